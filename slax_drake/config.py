@@ -1,0 +1,260 @@
+"""Typed scenario configuration, loaded from ``sim_configs/*.yaml`` with Drake's ``yaml_load_typed``.
+
+All lengths are metres, angles degrees where the key says ``_deg``, otherwise radians.
+The shelf frame S is defined in ../DESIGN.md: origin at the centre of the support surface, x to the right
+as seen from the camera, y into the shelf, z up.
+"""
+
+# No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
+import dataclasses
+import math
+from pathlib import Path
+
+import typing
+
+from pydrake.common.yaml import yaml_load, yaml_load_typed
+
+from slax_drake.errors import ConfigError
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+@dataclasses.dataclass
+class ShelfConfig:
+    """The shelf bay's interior: width along x, height along z, depth along y (metres)."""
+
+    width: float = 0.60
+    height: float = 0.60
+    depth: float = 0.60
+    wall_thickness: float = 0.02
+
+
+@dataclasses.dataclass
+class CameraConfig:
+    """The depth camera (RealSense L515 on the bluction tool's mount), static relative to the shelf.
+
+    ``position`` is the optical centre in the shelf frame; the optical axis points along +y of the shelf,
+    pitched down by ``pitch_deg``. Pixels are square: fx = fy from the horizontal field of view.
+    """
+
+    width: int = 640
+    height: int = 480
+    horizontal_fov_deg: float = 70.0
+    position: list[float] = dataclasses.field(default_factory=lambda: [0.0, -0.75, 0.20])
+    pitch_deg: float = 12.0
+    near: float = 0.1
+    far: float = 5.0
+
+
+@dataclasses.dataclass
+class ObjectsConfig:
+    """Occluding objects: boxes or upright cylinders with every dimension in [min_size, max_size]."""
+
+    min_size: float = 0.06
+    max_size: float = 0.20
+    box_probability: float = 0.5
+    clearance: float = 0.002
+    count_range: list[int] = dataclasses.field(default_factory=lambda: [2, 12])
+    density: float = 400.0
+
+
+@dataclasses.dataclass
+class TargetConfig:
+    """Target sizes [x, y, z] (metres) to draw from, and the spacing of points sampled on its surface."""
+
+    sizes: list[list[float]] = dataclasses.field(
+        default_factory=lambda: [[0.06, 0.06, 0.03], [0.06, 0.06, 0.06], [0.06, 0.06, 0.12]]
+    )
+    surface_point_spacing: float = 0.005
+    visibility_threshold: float = 0.80
+
+
+@dataclasses.dataclass
+class SamplingConfig:
+    """Retry budgets of the scene sampler."""
+
+    object_attempts: int = 200
+    target_attempts: int = 2048
+    scene_attempts: int = 100
+
+
+@dataclasses.dataclass
+class ProtocolConfig:
+    """An evaluation protocol (the paper's Table I): scenes per density, horizon H = horizon_per_object * n."""
+
+    densities: list[int] = dataclasses.field(default_factory=lambda: [4, 6, 8, 10])
+    scenes_per_density: int = 100
+    horizon_per_object: int = 2
+    suction_cost: float = 1.3
+    seed: int = 0
+
+
+@dataclasses.dataclass
+class Scenario:
+    """Everything that defines a shelf world and how scenes are drawn in it."""
+
+    shelf: ShelfConfig = dataclasses.field(default_factory=ShelfConfig)
+    camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)
+    objects: ObjectsConfig = dataclasses.field(default_factory=ObjectsConfig)
+    target: TargetConfig = dataclasses.field(default_factory=TargetConfig)
+    sampling: SamplingConfig = dataclasses.field(default_factory=SamplingConfig)
+    protocol: ProtocolConfig = dataclasses.field(default_factory=ProtocolConfig)
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Loads and validates a scenario YAML file; raises ConfigError naming the file, key and value."""
+    path = Path(path)
+    if not path.is_file() and not path.is_absolute() and (REPO_ROOT / path).is_file():
+        path = REPO_ROOT / path  # the shipped sim_configs/ when run from another folder
+    if not path.is_file():
+        raise ConfigError(f"{path}: no such config file")
+    try:
+        raw = yaml_load(filename=str(path))
+    except Exception as e:
+        message = " ".join(str(e).split())
+        raise ConfigError(f"{path}: not valid YAML ({message})") from None
+    _check_schema(raw if raw is not None else {}, Scenario, "", str(path))
+    try:
+        scenario = yaml_load_typed(schema=Scenario, filename=str(path), defaults=Scenario())
+    except Exception as e:  # Drake raises RuntimeError/TypeError/ValueError with a descriptive text.
+        message = " ".join(str(e).split())
+        raise ConfigError(f"{path}: {message}") from None
+    validate_scenario(scenario, source=str(path))
+    return scenario
+
+
+def _check_schema(value, schema, key: str, source: str) -> None:
+    """Checks keys and value types against the dataclass schema, naming the first offending key."""
+
+    def fail(why: str):
+        raise ConfigError(f"{source}: key '{key or '<top>'}' = {value!r}: {why}")
+
+    if dataclasses.is_dataclass(schema):
+        if not isinstance(value, dict):
+            fail(f"must be a mapping with keys {[f.name for f in dataclasses.fields(schema)]}")
+        fields = {f.name: f.type for f in dataclasses.fields(schema)}
+        for name, item in value.items():
+            sub = f"{key}.{name}" if key else str(name)
+            if name not in fields:
+                raise ConfigError(f"{source}: unknown key '{sub}' (known here: {', '.join(fields)})")
+            _check_schema(item, fields[name], sub, source)
+    elif typing.get_origin(schema) is list:
+        if not isinstance(value, list):
+            fail("must be a list")
+        (item_type,) = typing.get_args(schema)
+        for i, item in enumerate(value):
+            _check_schema(item, item_type, f"{key}[{i}]", source)
+    elif schema is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            fail("must be a number")
+    elif schema is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            fail("must be an integer")
+    elif schema is str:
+        if not isinstance(value, str):
+            fail("must be a string")
+
+
+def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
+    """Raises ConfigError on a non-positive, impossible or inconsistent value."""
+
+    def fail(key: str, value, why: str):
+        raise ConfigError(f"{source}: key '{key}' = {value!r}: {why}")
+
+    def positive(key: str, value):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            fail(key, value, "must be a positive number")
+
+    shelf = scenario.shelf
+    for name in ("width", "height", "depth", "wall_thickness"):
+        positive(f"shelf.{name}", getattr(shelf, name))
+
+    camera = scenario.camera
+    positive("camera.width", camera.width)
+    positive("camera.height", camera.height)
+    if not 1.0 < camera.horizontal_fov_deg < 170.0:
+        fail("camera.horizontal_fov_deg", camera.horizontal_fov_deg, "must lie in (1, 170) degrees")
+    if len(camera.position) != 3:
+        fail("camera.position", camera.position, "must be [x, y, z] in the shelf frame")
+    if not camera.position[1] < -shelf.depth / 2 - shelf.wall_thickness:
+        fail("camera.position", camera.position,
+             f"the camera must stand in front of the shelf's opening (y < {-shelf.depth / 2:.3f})")
+    if not -80.0 < camera.pitch_deg < 80.0:
+        fail("camera.pitch_deg", camera.pitch_deg, "must lie in (-80, 80) degrees")
+    positive("camera.near", camera.near)
+    if not camera.far > camera.near:
+        fail("camera.far", camera.far, "must exceed camera.near")
+
+    objects = scenario.objects
+    positive("objects.min_size", objects.min_size)
+    positive("objects.max_size", objects.max_size)
+    positive("objects.density", objects.density)
+    if objects.max_size < objects.min_size:
+        fail("objects.max_size", objects.max_size, "must be at least objects.min_size")
+    if not 0.0 <= objects.box_probability <= 1.0:
+        fail("objects.box_probability", objects.box_probability, "must lie in [0, 1]")
+    if objects.clearance < 0:
+        fail("objects.clearance", objects.clearance, "must not be negative")
+    bay_min = min(shelf.width, shelf.depth)
+    if objects.max_size > bay_min or objects.max_size > shelf.height:
+        fail("objects.max_size", objects.max_size,
+             f"an object this large does not fit the {shelf.width} x {shelf.height} x {shelf.depth} m bay")
+    if len(objects.count_range) != 2 or objects.count_range[0] < 1 or objects.count_range[1] < objects.count_range[0]:
+        fail("objects.count_range", objects.count_range, "must be [min, max] with 1 <= min <= max")
+    check_object_count(scenario, objects.count_range[1], source=source, key="objects.count_range")
+
+    target = scenario.target
+    if not target.sizes:
+        fail("target.sizes", target.sizes, "must list at least one [x, y, z] size")
+    for i, size in enumerate(target.sizes):
+        if len(size) != 3 or not all(isinstance(s, (int, float)) and s > 0 for s in size):
+            fail(f"target.sizes[{i}]", size, "must be three positive lengths [x, y, z]")
+        if size[0] > shelf.width or size[1] > shelf.depth or size[2] > shelf.height:
+            fail(f"target.sizes[{i}]", size, "the target does not fit in the bay")
+    positive("target.surface_point_spacing", target.surface_point_spacing)
+    if not 0.0 < target.visibility_threshold <= 1.0:
+        fail("target.visibility_threshold", target.visibility_threshold, "must lie in (0, 1]")
+
+    sampling = scenario.sampling
+    for name in ("object_attempts", "target_attempts", "scene_attempts"):
+        value = getattr(sampling, name)
+        if not (isinstance(value, int) and value > 0):
+            fail(f"sampling.{name}", value, "must be a positive integer")
+
+    protocol = scenario.protocol
+    if not protocol.densities:
+        fail("protocol.densities", protocol.densities, "must list at least one object count")
+    for n in protocol.densities:
+        check_object_count(scenario, n, source=source, key="protocol.densities")
+    if protocol.scenes_per_density < 1:
+        fail("protocol.scenes_per_density", protocol.scenes_per_density, "must be at least 1")
+    if protocol.horizon_per_object < 1:
+        fail("protocol.horizon_per_object", protocol.horizon_per_object, "must be at least 1")
+    if protocol.suction_cost <= 0:
+        fail("protocol.suction_cost", protocol.suction_cost, "must be positive")
+
+
+def max_placeable_objects(scenario: Scenario) -> int:
+    """An upper bound on how many objects of the smallest size fit on the shelf's floor beside a target.
+
+    Objects are at least min_size square (plus clearance) and the target needs its own footprint, so more
+    objects than this can never be placed; fewer may still fail by chance, which the retry budget handles.
+    """
+    shelf, objects = scenario.shelf, scenario.objects
+    cell = objects.min_size + objects.clearance
+    smallest_target = min(s[0] * s[1] for s in scenario.target.sizes)
+    free_area = shelf.width * shelf.depth - smallest_target
+    # A disc of diameter min_size covers pi/4 of the square; use the disc as the smallest footprint.
+    return int(free_area // (math.pi / 4 * cell * cell))
+
+
+def check_object_count(scenario: Scenario, count: int, source: str = "<request>", key: str = "objects") -> None:
+    """Raises ConfigError when ``count`` objects cannot be placed in the scenario's bay."""
+    if not isinstance(count, int) or count < 1:
+        raise ConfigError(f"{source}: key '{key}' = {count!r}: the number of objects must be a positive integer")
+    bound = max_placeable_objects(scenario)
+    if count > bound:
+        raise ConfigError(
+            f"{source}: key '{key}' = {count!r}: at most {bound} objects of at least "
+            f"{scenario.objects.min_size} m fit on a {scenario.shelf.width} x {scenario.shelf.depth} m shelf"
+        )

@@ -1,0 +1,114 @@
+"""The shelf scene: shelf bay, occluding objects, hidden target and camera, all in the shelf frame S.
+
+Objects rest in a stable pose on the support surface (z = 0): a box on one of its faces, a cylinder upright.
+The stable pose is folded into ``size``: the object frame O sits at the object's centre with z_O up, and
+``size`` holds the extents along x_O, y_O, z_O (a cylinder: [diameter, diameter, height]). X_SO is then a
+yaw about z_S plus a translation with z = height / 2.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from slax_drake.scene.camera import Camera
+
+
+@dataclasses.dataclass(frozen=True)
+class Shelf:
+    """The bay's interior: x in [-width/2, width/2], y in [-depth/2, depth/2], z in [0, height] (metres)."""
+
+    width: float
+    height: float
+    depth: float
+    wall_thickness: float = 0.02
+
+    def to_dict(self) -> dict:
+        return {"width": self.width, "height": self.height, "depth": self.depth, "wall_thickness": self.wall_thickness}
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneObject:
+    """An occluding object: ``shape`` "box" or "cylinder", ``size`` [x, y, z] and its pose X_SO (4x4)."""
+
+    name: str
+    shape: str
+    size: tuple[float, float, float]
+    X_SO: np.ndarray
+
+    @property
+    def center(self) -> np.ndarray:
+        return self.X_SO[:3, 3]
+
+    @property
+    def yaw(self) -> float:
+        return math.atan2(self.X_SO[1, 0], self.X_SO[0, 0])
+
+    @property
+    def height(self) -> float:
+        return self.size[2]
+
+    @property
+    def radius(self) -> float:
+        """A cylinder's radius; for a box, the radius of the circle through its footprint's corners."""
+        if self.shape == "cylinder":
+            return self.size[0] / 2.0
+        return 0.5 * math.hypot(self.size[0], self.size[1])
+
+    def moved_to(self, x: float, y: float) -> "SceneObject":
+        """The same object translated to (x, y) on the support surface."""
+        X = self.X_SO.copy()
+        X[0, 3], X[1, 3] = x, y
+        return dataclasses.replace(self, X_SO=X)
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "shape": self.shape, "size": list(self.size), "X_SO": self.X_SO.tolist()}
+
+
+@dataclasses.dataclass(frozen=True)
+class Target:
+    """The hidden target: a box of ``size`` [x, y, z], yaw aligned with the shelf, pose X_ST (4x4)."""
+
+    size: tuple[float, float, float]
+    X_ST: np.ndarray
+
+    @property
+    def center(self) -> np.ndarray:
+        return self.X_ST[:3, 3]
+
+    def as_object(self) -> SceneObject:
+        return SceneObject(name="target", shape="box", size=self.size, X_SO=self.X_ST)
+
+    def to_dict(self) -> dict:
+        return {"size": list(self.size), "X_ST": self.X_ST.tolist()}
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """A complete shelf scene. ``target`` is None for a scene of occluders only."""
+
+    shelf: Shelf
+    camera: Camera
+    objects: tuple[SceneObject, ...]
+    target: Target | None
+    seed: int | None = None
+
+    def with_objects(self, objects) -> "Scene":
+        return dataclasses.replace(self, objects=tuple(objects))
+
+    def object_named(self, name: str) -> SceneObject:
+        for obj in self.objects:
+            if obj.name == name:
+                return obj
+        raise KeyError(name)
+
+
+def planar_pose(x: float, y: float, z: float, yaw: float) -> np.ndarray:
+    """A 4x4 pose with a rotation of ``yaw`` about z and translation (x, y, z)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    X = np.eye(4)
+    X[:2, :2] = [[c, -s], [s, c]]
+    X[:3, 3] = (x, y, z)
+    return X

@@ -1,0 +1,19 @@
+"""Shared fixtures: the shipped scenarios and a few sampled scenes (sampled once per session)."""
+
+from pathlib import Path
+
+import pytest
+
+from slax_drake.config import load_scenario
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="session")
+def sim_scenario():
+    return load_scenario(REPO / "sim_configs" / "sim_shelf.yaml")
+
+
+@pytest.fixture(scope="session")
+def physical_scenario():
+    return load_scenario(REPO / "sim_configs" / "physical_shelf.yaml")
