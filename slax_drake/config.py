@@ -17,6 +17,7 @@ from pydrake.common.yaml import yaml_load, yaml_load_typed
 from slax_drake.errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_CONFIG = "sim_configs/sim_shelf.yaml"
 
 
 @dataclasses.dataclass
