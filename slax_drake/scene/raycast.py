@@ -17,7 +17,7 @@ from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf
 
 NO_HIT = 1e30
-CYLINDER_SECTIONS = 48
+CYLINDER_SECTIONS = 32
 # Embree works in float32: a hit this close before a point (relative to the segment) still counts as the point.
 VISIBILITY_EPS = 2e-5
 
@@ -35,7 +35,7 @@ def _unit_cylinder() -> np.ndarray:
 def object_triangles(obj: SceneObject) -> np.ndarray:
     """Triangles (T, 3, 3) of an object's surface in the shelf frame.
 
-    A cylinder is a prism inscribed in it (48 sides, at most 0.2 % of its radius inside), so an occluder is
+    A cylinder is a prism inscribed in it (32 sides, at most 0.5 % of its radius inside), so an occluder is
     never larger than the real object and a point found hidden is hidden by the real scene too."""
     unit = _unit_cylinder() if obj.shape == "cylinder" else _unit_box()
     local = unit * np.asarray(obj.size, dtype=float)

@@ -25,6 +25,7 @@ import numpy as np
 from slax_drake.config import Scenario, check_object_count
 from slax_drake.errors import SceneGenerationError
 from slax_drake.scene.camera import Camera
+from slax_drake.scene.io import DECIMALS
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
 from slax_drake.scene.raycast import SceneRaycaster
@@ -65,13 +66,30 @@ def sample_scene(
         scene = Scene(shelf=shelf, camera=camera, objects=tuple(objects), target=None, seed=seed)
         target = _place_hidden_target(scenario, scene, target_size, rng)
         if target is not None:
-            from slax_drake.scene.io import scene_from_dict, scene_to_dict
-
-            return scene_from_dict(scene_to_dict(Scene(shelf, camera, scene.objects, target, seed)))
+            return Scene(shelf, camera, tuple(_rounded_object(o) for o in scene.objects), _rounded_target(target), seed)
     raise SceneGenerationError(
         f"could not place {num_objects} objects with a hidden {target_size} m target in "
         f"{scenario.sampling.scene_attempts} attempts (seed {seed}); use fewer objects or a larger shelf"
     )
+
+
+def _rounded_pose(X: np.ndarray) -> np.ndarray:
+    """The pose as scene JSON stores it (Python's correctly rounded ``round`` to DECIMALS), so that a sampled
+    scene equals its own JSON round trip."""
+    return np.array([[_round(v) for v in row] for row in X.tolist()])
+
+
+def _round(v: float) -> float:
+    r = round(v, DECIMALS)
+    return 0.0 if r == 0 else r
+
+
+def _rounded_object(obj: SceneObject) -> SceneObject:
+    return SceneObject(obj.name, obj.shape, tuple(_round(v) for v in obj.size), _rounded_pose(obj.X_SO))
+
+
+def _rounded_target(target: Target) -> Target:
+    return Target(tuple(_round(v) for v in target.size), _rounded_pose(target.X_ST))
 
 
 def _random_object(scenario: Scenario, rng: np.random.Generator) -> tuple[str, tuple, float]:
