@@ -1,0 +1,391 @@
+"""Ground-truth target occupancy: every hidden, collision-free target placement on a regular grid, and its
+image-space distribution (paper Sec. IV-A, Fig. 3 b-f).
+
+Definitions (the brute-force reference in tests/test_occupancy_reference.py checks these literally):
+
+- Placements: target centres (x, y) on the lattice ``grid_step * Z^2`` of the shelf frame S (metres), target yaw
+  0, resting on the support surface (z = size_z / 2), whose footprint lies inside the bay and clear of every
+  occluding object (clearance 0: touching is allowed).
+- A placement is hidden when none of the target's surface points (``scene.surface.box_surface_points``,
+  ``surface_spacing`` apart, every face but the bottom) is visible from the camera's optical centre past the
+  shelf and the objects (``SceneRaycaster``; the scene's own target is never an occluder).
+- p2d: the eye-facing surface points of every hidden placement projected into ``camera`` and counted per pixel
+  (rounded to the nearest pixel centre), normalised to sum to 1; p1d = p2d.sum(axis=0).
+
+How it stays fast (the paper's pruning plus two exact reductions):
+
+1. Monotone in height. Every occluder is a vertical prism standing on the support surface (boxes yawed about
+   z, cylinders, the side and back walls), and the camera sits below the shelf's top panel. Raising a point
+   raises the ray to it at every point of its top-down path, so a hidden point hides every point below it.
+   Every vertical face's sample points lie directly below the top face's rim samples, hence a placement is
+   hidden exactly when all of its top-face samples are hidden.
+2. Shared lattice. When ``grid_step`` is a whole multiple of the top-face sample spacing, the top-face samples
+   of all placements lie on one fine lattice at height size_z. Each lattice point is decided once; "all
+   samples of a placement hidden" becomes a box sum over the lattice (a summed-area table).
+3. 2D visibility and Minkowski sum (the paper's pruning). Top down, a lattice point outside every object's
+   shadow polygon (the convex hull of the footprint and its projection away from the eye) and seen through the
+   shelf's opening is visible in 3D. The shadows are rasterised onto the lattice and grown by one lattice cell,
+   so that only certainly visible points are marked without a ray. A placement whose window holds such a point
+   (the Minkowski sum of the visible region with the target's footprint samples) is discarded, and one Embree
+   call decides the lattice points that the remaining candidates need.
+4. p2d by multiplicity: every face's samples also lie on lattices, so the number of hidden placements sharing a
+   sample point is again a box sum; each distinct point is projected once with that weight.
+
+When the grid is not aligned with the samples, or the camera is above the shelf's top, the same definitions are
+evaluated directly (every placement, every sample point): correct, only slower.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from slax_drake.scene.camera import Camera
+from slax_drake.scene.footprint import Footprint, clear_of
+from slax_drake.scene.model import Scene
+from slax_drake.scene.raycast import SceneRaycaster
+from slax_drake.scene.surface import box_surface_points, facing_points
+
+DEFAULT_GRID_STEP = 0.005
+DEFAULT_SURFACE_SPACING = 0.005
+# Lattice points this close (metres) to the wall shadow's edge are decided by a ray, not by the 2D test.
+WALL_MARGIN = 1e-3
+_FAR = 20.0  # how far (in units of the eye-to-vertex distance) a shadow polygon reaches behind an object
+
+
+@dataclasses.dataclass(frozen=True)
+class Occupancy:
+    """The hidden placements of one target size in one scene and their image-space distribution.
+
+    ``hidden_xy`` (K, 2) float64: placement centres (x, y) in the shelf frame S, metres; the target rests on the
+    support surface with yaw 0. ``p2d`` (camera.height, camera.width) float32, non-negative, sums to 1 (all
+    zeros when K == 0). ``p1d`` (camera.width,) float32 = p2d.sum(axis=0).
+    """
+
+    hidden_xy: np.ndarray
+    p2d: np.ndarray
+    p1d: np.ndarray
+    target_size: tuple[float, float, float]
+    grid_step: float
+    surface_spacing: float
+
+    @property
+    def num_hidden(self) -> int:
+        return len(self.hidden_xy)
+
+
+def compute_occupancy(
+    scene: Scene,
+    target_size=(0.06, 0.06, 0.06),
+    grid_step: float = DEFAULT_GRID_STEP,
+    camera: Camera | None = None,
+    surface_spacing: float | None = None,
+    raycaster: SceneRaycaster | None = None,
+) -> Occupancy:
+    """Every hidden placement of a ``target_size`` [x, y, z] (metres) box on the ``grid_step`` lattice of the
+    shelf, and the distributions p2d / p1d in ``camera`` (default ``scene.camera``).
+
+    Only ``scene.objects`` and the shelf occlude and collide; the scene's own target is ignored.
+    ``surface_spacing`` (default 0.005 m) spaces the target's surface samples. ``raycaster`` may pass a
+    ``SceneRaycaster(scene)`` already built for this scene's objects (without the target)."""
+    size = _check_size(target_size)
+    if not (isinstance(grid_step, (int, float)) and math.isfinite(grid_step) and grid_step > 0):
+        raise ValueError(f"grid_step must be a positive length in metres, got {grid_step!r}")
+    spacing = DEFAULT_SURFACE_SPACING if surface_spacing is None else float(surface_spacing)
+    if not spacing > 0:
+        raise ValueError(f"surface_spacing must be positive, got {surface_spacing!r}")
+    camera = scene.camera if camera is None else camera
+    if raycaster is None:
+        raycaster = SceneRaycaster(scene)
+    lattice = _Lattice.build(scene, size, float(grid_step), spacing)
+    if lattice is None or scene.camera.position[2] >= scene.shelf.height:
+        return _occupancy_direct(scene, size, float(grid_step), spacing, camera, raycaster)
+    hidden = lattice.hidden_mask(scene, raycaster)
+    p2d = lattice.distribution(hidden, camera, scene.camera.position)
+    ii, jj = np.nonzero(hidden)
+    hidden_xy = np.column_stack([lattice.cx[ii], lattice.cy[jj]])
+    return Occupancy(hidden_xy, p2d, p2d.sum(axis=0), size, float(grid_step), spacing)
+
+
+def grid_placements(scene: Scene, target_size, grid_step: float) -> np.ndarray:
+    """All lattice centres (K, 2) whose yaw-0 target footprint fits in the bay (ignoring objects), x-major."""
+    cx, cy = _grid_axes(scene, _check_size(target_size), grid_step)
+    gx, gy = np.meshgrid(cx, cy, indexing="ij")
+    return np.column_stack([gx.ravel(), gy.ravel()])
+
+
+def collision_free(scene: Scene, target_size, centers_xy: np.ndarray) -> np.ndarray:
+    """Whether a yaw-0 target at each centre (K, 2) lies inside the bay and clear of every object
+    (clearance 0, touching allowed); bool (K,)."""
+    size = _check_size(target_size)
+    centers = np.atleast_2d(np.asarray(centers_xy, dtype=float))
+    half = (size[0] / 2.0, size[1] / 2.0)
+    shelf = scene.shelf
+    ok = (np.abs(centers[:, 0]) + half[0] <= shelf.width / 2.0 + 1e-12) & (
+        np.abs(centers[:, 1]) + half[1] <= shelf.depth / 2.0 + 1e-12
+    )
+    for obj in scene.objects:
+        ok &= clear_of("box", centers, 0.0, half, Footprint.of(obj), 0.0)
+    return ok
+
+
+def placements_hidden(
+    scene: Scene,
+    target_size,
+    centers_xy: np.ndarray,
+    surface_spacing: float | None = None,
+    raycaster: SceneRaycaster | None = None,
+) -> np.ndarray:
+    """The direct test of given placements (K, 2): collision free and every surface sample hidden; bool (K,).
+
+    No pruning and no lattice: every sample point of every placement gets its own ray. Use it to check one
+    placement exactly (for example a sampled scene's true target centre, which need not lie on the grid)."""
+    size = _check_size(target_size)
+    spacing = DEFAULT_SURFACE_SPACING if surface_spacing is None else float(surface_spacing)
+    centers = np.atleast_2d(np.asarray(centers_xy, dtype=float))
+    ok = collision_free(scene, size, centers)
+    if not ok.any():
+        return ok
+    raycaster = SceneRaycaster(scene) if raycaster is None else raycaster
+    points, _ = box_surface_points(size, spacing)
+    offsets = np.column_stack([centers[ok], np.full(int(ok.sum()), size[2] / 2.0)])
+    seen = raycaster.visible(scene.camera.position, points[None, :, :] + offsets[:, None, :]).any(axis=1)
+    ok[np.flatnonzero(ok)[seen]] = False
+    return ok
+
+
+def project_placements(
+    camera: Camera, eye: np.ndarray, target_size, centers_xy: np.ndarray, surface_spacing: float
+) -> np.ndarray:
+    """p2d by its definition: the eye-facing surface samples of every placement projected into ``camera``
+    and counted per pixel, normalised; float32 (H, W). Direct and slow (one projection per sample)."""
+    size = _check_size(target_size)
+    points, normals = box_surface_points(size, surface_spacing)
+    counts = np.zeros(camera.height * camera.width, dtype=np.float64)
+    for c in np.atleast_2d(np.asarray(centers_xy, dtype=float)).reshape(-1, 2):
+        pts = facing_points(points, normals, np.array([c[0], c[1], size[2] / 2.0]), np.asarray(eye, float))
+        counts += _pixel_counts(camera, pts, None)
+    return _normalised(counts, camera)
+
+
+# --------------------------------------------------------------------------------------------------------
+
+
+def _check_size(target_size) -> tuple[float, float, float]:
+    try:
+        size = tuple(float(v) for v in target_size)
+    except (TypeError, ValueError):
+        raise ValueError(f"target_size must be three lengths [x, y, z] in metres, got {target_size!r}") from None
+    if len(size) != 3 or not all(math.isfinite(v) and v > 0 for v in size):
+        raise ValueError(f"target_size must be three positive lengths [x, y, z] in metres, got {target_size!r}")
+    return size
+
+
+def _grid_axes(scene: Scene, size, step: float) -> tuple[np.ndarray, np.ndarray]:
+    def axis(extent: float, half: float) -> np.ndarray:
+        n = math.floor((extent / 2.0 - half) / step + 1e-9)
+        return np.arange(-n, n + 1) * step if n >= 0 else np.zeros(0)
+
+    return axis(scene.shelf.width, size[0] / 2.0), axis(scene.shelf.depth, size[1] / 2.0)
+
+
+def _face(points: np.ndarray, normals: np.ndarray, normal) -> np.ndarray:
+    return points[np.all(normals == np.asarray(normal, dtype=float), axis=1)]
+
+
+def _multiple(step: float, sample: float) -> int | None:
+    m = step / sample
+    r = round(m)
+    return int(r) if r >= 1 and abs(m - r) < 1e-6 else None
+
+
+def _box_sums(values: np.ndarray, starts_a, starts_b, na: int, nb: int) -> np.ndarray:
+    """Sums of ``values`` over the windows [a, a + na) x [b, b + nb) for every a in starts_a, b in starts_b."""
+    sat = np.zeros((values.shape[0] + 1, values.shape[1] + 1), dtype=np.int64)
+    np.cumsum(np.cumsum(values, axis=0), axis=1, out=sat[1:, 1:])
+    a0, b0 = np.asarray(starts_a)[:, None], np.asarray(starts_b)[None, :]
+    return sat[a0 + na, b0 + nb] - sat[a0, b0 + nb] - sat[a0 + na, b0] + sat[a0, b0]
+
+
+def _spread(marks: np.ndarray, stride_a: int, stride_b: int, na: int, nb: int, shape) -> np.ndarray:
+    """How many marked placements' windows cover each lattice point: placement (i, j) covers
+    [i * stride_a, i * stride_a + na) x [j * stride_b, j * stride_b + nb)."""
+    z = np.zeros((shape[0] + 1, shape[1] + 1), dtype=np.int64)
+    z[1::stride_a, 1::stride_b][: marks.shape[0], : marks.shape[1]] = marks
+    sat = np.cumsum(np.cumsum(z, axis=0), axis=1)
+    a = np.arange(1, shape[0] + 1)
+    b = np.arange(1, shape[1] + 1)
+    a_lo, b_lo = np.maximum(a - na, 0)[:, None], np.maximum(b - nb, 0)[None, :]
+    return sat[a[:, None], b[None, :]] - sat[a_lo, b[None, :]] - sat[a[:, None], b_lo] + sat[a_lo, b_lo]
+
+
+def _spread_1d(marks: np.ndarray, stride: int, n: int, length: int) -> np.ndarray:
+    """Along axis 0 only: how many marked placements' windows [i * stride, i * stride + n) cover each index."""
+    z = np.zeros((length + 1, marks.shape[1]), dtype=np.int64)
+    z[1::stride][: marks.shape[0]] = marks
+    c = np.cumsum(z, axis=0)
+    a = np.arange(1, length + 1)
+    return c[a] - c[np.maximum(a - n, 0)]
+
+
+def _pixel_counts(camera: Camera, points: np.ndarray, weights: np.ndarray | None) -> np.ndarray:
+    uv = camera.project(points)
+    u = np.rint(uv[:, 0])
+    v = np.rint(uv[:, 1])
+    inside = (u >= 0) & (u < camera.width) & (v >= 0) & (v < camera.height) & (camera.to_camera(points)[:, 2] > 0)
+    index = v[inside].astype(np.int64) * camera.width + u[inside].astype(np.int64)
+    w = None if weights is None else weights[inside]
+    return np.bincount(index, weights=w, minlength=camera.width * camera.height).astype(np.float64)
+
+
+def _normalised(counts: np.ndarray, camera: Camera) -> np.ndarray:
+    total = counts.sum()
+    p = counts / total if total > 0 else counts
+    return p.reshape(camera.height, camera.width).astype(np.float32)
+
+
+def _occupancy_direct(scene, size, step, spacing, camera, raycaster) -> Occupancy:
+    centers = grid_placements(scene, size, step)
+    hidden = placements_hidden(scene, size, centers, spacing, raycaster)
+    hidden_xy = centers[hidden]
+    p2d = project_placements(camera, scene.camera.position, size, hidden_xy, spacing)
+    return Occupancy(hidden_xy, p2d, p2d.sum(axis=0), size, step, spacing)
+
+
+@dataclasses.dataclass
+class _Lattice:
+    """Placement grid (cx, cy) and the fine lattice of top-face samples shared by all placements."""
+
+    size: tuple[float, float, float]
+    cx: np.ndarray  # placement centres along x (n_i,)
+    cy: np.ndarray  # along y (n_j,)
+    mx: int  # placement step in top-face sample steps
+    my: int
+    ox: np.ndarray  # top-face sample offsets along x (nk,), ascending
+    oy: np.ndarray  # (nl,)
+    oz: np.ndarray  # vertical faces' sample heights above the support (nz,)
+    ax: np.ndarray  # fine lattice x coordinates (n_a,)
+    ay: np.ndarray  # fine lattice y coordinates (n_b,)
+
+    @staticmethod
+    def build(scene: Scene, size, step: float, spacing: float) -> "_Lattice | None":
+        points, normals = box_surface_points(size, spacing)
+        top = _face(points, normals, (0, 0, 1))
+        front = _face(points, normals, (0, -1, 0))
+        ox, oy, oz = np.unique(top[:, 0]), np.unique(top[:, 1]), np.unique(front[:, 2]) + size[2] / 2.0
+        cx, cy = _grid_axes(scene, size, step)
+        if len(cx) == 0 or len(cy) == 0:
+            return None
+        mx, my = _multiple(step, ox[1] - ox[0]), _multiple(step, oy[1] - oy[0])
+        if mx is None or my is None or not _uniform(ox) or not _uniform(oy):
+            return None
+        sx, sy = step / mx, step / my
+        ax = cx[0] + ox[0] + sx * np.arange((len(cx) - 1) * mx + len(ox))
+        ay = cy[0] + oy[0] + sy * np.arange((len(cy) - 1) * my + len(oy))
+        return _Lattice(size, cx, cy, mx, my, ox, oy, oz, ax, ay)
+
+    def window_counts(self, per_point: np.ndarray) -> np.ndarray:
+        """For each placement, the number of flagged lattice points among its top-face samples."""
+        return _box_sums(
+            per_point.astype(np.int64),
+            np.arange(len(self.cx)) * self.mx,
+            np.arange(len(self.cy)) * self.my,
+            len(self.ox),
+            len(self.oy),
+        )
+
+    def covered(self, placements: np.ndarray) -> np.ndarray:
+        """How many of the marked placements have each lattice point among their top-face samples."""
+        return _spread(placements.astype(np.int64), self.mx, self.my, len(self.ox), len(self.oy),
+                       (len(self.ax), len(self.ay)))
+
+    def hidden_mask(self, scene: Scene, raycaster: SceneRaycaster) -> np.ndarray:
+        """bool (n_i, n_j): collision free and every top-face sample hidden."""
+        gx, gy = np.meshgrid(self.cx, self.cy, indexing="ij")
+        free = collision_free(scene, self.size, np.column_stack([gx.ravel(), gy.ravel()])).reshape(gx.shape)
+        if not free.any():
+            return free
+        certain = self._certainly_visible(scene)
+        candidates = free & (self.window_counts(certain) == 0)
+        if not candidates.any():
+            return candidates
+        need = self.covered(candidates) > 0
+        ia, ib = np.nonzero(need)
+        pts = np.column_stack([self.ax[ia], self.ay[ib], np.full(len(ia), self.size[2])])
+        seen = np.zeros_like(need)
+        seen[ia, ib] = raycaster.visible(scene.camera.position, pts)
+        return candidates & (self.window_counts(seen) == 0)
+
+    def _certainly_visible(self, scene: Scene) -> np.ndarray:
+        """bool (n_a, n_b): lattice points that the top-down (2D) test proves visible from the camera."""
+        import cv2
+
+        eye = scene.camera.position
+        ex, ey = float(eye[0]), float(eye[1])
+        sx, sy = self.ax[1] - self.ax[0], self.ay[1] - self.ay[0]
+        shadow = np.zeros((len(self.ax), len(self.ay)), dtype=np.uint8)
+        shift = 8
+        for obj in scene.objects:
+            poly = np.asarray(Footprint.of(obj).polygon(segments=16).exterior.coords)[:-1]
+            far = poly + _FAR * (poly - (ex, ey))
+            hull = cv2.convexHull(np.concatenate([poly, far]).astype(np.float32))[:, 0, :]
+            # Raster rows are lattice x indices, columns lattice y indices; cv2 takes (column, row) points.
+            pix = np.column_stack([(hull[:, 1] - self.ay[0]) / sy, (hull[:, 0] - self.ax[0]) / sx])
+            cv2.fillConvexPoly(shadow, np.rint(pix * (1 << shift)).astype(np.int32), 1, lineType=cv2.LINE_8,
+                               shift=shift)
+        shadow = cv2.dilate(shadow, np.ones((3, 3), np.uint8))
+        # Seen through the opening: the top-down segment crosses the front plane y = -depth/2 inside the bay.
+        y_front = -scene.shelf.depth / 2.0
+        gx, gy = np.meshgrid(self.ax, self.ay, indexing="ij")
+        t = (y_front - ey) / (gy - ey)
+        x_cross = ex + t * (gx - ex)
+        through = np.abs(x_cross) < scene.shelf.width / 2.0 - WALL_MARGIN
+        return (shadow == 0) & through & (ey < y_front)
+
+    def distribution(self, hidden: np.ndarray, camera: Camera, eye: np.ndarray) -> np.ndarray:
+        """p2d (H, W) float32: every eye-facing surface sample of every hidden placement, projected once per
+        distinct point with the number of hidden placements that share it as its weight."""
+        counts = np.zeros(camera.height * camera.width, dtype=np.float64)
+        if not hidden.any():
+            return _normalised(counts, camera)
+        ex, ey, ez = (float(v) for v in eye)
+        sz = self.size[2]
+        hx, hy = self.size[0] / 2.0, self.size[1] / 2.0
+        chunks, weights = [], []
+        if ez > sz:  # top face
+            w = self.covered(hidden)
+            ia, ib = np.nonzero(w)
+            chunks.append(np.column_stack([self.ax[ia], self.ay[ib], np.full(len(ia), sz)]))
+            weights.append(w[ia, ib])
+        nz = len(self.oz)
+        # Front (-y) and back (+y) faces: points (x lattice, placement row y_j -/+ hy, z); weight along x.
+        wx = _spread_1d(hidden, self.mx, len(self.ox), len(self.ax))  # (n_a, n_j)
+        for sign in (-1.0, 1.0):
+            plane_y = self.cy + sign * hy
+            facing = sign * (ey - plane_y) > 0
+            w = wx * facing[None, :]
+            ia, jj = np.nonzero(w)
+            if len(ia):
+                chunks.append(np.column_stack([
+                    np.repeat(self.ax[ia], nz), np.repeat(plane_y[jj], nz), np.tile(self.oz, len(ia))]))
+                weights.append(np.repeat(w[ia, jj], nz))
+        # Left (-x) and right (+x) faces: points (placement column x_i -/+ hx, y lattice, z); weight along y.
+        wy = _spread_1d(hidden.T, self.my, len(self.oy), len(self.ay))  # (n_b, n_i)
+        for sign in (-1.0, 1.0):
+            plane_x = self.cx + sign * hx
+            facing = sign * (ex - plane_x) > 0
+            w = wy * facing[None, :]
+            ib, ii = np.nonzero(w)
+            if len(ib):
+                chunks.append(np.column_stack([
+                    np.repeat(plane_x[ii], nz), np.repeat(self.ay[ib], nz), np.tile(self.oz, len(ib))]))
+                weights.append(np.repeat(w[ib, ii], nz))
+        counts += _pixel_counts(camera, np.concatenate(chunks), np.concatenate(weights).astype(np.float64))
+        return _normalised(counts, camera)
+
+
+def _uniform(values: np.ndarray) -> bool:
+    d = np.diff(values)
+    return len(d) > 0 and bool(np.allclose(d, d[0], rtol=0, atol=1e-9))
