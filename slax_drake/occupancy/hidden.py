@@ -231,10 +231,12 @@ def _spread_1d(marks: np.ndarray, stride: int, n: int, length: int) -> np.ndarra
 
 
 def _pixel_counts(camera: Camera, points: np.ndarray, weights: np.ndarray | None) -> np.ndarray:
-    uv = camera.project(points)
-    u = np.rint(uv[:, 0])
-    v = np.rint(uv[:, 1])
-    inside = (u >= 0) & (u < camera.width) & (v >= 0) & (v < camera.height) & (camera.to_camera(points)[:, 2] > 0)
+    p_C = camera.to_camera(points)
+    z = p_C[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.rint(camera.fx * p_C[:, 0] / z + camera.cx)
+        v = np.rint(camera.fy * p_C[:, 1] / z + camera.cy)
+    inside = (u >= 0) & (u < camera.width) & (v >= 0) & (v < camera.height) & (z > 0)
     index = v[inside].astype(np.int64) * camera.width + u[inside].astype(np.int64)
     w = None if weights is None else weights[inside]
     return np.bincount(index, weights=w, minlength=camera.width * camera.height).astype(np.float64)
