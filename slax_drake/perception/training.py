@@ -185,11 +185,6 @@ def train(data: TrainingData, out: str | Path, options: TrainOptions = TrainOpti
             "val": val,
         }
         history.append(record)
-        log(
-            f"epoch {epoch + 1}/{options.epochs}: train KL {record['train_loss']:.3f}, val KL {val['kl_2d']:.3f}, "
-            f"1D IoU {val['iou_1d']:.3f}, 2D IoU {val['iou_2d']:.3f}, bal.acc {val['balanced_accuracy_2d']:.3f} "
-            f"({record['train_images_per_second']:.1f} img/s)"
-        )
         if best is None or val["iou_1d"] > best["val"]["iou_1d"]:
             best = record
             header = make_header(
@@ -204,6 +199,11 @@ def train(data: TrainingData, out: str | Path, options: TrainOptions = TrainOpti
         summary = {"options": dataclasses.asdict(options), "data": data.describe(), "history": history, "best": best}
         write_text_atomic(out / "metrics.json", json.dumps(summary, indent=2) + "\n")
         save_learning_curve(history, out / "learning_curve.png")
+        log(
+            f"epoch {epoch + 1}/{options.epochs}: train KL {record['train_loss']:.3f}, val KL {val['kl_2d']:.3f}, "
+            f"1D IoU {val['iou_1d']:.3f}, 2D IoU {val['iou_2d']:.3f}, bal.acc {val['balanced_accuracy_2d']:.3f} "
+            f"({record['train_images_per_second']:.1f} img/s)"
+        )
     if not history:
         raise PerceptionDataError(f"nothing to train: {options.epochs} epochs asked for, {start_epoch} done already")
     return {"options": dataclasses.asdict(options), "data": data.describe(), "history": history, "best": best}
@@ -250,7 +250,7 @@ def _load_checkpoint(path: Path, options: TrainOptions, data: TrainingData) -> d
         raise WeightFileError(f"{path}: not a slax-drake training checkpoint of version {CHECKPOINT_VERSION}")
     saved = json.loads(state["options"])
     now = dataclasses.asdict(options)
-    differ = [k for k in now if k not in ("epochs", "device", "num_threads") and saved.get(k) != now[k]]
+    differ = [k for k in now if k not in ("device", "num_threads") and saved.get(k) != now[k]]
     if differ:
         raise WeightFileError(f"{path}: checkpoint was trained with other options ({', '.join(differ)}); "
                               "use a new --out folder or the same options")
