@@ -1,0 +1,196 @@
+"""The shelf world in a MultibodyPlant: the shelf bay as an SDFormat model and a scene's objects as free bodies.
+
+Frames: the shelf model's body ``shelf_body`` has the shelf frame S of the scene package (origin at the centre of
+the support surface, x to the right seen from the camera, y into the shelf, z up). Its panels are exactly the
+boxes of ``slax_drake.scene.raycast.shelf_boxes``, so the physics, the renderer and the scene model share one
+geometry. Objects (and the target) are free bodies whose frame O is at the object's centre, z up.
+
+Physics choices (documented numbers):
+- mass from ``density`` (kg/m^3, the scenario's ``objects.density``, 400 in sim_shelf.yaml) times the volume,
+  inertia of the solid box or cylinder;
+- Coulomb friction 0.5 (static = dynamic) for objects, 0.4 for the shelf (cardboard and wood, plausible);
+- point contact: stiffness 2e5 N/m per contact point and Hunt-Crossley dissipation 5 s/m;
+- Drake's point contact between two boxes returns one contact point, which lets a resting box rock; each box
+  therefore carries eight 1 mm spheres inset at its corners (tangent to its faces), and each cylinder eight
+  spheres around each rim, so a resting object stands on four or more points like a real one.
+
+Render labels (``label_image``): the shelf is 0, ``objects[i]`` is i + 1 and the target len(objects) + 1, the
+same numbering as ``SceneRaycaster``; the robot has no perception role (it is not drawn in the camera images).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from slax_drake.scene.model import Scene, SceneObject, Shelf
+from slax_drake.scene.raycast import shelf_boxes
+
+OBJECT_FRICTION = 0.5
+SHELF_FRICTION = 0.4
+POINT_STIFFNESS = 2.0e5  # N/m
+HUNT_CROSSLEY_DISSIPATION = 5.0  # s/m
+CORNER_SPHERE_RADIUS = 0.001  # m
+SHELF_PANEL_NAMES = ("support", "left_wall", "right_wall", "top", "back")
+SHELF_COLOR = (0.76, 0.60, 0.42, 1.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneBodies:
+    """Body indices of the scene's objects in the plant, in scene order, and the target's (or None)."""
+
+    objects: tuple
+    target: object | None
+    names: tuple[str, ...]
+
+    def all(self) -> tuple:
+        return self.objects + ((self.target,) if self.target is not None else ())
+
+
+def shelf_sdf(shelf: Shelf) -> str:
+    """SDFormat text of the shelf bay: one body ``shelf_body`` at the shelf frame S with five box panels."""
+    links = []
+    for name, (lo, hi) in zip(SHELF_PANEL_NAMES, shelf_boxes(shelf)):
+        c, s = (lo + hi) / 2.0, hi - lo
+        pose = f"{c[0]:.6f} {c[1]:.6f} {c[2]:.6f} 0 0 0"
+        size = f"{s[0]:.6f} {s[1]:.6f} {s[2]:.6f}"
+        links.append(
+            f"""      <collision name="{name}">
+        <pose>{pose}</pose>
+        <geometry><box><size>{size}</size></box></geometry>
+        <drake:proximity_properties>
+          <drake:mu_dynamic>{SHELF_FRICTION}</drake:mu_dynamic>
+          <drake:mu_static>{SHELF_FRICTION}</drake:mu_static>
+          <drake:point_contact_stiffness>{POINT_STIFFNESS:g}</drake:point_contact_stiffness>
+          <drake:hunt_crossley_dissipation>{HUNT_CROSSLEY_DISSIPATION:g}</drake:hunt_crossley_dissipation>
+        </drake:proximity_properties>
+      </collision>
+      <visual name="{name}_visual">
+        <pose>{pose}</pose>
+        <geometry><box><size>{size}</size></box></geometry>
+        <material><diffuse>{" ".join(f"{v:g}" for v in SHELF_COLOR)}</diffuse></material>
+      </visual>"""
+        )
+    panels = "\n".join(links)
+    return f"""<?xml version="1.0"?>
+<!-- Shelf bay {shelf.width:g} m wide x {shelf.height:g} m high x {shelf.depth:g} m deep, panels {shelf.wall_thickness:g} m thick,
+     written by slax_drake.systems.scene_world.shelf_sdf (regenerate with it; a test checks the shipped copy).
+     Body frame = shelf frame S: origin at the centre of the support surface, x right seen from the camera,
+     y into the shelf (the front at y = -depth/2 is open), z up. Weld shelf_body to place the shelf. -->
+<sdf version="1.9" xmlns:drake="http://drake.mit.edu">
+  <model name="shelf">
+    <link name="shelf_body">
+{panels}
+    </link>
+  </model>
+</sdf>
+"""
+
+
+def object_mass(obj: SceneObject, density: float) -> float:
+    """Mass (kg) of a solid box or cylinder of ``density`` kg/m^3."""
+    sx, sy, sz = obj.size
+    volume = sx * sy * sz if obj.shape == "box" else math.pi * (sx / 2.0) ** 2 * sz
+    return density * volume
+
+
+def _corner_points(obj: SceneObject, r: float) -> list[np.ndarray]:
+    """Centres of the small contact spheres in the object frame, inset by r so they are tangent to the faces."""
+    sx, sy, sz = (s / 2.0 - r for s in obj.size)
+    if obj.shape == "box":
+        return [np.array([i * sx, j * sy, k * sz]) for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)]
+    points = []
+    for k in (-1, 1):
+        for n in range(8):
+            a = 2.0 * math.pi * n / 8
+            points.append(np.array([sx * math.cos(a), sx * math.sin(a), k * sz]))
+    return points
+
+
+def add_scene_objects(plant, scene: Scene, density: float, include_target: bool = True) -> SceneBodies:
+    """Adds the scene's objects (and target) as free bodies, each in its own model instance named after it.
+
+    Call before ``plant.Finalize()``; set their poses with ``set_default_object_poses`` (or
+    ``plant.SetDefaultFreeBodyPose``) once the shelf's pose in the world is known.
+    """
+    from pydrake.geometry import Box, Cylinder, ProximityProperties, Sphere
+    from pydrake.multibody.plant import CoulombFriction
+    from pydrake.multibody.tree import SpatialInertia, UnitInertia
+    from pydrake.geometry import AddCompliantHydroelasticProperties, AddContactMaterial  # noqa: F401
+    from pydrake.math import RigidTransform
+
+    items = list(scene.objects)
+    if include_target and scene.target is not None:
+        items.append(scene.target.as_object())
+    indices = []
+    for obj in items:
+        instance = plant.AddModelInstance(f"object_{obj.name}")
+        mass = object_mass(obj, density)
+        sx, sy, sz = obj.size
+        if obj.shape == "box":
+            unit = UnitInertia.SolidBox(sx, sy, sz)
+            shape = Box(sx, sy, sz)
+        else:
+            unit = UnitInertia.SolidCylinder(sx / 2.0, sz, [0.0, 0.0, 1.0])
+            shape = Cylinder(sx / 2.0, sz)
+        body = plant.AddRigidBody(obj.name, instance, SpatialInertia(mass, np.zeros(3), unit))
+        props = ProximityProperties()
+        AddContactMaterial(
+            dissipation=HUNT_CROSSLEY_DISSIPATION,
+            point_stiffness=POINT_STIFFNESS,
+            friction=CoulombFriction(OBJECT_FRICTION, OBJECT_FRICTION),
+            properties=props,
+        )
+        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"{obj.name}_collision", props)
+        for k, p in enumerate(_corner_points(obj, CORNER_SPHERE_RADIUS)):
+            plant.RegisterCollisionGeometry(
+                body, RigidTransform(p), Sphere(CORNER_SPHERE_RADIUS), f"{obj.name}_corner_{k}", props
+            )
+        color = (0.9, 0.2, 0.2, 1.0) if obj.name == "target" else (0.3, 0.6, 0.3, 1.0)
+        plant.RegisterVisualGeometry(body, RigidTransform(), shape, f"{obj.name}_visual", np.array(color))
+        indices.append(body.index())
+    has_target = include_target and scene.target is not None
+    return SceneBodies(
+        objects=tuple(indices[: len(scene.objects)]),
+        target=indices[-1] if has_target else None,
+        names=tuple(o.name for o in items),
+    )
+
+
+def set_default_object_poses(plant, scene: Scene, bodies: SceneBodies, X_WS) -> None:
+    """Places every object at its scene pose X_SO, expressed in the world as X_WS * X_SO."""
+    from pydrake.math import RigidTransform
+
+    items = list(scene.objects) + ([scene.target.as_object()] if bodies.target is not None else [])
+    for obj, index in zip(items, bodies.all()):
+        plant.SetDefaultFreeBodyPose(plant.get_body(index), X_WS @ RigidTransform(obj.X_SO))
+
+
+def assign_render_labels(scene_graph, plant, shelf_instance, robot_instance, bodies: SceneBodies) -> None:
+    """Sets the perception role: shelf label 0, objects i + 1, target last; the robot gets no perception role."""
+    from pydrake.geometry import PerceptionProperties, RenderLabel, Role, RoleAssign, MakePhongIllustrationProperties  # noqa: F401
+
+    inspector = scene_graph.model_inspector()
+    source_id = plant.get_source_id()
+
+    def relabel(body, label):
+        for geometry_id in plant.GetVisualGeometriesForBody(body):
+            props = PerceptionProperties()
+            props.AddProperty("label", "id", RenderLabel(label))
+            illustration = inspector.GetIllustrationProperties(geometry_id)
+            if illustration is not None and illustration.HasProperty("phong", "diffuse"):
+                props.AddProperty("phong", "diffuse", illustration.GetProperty("phong", "diffuse"))
+            if inspector.GetPerceptionProperties(geometry_id) is not None:
+                scene_graph.RemoveRole(source_id, geometry_id, Role.kPerception)
+            scene_graph.AssignRole(source_id, geometry_id, props, RoleAssign.kNew)
+
+    for body_index in plant.GetBodyIndices(shelf_instance):
+        relabel(plant.get_body(body_index), 0)
+    for label, body_index in enumerate(bodies.all(), start=1):
+        relabel(plant.get_body(body_index), label)
+    for body_index in plant.GetBodyIndices(robot_instance):
+        for geometry_id in plant.GetVisualGeometriesForBody(plant.get_body(body_index)):
+            if inspector.GetPerceptionProperties(geometry_id) is not None:
+                scene_graph.RemoveRole(source_id, geometry_id, Role.kPerception)
