@@ -15,6 +15,8 @@ from slax_drake.errors import UserError
 
 COMMAND_MODULES = (
     "slax_drake.scene.commands",
+    "slax_drake.occupancy.commands",
+    "slax_drake.dataset.commands",
 )
 
 
