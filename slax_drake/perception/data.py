@@ -66,6 +66,40 @@ class TrainingData:
         }
 
 
+def load_dataset(folder: str | Path, limit: int | None = None, progress: bool = False) -> TrainingData:
+    """Reads a ``slax-drake dataset`` folder (through ``slax_drake.dataset``'s reader) into memory: each
+    sample's depth image and the 2D distribution of its own target ratio. ``limit`` keeps the first samples."""
+    from slax_drake.dataset.shards import TARGET_SIZES as DATASET_SIZES
+    from slax_drake.dataset.shards import DatasetReader
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise PerceptionDataError(f"{folder}: no such dataset folder (make one with `slax-drake dataset`)")
+    if [tuple(s) for s in DATASET_SIZES] != [tuple(s) for s in TARGET_SIZES]:
+        raise PerceptionDataError(f"{folder}: dataset target ratios {DATASET_SIZES} differ from the heads {TARGET_SIZES}")
+    reader = DatasetReader(folder)
+    n = len(reader) if limit is None else min(limit, len(reader))
+    if n == 0:
+        raise PerceptionDataError(f"{folder}: the dataset holds no samples")
+    first = reader[0]
+    h, w = first["depth"].shape[-2:]
+    depth = np.empty((n, h, w), np.float32)
+    p2d = np.empty((n, h, w), np.float32)
+    own = np.empty(n, np.int64)
+    from tqdm import tqdm
+
+    try:
+        for i in tqdm(range(n), desc=f"reading {folder.name}", unit="sample", disable=not progress, leave=False):
+            sample = reader[i]
+            r = int(sample["target_ratio"])
+            depth[i] = sample["depth"][0]
+            p2d[i] = sample["p2d"][r]
+            own[i] = r
+    finally:
+        reader.close()
+    return TrainingData(depth, p2d, own, str(folder))
+
+
 def from_scenes(scenes, resolution: tuple[int, int], grid_step: float = 0.005) -> TrainingData:
     """Renders each scene's depth image at ``resolution`` (width, height) with the ray caster and computes the
     occupancy of its own target size (the ground truth of ``slax_drake.occupancy``)."""
