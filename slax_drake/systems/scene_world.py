@@ -113,7 +113,7 @@ def add_scene_objects(plant, scene: Scene, density: float, include_target: bool 
     """Adds the scene's objects (and target) as free bodies, each in its own model instance named after it.
 
     Call before ``plant.Finalize()``; set their poses with ``set_default_object_poses`` (or
-    ``plant.SetDefaultFreeBodyPose``) once the shelf's pose in the world is known.
+    ``plant.SetDefaultFloatingBaseBodyPose``) once the shelf's pose in the world is known.
     """
     from pydrake.geometry import Box, Cylinder, ProximityProperties, Sphere
     from pydrake.multibody.plant import CoulombFriction
@@ -165,7 +165,7 @@ def set_default_object_poses(plant, scene: Scene, bodies: SceneBodies, X_WS) -> 
 
     items = list(scene.objects) + ([scene.target.as_object()] if bodies.target is not None else [])
     for obj, index in zip(items, bodies.all()):
-        plant.SetDefaultFreeBodyPose(plant.get_body(index), X_WS @ RigidTransform(obj.X_SO))
+        plant.SetDefaultFloatingBaseBodyPose(plant.get_body(index), X_WS @ RigidTransform(obj.X_SO))
 
 
 def assign_render_labels(scene_graph, plant, shelf_instance, robot_instance, bodies: SceneBodies) -> None:

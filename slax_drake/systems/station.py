@@ -1,0 +1,355 @@
+"""The station: Fetch with the bluction tool, the shelf with a scene's objects, suction and the tool camera.
+
+``MakeStation(scenario, scene=None, meshcat=None)`` builds one Drake Diagram in the order of Drake's
+hardware_sim.py (plant config -> directives -> scene objects -> Finalize -> controllers -> suction -> camera ->
+visualization) from a typed ``StationScenario`` whose model directives live in ``sim_configs/station_*.yaml``.
+
+Shelf placement. The paper keeps camera and shelf static relative to each other in one observation
+configuration of the arm. The scenario's ``observation_configuration`` is that configuration; the shelf frame S
+is welded to the world at X_WS = X_WC(q_obs) * inv(X_SC), with X_SC the scene camera's pose, so that at q_obs
+the tool camera's frame is exactly the scene's X_SC. The station rejects (ConfigError) a configuration whose
+camera is not level (the shelf would tilt by more than 1 mrad).
+
+Ports of the station (all lower_snake_case):
+
+inputs
+- ``desired_state`` (18): [q_d, v_d] of ``PLANNED_JOINTS`` (torso m, arm and shaft rad; m/s, rad/s). Feed it a
+  TrajectorySource of a joint trajectory (positions and derivatives), or a constant. The head is held at
+  ``head_configuration``. Each joint is a PD-controlled actuator of the discrete plant (implicit PD, gains in
+  the URDF) with gravity compensation as feed-forward; torques are clamped to the effort limits.
+- ``suction_command`` (1): on when > 0.5.
+
+outputs
+- ``measured_state`` (18): [q, v] of ``PLANNED_JOINTS``.
+- ``robot_state``: the full state of the robot model instance; ``plant_state``: the plant's whole state.
+- ``depth_image`` (ImageDepth32F, metres), ``label_image`` (ImageLabel16I: shelf 0, objects[i] i + 1, target
+  last, background/robot empty), ``color_image``: the tool camera, rendered only when evaluated (camera=True).
+- ``query_object``, ``body_poses``, ``contact_results``, ``suction_force`` (1: the pull in N).
+"""
+
+# No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
+import dataclasses
+import math
+import typing
+from pathlib import Path
+
+import numpy as np
+
+from slax_drake.config import REPO_ROOT, load_scenario
+from slax_drake.errors import ConfigError, UserError
+from slax_drake.scene.camera import Camera
+from slax_drake.scene.model import Scene
+from slax_drake.scene.sampling import shelf_of
+from slax_drake.systems import robot as robot_model
+from slax_drake.systems.suction import SuctionParameters
+
+DEFAULT_STATION = "sim_configs/station_sim_shelf.yaml"
+SHELF_BODY = "shelf_body"
+
+
+class SceneMismatchError(UserError):
+    """A scene does not belong to the station's shelf (different bay)."""
+
+
+def _default_plant_config():
+    from pydrake.multibody.plant import MultibodyPlantConfig
+
+    return MultibodyPlantConfig(time_step=0.002, contact_model="point", discrete_contact_approximation="lagged")
+
+
+@dataclasses.dataclass
+class StationScenario:
+    """A station: the scene scenario it serves, the model directives and the plant, control and camera settings.
+
+    ``directives`` must add the robot as model ``robot_model`` (welded to the world by an ``add_weld`` from
+    ``world``) and the shelf as model ``shelf_model`` (not welded: the station places it from the camera).
+    ``observation_configuration`` maps every name of ``PLANNED_JOINTS`` to its value at the observation pose.
+    """
+
+    scene_config: str = "sim_configs/sim_shelf.yaml"
+    directives: typing.List[typing.Any] = dataclasses.field(default_factory=list)
+    plant_config: typing.Any = dataclasses.field(default_factory=_default_plant_config)
+    robot_model: str = "fetch"
+    shelf_model: str = "shelf"
+    observation_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
+    head_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
+    suction: SuctionParameters = dataclasses.field(default_factory=SuctionParameters)
+    camera: bool = True
+
+
+def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:
+    """Reads a station YAML; raises ConfigError naming the file on a missing file or a bad key/value."""
+    from pydrake.common.yaml import yaml_load_typed
+    from pydrake.multibody.parsing import ModelDirective
+    from pydrake.multibody.plant import MultibodyPlantConfig
+
+    @dataclasses.dataclass
+    class _Schema:  # the same fields, with Drake's types for the typed loader
+        scene_config: str = "sim_configs/sim_shelf.yaml"
+        directives: typing.List[ModelDirective] = dataclasses.field(default_factory=list)
+        plant_config: MultibodyPlantConfig = dataclasses.field(default_factory=_default_plant_config)
+        robot_model: str = "fetch"
+        shelf_model: str = "shelf"
+        observation_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
+        head_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
+        suction: SuctionParameters = dataclasses.field(default_factory=SuctionParameters)
+        camera: bool = True
+
+    path = Path(path)
+    if not path.is_file() and not path.is_absolute() and (REPO_ROOT / path).is_file():
+        path = REPO_ROOT / path
+    if not path.is_file():
+        raise ConfigError(f"{path}: no such station file")
+    try:
+        raw = yaml_load_typed(schema=_Schema, filename=str(path), defaults=_Schema())
+    except Exception as e:
+        raise ConfigError(f"{path}: {' '.join(str(e).split())}") from None
+    scenario = StationScenario(**{f.name: getattr(raw, f.name) for f in dataclasses.fields(_Schema)})
+    _validate(scenario, str(path))
+    return scenario
+
+
+def _validate(scenario: StationScenario, source: str) -> None:
+    missing = [n for n in robot_model.PLANNED_JOINTS if n not in scenario.observation_configuration]
+    unknown = [n for n in scenario.observation_configuration if n not in robot_model.PLANNED_JOINTS]
+    if missing or unknown:
+        raise ConfigError(
+            f"{source}: key 'observation_configuration' must give exactly the joints {list(robot_model.PLANNED_JOINTS)}"
+            f" (missing {missing}, unknown {unknown})"
+        )
+    if scenario.plant_config.contact_model != "point":
+        raise ConfigError(f"{source}: key 'plant_config.contact_model' = {scenario.plant_config.contact_model!r}: must be 'point'")
+    if not scenario.plant_config.time_step > 0:
+        raise ConfigError(f"{source}: key 'plant_config.time_step' must be positive (a discrete plant)")
+    if scenario.plant_config.discrete_contact_approximation not in ("sap", "similar", "lagged"):
+        raise ConfigError(
+            f"{source}: key 'plant_config.discrete_contact_approximation' = "
+            f"{scenario.plant_config.discrete_contact_approximation!r}: PD-controlled actuators need 'sap', 'similar' or 'lagged'"
+        )
+    p = scenario.suction
+    for name in ("vacuum_pressure", "cup_radius", "max_distance", "max_angle_deg"):
+        if not getattr(p, name) > 0:
+            raise ConfigError(f"{source}: key 'suction.{name}' = {getattr(p, name)!r}: must be positive")
+
+
+def observation_positions(scenario: StationScenario) -> np.ndarray:
+    """q_obs of ``PLANNED_JOINTS`` (9)."""
+    return np.array([scenario.observation_configuration[n] for n in robot_model.PLANNED_JOINTS])
+
+
+def _base_weld(scenario: StationScenario):
+    """X_WB of the robot's base from the directives' add_weld (identity when no X_PC is given)."""
+    from pydrake.math import RigidTransform
+
+    child = f"{scenario.robot_model}::{robot_model.BASE_BODY}"
+    for directive in scenario.directives:
+        weld = directive.add_weld
+        if weld is not None and weld.child == child:
+            if weld.parent != "world":
+                raise ConfigError(f"the robot's base must be welded to 'world', not {weld.parent!r}")
+            return weld.X_PC.GetDeterministicValue() if weld.X_PC is not None else RigidTransform()
+    raise ConfigError(f"the directives do not weld {child} to the world")
+
+
+def camera_pose_at(scenario: StationScenario, q_planned: np.ndarray):
+    """X_WC of the tool camera at the given planned joint positions (head at head_configuration)."""
+    plant = robot_model.robot_only_plant()
+    context = plant.CreateDefaultContext()
+    q = np.zeros(plant.num_positions())
+    q[robot_model.planned_joint_indices(plant)] = q_planned
+    for name, value in scenario.head_configuration.items():
+        q[plant.GetJointByName(name).position_start()] = value
+    plant.SetPositions(context, q)
+    X_BC = plant.GetFrameByName(robot_model.CAMERA_FRAME).CalcPoseInWorld(context)
+    return _base_weld(scenario) @ X_BC
+
+
+def shelf_pose(scenario: StationScenario, camera: Camera):
+    """X_WS = X_WC(q_obs) * inv(X_SC); ConfigError when the shelf would not stand level (> 1 mrad)."""
+    from pydrake.math import RigidTransform
+
+    X_WS = camera_pose_at(scenario, observation_positions(scenario)) @ RigidTransform(camera.X_SC).inverse()
+    tilt = math.acos(min(1.0, max(-1.0, X_WS.rotation().matrix()[2, 2])))
+    if tilt > 1e-3:
+        raise ConfigError(
+            f"the observation configuration tilts the shelf by {tilt:.4f} rad: at q_obs the camera's roll and pitch "
+            "must equal the scene camera's (level roll, pitch_deg down)"
+        )
+    return X_WS
+
+
+def camera_render_cameras(camera: Camera, renderer_name: str):
+    """Drake ColorRenderCamera and DepthRenderCamera with exactly the intrinsics of ``camera``."""
+    from pydrake.geometry import ClippingRange, ColorRenderCamera, DepthRange, DepthRenderCamera, RenderCameraCore
+    from pydrake.math import RigidTransform
+    from pydrake.systems.sensors import CameraInfo
+
+    info = CameraInfo(
+        width=camera.width, height=camera.height, focal_x=camera.fx, focal_y=camera.fy,
+        center_x=camera.cx, center_y=camera.cy,
+    )
+    core = RenderCameraCore(renderer_name, info, ClippingRange(camera.near, camera.far), RigidTransform())
+    return ColorRenderCamera(core, False), DepthRenderCamera(core, DepthRange(camera.near, camera.far))
+
+
+def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=None, camera: bool | None = None):
+    """Builds the station Diagram (ports in the module docstring). ``scene``: objects to place (or an empty shelf).
+
+    ``camera`` overrides ``scenario.camera`` (False leaves out the RgbdSensor and its renderer).
+    """
+    from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, MakeRenderEngineVtk, RenderEngineVtkParams
+    from pydrake.math import RigidTransform
+    from pydrake.multibody.parsing import ModelDirectives, Parser, ProcessModelDirectives
+    from pydrake.multibody.plant import AddMultibodyPlant
+    from pydrake.systems.controllers import InverseDynamics
+    from pydrake.systems.framework import DiagramBuilder
+    from pydrake.systems.primitives import Adder, ConstantVectorSource, MatrixGain
+    from pydrake.systems.sensors import RgbdSensor
+
+    from slax_drake.systems.scene_world import add_scene_objects, assign_render_labels, set_default_object_poses
+    from slax_drake.systems.suction import SuctionCup
+
+    config = load_scenario(scenario.scene_config)
+    shelf = shelf_of(config)
+    if scene is not None and scene.shelf != shelf:
+        raise SceneMismatchError(
+            f"the scene's shelf {scene.shelf} differs from the station's ({scenario.scene_config}: {shelf}); "
+            "use the station file made for that shelf"
+        )
+    cam = scene.camera if scene is not None else Camera.from_config(config.camera)
+    use_camera = scenario.camera if camera is None else camera
+
+    builder = DiagramBuilder()
+    plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
+    parser = Parser(plant)
+    robot_model.add_package(parser)
+    ProcessModelDirectives(ModelDirectives(directives=scenario.directives), plant, parser)
+    if not plant.HasModelInstanceNamed(scenario.robot_model) or not plant.HasModelInstanceNamed(scenario.shelf_model):
+        raise ConfigError(f"the directives must add models named {scenario.robot_model!r} and {scenario.shelf_model!r}")
+    robot = plant.GetModelInstanceByName(scenario.robot_model)
+    shelf_instance = plant.GetModelInstanceByName(scenario.shelf_model)
+    bodies = None
+    if scene is not None:
+        bodies = add_scene_objects(plant, scene, config.objects.density)
+    X_WS = shelf_pose(scenario, cam)
+    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(SHELF_BODY, shelf_instance), X_WS)
+    plant.Finalize()
+    plant.set_name("plant")
+
+    # The robot never collides with itself in this model (its boxes overlap at the joints).
+    robot_geometries = [g for b in plant.GetBodyIndices(robot) for g in plant.GetCollisionGeometriesForBody(plant.get_body(b))]
+    scene_graph.collision_filter_manager().Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(robot_geometries)))
+    from slax_drake.systems.scene_world import SceneBodies
+
+    assign_render_labels(scene_graph, plant, shelf_instance, robot, bodies or SceneBodies((), None, ()))
+    if scene is not None:
+        set_default_object_poses(plant, scene, bodies, X_WS)
+
+    # Default robot pose: the observation configuration.
+    q_default = plant.GetDefaultPositions(robot).copy()
+    planned_local = _local_position_indices(plant, robot, robot_model.PLANNED_JOINTS)
+    q_default[planned_local] = observation_positions(scenario)
+    head_names = tuple(scenario.head_configuration)
+    q_default[_local_position_indices(plant, robot, head_names)] = [scenario.head_configuration[n] for n in head_names]
+    plant.SetDefaultPositions(robot, q_default)
+
+    # Desired state: the planned joints from the input, the head (and any other actuated joint) held still.
+    actuated_joints = [plant.get_joint_actuator(i).joint().name() for i in plant.GetJointActuatorIndices(robot)]
+    nu = len(actuated_joints)
+    n_planned = len(robot_model.PLANNED_JOINTS)
+    D = np.zeros((2 * nu, 2 * n_planned))
+    hold = np.zeros(2 * nu)
+    for k, name in enumerate(actuated_joints):
+        if name in robot_model.PLANNED_JOINTS:
+            j = robot_model.PLANNED_JOINTS.index(name)
+            D[k, j] = 1.0
+            D[nu + k, n_planned + j] = 1.0
+        else:
+            hold[k] = scenario.head_configuration.get(name, 0.0)
+    select = builder.AddNamedSystem("desired_state_to_actuators", MatrixGain(D))
+    held = builder.AddNamedSystem("held_joints", ConstantVectorSource(hold))
+    desired = builder.AddNamedSystem("desired_actuator_state", Adder(2, 2 * nu))
+    builder.Connect(select.get_output_port(), desired.get_input_port(0))
+    builder.Connect(held.get_output_port(), desired.get_input_port(1))
+    builder.Connect(desired.get_output_port(), plant.get_desired_state_input_port(robot))
+    builder.ExportInput(select.get_input_port(), "desired_state")
+
+    # Gravity compensation (feed-forward) from a plant of the robot alone.
+    controller_plant = builder.AddNamedSystem("controller_plant", robot_model.robot_only_plant())  # kept alive
+    gravity = builder.AddNamedSystem(
+        "gravity_compensation", InverseDynamics(controller_plant, InverseDynamics.InverseDynamicsMode.kGravityCompensation)
+    )
+    B = controller_plant.MakeActuationMatrix()  # nv x nu, one 1 per column
+    to_actuation = builder.AddNamedSystem("generalized_to_actuation", MatrixGain(B.T))
+    builder.Connect(plant.get_state_output_port(robot), gravity.get_input_port_estimated_state())
+    builder.Connect(gravity.get_output_port_generalized_force(), to_actuation.get_input_port())
+    builder.Connect(to_actuation.get_output_port(), plant.get_actuation_input_port(robot))
+
+    # Measured state of the planned joints.
+    nq_robot = plant.num_positions(robot)
+    S = np.zeros((2 * n_planned, 2 * nq_robot))
+    for j, k in enumerate(planned_local):
+        S[j, k] = 1.0
+        S[n_planned + j, nq_robot + _local_velocity_index(plant, robot, robot_model.PLANNED_JOINTS[j])] = 1.0
+    measured = builder.AddNamedSystem("measured_planned_state", MatrixGain(S))
+    builder.Connect(plant.get_state_output_port(robot), measured.get_input_port())
+    builder.ExportOutput(measured.get_output_port(), "measured_state")
+    builder.ExportOutput(plant.get_state_output_port(robot), "robot_state")
+    builder.ExportOutput(plant.get_state_output_port(), "plant_state")
+
+    # Suction.
+    cup_frame = plant.GetFrameByName(robot_model.CUP_TIP_FRAME, robot)
+    suction = builder.AddNamedSystem(
+        "suction_cup",
+        SuctionCup(plant, scene_graph, cup_frame, scenario.suction, object_bodies=bodies.all() if bodies else []),
+    )
+    builder.Connect(scene_graph.get_query_output_port(), suction.GetInputPort("query_object"))
+    builder.Connect(suction.GetOutputPort("spatial_forces"), plant.get_applied_spatial_force_input_port())
+    builder.ExportInput(suction.GetInputPort("suction_command"), "suction_command")
+    builder.ExportOutput(suction.GetOutputPort("suction_state"), "suction_force")
+
+    # The tool camera: the scene package's Camera, attached at camera_optical_frame.
+    if use_camera:
+        renderer = "slax_vtk"
+        scene_graph.AddRenderer(renderer, MakeRenderEngineVtk(RenderEngineVtkParams()))
+        color_camera, depth_camera = camera_render_cameras(cam, renderer)
+        optical = plant.GetFrameByName(robot_model.CAMERA_FRAME, robot)
+        sensor = builder.AddNamedSystem(
+            "tool_camera",
+            RgbdSensor(
+                plant.GetBodyFrameIdOrThrow(optical.body().index()),
+                optical.GetFixedPoseInBodyFrame(),
+                color_camera,
+                depth_camera,
+            ),
+        )
+        builder.Connect(scene_graph.get_query_output_port(), sensor.query_object_input_port())
+        builder.ExportOutput(sensor.depth_image_32F_output_port(), "depth_image")
+        builder.ExportOutput(sensor.label_image_output_port(), "label_image")
+        builder.ExportOutput(sensor.color_image_output_port(), "color_image")
+
+    builder.ExportOutput(scene_graph.get_query_output_port(), "query_object")
+    builder.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
+    builder.ExportOutput(plant.get_contact_results_output_port(), "contact_results")
+
+    if meshcat is not None:
+        from pydrake.visualization import AddDefaultVisualization
+
+        AddDefaultVisualization(builder, meshcat)
+
+    diagram = builder.Build()
+    diagram.set_name("station")
+    return diagram
+
+
+def _local_position_indices(plant, instance, names) -> list[int]:
+    """Indices of the joints' positions within the model instance's position vector."""
+    q = np.arange(plant.num_positions(), dtype=float)
+    local = plant.GetPositionsFromArray(instance, q).astype(int).tolist()
+    return [local.index(plant.GetJointByName(n, instance).position_start()) for n in names]
+
+
+def _local_velocity_index(plant, instance, name) -> int:
+    v = np.arange(plant.num_velocities(), dtype=float)
+    local = plant.GetVelocitiesFromArray(instance, v).astype(int).tolist()
+    return local.index(plant.GetJointByName(name, instance).velocity_start())
