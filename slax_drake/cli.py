@@ -18,6 +18,7 @@ COMMAND_MODULES = (
     "slax_drake.perception.commands",
     "slax_drake.occupancy.commands",
     "slax_drake.dataset.commands",
+    "slax_drake.systems.commands",
 )
 
 
