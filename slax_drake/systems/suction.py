@@ -92,7 +92,7 @@ class SuctionCup(LeafSystem):
         X_WB = query.GetPoseInWorld(self._cup_frame_id)
         X_WT = X_WB @ self._X_BT
         p_WT = X_WT.translation()
-        axis_W = X_WT.rotation().col(0)
+        axis_W = X_WT.rotation().matrix()[:, 0].copy()
         best = None
         for result in query.ComputeSignedDistanceToPoint(p_WT, p.max_distance):
             owner = self._geometry_body.get(result.id_G)
