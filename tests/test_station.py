@@ -1,0 +1,102 @@
+"""The full station: point contact, the scene's objects at rest where the JSON puts them, the tool camera equal
+to the scene camera, the exported ports, and bad station files."""
+
+import numpy as np
+import pytest
+
+from slax_drake.errors import ConfigError
+from slax_drake.scene.sampling import sample_scene
+from slax_drake.systems import robot as robot_model
+from slax_drake.systems.station import MakeStation, load_station_scenario, observation_positions
+
+
+@pytest.fixture(scope="module")
+def station(sim_scenario):
+    scenario = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    scene = sample_scene(sim_scenario, 6, seed=3)
+    return scenario, scene, MakeStation(scenario, scene, camera=False)
+
+
+def _simulator(diagram, seconds):
+    from pydrake.systems.analysis import Simulator
+
+    simulator = Simulator(diagram)
+    context = simulator.get_mutable_context()
+    q = diagram.GetOutputPort("measured_state").Eval(context)[:9]
+    diagram.GetInputPort("desired_state").FixValue(context, np.concatenate([q, np.zeros(9)]))
+    diagram.GetInputPort("suction_command").FixValue(context, [0.0])
+    simulator.AdvanceTo(seconds)
+    return simulator
+
+
+def test_contact_model_is_point(station):
+    from pydrake.multibody.plant import ContactModel
+
+    plant = station[2].GetSubsystemByName("plant")
+    assert plant.get_contact_model() == ContactModel.kPoint
+    assert plant.time_step() > 0
+
+
+def test_objects_rest_at_their_json_poses_and_the_arm_holds(station):
+    scenario, scene, diagram = station
+    simulator = _simulator(diagram, 0.6)
+    context = simulator.get_context()
+    plant = diagram.GetSubsystemByName("plant")
+    plant_context = plant.GetMyContextFromRoot(context)
+    X_SW = plant.GetFrameByName("shelf_body").CalcPoseInWorld(plant_context).inverse()
+    for obj in scene.objects + (scene.target.as_object(),):
+        X_SO = X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.GetBodyByName(obj.name))
+        assert np.linalg.norm(X_SO.translation() - obj.X_SO[:3, 3]) < 1e-3, obj.name
+        assert np.allclose(X_SO.rotation().matrix(), obj.X_SO[:3, :3], atol=1e-2), obj.name
+    q = diagram.GetOutputPort("measured_state").Eval(context)[:9]
+    assert np.abs(q - observation_positions(scenario)).max() < 1e-3
+
+
+def test_tool_camera_is_the_scene_camera_at_the_observation_pose(station):
+    scenario, scene, diagram = station
+    plant = diagram.GetSubsystemByName("plant")
+    context = plant.CreateDefaultContext()
+    X_SC = plant.GetFrameByName(robot_model.CAMERA_FRAME).CalcPose(context, plant.GetFrameByName("shelf_body"))
+    assert np.allclose(X_SC.GetAsMatrix4(), scene.camera.X_SC, atol=1e-9)
+    X_WS = plant.GetFrameByName("shelf_body").CalcPoseInWorld(context)
+    assert X_WS.rotation().matrix()[2, 2] > np.cos(1e-3)  # the shelf stands level
+
+
+def test_ports(station):
+    diagram = station[2]
+    inputs = {diagram.get_input_port(i).get_name() for i in range(diagram.num_input_ports())}
+    outputs = {diagram.get_output_port(i).get_name() for i in range(diagram.num_output_ports())}
+    assert inputs == {"desired_state", "suction_command"}
+    assert {"measured_state", "robot_state", "query_object", "body_poses", "contact_results", "suction_force"} <= outputs
+    assert diagram.GetInputPort("desired_state").size() == 18
+
+
+@pytest.mark.xfail(strict=True, reason="open issue: Drake's depth differs from SceneRaycaster by up to ~1-2 cm on "
+                   "11 % of pixels (an angular offset between the two, not yet found); see the B report")
+def test_depth_image_agrees_with_the_scene_raycaster(sim_scenario):
+    from slax_drake.scene.raycast import SceneRaycaster
+
+    scenario = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    scene = sample_scene(sim_scenario, 4, seed=5)
+    small = scene.camera.with_resolution(160, 120)
+    scene = type(scene)(scene.shelf, small, scene.objects, scene.target, scene.seed)
+    diagram = MakeStation(scenario, scene)
+    context = diagram.CreateDefaultContext()
+    depth = diagram.GetOutputPort("depth_image").Eval(context).data[:, :, 0]
+    labels = diagram.GetOutputPort("label_image").Eval(context).data[:, :, 0]
+    ref_depth, ref_labels = SceneRaycaster(scene, include_target=True).render(small)
+    both = np.isfinite(ref_depth) & (ref_depth > 0) & np.isfinite(depth) & (depth > 0)
+    assert both.mean() > 0.5
+    close = np.abs(depth[both] - ref_depth[both]) < 0.01
+    assert close.mean() > 0.97
+    same = labels[both].astype(int) == ref_labels[both].astype(int)
+    assert same.mean() > 0.97
+
+
+def test_bad_station_file(tmp_path):
+    bad = tmp_path / "station.yaml"
+    bad.write_text("observation_configuration: {torso_lift_joint: 0.1}\n")
+    with pytest.raises(ConfigError, match="observation_configuration"):
+        load_station_scenario(bad)
+    with pytest.raises(ConfigError, match="no such station file"):
+        load_station_scenario(tmp_path / "missing.yaml")
