@@ -182,12 +182,9 @@ def camera_render_cameras(camera: Camera, renderer_name: str):
     """Drake ColorRenderCamera and DepthRenderCamera with exactly the intrinsics of ``camera``."""
     from pydrake.geometry import ClippingRange, ColorRenderCamera, DepthRange, DepthRenderCamera, RenderCameraCore
     from pydrake.math import RigidTransform
-    from pydrake.systems.sensors import CameraInfo
+    from slax_drake.systems.scene_renderer import drake_camera_info
 
-    info = CameraInfo(
-        width=camera.width, height=camera.height, focal_x=camera.fx, focal_y=camera.fy,
-        center_x=camera.cx, center_y=camera.cy,
-    )
+    info = drake_camera_info(camera)
     core = RenderCameraCore(renderer_name, info, ClippingRange(camera.near, camera.far), RigidTransform())
     return ColorRenderCamera(core, False), DepthRenderCamera(core, DepthRange(camera.near, camera.far))
 
