@@ -15,6 +15,7 @@ from slax_drake.errors import UserError
 
 COMMAND_MODULES = (
     "slax_drake.scene.commands",
+    "slax_drake.policies.commands",
     "slax_drake.perception.commands",
     "slax_drake.occupancy.commands",
     "slax_drake.dataset.commands",

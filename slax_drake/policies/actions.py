@@ -1,0 +1,380 @@
+"""The bluction tool's action model: pushes with the blade and suction pick-and-place, in plain numpy.
+
+Shared by the fast shelf simulator and (later) the Drake planner LeafSystem, so the two agree on which
+actions exist. Everything is in the shelf frame S (x right, y into the shelf, z up; metres).
+
+Push (q, d) (paper Sec. III): the blade (``blade_width`` along x, ``blade_height`` tall) is inserted from the
+front along +y, edge first on its shaft (``tube_diameter`` wide), and turned in the gap beside the object, from
+the object's front extreme to ``push_contact_depth`` behind it (at most its centre), against the object's
+extreme x (its axis-aligned extent) on the side opposite the push (:meth:`ActionModel.push_tool_rects`). The
+blade needs a gap of at least ``blade_width`` between the object and its neighbour or the wall, and the
+shaft's way in from outside the shelf must touch no other object. The blade then moves a signed distance d along x and the
+object translates with it (first order: no rotation). The object stops ``clearance`` before a neighbour or a
+wall; the blade and its shaft (the lane, dragged along) must touch no other object; exactly one object moves;
+no cell the object newly covers may be hidden behind *another* object in the overhead view
+(:mod:`slax_drake.policies.floor`).
+
+Suction (q, d_x, d_z): the cup (``cup_diameter``) seals on the camera-facing side: a box's side face whose
+outward normal points most toward the camera, or a cylinder's front (sealable only when its radius is at least
+``min_seal_radius``), at the highest sealable point. The tube approaches straight along +y from outside the
+shelf; objects taller than the tube's underside in its corridor block it; the contact must lie within
+``max_suction_depth`` of the opening and the object must weigh at most ``max_suction_mass``. The object is
+lifted ``lift_height``, pulled straight out of the shelf (the path must be collision free and not cross
+hidden space), translated by d_x, and pushed straight in to depth y = d_z (the path and the placement must be
+collision free, inside the walls, and cross no cell hidden behind any known object, the object's own old
+shadow included, since nobody has seen it yet).
+
+``enumerate`` lists a state's candidates with d discretised at ``push_resolution`` (the maximal push is always a
+candidate) and placements on a ``suction_resolution`` lattice around the object, and returns every rejected
+candidate with the reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from slax_drake.policies.floor import (
+    NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, shift_mask,
+)
+from slax_drake.scene.footprint import Footprint, clear_of
+from slax_drake.scene.model import SceneObject, Shelf
+
+FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
+BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
+
+
+@dataclasses.dataclass(frozen=True)
+class ToolConfig:
+    """The bluction tool and the action discretisation (metres, kilograms)."""
+
+    blade_width: float = 0.065
+    blade_height: float = 0.075
+    cup_diameter: float = 0.03
+    tube_diameter: float = 0.03
+    max_suction_depth: float = 0.40  # the tube's length: deepest contact behind the opening
+    max_suction_mass: float = 2.0
+    min_seal_radius: float = 0.04  # a cylinder of smaller radius curves too much for the cup to seal
+    lift_height: float = 0.02
+    object_density: float = 400.0  # kg/m^3, to weigh objects
+    clearance: float = 0.002  # moved objects stop this far from neighbours and walls
+    push_resolution: float = 0.05
+    suction_resolution: float = 0.05
+    min_push: float = 0.01
+    push_contact_depth: float = 0.03  # the blade's tip goes this far past the object's front extreme
+    cell: float = 0.005  # the path step and the hidden-space raster's cell
+
+
+@dataclasses.dataclass(frozen=True)
+class Push:
+    """Push object ``name`` by ``d`` metres along x with the blade starting at ``q`` (x, y, z)."""
+
+    name: str
+    q: tuple[float, float, float]
+    d: float
+
+    kind = "push"
+
+    def describe(self) -> str:
+        return f"push {self.name} d={self.d:+.3f}"
+
+
+@dataclasses.dataclass(frozen=True)
+class Suction:
+    """Suction object ``name`` at contact ``q``, translate it by ``dx`` and place it at depth y = ``dz``."""
+
+    name: str
+    q: tuple[float, float, float]
+    dx: float
+    dz: float
+
+    kind = "suction"
+
+    def describe(self) -> str:
+        return f"suction {self.name} dx={self.dx:+.3f} dz={self.dz:+.3f}"
+
+
+Action = Push | Suction
+
+
+@dataclasses.dataclass(frozen=True)
+class Rejected:
+    """A candidate that was skipped: what it was and why."""
+
+    what: str
+    reason: str
+
+
+@dataclasses.dataclass
+class Candidates:
+    feasible: list
+    rejected: list
+
+
+def object_mass(obj: SceneObject, density: float) -> float:
+    sx, sy, sz = obj.size
+    volume = math.pi * (sx / 2) ** 2 * sz if obj.shape == "cylinder" else sx * sy * sz
+    return density * volume
+
+
+def apply_action(objects: tuple[SceneObject, ...], action) -> tuple[SceneObject, ...]:
+    """The objects after the action, exactly as the model says (no feasibility check)."""
+    out = []
+    for o in objects:
+        if o.name == action.name:
+            x, y = float(o.center[0]), float(o.center[1])
+            o = o.moved_to(x + action.d, y) if isinstance(action, Push) else o.moved_to(x + action.dx, action.dz)
+        out.append(o)
+    return tuple(out)
+
+
+class ActionModel:
+    """Enumerates feasible pushes and suctions for a set of known objects (plus known immovable obstacles)."""
+
+    def __init__(self, shelf: Shelf, eye_xy, tool: ToolConfig = ToolConfig()):
+        if abs(tool.push_resolution / tool.cell - round(tool.push_resolution / tool.cell)) > 1e-9 or abs(
+            tool.suction_resolution / tool.cell - round(tool.suction_resolution / tool.cell)
+        ) > 1e-9:
+            raise ValueError("push_resolution and suction_resolution must be multiples of cell")
+        self.shelf = shelf
+        self.eye_xy = np.asarray(eye_xy, dtype=float)[:2]
+        self.tool = tool
+        self.grid = FloorGrid(shelf, tool.cell)
+        self.y_front = -shelf.depth / 2 - FRONT_MARGIN
+
+    # ----------------------------------------------------------------------------------------------------
+    def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True) -> Candidates:
+        """Candidates for moving each of ``objects``; ``fixed`` are known obstacles that never move (the
+        oracle's target). Returns feasible actions (deterministic order) and rejected ones with reasons."""
+        objects = tuple(objects)
+        ctx = _StateContext(self, objects, tuple(fixed))
+        feasible, rejected = [], []
+        for i in range(len(objects)):
+            if pushes:
+                for sign in (+1, -1):
+                    self._pushes(ctx, i, sign, feasible, rejected)
+            if suctions:
+                self._suctions(ctx, i, feasible, rejected)
+        return Candidates(feasible, rejected)
+
+    # ----------------------------------------------------------------------------------------------------
+    def _pushes(self, ctx, i, sign, feasible, rejected):
+        t, shelf = self.tool, self.shelf
+        obj, fp = ctx.objects[i], ctx.fps[i]
+        ex, ey = fp.extents()
+        x, y = fp.x, fp.y
+        side = "left" if sign > 0 else "right"
+        what = f"push {obj.name} {'+x' if sign > 0 else '-x'}"
+        rects = self.push_tool_rects(fp, sign)
+        lane_x = rects[0][0]
+        if abs(lane_x) + t.blade_width / 2 > shelf.width / 2 + 1e-9:
+            rejected.append(Rejected(what, f"blade does not fit between {obj.name} and the {side} wall"))
+            return
+        for j in ctx.others(i):
+            for k_r, (rx, ry, hx, hy) in enumerate(rects):
+                if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
+                    where = "gap" if k_r == 0 else "shaft's way in"
+                    rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
+                    return
+        n = int(math.ceil(shelf.width / t.cell)) + 1
+        k = np.arange(1, n + 1)
+        xs = x + sign * k * t.cell
+        ok = np.abs(xs) + ex <= shelf.width / 2 - t.clearance + 1e-12
+        first_bad, stopper = _first_false(ok), "the wall"
+        centers = np.column_stack([xs, np.full(n, y)])
+        for j in ctx.others(i):
+            other = ctx.all_fps[j]
+            clear = clear_of(fp.shape, centers, fp.yaw, (fp.half_x, fp.half_y), other, t.clearance)
+            for rx, ry, hx, hy in rects:
+                tool = np.column_stack([rx + sign * k * t.cell, np.full(n, ry)])
+                clear &= clear_of("box", tool, 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)
+            bad = _first_false(clear)
+            if bad < first_bad:
+                first_bad, stopper = bad, ctx.all_names[j]
+        hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign)
+        if hidden_cells < first_bad:
+            first_bad, stopper = hidden_cells, "hidden space"
+        d_max = first_bad * t.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
+        step = t.push_resolution
+        q = (lane_x, self.blade_depth(fp), t.blade_height / 2)
+        if d_max < t.min_push - 1e-12:
+            rejected.append(Rejected(what, f"no room: {obj.name} is stopped by {stopper} at once"))
+            return
+        ds = list(np.arange(1, int(d_max / step + 1e-9) + 1) * step)
+        if not ds or d_max - ds[-1] > t.cell / 2:
+            ds.append(d_max)
+        for d in ds:
+            feasible.append(Push(obj.name, q, round(float(sign * d), 6)))
+        d = (int(d_max / step + 1e-9) + 1) * step
+        if d < shelf.width:
+            rejected.append(Rejected(f"{what} by {d:.3f}", f"{obj.name} would hit {stopper} after {d_max:.3f} m"))
+
+    # ----------------------------------------------------------------------------------------------------
+    def _suctions(self, ctx, i, feasible, rejected):
+        t, shelf = self.tool, self.shelf
+        obj, fp = ctx.objects[i], ctx.fps[i]
+        what = f"suction {obj.name}"
+        mass = object_mass(obj, t.object_density)
+        if mass > t.max_suction_mass:
+            rejected.append(Rejected(what, f"{obj.name} weighs {mass:.2f} kg > {t.max_suction_mass:.2f} kg"))
+            return
+        contact = self.suction_contact(obj)
+        if contact is None:
+            rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is too small or curved for the cup"))
+            return
+        cx, cy, cz = contact
+        if cy - (-shelf.depth / 2) > t.max_suction_depth:
+            rejected.append(Rejected(what, f"{obj.name}'s face is beyond the tube's reach"))
+            return
+        tube_r = t.tube_diameter / 2
+        corridor_half = (tube_r, (cy - self.y_front) / 2)
+        corridor = np.array([[cx, (cy + self.y_front) / 2]])
+        for j in ctx.others(i):
+            if ctx.all_heights[j] <= cz - tube_r:
+                continue  # the tube passes over it
+            if not clear_of("box", corridor, 0.0, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
+                rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
+                return
+        ex, ey = fp.extents()
+        y_out = -shelf.depth / 2 - ey - t.cell
+        n_out = int(math.ceil((fp.y - y_out) / t.cell))
+        ys = fp.y - np.arange(1, n_out + 1) * t.cell
+        path = np.column_stack([np.full(n_out, fp.x), ys])
+        for j in ctx.others(i):
+            if not clear_of(fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.clearance).all():
+                rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
+                return
+        cols, first_rows, last_rows = column_extents(ctx.masks[i])
+        hidden_o = ctx.hidden_others(i)
+        if any(hidden_o[:r, c].any() for c, r in zip(cols, first_rows)):
+            rejected.append(Rejected(what, f"path out of the shelf crosses space hidden from the camera"))
+            return
+        q = (float(cx), float(cy), float(cz))
+        # Placements on a lattice around the object: x' = x + a res, y' = y + b res.
+        res = t.suction_resolution
+        cells_per = int(round(res / t.cell))
+        x_lim = shelf.width / 2 - t.clearance - ex
+        y_lim = shelf.depth / 2 - t.clearance - ey
+        a_all = np.arange(int(math.floor((-x_lim - fp.x) / res + 1e-9)), int(math.floor((x_lim - fp.x) / res + 1e-9)) + 1)
+        a_all = a_all[np.abs(fp.x + a_all * res) <= x_lim + 1e-12]
+        b_all = np.arange(int(math.ceil((-y_lim - fp.y) / res - 1e-9)), int(math.floor((y_lim - fp.y) / res + 1e-9)) + 1)
+        if len(a_all) == 0 or len(b_all) == 0:
+            rejected.append(Rejected(what, "no placement fits in the shelf"))
+            return
+        # Exact path check, vectorised over all columns x' and steps in from y_out to the deepest placement.
+        y_deep = fp.y + b_all[-1] * res
+        n_in = int(math.ceil((y_deep - y_out) / t.cell)) + 1
+        steps = y_out + np.arange(n_in) * t.cell
+        steps[-1] = min(steps[-1], y_deep)
+        xs = fp.x + a_all * res
+        grid_c = np.column_stack([np.repeat(xs, n_in), np.tile(steps, len(xs))])
+        clear = np.ones(len(grid_c), dtype=bool)
+        for j in ctx.others(i):
+            clear &= clear_of(fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.clearance)
+        clear = clear.reshape(len(xs), n_in)
+        first_bad = np.where(clear.all(axis=1), n_in, np.argmin(clear, axis=1))
+        y_reach_exact = np.where(
+            first_bad >= n_in, np.inf, np.where(first_bad == 0, -np.inf, steps[np.maximum(first_bad - 1, 0)])
+        )
+        # Hidden-space rule on the raster: the shifted footprint, sweeping in from the front.
+        hidden_in = ctx.hidden_all & ~ctx.masks[i]
+        first_h = first_hidden_row(hidden_in)
+        n_found = 0
+        for a, x_new, y_ex in zip(a_all, xs, y_reach_exact):
+            shifted_cols = cols + a * cells_per
+            inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
+            if not inside.any():
+                continue
+            # rows the footprint may advance by (relative to its current rows) before touching hidden cells
+            adv = (first_h[shifted_cols[inside]] - last_rows[inside] - 1).min()
+            y_reach_hidden = fp.y + adv * t.cell if adv < NOT_FOUND // 2 else np.inf
+            y_reach = min(y_ex, y_reach_hidden)
+            for b in b_all:
+                if a == 0 and b == 0:
+                    continue
+                y_new = fp.y + b * res
+                if y_new <= y_reach + 1e-9:
+                    feasible.append(Suction(obj.name, q, round(float(a * res), 6), round(float(y_new), 6)))
+                    n_found += 1
+        if n_found == 0:
+            rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
+
+    def push_tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
+        """The tool's outline when inserted to push ``fp`` toward ``sign`` x: (centre x, centre y, half x,
+        half y) of the blade in the gap beside the object (``blade_width`` along x, from the object's front
+        extreme to the blade's depth) and of the shaft's way in (``tube_diameter`` wide, from outside the
+        shelf to the blade's depth; the blade goes in edge first and turns in the gap)."""
+        t = self.tool
+        ex, ey = fp.extents()
+        edge = fp.x - ex if sign > 0 else fp.x + ex
+        blade_x = edge - sign * t.blade_width / 2
+        y_tip = self.blade_depth(fp)
+        y_face = fp.y - ey
+        blade = (blade_x, (y_face + y_tip) / 2, t.blade_width / 2, max(1e-4, (y_tip - y_face) / 2))
+        shaft = (blade_x, (self.y_front + y_tip) / 2, t.tube_diameter / 2, (y_tip - self.y_front) / 2)
+        return [blade, shaft]
+
+    def blade_depth(self, fp: Footprint) -> float:
+        """How deep the blade goes (y of its tip): ``push_contact_depth`` past the object's front extreme,
+        at most to its centre."""
+        return min(fp.y, fp.y - fp.extents()[1] + self.tool.push_contact_depth)
+
+    def suction_contact(self, obj: SceneObject):
+        """Where the cup seals on the object's camera-facing side (x, y, z), or None when it cannot."""
+        t = self.tool
+        cup_r = t.cup_diameter / 2
+        h = obj.size[2]
+        if h < t.cup_diameter:
+            return None
+        z = max(cup_r, h - cup_r - 0.005)
+        cx, cy = float(obj.center[0]), float(obj.center[1])
+        if obj.shape == "cylinder":
+            r = obj.size[0] / 2
+            if r < t.min_seal_radius:
+                return None
+            return cx, cy - r, z
+        c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+        faces = [  # (outward normal, half width of the face, distance of the face from the centre)
+            (np.array([c, s]), obj.size[1] / 2, obj.size[0] / 2),
+            (np.array([-c, -s]), obj.size[1] / 2, obj.size[0] / 2),
+            (np.array([-s, c]), obj.size[0] / 2, obj.size[1] / 2),
+            (np.array([s, -c]), obj.size[0] / 2, obj.size[1] / 2),
+        ]
+        normal, half_w, dist = min(faces, key=lambda f: f[0][1])
+        if 2 * half_w < t.cup_diameter:
+            return None
+        p = np.array([cx, cy]) + normal * dist
+        return float(p[0]), float(p[1]), z
+
+
+class _StateContext:
+    """Per-state precomputation: footprints, masks, shadows."""
+
+    def __init__(self, model: ActionModel, objects, fixed):
+        self.objects = objects
+        self.all_objs = objects + fixed
+        self.fps = [Footprint.of(o) for o in objects]
+        self.all_fps = self.fps + [Footprint.of(o) for o in fixed]
+        self.all_names = [o.name for o in self.all_objs]
+        self.all_heights = [o.size[2] for o in self.all_objs]
+        grid = model.grid
+        self.masks = [grid.footprint_mask(fp) for fp in self.fps]
+        shadows = [grid.shadow_mask(fp, model.eye_xy) for fp in self.fps]
+        self.shadows = shadows
+        self.count = np.sum(shadows, axis=0) if shadows else np.zeros((grid.ny, grid.nx), dtype=int)
+        self.hidden_all = erode(self.count > 0)
+        self._n = len(self.all_objs)
+
+    def others(self, i):
+        return [j for j in range(self._n) if j != i]
+
+    def hidden_others(self, i) -> np.ndarray:
+        return erode((self.count - self.shadows[i]) > 0)
+
+
+def _first_false(ok: np.ndarray) -> int:
+    """Index of the first False (len(ok) when all are True)."""
+    bad = np.flatnonzero(~ok)
+    return int(bad[0]) if len(bad) else len(ok)

@@ -1,0 +1,201 @@
+"""The paper's Table I protocol: every policy on the same seeded scenes of 4, 6, 8 and 10 objects, H = 2n.
+
+Scene seeds: ``scene_seed(protocol_seed, density, index)``, identical for every policy. Each finished trial is
+written as its own JSON file under ``<out>/trials/<policy>/<density>_<index>.json`` (atomically), so a run
+that is stopped resumes where it was. When all trials are in, ``table1.json``, ``table1.md`` and
+``table1.png`` are (re)written from the trial files.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import time
+from pathlib import Path
+
+import numpy as np
+
+from slax_drake.config import Scenario
+from slax_drake.errors import UserError
+from slax_drake.scene.io import write_bytes_atomic, write_text_atomic
+
+PAPER_TABLE1 = {  # success % for 4/6/8/10/All (paper Table I)
+    "oracle-p": [100, 100, 99, 94, 98], "oracle-p+s": [100, 100, 100, 100, 100], "dar": [77, 68, 45, 24, 54],
+    "der-3": [83, 72, 50, 34, 60], "bluction-dar": [96, 92, 88, 67, 86],
+}
+
+
+class BenchmarkError(UserError):
+    """A benchmark request that cannot be run, or a corrupt trial file."""
+
+
+def scene_seed(protocol_seed: int, density: int, index: int) -> int:
+    """The scene seed for trial ``index`` of ``density`` objects; the same for every policy."""
+    return int(protocol_seed) * 1_000_003 + int(density) * 10_007 + int(index)
+
+
+def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
+    return out / "trials" / policy / f"{density:02d}_{index:04d}.json"
+
+
+def _run_one(job):
+    """Runs one trial in a worker; returns (path, trial dict)."""
+    scenario, policy_name, density, index, seed, perception, out = job
+    from slax_drake.policies.registry import make_policy
+    from slax_drake.policies.simulator import run_trial
+    from slax_drake.scene.sampling import sample_scene
+
+    scene = sample_scene(scenario, density, seed, target_size=tuple(scenario.target.sizes[0]))
+    horizon = scenario.protocol.horizon_per_object * density
+    policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon)
+    result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
+                       suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
+    result["index"] = index
+    path = _trial_path(Path(out), policy_name, density, index)
+    write_text_atomic(path, json.dumps(result, sort_keys=True))
+    return str(path), result
+
+
+def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: int, out: Path, workers: int = 1,
+                  backend: str = "local", perception: str = "ground-truth", densities=None, progress=True) -> dict:
+    """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``)."""
+    out = Path(out)
+    densities = list(densities or scenario.protocol.densities)
+    jobs = []
+    for policy in policies:
+        for density in densities:
+            for index in range(scenes_per_density):
+                if not _trial_path(out, policy, density, index).is_file():
+                    jobs.append((scenario, policy, density, index, scene_seed(seed, density, index), perception,
+                                 str(out)))
+    # Heavy policies first, interleaved, so the pool stays busy to the end.
+    jobs.sort(key=lambda j: (-j[2], j[3], j[1]))
+    start = time.perf_counter()
+    if jobs:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(jobs), desc="trials", disable=not progress, unit="trial")
+        if backend == "ray":
+            import ray
+
+            if not ray.is_initialized():
+                ray.init(num_cpus=max(1, workers), include_dashboard=False, log_to_driver=False)
+            remote = ray.remote(_run_one)
+            pending = [remote.remote(j) for j in jobs]
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1)
+                ray.get(done)
+                bar.update(len(done))
+        elif workers <= 1:
+            for j in jobs:
+                _run_one(j)
+                bar.update(1)
+        else:
+            ctx = multiprocessing.get_context("spawn")
+            with ctx.Pool(workers) as pool:
+                for _ in pool.imap_unordered(_run_one, jobs, chunksize=1):
+                    bar.update(1)
+        bar.close()
+    elapsed = time.perf_counter() - start
+    trials = load_trials(out, policies, densities, scenes_per_density)
+    table = summarise(trials, policies, densities)
+    table["meta"] = {"scenes_per_density": scenes_per_density, "seed": seed, "perception": perception,
+                     "densities": densities, "wall_seconds_this_run": round(elapsed, 1), "workers": workers,
+                     "backend": backend}
+    write_tables(table, out)
+    return table
+
+
+def load_trials(out: Path, policies, densities, scenes_per_density) -> list[dict]:
+    trials = []
+    for policy in policies:
+        for density in densities:
+            for index in range(scenes_per_density):
+                path = _trial_path(out, policy, density, index)
+                try:
+                    trials.append(json.loads(path.read_text()))
+                except (OSError, json.JSONDecodeError) as e:
+                    raise BenchmarkError(f"{path}: unreadable trial file ({e}); delete it to rerun that trial")
+    return trials
+
+
+def summarise(trials: list[dict], policies, densities) -> dict:
+    """Per policy and density key ("4", ..., "all"): success_rate, median_steps, iqr, trials (count);
+    steps statistics over successful trials, as in the paper's table; plus the raw ``trials`` list."""
+    table = {"policies": {}, "trials": [
+        {k: t[k] for k in ("seed", "density", "policy", "success", "steps", "cost", "reason")} for t in trials
+    ]}
+    for policy in policies:
+        per = {}
+        for key in [str(d) for d in densities] + ["all"]:
+            sel = [t for t in trials if t["policy"] == policy and (key == "all" or t["density"] == int(key))]
+            steps = [t["steps"] for t in sel if t["success"]]
+            decision = [s for t in sel for s in t["decision_seconds"]]
+            per[key] = {
+                "success_rate": round(sum(t["success"] for t in sel) / len(sel), 4) if sel else None,
+                "median_steps": float(np.median(steps)) if steps else None,
+                "iqr": [float(np.percentile(steps, 25)), float(np.percentile(steps, 75))] if steps else None,
+                "trials": len(sel),
+                "mean_decision_seconds": round(float(np.mean(decision)), 4) if decision else None,
+            }
+        table["policies"][policy] = per
+    return table
+
+
+def write_tables(table: dict, out: Path) -> None:
+    out = Path(out)
+    write_text_atomic(out / "table1.json", json.dumps(table, indent=1, sort_keys=True))
+    write_text_atomic(out / "table1.md", markdown_table(table))
+    write_bytes_atomic(out / "table1.png", bar_chart_png(table))
+
+
+def markdown_table(table: dict) -> str:
+    policies = list(table["policies"])
+    keys = [k for k in next(iter(table["policies"].values()))]
+    lines = ["| No. | Metric | " + " | ".join(policies) + " |", "|---|---|" + "---|" * len(policies)]
+    for key in keys:
+        cells_s, cells_m = [], []
+        for p in policies:
+            e = table["policies"][p][key]
+            cells_s.append("-" if e["success_rate"] is None else f"{100 * e['success_rate']:.0f} %")
+            cells_m.append("-" if e["median_steps"] is None else
+                           f"{e['median_steps']:.1f} ({e['iqr'][0]:.1f} - {e['iqr'][1]:.1f})")
+        label = "All" if key == "all" else key
+        lines.append(f"| {label} | Success rate | " + " | ".join(cells_s) + " |")
+        lines.append(f"| {label} | Median steps (IQR) | " + " | ".join(cells_m) + " |")
+    lines.append("| All | Mean decision time per step (s) | " + " | ".join(
+        "-" if table["policies"][p]["all"]["mean_decision_seconds"] is None
+        else f"{table['policies'][p]['all']['mean_decision_seconds']:.3f}" for p in policies) + " |")
+    meta = table.get("meta", {})
+    lines.append("")
+    lines.append(f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
+                 f"{meta.get('perception', '?')} distributions; steps over successful trials.")
+    return "\n".join(lines) + "\n"
+
+
+def bar_chart_png(table: dict) -> bytes:
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    policies = list(table["policies"])
+    keys = list(next(iter(table["policies"].values())))
+    fig, ax = plt.subplots(figsize=(8, 4))
+    width = 0.8 / max(1, len(policies))
+    for i, p in enumerate(policies):
+        rates = [100 * (table["policies"][p][k]["success_rate"] or 0) for k in keys]
+        ax.bar(np.arange(len(keys)) + i * width, rates, width, label=p)
+    ax.set_xticks(np.arange(len(keys)) + width * (len(policies) - 1) / 2)
+    ax.set_xticklabels(["All" if k == "all" else f"{k} objects" for k in keys])
+    ax.set_ylabel("success rate (%)")
+    ax.set_ylim(0, 105)
+    ax.legend(fontsize=8, ncol=3)
+    ax.set_title("Table I protocol (fast first-order shelf simulator)")
+    buf = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buf, format="png", dpi=120)
+    plt.close(fig)
+    return buf.getvalue()

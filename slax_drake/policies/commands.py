@@ -1,0 +1,63 @@
+"""``slax-drake benchmark``: the paper's Table I protocol in the fast first-order shelf simulator."""
+
+from __future__ import annotations
+
+import argparse
+
+from slax_drake.errors import UserError
+
+
+def register(subparsers) -> None:
+    from slax_drake.policies.registry import POLICY_NAMES
+
+    p = subparsers.add_parser(
+        "benchmark",
+        help="run search policies on the Table I protocol (fast shelf simulator)",
+        description="Run search policies on the same seeded scenes of every density of the protocol "
+        "(H = horizon_per_object * n actions) and write table1.md, table1.json and table1.png. "
+        "Finished trials are kept under OUT/trials, so a stopped run resumes.",
+    )
+    p.add_argument("--config", default="sim_configs/table1.yaml", help="scenario YAML (default: sim_configs/table1.yaml)")
+    p.add_argument("--policies", default="oracle-p,oracle-p+s,dar,der-3,bluction-dar",
+                   help=f"comma-separated policy names from: {', '.join(POLICY_NAMES)}")
+    p.add_argument("--scenes-per-density", type=int, default=None, help="default: the protocol's")
+    p.add_argument("--seed", type=int, default=None, help="protocol seed (default: the protocol's)")
+    p.add_argument("--workers", type=int, default=1, help="parallel worker processes (default: 1)")
+    p.add_argument("--backend", choices=("local", "ray"), default="local",
+                   help="local: multiprocessing; ray: Ray tasks on a local Ray instance")
+    p.add_argument("--perception", choices=("ground-truth", "learned"), default="ground-truth",
+                   help="distribution model: ground-truth (compute_occupancy); 'learned' is not implemented yet "
+                   "(it comes with the perception network) and is refused")
+    p.add_argument("--out", default="results/table1", help="output folder (default: results/table1)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from slax_drake.config import load_scenario
+    from slax_drake.policies.benchmark import run_benchmark
+    from slax_drake.policies.registry import POLICY_NAMES
+
+    scenario = load_scenario(args.config)
+    policies = [p.strip() for p in args.policies.split(",") if p.strip()]
+    for p in policies:
+        if p not in POLICY_NAMES:
+            raise UserError(f"unknown policy '{p}' (known: {', '.join(POLICY_NAMES)})")
+    if not policies:
+        raise UserError("--policies is empty")
+    if args.perception != "ground-truth":
+        raise UserError("--perception learned is not implemented yet (only ground-truth)")
+    n = args.scenes_per_density if args.scenes_per_density is not None else scenario.protocol.scenes_per_density
+    if n < 1:
+        raise UserError("--scenes-per-density must be at least 1")
+    if args.workers < 1:
+        raise UserError("--workers must be at least 1")
+    seed = args.seed if args.seed is not None else scenario.protocol.seed
+    table = run_benchmark(scenario, policies, n, seed, args.out, workers=args.workers, backend=args.backend,
+                          perception=args.perception, progress=not args.no_progress)
+    for p in policies:
+        e = table["policies"][p]["all"]
+        print(f"{p:>18}: success {100 * e['success_rate']:.0f} % over {e['trials']} trials, median steps "
+              f"{e['median_steps']}")
+    print(f"wrote {args.out}/table1.md, table1.json, table1.png")
+    return 0

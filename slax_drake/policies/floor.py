@@ -1,0 +1,132 @@
+"""A raster of the shelf's support surface: object footprints and the 2D shadows they cast from the camera.
+
+The action model uses it for one rule only, the paper's "nothing is moved into space hidden behind other
+objects": a floor cell is *hidden* when the segment from the camera's (x, y) to the cell's centre crosses an
+object's footprint (the overhead 2D visibility of paper Sec. V-A, objects taken as infinitely tall, which is
+conservative: anything the camera cannot see in 3D lies in this 2D shadow). Collisions are never decided on
+this raster; they use the exact footprint tests of :mod:`slax_drake.scene.footprint`.
+
+Cells are ``cell`` metres square; row r, column c has its centre at
+(x, y) = (-width/2 + (c + 0.5) cell, -depth/2 + (r + 0.5) cell) in the shelf frame S (rows run into the shelf).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from slax_drake.scene.footprint import Footprint, clear_of
+from slax_drake.scene.model import Shelf
+
+NOT_FOUND = 1 << 20
+
+
+class FloorGrid:
+    """Cell centres of the bay's floor, and footprint / shadow masks (rows along y, columns along x)."""
+
+    def __init__(self, shelf: Shelf, cell: float = 0.005):
+        self.shelf = shelf
+        self.cell = cell
+        self.nx = int(round(shelf.width / cell))
+        self.ny = int(round(shelf.depth / cell))
+        xs = -shelf.width / 2 + (np.arange(self.nx) + 0.5) * cell
+        ys = -shelf.depth / 2 + (np.arange(self.ny) + 0.5) * cell
+        gx, gy = np.meshgrid(xs, ys)
+        self.centers = np.column_stack([gx.ravel(), gy.ravel()])
+
+    def footprint_mask(self, fp: Footprint) -> np.ndarray:
+        """Cells (ny, nx) whose centre lies inside the footprint."""
+        inside = ~clear_of("cylinder", self.centers, 0.0, (0.0, 0.0), fp, 1e-9)
+        return inside.reshape(self.ny, self.nx)
+
+    def shadow_mask(self, fp: Footprint, eye_xy: np.ndarray) -> np.ndarray:
+        """Cells (ny, nx) hidden by the footprint from ``eye_xy``: the segment eye -> centre meets it
+        (the footprint's own cells included)."""
+        e = np.asarray(eye_xy, dtype=float)
+        p = self.centers
+        if fp.shape == "cylinder":
+            c = np.array([fp.x, fp.y])
+            d = p - e
+            t = np.clip(((c - e) @ d.T) / np.einsum("ij,ij->i", d, d), 0.0, 1.0)
+            closest = e + t[:, None] * d
+            hit = np.hypot(closest[:, 0] - c[0], closest[:, 1] - c[1]) <= fp.half_x
+            return hit.reshape(self.ny, self.nx)
+        cos, sin = math.cos(fp.yaw), math.sin(fp.yaw)
+        R = np.array([[cos, -sin], [sin, cos]])
+        e_l = (e - (fp.x, fp.y)) @ R
+        p_l = (p - (fp.x, fp.y)) @ R
+        d = p_l - e_l
+        t_lo = np.zeros(len(p))
+        t_hi = np.ones(len(p))
+        for axis, half in ((0, fp.half_x), (1, fp.half_y)):
+            da = d[:, axis]
+            small = np.abs(da) < 1e-12
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t1 = (-half - e_l[axis]) / da
+                t2 = (half - e_l[axis]) / da
+            lo = np.where(small, -np.inf, np.minimum(t1, t2))
+            hi = np.where(small, np.inf, np.maximum(t1, t2))
+            outside = small & (abs(e_l[axis]) > half)
+            t_lo = np.maximum(t_lo, lo)
+            t_hi = np.where(outside, -1.0, np.minimum(t_hi, hi))
+        return (t_lo <= t_hi).reshape(self.ny, self.nx)
+
+
+def shift_mask(mask: np.ndarray, rows: int, cols: int) -> np.ndarray:
+    """The mask translated by (rows, cols) cells; cells shifted in from outside are False."""
+    out = np.zeros_like(mask)
+    ny, nx = mask.shape
+    if abs(rows) >= ny or abs(cols) >= nx:
+        return out
+    src = mask[max(0, -rows): ny - max(0, rows), max(0, -cols): nx - max(0, cols)]
+    out[max(0, rows): ny - max(0, -rows), max(0, cols): nx - max(0, -cols)] = src
+    return out
+
+
+def erode(mask: np.ndarray) -> np.ndarray:
+    """One-cell erosion (4-neighbourhood) that absorbs the raster's edge noise."""
+    out = mask.copy()
+    out[1:, :] &= mask[:-1, :]
+    out[:-1, :] &= mask[1:, :]
+    out[:, 1:] &= mask[:, :-1]
+    out[:, :-1] &= mask[:, 1:]
+    return out
+
+
+def free_push_cells(footprint: np.ndarray, hidden: np.ndarray, sign: int) -> int:
+    """How many cells a footprint mask can move along x (sign +1 right, -1 left) before any cell it newly
+    covers is hidden; NOT_FOUND when nothing hidden lies in its way."""
+    rows = np.flatnonzero(footprint.any(axis=1))
+    if len(rows) == 0:
+        return NOT_FOUND
+    f = footprint[rows]
+    h = hidden[rows]
+    nx = f.shape[1]
+    cols = np.arange(nx)
+    if sign > 0:
+        edge = nx - 1 - np.argmax(f[:, ::-1], axis=1)  # last covered column per row
+        ahead = h & (cols[None, :] > edge[:, None])
+        first = np.where(ahead.any(axis=1), np.argmax(ahead, axis=1), NOT_FOUND)
+        gaps = first - edge - 1
+    else:
+        edge = np.argmax(f, axis=1)  # first covered column per row
+        ahead = h & (cols[None, :] < edge[:, None])
+        last = np.where(ahead.any(axis=1), nx - 1 - np.argmax(ahead[:, ::-1], axis=1), -NOT_FOUND)
+        gaps = edge - last - 1
+    return int(min(gaps.min(), NOT_FOUND))
+
+
+def column_extents(footprint: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Columns the footprint covers, and per such column its first and last covered row."""
+    cols = np.flatnonzero(footprint.any(axis=0))
+    f = footprint[:, cols]
+    ny = f.shape[0]
+    first = np.argmax(f, axis=0)
+    last = ny - 1 - np.argmax(f[::-1, :], axis=0)
+    return cols, first, last
+
+
+def first_hidden_row(hidden: np.ndarray) -> np.ndarray:
+    """Per column, the first (front-most) hidden row; NOT_FOUND where the column is clear."""
+    return np.where(hidden.any(axis=0), np.argmax(hidden, axis=0), NOT_FOUND)

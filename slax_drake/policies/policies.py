@@ -1,0 +1,208 @@
+"""Distribution-based search policies: DAR, DER-k, Bluction-DAR (paper Sec. V-C).
+
+Each sees only the :class:`~slax_drake.policies.simulator.Observation` (coarse depth and labels, the objects
+seen, the 1D occupancy distribution P_t). It keeps the history encoding P'_t = min(P_t, P'_{t-1}) and scores a
+hypothetical action by the distribution its model predicts for the observed objects moved as the action says
+(:class:`~slax_drake.policies.distribution.DistributionModel`), min-ed with P'_t:
+
+- DAR: pushes only; the largest support reduction Delta r = r_t - r_{t+1}.
+- DER-k: pushes only; a k-step lookahead (beam search, ``beam`` best partial sequences per depth) that takes
+  the first action of the sequence with the least entropy of the predicted distribution after k steps.
+- Bluction-DAR: pushes and suctions; a suction's reduction is weighted Delta r^s = psi Delta r (the paper's
+  form, ``suction_weighting="paper"``) or Delta r / psi (``"cost"``, the variant ``bluction-dar-cost``).
+
+Ties are broken deterministically: the smaller support of the raw predicted distribution, then the cheaper
+action, then the smaller displacement, then enumeration order. No policy draws random numbers, so a rollout
+is a function of the scene alone.
+
+Suction placements are many (a lattice per object). A policy first predicts the distribution with the object
+removed; placements are then tried in order of how many still-possible columns their silhouette would cover
+(``max_placements`` at most, stopping at one that loses nothing against removal).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from slax_drake.policies.actions import ActionModel, Push, Suction, apply_action
+from slax_drake.policies.distribution import DistributionModel, entropy, history_min, support
+from slax_drake.policies.simulator import observe
+
+
+class DistributionPolicy:
+    """Common machinery: observe, keep P'_t, predict candidates' distributions."""
+
+    name = "abstract"
+    use_pushes = True
+    use_suctions = False
+
+    def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
+                 observation_width: int = 160, max_placements: int = 4):
+        self.action_model = action_model
+        self.distribution = distribution
+        self.psi = psi
+        self.observation_width = observation_width
+        self.max_placements = max_placements
+        self.history = None
+        self.stop_reason = None
+        self.last_rejected = []
+
+    def reset(self, scene) -> None:
+        self.history = None
+        self.stop_reason = None
+
+    def act(self, scene):
+        obs = observe(scene, self.distribution, self.observation_width)
+        self.history = history_min(obs.p1d, self.history)
+        return self.decide(obs)
+
+    def decide(self, obs):  # pragma: no cover - interface
+        raise NotImplementedError
+
+    # helpers ---------------------------------------------------------------------------------------------
+    def predict(self, obs, objects) -> np.ndarray:
+        return self.distribution.distribution(obs.scene_template.with_objects(objects))
+
+    def candidates(self, objects, pushes=None, suctions=None):
+        c = self.action_model.enumerate(
+            objects, pushes=self.use_pushes if pushes is None else pushes,
+            suctions=self.use_suctions if suctions is None else suctions,
+        )
+        self.last_rejected = c.rejected
+        return c.feasible
+
+    def action_cost(self, action) -> float:
+        return 1.0 if isinstance(action, Push) else self.psi
+
+    def ranked_suctions(self, obs, objects, history, suctions):
+        """Groups suction candidates by object; yields (object name, removal distribution, placements ordered
+        by how many still-possible columns the placed object's silhouette covers)."""
+        cam = obs.scene_template.camera
+        width = len(history)
+        coarse = cam.with_resolution(width, max(1, int(round(cam.height * width / cam.width))))
+        by_object: dict = {}
+        for a in suctions:
+            by_object.setdefault(a.name, []).append(a)
+        for name, group in by_object.items():
+            rest = tuple(o for o in objects if o.name != name)
+            p_removed = self.predict(obs, rest)
+            alive = np.minimum(p_removed, history) > 0
+            obj = next(o for o in objects if o.name == name)
+            corners = _box_corners(obj)
+            ranked = []
+            for order, a in enumerate(group):
+                offset = np.array([a.dx, a.dz - obj.center[1], 0.0])
+                u = coarse.project(corners + offset)[:, 0]
+                lo, hi = int(max(0, math.floor(u.min()))), int(min(width - 1, math.ceil(u.max())))
+                covered = int(alive[lo:hi + 1].sum()) if hi >= lo else 0
+                ranked.append((covered, abs(a.dx) + abs(a.dz - obj.center[1]), order, a))
+            ranked.sort(key=lambda r: r[:3])
+            yield name, p_removed, [r[3] for r in ranked]
+
+
+def _box_corners(obj) -> np.ndarray:
+    sx, sy, sz = obj.size
+    local = np.array([[x, y, z] for x in (-sx / 2, sx / 2) for y in (-sy / 2, sy / 2) for z in (-sz / 2, sz / 2)])
+    return local @ obj.X_SO[:3, :3].T + obj.X_SO[:3, 3]
+
+
+class DAR(DistributionPolicy):
+    """Distribution Area Reduction: greedy support reduction (pushes; with suctions in Bluction-DAR)."""
+
+    name = "dar"
+
+    def suction_weight(self) -> float:
+        return 1.0
+
+    def decide(self, obs):
+        h = self.history
+        r_t = support(h)
+        cands = self.candidates(obs.known)
+        if not cands:
+            self.stop_reason = "no feasible action"
+            return None
+        best, best_key = None, None
+        order = 0
+
+        def consider(a, p):
+            nonlocal best, best_key, order
+            dr = r_t - support(np.minimum(p, h))
+            weighted = dr * (self.suction_weight() if isinstance(a, Suction) else 1.0)
+            disp = abs(a.d) if isinstance(a, Push) else abs(a.dx) + abs(a.dz)
+            key = (-weighted, support(p), self.action_cost(a), disp, order)
+            order += 1
+            if best_key is None or key < best_key:
+                best, best_key = a, key
+            return dr
+
+        pushes = [a for a in cands if isinstance(a, Push)]
+        suctions = [a for a in cands if isinstance(a, Suction)]
+        for a in pushes:
+            consider(a, self.predict(obs, apply_action(obs.known, a)))
+        if suctions:
+            w = self.suction_weight()
+            for name, p_removed, placements in self.ranked_suctions(obs, obs.known, h, suctions):
+                dr_removed = r_t - support(np.minimum(p_removed, h))
+                if best_key is not None and -w * dr_removed > best_key[0]:
+                    continue  # even removing the object outright would not beat the best action
+                for a in placements[: self.max_placements]:
+                    dr = consider(a, self.predict(obs, apply_action(obs.known, a)))
+                    if dr >= dr_removed:
+                        break
+        return best
+
+
+class BluctionDAR(DAR):
+    """Bluction-DAR: DAR over pushes and suctions; suction reductions weighted by psi (paper) or 1/psi."""
+
+    name = "bluction-dar"
+    use_suctions = True
+
+    def __init__(self, *args, suction_weighting: str = "paper", **kwargs):
+        super().__init__(*args, **kwargs)
+        if suction_weighting not in ("paper", "cost"):
+            raise ValueError("suction_weighting must be 'paper' or 'cost'")
+        self.suction_weighting = suction_weighting
+        if suction_weighting == "cost":
+            self.name = "bluction-dar-cost"
+
+    def suction_weight(self) -> float:
+        return self.psi if self.suction_weighting == "paper" else 1.0 / self.psi
+
+
+class DER(DistributionPolicy):
+    """DER-k: pushes only; beam-search lookahead of ``depth`` steps minimising the entropy of the predicted
+    history-encoded distribution after the last step."""
+
+    def __init__(self, *args, depth: int = 3, beam: int = 2, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.depth = depth
+        self.beam = beam
+        self.name = f"der-{depth}"
+
+    def decide(self, obs):
+        level = [(None, obs.known, self.history)]
+        best_leaf = None
+        for depth in range(self.depth):
+            children = []
+            for first, objects, hist in level:
+                cands = self.candidates(objects)
+                if depth == 0 and not cands:
+                    self.stop_reason = "no feasible action"
+                    return None
+                for a in cands:
+                    after = apply_action(objects, a)
+                    p = self.predict(obs, after)
+                    h2 = np.minimum(p, hist)
+                    disp = abs(a.d)
+                    key = (entropy(h2), support(h2), disp, len(children))
+                    children.append((key, first or a, after, h2))
+            if not children:
+                break
+            children.sort(key=lambda c: c[0])
+            best_leaf = children[0]
+            level = [(c[1], c[2], c[3]) for c in children[: self.beam]]
+        return best_leaf[1] if best_leaf else None
+

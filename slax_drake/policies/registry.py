@@ -1,0 +1,45 @@
+"""Policies by name, built for a scenario: the one place that maps a command-line name to a policy object."""
+
+from __future__ import annotations
+
+from slax_drake.config import Scenario
+from slax_drake.errors import UserError
+from slax_drake.policies.actions import ActionModel, ToolConfig
+from slax_drake.policies.distribution import make_distribution_model
+from slax_drake.scene.camera import Camera
+from slax_drake.scene.sampling import shelf_of
+
+POLICY_NAMES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar", "bluction-dar-cost")
+
+
+class UnknownPolicyError(UserError):
+    """A policy name that does not exist."""
+
+
+def tool_config(scenario: Scenario, **overrides) -> ToolConfig:
+    return ToolConfig(object_density=scenario.objects.density, clearance=scenario.objects.clearance, **overrides)
+
+
+def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,
+                target_size=None):
+    """A fresh policy object named ``name`` (see POLICY_NAMES) for ``scenario``'s shelf and camera."""
+    from slax_drake.policies.oracle import Oracle
+    from slax_drake.policies.policies import DAR, DER, BluctionDAR
+
+    if name not in POLICY_NAMES:
+        raise UnknownPolicyError(f"unknown policy '{name}' (known: {', '.join(POLICY_NAMES)})")
+    psi = scenario.protocol.suction_cost
+    model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position, tool_config(scenario))
+    if name.startswith("oracle"):
+        return Oracle(model, suctions=name == "oracle-p+s", psi=psi, horizon=horizon)
+    size = target_size or tuple(scenario.target.sizes[0])
+    dist = make_distribution_model(perception, size)
+    if name == "dar":
+        return DAR(model, dist, psi=psi)
+    if name == "der-3":
+        return DER(model, dist, psi=psi, depth=3)
+    if name == "bluction-dar":
+        return BluctionDAR(model, dist, psi=psi, suction_weighting="paper")
+    if name == "bluction-dar-cost":
+        return BluctionDAR(model, dist, psi=psi, suction_weighting="cost")
+    raise AssertionError(name)

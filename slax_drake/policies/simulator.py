@@ -1,0 +1,208 @@
+"""The fast first-order shelf simulator: observe, execute an action, check the target's visibility.
+
+What a non-oracle policy observes (:class:`Observation`): the depth and label images rendered at a coarse
+resolution (``observation_width`` px wide) from the scene's camera, the 1D occupancy distribution of the true
+scene from the :class:`DistributionModel`, and ``known``: every object of which at least one pixel is seen,
+with its exact footprint (an idealised segmentation and shape fit). Objects no pixel of which is seen, and the
+target, are not in the observation.
+
+Execution (:func:`execute`) is first order: the moved object translates, nothing rotates or topples. The
+simulator replays the action against the *true* scene, hidden objects and the target included: a blade lane
+or suction path blocked by something the policy could not see leaves everything in place, and a push or a
+placement stops ``clearance`` before the first true obstacle. So the simulator never creates an overlap.
+A trial (:func:`run_trial`) succeeds when the target's visible fraction reaches v, and fails after H actions
+or when the policy finds no feasible action.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+
+from slax_drake.policies.actions import (
+    BLADE_CONTACT_CLEARANCE, FRONT_MARGIN, ActionModel, Push, Suction, apply_action,
+)
+from slax_drake.scene.footprint import Footprint, clear_of
+from slax_drake.scene.model import Scene
+from slax_drake.scene.raycast import SceneRaycaster
+from slax_drake.scene.sampling import target_visible_fraction
+
+
+@dataclasses.dataclass(frozen=True)
+class Observation:
+    """What a non-oracle policy may use (see the module docstring)."""
+
+    depth: np.ndarray  # (H, W) float32, metres along the optical axis
+    labels: np.ndarray  # (H, W) int32: -1 nothing, 0 shelf, i + 1 for scene.objects[i]
+    known: tuple  # the SceneObjects seen, in scene order
+    p1d: np.ndarray  # (W_d,) the 1D occupancy distribution of the current state
+    scene_template: Scene  # shelf and camera, and the known objects; never the target or hidden objects
+
+
+def observe(scene: Scene, distribution_model, observation_width: int = 160) -> Observation:
+    cam = scene.camera
+    coarse = cam.with_resolution(observation_width, max(1, int(round(cam.height * observation_width / cam.width))))
+    depth, labels = SceneRaycaster(scene).render(coarse)
+    seen = set(int(v) - 1 for v in np.unique(labels) if v > 0)
+    known = tuple(o for i, o in enumerate(scene.objects) if i in seen)
+    p1d = distribution_model.distribution(scene.with_objects(scene.objects))
+    template = dataclasses.replace(scene, objects=known, target=None)
+    return Observation(depth, labels, known, p1d, template)
+
+
+def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
+    """Applies ``action`` to the true scene; returns the new scene and a note ("" when it went as planned)."""
+    t = model.tool
+    shelf = scene.shelf
+    names = [o.name for o in scene.objects]
+    if action.name not in names:
+        return scene, f"{action.name} does not exist"
+    i = names.index(action.name)
+    obj = scene.objects[i]
+    fp = Footprint.of(obj)
+    obstacles = [(o.name, Footprint.of(o)) for j, o in enumerate(scene.objects) if j != i]
+    if scene.target is not None:
+        obstacles.append(("target", Footprint.of(scene.target.as_object())))
+    half = (fp.half_x, fp.half_y)
+    ex, ey = fp.extents()
+
+    def first_blocked(centers, lane=None, lane_half=None):
+        ok = np.ones(len(centers), dtype=bool)
+        for _, other in obstacles:
+            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.clearance)
+            if lane is not None:
+                ok &= clear_of("box", lane, 0.0, lane_half, other, BLADE_CONTACT_CLEARANCE)
+        bad = np.flatnonzero(~ok)
+        return int(bad[0]) if len(bad) else len(centers)
+
+    if isinstance(action, Push):
+        sign = 1 if action.d > 0 else -1
+        rects = model.push_tool_rects(fp, sign)
+        for name, other in obstacles:
+            for rx, ry, hx, hy in rects:
+                if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)[0]:
+                    return scene, f"blade blocked by {name}"
+        n = max(1, int(math.ceil(abs(action.d) / t.cell)))
+        s = np.linspace(0.0, action.d, n + 1)[1:]
+        xs = fp.x + s
+        inside = np.abs(xs) + ex <= shelf.width / 2 - t.clearance + 1e-12
+        ok = inside.copy()
+        centers = np.column_stack([xs, np.full(n, fp.y)])
+        for _, other in obstacles:
+            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.clearance)
+            for rx, ry, hx, hy in rects:
+                ok &= clear_of("box", np.column_stack([rx + s, np.full(n, ry)]), 0.0, (hx, hy), other,
+                               BLADE_CONTACT_CLEARANCE)
+        bad = np.flatnonzero(~ok)
+        k = int(bad[0]) if len(bad) else n
+        if k == 0:
+            return scene, "pushed object blocked at once"
+        moved = obj.moved_to(float(xs[k - 1]), fp.y)
+        note = "" if k == n else f"push stopped after {s[k - 1]:+.3f} m by an unseen obstacle"
+        return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
+
+    if isinstance(action, Suction):
+        y_out = -shelf.depth / 2 - ey - t.cell
+        n_out = max(1, int(math.ceil((fp.y - y_out) / t.cell)))
+        ys = np.linspace(fp.y, y_out, n_out + 1)[1:]
+        if first_blocked(np.column_stack([np.full(n_out, fp.x), ys])) < n_out:
+            return scene, "path out blocked by an unseen obstacle"
+        x_new = fp.x + action.dx
+        if abs(x_new) + ex > shelf.width / 2 - t.clearance + 1e-9:
+            return scene, "placement outside the walls"
+        n_in = max(1, int(math.ceil((action.dz - y_out) / t.cell)))
+        ys = np.linspace(y_out, action.dz, n_in + 1)[1:]
+        k = first_blocked(np.column_stack([np.full(n_in, x_new), ys]))
+        y_final = ys[k - 1] if k > 0 else None
+        if y_final is None or y_final + ey < -shelf.depth / 2 + 1e-9:
+            return scene, "could not place the object: put back"
+        moved = obj.moved_to(float(x_new), float(y_final))
+        note = "" if k == n_in else "placement stopped early by an unseen obstacle"
+        return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
+    raise TypeError(f"not an action: {action!r}")
+
+
+@dataclasses.dataclass
+class TrialResult:
+    seed: int
+    density: int
+    policy: str
+    success: bool
+    steps: int
+    cost: float
+    pushes: int
+    suctions: int
+    reason: str  # "revealed", "horizon", "no action", or the policy's own reason
+    decision_seconds: list
+    actions: list  # descriptions of the actions taken
+    notes: list  # execution notes (unseen obstacles)
+    visible_fraction: float
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, suction_cost: float = 1.3,
+              density: int | None = None, max_seconds: float | None = None) -> TrialResult:
+    """Rolls ``policy`` out on ``scene`` until the target is revealed, H actions are spent or no action is left.
+
+    ``policy`` has ``reset(scene)`` and ``act(scene) -> action | None``; non-oracle policies read only
+    ``observe(scene, ...)`` inside ``act`` (they are given the simulator's scene object solely to observe it)."""
+    policy.reset(scene)
+    seconds, actions, notes = [], [], []
+    pushes = suctions = 0
+    reason = "horizon"
+    fraction = target_visible_fraction(scene)
+    start = time.perf_counter()
+    for _ in range(horizon):
+        if fraction >= threshold:
+            break
+        t0 = time.perf_counter()
+        action = policy.act(scene)
+        seconds.append(time.perf_counter() - t0)
+        if action is None:
+            reason = getattr(policy, "stop_reason", None) or "no action"
+            break
+        scene, note = execute(scene, action, policy.action_model)
+        actions.append(action.describe())
+        if note:
+            notes.append(f"step {len(actions)}: {note}")
+        if isinstance(action, Push):
+            pushes += 1
+        else:
+            suctions += 1
+        fraction = target_visible_fraction(scene)
+        if max_seconds is not None and time.perf_counter() - start > max_seconds:
+            reason = "time limit"
+            break
+    success = fraction >= threshold
+    if success:
+        reason = "revealed"
+    return TrialResult(
+        seed=int(scene.seed) if scene.seed is not None else -1, density=int(density or len(scene.objects)),
+        policy=policy.name, success=bool(success), steps=pushes + suctions,
+        cost=round(pushes + suction_cost * suctions, 6), pushes=pushes, suctions=suctions, reason=reason,
+        decision_seconds=[round(s, 6) for s in seconds], actions=actions, notes=notes,
+        visible_fraction=round(float(fraction), 6),
+    )
+
+
+def objects_overlap(scene: Scene, clearance: float = 0.0) -> list[tuple[str, str]]:
+    """Pairs of objects (and the target) whose footprints overlap (by more than -clearance); for checks."""
+    from slax_drake.scene.footprint import footprints_clear
+
+    items = [(o.name, Footprint.of(o)) for o in scene.objects]
+    if scene.target is not None:
+        items.append(("target", Footprint.of(scene.target.as_object())))
+    bad = []
+    for a in range(len(items)):
+        for b in range(a + 1, len(items)):
+            if not footprints_clear(items[a][1], items[b][1], clearance):
+                bad.append((items[a][0], items[b][0]))
+    return bad
+
+
+__all__ = ["Observation", "TrialResult", "apply_action", "execute", "objects_overlap", "observe", "run_trial"]
