@@ -1,0 +1,136 @@
+"""Feasibility rules of the bluction action model on hand-built scenes."""
+
+import numpy as np
+import pytest
+
+from slax_drake.policies.actions import ActionModel, Push, Suction, ToolConfig, apply_action
+from slax_drake.scene.footprint import Footprint, footprints_clear, inside_shelf
+from slax_drake.scene.model import SceneObject, Shelf, planar_pose
+
+SHELF = Shelf(0.60, 0.60, 0.60, 0.02)
+EYE = np.array([0.0, -0.75, 0.20])
+
+
+def box(name, x, y, sx=0.08, sy=0.08, sz=0.10, yaw=0.0):
+    return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, yaw))
+
+
+def cyl(name, x, y, d=0.10, h=0.10):
+    return SceneObject(name, "cylinder", (d, d, h), planar_pose(x, y, h / 2, 0.0))
+
+
+def model(**kw):
+    return ActionModel(SHELF, EYE, ToolConfig(**kw))
+
+
+def reasons(cands, what):
+    return [r.reason for r in cands.rejected if r.what.startswith(what)]
+
+
+def pushes_of(cands, name, sign):
+    return [a for a in cands.feasible if isinstance(a, Push) and a.name == name and np.sign(a.d) == sign]
+
+
+def test_blade_needs_a_gap_as_wide_as_the_blade():
+    # a and b stand side by side 3 cm apart: the 6.5 cm blade cannot go between them.
+    a, b = box("a", -0.10, -0.10), box("b", -0.10 + 0.08 + 0.03, -0.10)
+    c = model().enumerate((a, b), suctions=False)
+    assert reasons(c, "push b +x") == ["blade gap left of b blocked by a"]
+    assert reasons(c, "push a -x") == ["blade gap right of a blocked by b"]
+    # pushed toward each other from the free side, they stop short of the 3 cm gap
+    assert max(abs(p.d) for p in pushes_of(c, "b", -1) + pushes_of(c, "a", +1)) <= 0.03 - 0.002 + 1e-9
+    # 8 cm apart, it fits.
+    b2 = box("b", -0.10 + 0.08 + 0.08, -0.10)
+    c2 = model().enumerate((a, b2), suctions=False)
+    assert pushes_of(c2, "b", +1)
+
+
+def test_blade_does_not_fit_against_a_wall():
+    a = box("a", -0.30 + 0.04 + 0.03, -0.10)  # 3 cm from the left wall
+    c = model().enumerate((a,), suctions=False)
+    assert reasons(c, "push a +x") == ["blade does not fit between a and the left wall"]
+    assert pushes_of(c, "a", +1) == []
+    assert max(abs(p.d) for p in pushes_of(c, "a", -1)) <= 0.03 - 0.002 + 1e-9  # toward the wall: 3 cm at most
+
+
+def test_shaft_way_in_must_be_clear():
+    front, back = box("front", 0.0, -0.20, sx=0.24), box("back", 0.0, 0.05, sx=0.06)
+    c = model().enumerate((front, back), suctions=False)
+    assert reasons(c, "push back") == ["blade shaft's way in left of back blocked by front",
+                                       "blade shaft's way in right of back blocked by front"]
+    assert not [a for a in c.feasible if a.name == "back"]
+
+
+def test_push_moves_exactly_one_object_and_stops_before_its_neighbour():
+    a, b = box("a", -0.15, -0.10), box("b", 0.10, -0.10)
+    m = model()
+    c = m.enumerate((a, b), suctions=False)
+    right = pushes_of(c, "a", +1)
+    d_max = max(a_.d for a_ in right)
+    gap = (0.10 - 0.04) - (-0.15 + 0.04)
+    assert d_max == pytest.approx(gap - m.tool.clearance, abs=m.tool.cell)
+    assert d_max <= gap - m.tool.clearance + 1e-9
+    after = apply_action((a, b), max(right, key=lambda p: p.d))
+    assert np.allclose(after[1].X_SO, b.X_SO)  # b did not move
+    assert after[0].center[1] == pytest.approx(a.center[1]) and after[0].center[0] > a.center[0]
+    assert footprints_clear(Footprint.of(after[0]), Footprint.of(after[1]), m.tool.clearance - 1e-9)
+    # every candidate distance is a multiple of the resolution, or the maximal push
+    for p in right:
+        assert p.d == pytest.approx(d_max) or abs(p.d / m.tool.push_resolution - round(p.d / m.tool.push_resolution)) < 1e-6
+
+
+def test_nothing_is_pushed_into_space_hidden_behind_another_object():
+    # "front" hides the space behind it; "back" stands to its right, deeper, in the open.
+    front = box("front", -0.05, -0.20, sx=0.16, sy=0.06)
+    back = box("back", 0.15, 0.10, sx=0.07, sy=0.07)
+    m = model()
+    c = m.enumerate((front, back), suctions=False)
+    left = pushes_of(c, "back", -1)
+    assert left, "back can be pushed left a little"
+    d_min = min(p.d for p in left)  # the longest push to the left
+    moved = apply_action((front, back), Push("back", (0, 0, 0), d_min))[1]
+    # The shadow of "front": rays from the camera through its right edge; the moved object stays right of it.
+    fp = Footprint.of(moved)
+    ex, ey = fp.extents()
+    corner = np.array([fp.x - ex, fp.y - ey])  # the moved object's front-left corner
+    edge = np.array([-0.05 + 0.08, -0.20 - 0.03])  # front's front-right corner: its shadow's right boundary
+    ray = edge - EYE[:2]
+    to_corner = corner - EYE[:2]
+    assert ray[0] * to_corner[1] - ray[1] * to_corner[0] <= 0.01 * np.hypot(*to_corner)  # corner not left of ray
+    assert any("hidden space" in r for r in reasons(c, "push back -x"))
+
+
+def test_suction_placements_are_collision_free_and_inside_the_shelf():
+    objs = (box("a", -0.15, -0.15), box("b", 0.10, -0.05, sx=0.12), cyl("c", 0.0, 0.18, d=0.10))
+    m = model()
+    c = m.enumerate(objs, pushes=False)
+    sucs = [a for a in c.feasible if isinstance(a, Suction)]
+    assert sucs
+    for s in sucs:
+        after = apply_action(objs, s)
+        fps = [Footprint.of(o) for o in after]
+        for i in range(len(fps)):
+            assert inside_shelf(fps[i], SHELF, m.tool.clearance - 1e-9)
+            for j in range(i + 1, len(fps)):
+                assert footprints_clear(fps[i], fps[j], m.tool.clearance - 1e-9), s
+
+
+def test_suction_rejections_say_why():
+    heavy = box("heavy", -0.15, -0.15, 0.20, 0.20, 0.20)  # 3.2 kg at 400 kg/m^3
+    thin = cyl("thin", 0.15, -0.15, d=0.06)  # radius 3 cm < 4 cm seal radius
+    blocked = box("blocked", 0.15, 0.10, sz=0.12)  # thin stands in its way out
+    c = model().enumerate((heavy, thin, blocked), pushes=False)
+    assert reasons(c, "suction heavy") == ["heavy weighs 3.20 kg > 2.00 kg"]
+    assert reasons(c, "suction thin") == ["thin's camera-facing side is too small or curved for the cup"]
+    assert reasons(c, "suction blocked") == ["tube approach to blocked blocked by thin"] or reasons(
+        c, "suction blocked") == ["path out of the shelf blocked by thin"]
+
+
+def test_suction_beyond_the_tube_is_not_reachable():
+    deep = box("deep", 0.0, 0.22)  # front face 0.48 m behind the opening
+    assert reasons(model().enumerate((deep,), pushes=False), "suction deep") == ["deep's face is beyond the tube's reach"]
+
+
+def test_enumeration_is_deterministic():
+    objs = (box("a", -0.15, -0.15), box("b", 0.10, -0.05, sx=0.12, yaw=0.4), cyl("c", 0.0, 0.18))
+    assert model().enumerate(objs).feasible == model().enumerate(objs).feasible

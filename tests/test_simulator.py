@@ -1,0 +1,56 @@
+"""The first-order shelf simulator never creates overlaps, and stops on the target's visibility."""
+
+import numpy as np
+from hypothesis import given, settings, strategies as st
+
+from slax_drake.policies.actions import Push, Suction
+from slax_drake.policies.registry import make_policy
+from slax_drake.policies.simulator import execute, objects_overlap
+from slax_drake.scene import sample_scene
+from slax_drake.scene.footprint import Footprint, inside_shelf
+from slax_drake.scene.model import SceneObject, planar_pose
+
+
+@settings(max_examples=12, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.sampled_from([4, 6, 8]))
+def test_random_rollouts_never_overlap(sim_scenario, seed, n):
+    scene = sample_scene(sim_scenario, n, seed, target_size=(0.06, 0.06, 0.06))
+    model = make_policy("oracle-p+s", sim_scenario).action_model
+    rng = np.random.default_rng(seed)
+    clearance = model.tool.clearance
+    assert objects_overlap(scene, clearance - 1e-9) == []
+    for _ in range(5):
+        feasible = model.enumerate(scene.objects).feasible  # full state: sometimes moves beside the target
+        if not feasible:
+            break
+        scene, _ = execute(scene, feasible[int(rng.integers(len(feasible)))], model)
+        assert objects_overlap(scene, clearance - 1e-9) == []
+        for o in scene.objects:
+            assert inside_shelf(Footprint.of(o), scene.shelf, clearance - 1e-9)
+
+
+def test_unseen_obstacle_stops_a_push(sim_scenario):
+    scene = sample_scene(sim_scenario, 4, 1, target_size=(0.06, 0.06, 0.06))
+    model = make_policy("oracle-p", sim_scenario).action_model
+    box = SceneObject("a", "box", (0.08, 0.08, 0.1), planar_pose(-0.15, -0.2, 0.05, 0.0))
+    wall = SceneObject("b", "box", (0.08, 0.08, 0.1), planar_pose(0.05, -0.2, 0.05, 0.0))
+    s = scene.with_objects((box, wall))
+    s = s.__class__(s.shelf, s.camera, s.objects, None, 0)
+    moved, note = execute(s, Push("a", (-0.2225, -0.21, 0.0375), 0.30), model)
+    assert "unseen obstacle" in note
+    assert objects_overlap(moved, model.tool.clearance - 1e-9) == []
+    assert moved.objects[0].center[0] > -0.15
+
+
+def test_suction_moves_the_object_to_its_placement(sim_scenario):
+    scene = sample_scene(sim_scenario, 4, 1, target_size=(0.06, 0.06, 0.06))
+    model = make_policy("oracle-p+s", sim_scenario).action_model
+    sucs = [a for a in model.enumerate(scene.objects, fixed=(scene.target.as_object(),)).feasible
+            if isinstance(a, Suction)]
+    assert sucs
+    a = sucs[0]
+    after, note = execute(scene, a, model)
+    assert note == ""
+    o0 = scene.object_named(a.name)
+    o1 = after.object_named(a.name)
+    assert np.allclose(o1.center[:2], (o0.center[0] + a.dx, a.dz))
