@@ -26,6 +26,7 @@ def register(subparsers) -> None:
     p.add_argument("--batch-size", type=int, default=16, help="default: 16")
     p.add_argument("--lr", type=float, default=3e-3, help="peak learning rate of the one-cycle schedule (default: 3e-3)")
     p.add_argument("--channels", type=int, default=16, help="channels of the first U-Net level (default: 16)")
+    p.add_argument("--levels", type=int, default=4, help="U-Net levels; image sides must divide by 2^levels (default: 4)")
     p.add_argument("--val-fraction", type=float, default=0.1, help="validation share of the samples (default: 0.1)")
     p.add_argument("--limit", type=int, help="use only the first N samples of the dataset")
     p.add_argument("--threads", type=int, help="torch CPU threads (default: torch's choice)")
@@ -63,7 +64,7 @@ def run_train(args: argparse.Namespace) -> int:
     from slax_drake.perception.data import load_dataset
     from slax_drake.perception.training import TrainOptions, train
 
-    for name in ("epochs", "batch_size", "lr", "channels", "limit", "threads"):
+    for name in ("epochs", "batch_size", "lr", "channels", "levels", "limit", "threads"):
         _positive(getattr(args, name), "--" + name.replace("_", "-"))
     if not 0 < args.val_fraction < 1:
         from slax_drake.errors import UserError
@@ -74,7 +75,7 @@ def run_train(args: argparse.Namespace) -> int:
     print(f"{len(data)} samples at {w}x{h} from {args.data}", flush=True)
     options = TrainOptions(
         epochs=args.epochs, batch_size=args.batch_size, learning_rate=args.lr, val_fraction=args.val_fraction,
-        seed=args.seed, device=args.device, num_threads=args.threads, base_channels=args.channels,
+        seed=args.seed, device=args.device, num_threads=args.threads, base_channels=args.channels, levels=args.levels,
     )
     result = train(data, args.out, options, resume=args.resume, progress=not args.no_progress and sys.stderr.isatty(),
                    log=lambda line: print(line, flush=True))
