@@ -236,8 +236,10 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
     # The robot never collides with itself in this model (its boxes overlap at the joints).
     robot_geometries = [g for b in plant.GetBodyIndices(robot) for g in plant.GetCollisionGeometriesForBody(plant.get_body(b))]
     scene_graph.collision_filter_manager().Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(robot_geometries)))
-    from slax_drake.systems.scene_world import SceneBodies
+    from slax_drake.systems.scene_world import SceneBodies, support_by_corner_spheres_only
 
+    if bodies is not None:
+        support_by_corner_spheres_only(scene_graph, plant, shelf_instance, bodies)
     assign_render_labels(scene_graph, plant, shelf_instance, robot, bodies or SceneBodies((), None, ()))
     if scene is not None:
         set_default_object_poses(plant, scene, bodies, X_WS)
@@ -271,8 +273,10 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
     builder.Connect(desired.get_output_port(), plant.get_desired_state_input_port(robot))
     builder.ExportInput(select.get_input_port(), "desired_state")
 
-    # Gravity compensation (feed-forward) from a plant of the robot alone.
-    controller_plant = builder.AddNamedSystem("controller_plant", robot_model.robot_only_plant())  # kept alive
+    # Gravity compensation (feed-forward) from a plant of the robot alone. That plant is not a subsystem of the
+    # diagram (as one, its 22 continuous states would be integrated every step for nothing, about 17 % of the
+    # step time); the diagram's Python object holds it alive instead (InverseDynamics only keeps a pointer).
+    controller_plant = robot_model.robot_only_plant()
     gravity = builder.AddNamedSystem(
         "gravity_compensation", InverseDynamics(controller_plant, InverseDynamics.InverseDynamicsMode.kGravityCompensation)
     )
@@ -336,6 +340,7 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
 
     diagram = builder.Build()
     diagram.set_name("station")
+    diagram._controller_plant = controller_plant  # lifetime: InverseDynamics refers to it
     return diagram
 
 
