@@ -1,0 +1,59 @@
+"""Inverse kinematics of a tool frame pose with Drake's InverseKinematics (SNOPT from the pip wheel).
+
+One solve places a tool frame (``blade_face_frame`` or ``cup_tip_frame``) at a pose in the shelf frame S
+within ``position_tolerance`` metres (a box) and ``angle_tolerance`` radians, within the joint limits, with the
+head and the tool shaft locked (the shaft angle is given: ``SHAFT_BLADE_DOWN`` or ``SHAFT_BLADE_UP``; it
+turns about the same axis as the wrist roll, so leaving it free would make the problem redundant) and, when
+``min_distance`` is given, every robot-environment distance above it (AddMinimumDistanceLowerBoundConstraint).
+The cost keeps the solution near the warm start (the previous waypoint's configuration), so consecutive
+waypoints along a path give neighbouring configurations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from slax_drake.systems import robot as robot_model
+
+POSITION_TOLERANCE = 5e-4  # m
+ANGLE_TOLERANCE = 0.01  # rad
+CONTINUOUS_JOINTS = ("upperarm_roll_joint", "forearm_roll_joint", "wrist_roll_joint")
+
+
+def solve_tool_pose(world, frame: str, X_S_target, q_guess, shaft: float, min_distance: float | None = None,
+                    position_tolerance: float = POSITION_TOLERANCE, angle_tolerance: float = ANGLE_TOLERANCE):
+    """Planned joint values (9,) placing ``frame`` at X_S_target (RigidTransform in S), or None if the solver
+    finds no solution. ``q_guess`` (9,) is the initial guess and the configuration the cost stays near."""
+    from pydrake.math import RotationMatrix
+    from pydrake.multibody.inverse_kinematics import InverseKinematics
+    from pydrake.solvers import Solve
+
+    plant, context = world.plant, world.plant_context
+    q_start = np.asarray(q_guess, float).copy()
+    q_start[robot_model.PLANNED_JOINTS.index("tool_shaft_joint")] = shaft
+    plant.SetPositions(context, world.full_q(q_start))
+    for name in robot_model.HEAD_JOINTS + ("tool_shaft_joint",):
+        plant.GetJointByName(name, world.robot).Lock(context)
+    ik = InverseKinematics(plant, context, with_joint_limits=True)
+    q = ik.q()
+    X_WT = world.X_WS @ X_S_target
+    p = X_WT.translation()
+    tol = np.full(3, position_tolerance)
+    tool = plant.GetFrameByName(frame, world.robot)
+    ik.AddPositionConstraint(tool, np.zeros(3), plant.world_frame(), p - tol, p + tol)
+    ik.AddOrientationConstraint(plant.world_frame(), X_WT.rotation(), tool, RotationMatrix(), angle_tolerance)
+    if min_distance is not None:
+        ik.AddMinimumDistanceLowerBoundConstraint(min_distance, 0.02)
+    prog = ik.get_mutable_prog()
+    q0 = world.full_q(q_start)
+    for name in CONTINUOUS_JOINTS:  # unbounded joints: stay within half a turn of the warm start
+        i = plant.GetJointByName(name, world.robot).position_start()
+        prog.AddBoundingBoxConstraint(q0[i] - np.pi, q0[i] + np.pi, q[i])
+    prog.AddQuadraticErrorCost(np.eye(len(q0)), q0, q)
+    prog.SetInitialGuess(q, q0)
+    result = Solve(prog)
+    for name in robot_model.HEAD_JOINTS + ("tool_shaft_joint",):
+        plant.GetJointByName(name, world.robot).Unlock(context)
+    if not result.is_success():
+        return None
+    return world.planned_q(result.GetSolution(q))

@@ -1,0 +1,295 @@
+"""Turn a policy's action into a checked, timed joint trajectory of the planned joints, or reject it.
+
+:meth:`MotionPlanner.plan` (action, scene as it stands, start configuration):
+
+1. tool waypoints of the action (:func:`slax_drake.planning.waypoints.action_waypoints`);
+2. IK per waypoint (:func:`slax_drake.planning.ik.solve_tool_pose`), warm-started from the previous one; the
+   first from the start configuration and a few fixed seeds. A solution that collides is solved again with a
+   minimum-distance constraint;
+3. each straight tool segment is refined: where the joint-space straight line between two solutions moves the
+   tool more than ``deviation_tolerance`` from the Cartesian segment, the midpoint is solved and inserted;
+4. every joint segment (the free ones from the start and back to the observation pose included) is checked
+   densely with SceneGraphCollisionChecker against the world as it stands (padding 2 mm; the tool may touch
+   the manipulated object only on the action's contact segments);
+5. Ruckig times the chain rest to rest (:mod:`slax_drake.planning.timing`), with dwells at rest where the
+   waypoints ask for them; the suction command is on during the segments that carry the object.
+
+Any failure returns a :class:`Rejection` with a reason naming the waypoint (and the colliding body).
+Timings of each stage are kept (seconds of wall clock) for the benchmark.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from slax_drake.planning.ik import solve_tool_pose
+from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
+from slax_drake.planning.trajectory import JointTrajectory
+from slax_drake.planning.waypoints import ToolWaypoint, action_waypoints
+from slax_drake.planning.world import PlanningWorld
+from slax_drake.policies.actions import ToolConfig
+from slax_drake.policies.distribution import state_key
+from slax_drake.scene.model import Scene
+from slax_drake.systems import robot as robot_model
+from slax_drake.systems.station import StationScenario, observation_positions
+
+DEVIATION_TOLERANCE = 0.004  # m; the requirement is < 5 mm, 1 mm is left for the 1 ms sampling and IK tolerance
+MAX_REFINE_DEPTH = 6
+NUM_RANDOM_SEEDS = 12
+SEED_LIBRARY_SEED = 0
+MAX_FIRST_SOLUTIONS = 3
+MIN_DISTANCE = 0.004  # m, IK's robot-environment distance when the unconstrained solution collides
+
+
+@dataclasses.dataclass
+class Rejection:
+    """An action whose motion is infeasible, and why."""
+
+    action: object
+    reason: str
+    timings: dict
+
+    feasible = False
+
+
+@dataclasses.dataclass
+class PlannedMotion:
+    """A checked, timed motion of an action: the trajectory (from t = 0), the suction command's on-intervals
+    [(t_on, t_off)] in seconds, the times at which each tool waypoint is reached, the largest tool deviation
+    from the Cartesian segments found by the refinement (m), and stage timings (s)."""
+
+    action: object
+    trajectory: JointTrajectory
+    suction_intervals: list
+    waypoint_times: list
+    max_deviation: float
+    timings: dict
+    segments: list  # (q_a, q_b, contact) of every checked joint segment, for tests and re-checks
+
+    feasible = True
+
+    def suction_at(self, t: float) -> bool:
+        return any(t0 <= t < t1 for t0, t1 in self.suction_intervals)
+
+
+class _Reject(Exception):
+    pass
+
+
+class MotionPlanner:
+    """Plans actions for one station (robot, shelf placement, observation pose)."""
+
+    def __init__(self, scenario: StationScenario, tool: ToolConfig = ToolConfig(),
+                 deviation_tolerance: float = DEVIATION_TOLERANCE):
+        self.scenario = scenario
+        self.tool = tool
+        self.deviation_tolerance = deviation_tolerance
+        self.q_observation = observation_positions(scenario)
+        self.limits = robot_model.joint_limits()
+        self._world_key = None
+        self._world = None
+
+    def world(self, scene: Scene) -> PlanningWorld:
+        """The planning world of the scene's objects as they stand (built once per object state)."""
+        key = (state_key(scene.objects), scene.shelf)
+        if key != self._world_key:
+            self._world = PlanningWorld(self.scenario, scene)
+            self._world_key = key
+        return self._world
+
+    def plan(self, action, scene: Scene, q_start=None):
+        """A :class:`PlannedMotion` from q_start (default: the observation pose) through the action and back
+        to the observation pose, or a :class:`Rejection`."""
+        timings = {"world_s": 0.0, "ik_s": 0.0, "check_s": 0.0, "timing_s": 0.0, "ik_solves": 0}
+        t_all = time.perf_counter()
+        t0 = time.perf_counter()
+        world = self.world(scene)
+        timings["world_s"] = time.perf_counter() - t0
+        q_start = self.q_observation.copy() if q_start is None else np.asarray(q_start, float)
+        try:
+            waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool)
+            motion = self._plan(world, action, waypoints, q_start, timings)
+        except _Reject as e:
+            world.allow_tool_contact(action.name, False)
+            timings["total_s"] = time.perf_counter() - t_all
+            return Rejection(action, str(e), _rounded(timings))
+        timings["total_s"] = time.perf_counter() - t_all
+        motion.timings = _rounded(timings)
+        return motion
+
+    # -----------------------------------------------------------------------------------------------------
+    def _ik(self, world, wp: ToolWaypoint, guess, timings, min_distance=None):
+        from pydrake.math import RigidTransform
+
+        t0 = time.perf_counter()
+        q = solve_tool_pose(world, wp.frame, RigidTransform(wp.X_SF), guess, wp.shaft, min_distance=min_distance)
+        timings["ik_s"] += time.perf_counter() - t0
+        timings["ik_solves"] += 1
+        return q
+
+    def _free(self, world, q, timings) -> bool:
+        t0 = time.perf_counter()
+        ok = world.config_free(q)
+        timings["check_s"] += time.perf_counter() - t0
+        return ok
+
+    def _solve_waypoint(self, world, wp, guesses, name, timings):
+        """IK for a waypoint from the guesses in turn; a colliding solution is re-solved with a distance bound."""
+        world.allow_tool_contact(name, wp.contact)
+        found_colliding = None
+        for guess in guesses:
+            q = self._ik(world, wp, guess, timings)
+            if q is None:
+                continue
+            if self._free(world, q, timings):
+                return q
+            found_colliding = q
+        if found_colliding is not None and not wp.contact:
+            for guess in guesses[:1]:
+                q = self._ik(world, wp, guess, timings, min_distance=MIN_DISTANCE)
+                if q is not None and self._free(world, q, timings):
+                    return q
+        if found_colliding is not None:
+            hits = ", ".join(world.colliding_bodies(found_colliding)) or "the environment"
+            raise _Reject(f"{wp.label}: every IK solution collides with {hits}")
+        raise _Reject(f"{wp.label}: tool pose out of reach (no IK solution)")
+
+    def _seeds(self, q_start):
+        """Initial guesses for the first waypoint: the start, the observation pose with the torso low, mid and
+        high, then a fixed set of pseudo-random configurations (seeded: the planner is deterministic)."""
+        seeds = [np.asarray(q_start, float), self.q_observation]
+        for torso in (0.2, 0.38):
+            s = self.q_observation.copy()
+            s[0] = torso
+            seeds.append(s)
+        lim = self.limits
+        lo = np.where(np.isfinite(lim.position_lower), lim.position_lower, -np.pi)
+        hi = np.where(np.isfinite(lim.position_upper), lim.position_upper, np.pi)
+        rng = np.random.default_rng(SEED_LIBRARY_SEED)
+        for _ in range(NUM_RANDOM_SEEDS):
+            s = rng.uniform(lo, hi)
+            s[-1] = self.q_observation[-1]
+            seeds.append(s)
+        return seeds
+
+    def _first_waypoints(self, world, wp, q_start, name, timings):
+        """Up to ``MAX_FIRST_SOLUTIONS`` distinct collision-free IK solutions of the first waypoint, nearest to
+        the start first."""
+        world.allow_tool_contact(name, False)
+        found = []
+        for guess in self._seeds(q_start):
+            q = self._ik(world, wp, guess, timings)
+            if q is None or not self._free(world, q, timings):
+                continue
+            if all(np.linalg.norm(q - f) > 0.1 for f in found):
+                found.append(q)
+            if len(found) >= MAX_FIRST_SOLUTIONS:
+                break
+        if not found:
+            raise _Reject(f"{wp.label}: tool pose out of reach (no collision-free IK solution from "
+                          f"{len(self._seeds(q_start))} seeds)")
+        found.sort(key=lambda q: float(np.linalg.norm(q - q_start)))
+        return found
+
+    def _plan(self, world, action, waypoints, q_start, timings) -> PlannedMotion:
+        reasons = []
+        for q_first in self._first_waypoints(world, waypoints[0], q_start, action.name, timings):
+            try:
+                return self._plan_from(world, action, waypoints, q_start, q_first, timings)
+            except _Reject as e:
+                reasons.append(str(e))
+        raise _Reject(reasons[0] if len(set(reasons)) == 1 else "; ".join(dict.fromkeys(reasons)))
+
+    def _plan_from(self, world, action, waypoints, q_start, q_first, timings) -> PlannedMotion:
+        name = action.name
+        # 2. IK along the path, warm-started from the previous waypoint.
+        qs = [q_first]
+        for wp in waypoints[1:]:
+            qs.append(self._solve_waypoint(world, wp, [qs[-1]], name, timings))
+        # 3. Cartesian refinement of each straight tool segment.
+        # (q, contact and suction of the segment arriving here, the waypoint or None for inserted points)
+        chain = [(q_start, False, False, None), (qs[0], False, waypoints[0].suction, waypoints[0])]
+        max_dev = 0.0
+        for k in range(1, len(waypoints)):
+            a, b = waypoints[k - 1], waypoints[k]
+            world.allow_tool_contact(name, b.contact)
+            inner, dev = self._refine(world, qs[k - 1], a.X_SF, qs[k], b.X_SF, b, timings, 0)
+            max_dev = max(max_dev, dev)
+            chain.extend((q, b.contact, b.suction, None) for q in inner)
+            chain.append((qs[k], b.contact, b.suction, b))
+        chain.append((self.q_observation.copy(), False, False, None))
+        # 4. Dense collision checks of every joint segment.
+        segments = []
+        t0 = time.perf_counter()
+        for (qa, _, _, wa), (qb, contact, _, wb) in zip(chain[:-1], chain[1:]):
+            world.allow_tool_contact(name, contact)
+            if not world.edge_free(qa, qb):
+                world.allow_tool_contact(name, False)
+                timings["check_s"] += time.perf_counter() - t0
+                where = wb.label if wb is not None else ("the return to the observation pose" if wa is not None and wb is None
+                                                         else "the way between waypoints")
+                raise _Reject(f"segment to {where} collides")
+            segments.append((np.asarray(qa).copy(), np.asarray(qb).copy(), contact))
+        world.allow_tool_contact(name, False)
+        timings["check_s"] += time.perf_counter() - t0
+        # 5. Ruckig timing, segment by segment, with dwells and the suction schedule.
+        t0 = time.perf_counter()
+        lim = self.limits
+        traj = JointTrajectory.hold(lim.names, chain[0][0], 0.0)
+        suction, waypoint_times = [], []
+        on_since = None
+        for (qa, _, _, _), (qb, _, want, wb) in zip(chain[:-1], chain[1:]):
+            if want and on_since is None:
+                on_since = float(traj.times[-1])
+            if not want and on_since is not None:
+                suction.append((on_since, float(traj.times[-1])))
+                on_since = None
+            t, q, v, a = time_segment(qa, qb, lim.velocity, lim.acceleration, lim.jerk, SAMPLE_PERIOD)
+            if len(t) > 1:
+                traj = traj.then(JointTrajectory(lim.names, t, q, v, a))
+            if wb is not None:
+                waypoint_times.append((wb.label, round(float(traj.times[-1]), 6)))
+                if wb.dwell > 0:
+                    traj = traj.then(JointTrajectory.hold(lim.names, qb, wb.dwell))
+        if on_since is not None:
+            suction.append((on_since, float(traj.times[-1])))
+        timings["timing_s"] += time.perf_counter() - t0
+        return PlannedMotion(action, traj, [(round(float(a), 6), round(float(b), 6)) for a, b in suction],
+                             waypoint_times, float(max_dev), {}, segments)
+
+    def _refine(self, world, qa, Xa, qb, Xb, wp, timings, depth):
+        """Configurations to insert between qa and qb (excluding both) so that the joint-space straight line
+        keeps ``wp.frame`` within the tolerance of the Cartesian segment; and the largest deviation left."""
+        pa, pb = Xa[:3, 3], Xb[:3, 3]
+        n = max(6, int(np.ceil(np.linalg.norm(pb - pa) / 0.01)) + 1)
+        dev = 0.0
+        for s in np.linspace(0.0, 1.0, n)[1:-1]:
+            p = world.tool_pose_S(qa + s * (qb - qa), wp.frame).translation()
+            dev = max(dev, _distance_to_segment(p, pa, pb))
+        if dev <= self.deviation_tolerance:
+            return [], dev
+        if depth >= MAX_REFINE_DEPTH:
+            raise _Reject(f"{wp.label}: the tool leaves its straight segment by {dev * 1000:.1f} mm")
+        X_mid = Xa.copy()
+        X_mid[:3, 3] = (pa + pb) / 2.0
+        mid = dataclasses.replace(wp, X_SF=X_mid, label=wp.label)
+        q_mid = self._ik(world, mid, (qa + qb) / 2.0, timings)
+        if q_mid is None:
+            raise _Reject(f"{wp.label}: a point of the straight segment is out of reach")
+        left, d1 = self._refine(world, qa, Xa, q_mid, X_mid, wp, timings, depth + 1)
+        right, d2 = self._refine(world, q_mid, X_mid, qb, Xb, wp, timings, depth + 1)
+        return left + [q_mid] + right, max(d1, d2)
+
+
+def _distance_to_segment(p, a, b) -> float:
+    ab = b - a
+    L2 = float(ab @ ab)
+    s = 0.0 if L2 == 0 else min(1.0, max(0.0, float((p - a) @ ab) / L2))
+    return float(np.linalg.norm(p - (a + s * ab)))
+
+
+def _rounded(timings: dict) -> dict:
+    return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in timings.items()}

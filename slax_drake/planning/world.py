@@ -1,0 +1,135 @@
+"""The planning world: the robot, the shelf and a scene's objects frozen where they stand, for IK and checks.
+
+``PlanningWorld(station_scenario, scene)`` builds a Drake RobotDiagram (RobotDiagramBuilder) holding the robot
+(base welded as in the station's directives), the shelf welded at the station's X_WS and every object of the
+scene (and, optionally, the target) as a body welded at X_WS * X_SO, with its primitive box or cylinder as the
+collision shape. The plant's positions are the robot's alone (planned joints and the head).
+
+Collision semantics (the same for IK and for the checker):
+- robot vs environment (shelf panels and objects) is checked with ``padding`` metres of margin;
+- the robot's links are not checked against each other, as in the station (its primitive link boxes overlap at
+  the joints); the tool's tube stays out of the arm by the tool waypoints' geometry;
+- during an action's contact phases, the tool link (tube, blade, cup) is allowed to touch the manipulated
+  object: :meth:`PlanningWorld.allow_tool_contact` toggles that single pair in the checker.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from slax_drake.scene.model import Scene
+from slax_drake.systems import robot as robot_model
+from slax_drake.systems.station import SHELF_BODY, StationScenario, _base_weld, shelf_pose
+
+PADDING = 0.002  # m, robot-environment margin of the collision checker
+EDGE_STEP = 0.005  # rad (weighted joint distance) between checked configurations along a segment
+
+
+class PlanningWorld:
+    """A frozen world for planning (see the module docstring). Frames: world W = the station's world."""
+
+    def __init__(self, scenario: StationScenario, scene: Scene, include_target: bool = False,
+                 padding: float = PADDING, edge_step: float = EDGE_STEP):
+        from pydrake.geometry import Box, CollisionFilterDeclaration, Cylinder, GeometrySet, ProximityProperties
+        from pydrake.math import RigidTransform
+        from pydrake.multibody.tree import SpatialInertia
+        from pydrake.planning import RobotDiagramBuilder, SceneGraphCollisionChecker
+
+        self.scenario = scenario
+        self.scene = scene
+        self.X_WS = shelf_pose(scenario, scene.camera)
+        builder = RobotDiagramBuilder(time_step=0.0)
+        plant = builder.plant()
+        parser = builder.parser()
+        robot_model.add_package(parser)
+        (robot,) = parser.AddModels(url=robot_model.ROBOT_URL)
+        plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(robot_model.BASE_BODY, robot), _base_weld(scenario))
+        shelf_file = _shelf_file(scenario)
+        (shelf,) = parser.AddModels(url=shelf_file)
+        plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(SHELF_BODY, shelf), self.X_WS)
+        items = list(scene.objects) + ([scene.target.as_object()] if include_target and scene.target else [])
+        self.object_bodies = {}
+        for obj in items:
+            instance = plant.AddModelInstance(f"planning_{obj.name}")
+            body = plant.AddRigidBody(obj.name, instance, SpatialInertia.SolidBoxWithMass(1.0, 0.1, 0.1, 0.1))
+            sx, sy, sz = obj.size
+            shape = Box(sx, sy, sz) if obj.shape == "box" else Cylinder(sx / 2.0, sz)
+            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"{obj.name}_collision", ProximityProperties())
+            plant.WeldFrames(plant.world_frame(), body.body_frame(), self.X_WS @ RigidTransform(obj.X_SO))
+            self.object_bodies[obj.name] = body
+        plant.Finalize()
+        scene_graph = builder.scene_graph()
+        robot_geometries = [g for b in plant.GetBodyIndices(robot) for g in plant.GetCollisionGeometriesForBody(plant.get_body(b))]
+        scene_graph.collision_filter_manager().Apply(
+            CollisionFilterDeclaration().ExcludeWithin(GeometrySet(robot_geometries)))
+        self.robot = robot
+        self.planned_indices = robot_model.planned_joint_indices(plant, robot)
+        self.head_indices = np.array([plant.GetJointByName(n, robot).position_start() for n in robot_model.HEAD_JOINTS])
+        self.q_head = np.array([scenario.head_configuration.get(n, 0.0) for n in robot_model.HEAD_JOINTS])
+        diagram = builder.Build()
+        self.checker = SceneGraphCollisionChecker(
+            model=diagram, robot_model_instances=[robot], edge_step_size=edge_step,
+            env_collision_padding=padding, self_collision_padding=0.0,
+        )
+        self.padding = padding
+        self.diagram = self.checker.model()
+        self.plant = self.checker.plant()
+        self.tool_body = self.plant.GetBodyByName(robot_model.TOOL_BODY, robot)
+        # A context of our own for IK and forward kinematics.
+        self.diagram_context = self.diagram.CreateDefaultContext()
+        self.plant_context = self.plant.GetMyMutableContextFromRoot(self.diagram_context)
+        self.frames = {name: self.plant.GetFrameByName(name, robot) for name in
+                       (robot_model.BLADE_FACE_FRAME, robot_model.CUP_TIP_FRAME, robot_model.CAMERA_FRAME)}
+
+    # configurations -------------------------------------------------------------------------------------
+    def full_q(self, q_planned) -> np.ndarray:
+        """The plant's positions for planned joint values (head at the scenario's head configuration)."""
+        q = np.zeros(self.plant.num_positions())
+        q[self.planned_indices] = q_planned
+        q[self.head_indices] = self.q_head
+        return q
+
+    def planned_q(self, q_full) -> np.ndarray:
+        return np.asarray(q_full)[self.planned_indices].copy()
+
+    def tool_pose_S(self, q_planned, frame: str):
+        """X_SF of a robot frame at the planned joint values (RigidTransform, shelf frame)."""
+        self.plant.SetPositions(self.plant_context, self.full_q(q_planned))
+        return self.X_WS.inverse() @ self.frames[frame].CalcPoseInWorld(self.plant_context)
+
+    # checks -----------------------------------------------------------------------------------------------
+    def allow_tool_contact(self, name: str | None, allowed: bool) -> None:
+        """Lets the tool link touch object ``name`` (or stops letting it)."""
+        if name is None or name not in self.object_bodies:
+            return
+        self.checker.SetCollisionFilteredBetween(self.tool_body, self.object_bodies[name], allowed)
+
+    def config_free(self, q_planned) -> bool:
+        return bool(self.checker.CheckConfigCollisionFree(self.full_q(q_planned)))
+
+    def edge_free(self, q0, q1) -> bool:
+        return bool(self.checker.CheckEdgeCollisionFree(self.full_q(q0), self.full_q(q1)))
+
+    def colliding_bodies(self, q_planned) -> list[str]:
+        """Names of the environment bodies the robot touches (within the padding) at q."""
+        from pydrake.planning import RobotCollisionType
+
+        types = self.checker.ClassifyBodyCollisions(self.full_q(q_planned))
+        names = []
+        for i, t in enumerate(types):
+            if t in (RobotCollisionType.kEnvironmentCollision, RobotCollisionType.kEnvironmentAndSelfCollision):
+                names.append(self.plant.get_body(self.plant.get_body(_body_index(i)).index()).name())
+        return names
+
+
+def _body_index(i: int):
+    from pydrake.multibody.tree import BodyIndex
+
+    return BodyIndex(i)
+
+
+def _shelf_file(scenario: StationScenario) -> str:
+    for directive in scenario.directives:
+        if directive.add_model is not None and directive.add_model.name == scenario.shelf_model:
+            return directive.add_model.file
+    raise ValueError(f"the station's directives add no model {scenario.shelf_model!r}")
