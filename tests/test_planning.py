@@ -1,0 +1,166 @@
+"""Motion planning: limits at 1 ms sampling, collision freedom, Cartesian deviation, rejection, determinism."""
+
+import numpy as np
+import pytest
+
+from slax_drake.planning.planner import MotionPlanner, Rejection
+from slax_drake.planning.timing import time_waypoints
+from slax_drake.planning.world import PlanningWorld
+from slax_drake.policies.actions import ActionModel, Push, Suction
+from slax_drake.policies.registry import tool_config
+from slax_drake.scene.sampling import sample_scene, shelf_of
+from slax_drake.systems.robot import joint_limits
+from slax_drake.systems.station import load_station_scenario, observation_positions
+
+TOL = 1e-9
+
+
+@pytest.fixture(scope="module")
+def setup(sim_scenario):
+    station = load_station_scenario()
+    tool = tool_config(sim_scenario)
+    planner = MotionPlanner(station, tool)
+    scene = sample_scene(sim_scenario, 6, seed=0)
+    model = ActionModel(shelf_of(sim_scenario), scene.camera.position, tool)
+    return station, planner, scene, model
+
+
+@pytest.fixture(scope="module")
+def motions(setup):
+    """The first push and the first suction among the action model's candidates that plan successfully."""
+    _, planner, scene, model = setup
+    found = {}
+    for action in model.enumerate(scene.objects).feasible:
+        kind = action.kind
+        if kind in found:
+            continue
+        result = planner.plan(action, scene)
+        if result.feasible:
+            found[kind] = result
+        if len(found) == 2:
+            break
+    assert set(found) == {"push", "suction"}
+    return scene, found
+
+
+def _check_limits(traj):
+    lim = joint_limits()
+    assert traj.names == lim.names
+    assert traj.dt == pytest.approx(0.001)
+    assert np.allclose(np.diff(traj.times), 0.001, atol=1e-9)
+    assert np.all(traj.q >= lim.position_lower - TOL) and np.all(traj.q <= lim.position_upper + TOL)
+    assert np.all(np.abs(traj.v) <= lim.velocity * (1 + 1e-9) + TOL)
+    assert np.all(np.abs(traj.a) <= lim.acceleration * (1 + 1e-9) + TOL)
+    assert np.all(np.abs(traj.jerk()) <= lim.jerk * (1 + 1e-6) + 1e-6)
+    # rest at both ends; at most a 1 ms step of motion between samples
+    assert np.allclose(traj.v[[0, -1]], 0.0) and np.allclose(traj.a[[0, -1]], 0.0)
+    assert np.all(np.abs(np.diff(traj.q, axis=0)) <= lim.velocity * 0.001 + 1e-9)
+
+
+@pytest.mark.parametrize("kind", ["push", "suction"])
+def test_trajectory_respects_limits_at_1ms(motions, kind):
+    _, found = motions
+    _check_limits(found[kind].trajectory)
+
+
+def test_ruckig_timing_limits_random_waypoints():
+    lim = joint_limits()
+    rng = np.random.default_rng(3)
+    lo = np.where(np.isfinite(lim.position_lower), lim.position_lower, -3.0)
+    hi = np.where(np.isfinite(lim.position_upper), lim.position_upper, 3.0)
+    waypoints = rng.uniform(lo, hi, size=(4, len(lo)))
+    traj = time_waypoints(lim.names, waypoints, lim.velocity, lim.acceleration, lim.jerk)
+    _check_limits(traj)
+    assert np.allclose(traj.q[0], waypoints[0]) and np.allclose(traj.q[-1], waypoints[-1])
+
+
+@pytest.mark.parametrize("kind", ["push", "suction"])
+def test_trajectory_starts_and_ends_at_the_observation_pose(setup, motions, kind):
+    station = setup[0]
+    q_obs = observation_positions(station)
+    traj = motions[1][kind].trajectory
+    assert np.allclose(traj.q[0], q_obs) and np.allclose(traj.q[-1], q_obs)
+
+
+@pytest.mark.parametrize("kind", ["push", "suction"])
+def test_trajectory_is_collision_free_at_every_sample(setup, motions, kind):
+    """Every 1 ms sample against the world as it stood, without the manipulated object; and, up to the moment
+    the tool reaches the object (insert / approach), against the whole world including it."""
+    station = setup[0]
+    scene, found = motions
+    motion = found[kind]
+    name = motion.action.name
+    others = scene.with_objects(tuple(o for o in scene.objects if o.name != name))
+    q = motion.trajectory.q
+    rest = _world(station, others)
+    assert all(rest.checker.CheckConfigsCollisionFree([rest.full_q(qi) for qi in q]))
+    labels = dict(motion.waypoint_times)
+    t_reach = labels["insert"] if kind == "push" else labels["approach"]
+    k = int(np.searchsorted(motion.trajectory.times, t_reach))
+    whole = _world(station, scene)
+    assert all(whole.checker.CheckConfigsCollisionFree([whole.full_q(qi) for qi in q[: k + 1]]))
+
+
+_worlds = {}
+
+
+def _world(station, scene):
+    key = tuple(o.name for o in scene.objects)
+    if key not in _worlds:
+        _worlds[key] = PlanningWorld(station, scene)
+    return _worlds[key]
+
+
+@pytest.mark.parametrize("kind", ["push", "suction"])
+def test_tool_stays_within_5mm_of_its_straight_segments(setup, motions, kind):
+    station = setup[0]
+    scene, found = motions
+    motion = found[kind]
+    from slax_drake.planning.waypoints import action_waypoints
+
+    waypoints = action_waypoints(motion.action, scene.objects, scene.shelf, setup[1].tool)
+    world = _world(station, scene)
+    times = motion.trajectory.times
+    reached = [t for _, t in motion.waypoint_times]
+    worst = 0.0
+    for (a, b), t0, t1 in zip(zip(waypoints[:-1], waypoints[1:]), reached[:-1], reached[1:]):
+        pa, pb = a.position, b.position
+        i0 = int(np.searchsorted(times, t0 + a.dwell - 1e-9))
+        i1 = int(np.searchsorted(times, t1 - 1e-9))
+        for qi in motion.trajectory.q[i0:i1 + 1:5]:  # every 5 ms
+            p = world.tool_pose_S(qi, b.frame).translation()
+            ab = pb - pa
+            s = 0.0 if ab @ ab == 0 else np.clip((p - pa) @ ab / (ab @ ab), 0.0, 1.0)
+            worst = max(worst, float(np.linalg.norm(p - (pa + s * ab))))
+    assert worst < 0.005
+
+
+def test_suction_command_covers_the_carry(motions):
+    motion = motions[1]["suction"]
+    labels = dict(motion.waypoint_times)
+    assert len(motion.suction_intervals) == 1
+    t_on, t_off = motion.suction_intervals[0]
+    assert t_on < labels["seal"] and labels["lower"] <= t_off <= labels["release"] + 0.5
+    assert motion.suction_at(labels["translate"]) and not motion.suction_at(labels["retract"])
+
+
+def test_unreachable_action_is_rejected_with_a_reason(setup):
+    _, planner, scene, _ = setup
+    obj = scene.objects[0]
+    far = Push(obj.name, (1.5, 0.0, 0.0375), 0.05)  # a lane 1.5 m to the right of the shelf's centre
+    result = planner.plan(far, scene)
+    assert isinstance(result, Rejection) and not result.feasible
+    assert "out of reach" in result.reason and result.reason.startswith("pre-approach")
+    deep = Suction(obj.name, (float(obj.center[0]), 2.0, 0.05), 0.0, float(obj.center[1]))
+    result = planner.plan(deep, scene)
+    assert isinstance(result, Rejection) and result.reason
+
+
+def test_planning_is_deterministic(setup, motions):
+    _, _, scene, _ = setup
+    motion = motions[1]["push"]
+    planner = MotionPlanner(setup[0], setup[1].tool)
+    again = planner.plan(motion.action, scene)
+    assert again.feasible
+    assert np.array_equal(again.trajectory.q, motion.trajectory.q)
+    assert np.array_equal(again.trajectory.times, motion.trajectory.times)
