@@ -71,7 +71,7 @@ class SampleMaker:
         self.renderer = SceneRenderer(self.camera)
 
     def make(self, index: int) -> Sample:
-        from slax_drake.occupancy import compute_occupancy
+        from slax_drake.occupancy import compute_occupancies
         from slax_drake.scene import sample_scene, scene_to_json
         from slax_drake.scene.raycast import SceneRaycaster
 
@@ -80,8 +80,7 @@ class SampleMaker:
         depth, label = self.renderer.render(scene)
         raycaster = SceneRaycaster(scene)
         spacing = self.scenario.target.surface_point_spacing
-        occs = [compute_occupancy(scene, size, self.spec.grid_step, self.camera, spacing, raycaster=raycaster)
-                for size in TARGET_SIZES]
+        occs = compute_occupancies(scene, TARGET_SIZES, self.spec.grid_step, self.camera, spacing, raycaster)
         return Sample(
             depth=depth,
             label=label,

@@ -3,6 +3,7 @@
 from slax_drake.occupancy.hidden import (
     Occupancy,
     collision_free,
+    compute_occupancies,
     compute_occupancy,
     grid_placements,
     placements_hidden,
@@ -10,6 +11,6 @@ from slax_drake.occupancy.hidden import (
 )
 
 __all__ = [
-    "Occupancy", "collision_free", "compute_occupancy", "grid_placements", "placements_hidden",
+    "Occupancy", "collision_free", "compute_occupancies", "compute_occupancy", "grid_placements", "placements_hidden",
     "project_placements",
 ]

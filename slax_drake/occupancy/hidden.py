@@ -38,6 +38,7 @@ evaluated directly (every placement, every sample point): correct, only slower.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -90,23 +91,49 @@ def compute_occupancy(
     Only ``scene.objects`` and the shelf occlude and collide; the scene's own target is ignored.
     ``surface_spacing`` (default 0.005 m) spaces the target's surface samples. ``raycaster`` may pass a
     ``SceneRaycaster(scene)`` already built for this scene's objects (without the target)."""
-    size = _check_size(target_size)
+    return compute_occupancies(scene, (target_size,), grid_step, camera, surface_spacing, raycaster)[0]
+
+
+def compute_occupancies(
+    scene: Scene,
+    target_sizes,
+    grid_step: float = DEFAULT_GRID_STEP,
+    camera: Camera | None = None,
+    surface_spacing: float | None = None,
+    raycaster: SceneRaycaster | None = None,
+) -> tuple[Occupancy, ...]:
+    """``compute_occupancy`` for several target sizes of one scene, in order; each result equals that of its
+    own ``compute_occupancy`` call.
+
+    Sizes that share a footprint (x, y), like the paper's three aspect ratios, share the work that does not
+    depend on the target's height: the collision-free grid, the 2D shadow pruning and the lattice points to
+    ray-cast. Only the rays (at each height) and the distributions are made per size."""
+    sizes = [_check_size(s) for s in target_sizes]
     if not (isinstance(grid_step, (int, float)) and math.isfinite(grid_step) and grid_step > 0):
         raise ValueError(f"grid_step must be a positive length in metres, got {grid_step!r}")
+    step = float(grid_step)
     spacing = DEFAULT_SURFACE_SPACING if surface_spacing is None else float(surface_spacing)
     if not spacing > 0:
         raise ValueError(f"surface_spacing must be positive, got {surface_spacing!r}")
     camera = scene.camera if camera is None else camera
     if raycaster is None:
         raycaster = SceneRaycaster(scene)
-    lattice = _Lattice.build(scene, size, float(grid_step), spacing)
-    if lattice is None or scene.camera.position[2] >= scene.shelf.height:
-        return _occupancy_direct(scene, size, float(grid_step), spacing, camera, raycaster)
-    hidden = lattice.hidden_mask(scene, raycaster)
-    p2d = lattice.distribution(hidden, camera, scene.camera.position)
-    ii, jj = np.nonzero(hidden)
-    hidden_xy = np.column_stack([lattice.cx[ii], lattice.cy[jj]])
-    return Occupancy(hidden_xy, p2d, p2d.sum(axis=0), size, float(grid_step), spacing)
+    eye = scene.camera.position
+    shared: dict[tuple[float, float], _Candidates] = {}
+    results = []
+    for size in sizes:
+        lattice = _lattice(scene.shelf.width, scene.shelf.depth, size, step, spacing)
+        if lattice is None or eye[2] >= scene.shelf.height:
+            results.append(_occupancy_direct(scene, size, step, spacing, camera, raycaster))
+            continue
+        if size[:2] not in shared:
+            shared[size[:2]] = lattice.candidates(scene)
+        hidden = lattice.hidden_mask(scene, raycaster, shared[size[:2]])
+        p2d = lattice.distribution(hidden, camera, eye)
+        ii, jj = np.nonzero(hidden)
+        hidden_xy = np.column_stack([lattice.cx[ii], lattice.cy[jj]])
+        results.append(Occupancy(hidden_xy, p2d, p2d.sum(axis=0), size, step, spacing))
+    return tuple(results)
 
 
 def grid_placements(scene: Scene, target_size, grid_step: float) -> np.ndarray:
@@ -184,11 +211,15 @@ def _check_size(target_size) -> tuple[float, float, float]:
 
 
 def _grid_axes(scene: Scene, size, step: float) -> tuple[np.ndarray, np.ndarray]:
+    return _axes_in_bay(scene.shelf.width, scene.shelf.depth, size, step)
+
+
+def _axes_in_bay(width: float, depth: float, size, step: float) -> tuple[np.ndarray, np.ndarray]:
     def axis(extent: float, half: float) -> np.ndarray:
         n = math.floor((extent / 2.0 - half) / step + 1e-9)
         return np.arange(-n, n + 1) * step if n >= 0 else np.zeros(0)
 
-    return axis(scene.shelf.width, size[0] / 2.0), axis(scene.shelf.depth, size[1] / 2.0)
+    return axis(width, size[0] / 2.0), axis(depth, size[1] / 2.0)
 
 
 def _face(points: np.ndarray, normals: np.ndarray, normal) -> np.ndarray:
@@ -256,7 +287,24 @@ def _occupancy_direct(scene, size, step, spacing, camera, raycaster) -> Occupanc
     return Occupancy(hidden_xy, p2d, p2d.sum(axis=0), size, step, spacing)
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
+class _Candidates:
+    """The part of the hidden test that does not depend on the target's height (shared by sizes with one
+    footprint): placements (n_i, n_j) that are collision free and not certainly visible top down, and the
+    fine-lattice points (need_a, need_b) whose rays decide them."""
+
+    placements: np.ndarray
+    need_a: np.ndarray
+    need_b: np.ndarray
+
+
+@functools.lru_cache(maxsize=64)
+def _lattice(width: float, depth: float, size, step: float, spacing: float) -> "_Lattice | None":
+    """The lattice of a ``width`` x ``depth`` bay (metres), cached: it depends on nothing else of the scene."""
+    return _Lattice.build(width, depth, size, step, spacing)
+
+
+@dataclasses.dataclass(frozen=True)
 class _Lattice:
     """Placement grid (cx, cy) and the fine lattice of top-face samples shared by all placements."""
 
@@ -272,12 +320,12 @@ class _Lattice:
     ay: np.ndarray  # fine lattice y coordinates (n_b,)
 
     @staticmethod
-    def build(scene: Scene, size, step: float, spacing: float) -> "_Lattice | None":
+    def build(width: float, depth: float, size, step: float, spacing: float) -> "_Lattice | None":
         points, normals = box_surface_points(size, spacing)
         top = _face(points, normals, (0, 0, 1))
         front = _face(points, normals, (0, -1, 0))
         ox, oy, oz = np.unique(top[:, 0]), np.unique(top[:, 1]), np.unique(front[:, 2]) + size[2] / 2.0
-        cx, cy = _grid_axes(scene, size, step)
+        cx, cy = _axes_in_bay(width, depth, size, step)
         if len(cx) == 0 or len(cy) == 0:
             return None
         mx, my = _multiple(step, ox[1] - ox[0]), _multiple(step, oy[1] - oy[0])
@@ -286,6 +334,8 @@ class _Lattice:
         sx, sy = step / mx, step / my
         ax = cx[0] + ox[0] + sx * np.arange((len(cx) - 1) * mx + len(ox))
         ay = cy[0] + oy[0] + sy * np.arange((len(cy) - 1) * my + len(oy))
+        for a in (cx, cy, ox, oy, oz, ax, ay):
+            a.setflags(write=False)  # shared through the cache
         return _Lattice(size, cx, cy, mx, my, ox, oy, oz, ax, ay)
 
     def window_counts(self, per_point: np.ndarray) -> np.ndarray:
@@ -303,22 +353,26 @@ class _Lattice:
         return _spread(placements.astype(np.int64), self.mx, self.my, len(self.ox), len(self.oy),
                        (len(self.ax), len(self.ay)))
 
-    def hidden_mask(self, scene: Scene, raycaster: SceneRaycaster) -> np.ndarray:
-        """bool (n_i, n_j): collision free and every top-face sample hidden."""
+    def candidates(self, scene: Scene) -> _Candidates:
+        """Collision free placements not proved visible by the 2D test, and the lattice points they need."""
         gx, gy = np.meshgrid(self.cx, self.cy, indexing="ij")
-        free = collision_free(scene, self.size, np.column_stack([gx.ravel(), gy.ravel()])).reshape(gx.shape)
-        if not free.any():
-            return free
-        certain = self._certainly_visible(scene)
-        candidates = free & (self.window_counts(certain) == 0)
-        if not candidates.any():
-            return candidates
-        need = self.covered(candidates) > 0
-        ia, ib = np.nonzero(need)
+        placements = collision_free(scene, self.size, np.column_stack([gx.ravel(), gy.ravel()])).reshape(gx.shape)
+        if placements.any():
+            placements &= self.window_counts(self._certainly_visible(scene)) == 0
+        if not placements.any():
+            return _Candidates(placements, np.zeros(0, np.int64), np.zeros(0, np.int64))
+        need_a, need_b = np.nonzero(self.covered(placements) > 0)
+        return _Candidates(placements, need_a, need_b)
+
+    def hidden_mask(self, scene: Scene, raycaster: SceneRaycaster, candidates: _Candidates) -> np.ndarray:
+        """bool (n_i, n_j): collision free and every top-face sample (at this lattice's height) hidden."""
+        if len(candidates.need_a) == 0:
+            return candidates.placements.copy()
+        ia, ib = candidates.need_a, candidates.need_b
         pts = np.column_stack([self.ax[ia], self.ay[ib], np.full(len(ia), self.size[2])])
-        seen = np.zeros_like(need)
+        seen = np.zeros((len(self.ax), len(self.ay)), dtype=bool)
         seen[ia, ib] = raycaster.visible(scene.camera.position, pts)
-        return candidates & (self.window_counts(seen) == 0)
+        return candidates.placements & (self.window_counts(seen) == 0)
 
     def _certainly_visible(self, scene: Scene) -> np.ndarray:
         """bool (n_a, n_b): lattice points that the top-down (2D) test proves visible from the camera."""
@@ -349,43 +403,118 @@ class _Lattice:
     def distribution(self, hidden: np.ndarray, camera: Camera, eye: np.ndarray) -> np.ndarray:
         """p2d (H, W) float32: every eye-facing surface sample of every hidden placement, projected once per
         distinct point with the number of hidden placements that share it as its weight."""
-        counts = np.zeros(camera.height * camera.width, dtype=np.float64)
         if not hidden.any():
-            return _normalised(counts, camera)
+            return _normalised(np.zeros(camera.height * camera.width), camera)
+        if _x_aligned(camera):
+            return _normalised(self._counts_x_aligned(hidden, camera, eye), camera)
+        return _normalised(self._counts_generic(hidden, camera, eye), camera)
+
+    def _face_weights(self, hidden: np.ndarray, eye: np.ndarray):
+        """The weighted sample points of the eye-facing faces, by face: ("top", w (n_a, n_b)) for the top
+        face at height size_z; ("y", plane_y (n_j,), w (n_a, n_j)) for the front and back faces, points
+        (ax[a], plane_y[j], oz); ("x", plane_x (n_i,), w (n_b, n_i)) for the left and right faces, points
+        (plane_x[i], ay[b], oz). Weights are the number of hidden placements sharing each point."""
         ex, ey, ez = (float(v) for v in eye)
-        sz = self.size[2]
         hx, hy = self.size[0] / 2.0, self.size[1] / 2.0
-        chunks, weights = [], []
-        if ez > sz:  # top face
-            w = self.covered(hidden)
-            ia, ib = np.nonzero(w)
-            chunks.append(np.column_stack([self.ax[ia], self.ay[ib], np.full(len(ia), sz)]))
-            weights.append(w[ia, ib])
-        nz = len(self.oz)
-        # Front (-y) and back (+y) faces: points (x lattice, placement row y_j -/+ hy, z); weight along x.
+        faces = []
+        if ez > self.size[2]:
+            faces.append(("top", None, self.covered(hidden)))
         wx = _spread_1d(hidden, self.mx, len(self.ox), len(self.ax))  # (n_a, n_j)
         for sign in (-1.0, 1.0):
             plane_y = self.cy + sign * hy
-            facing = sign * (ey - plane_y) > 0
-            w = wx * facing[None, :]
-            ia, jj = np.nonzero(w)
-            if len(ia):
-                chunks.append(np.column_stack([
-                    np.repeat(self.ax[ia], nz), np.repeat(plane_y[jj], nz), np.tile(self.oz, len(ia))]))
-                weights.append(np.repeat(w[ia, jj], nz))
-        # Left (-x) and right (+x) faces: points (placement column x_i -/+ hx, y lattice, z); weight along y.
+            faces.append(("y", plane_y, wx * (sign * (ey - plane_y) > 0)[None, :]))
         wy = _spread_1d(hidden.T, self.my, len(self.oy), len(self.ay))  # (n_b, n_i)
         for sign in (-1.0, 1.0):
             plane_x = self.cx + sign * hx
-            facing = sign * (ex - plane_x) > 0
-            w = wy * facing[None, :]
-            ib, ii = np.nonzero(w)
-            if len(ib):
+            faces.append(("x", plane_x, wy * (sign * (ex - plane_x) > 0)[None, :]))
+        return faces
+
+    def _counts_generic(self, hidden: np.ndarray, camera: Camera, eye: np.ndarray) -> np.ndarray:
+        """Pixel counts (H * W,) float64, every distinct point projected through ``Camera.to_camera``."""
+        sz, nz = self.size[2], len(self.oz)
+        chunks, weights = [], []
+        for kind, plane, w in self._face_weights(hidden, eye):
+            if kind == "top":
+                ia, ib = np.nonzero(w)
+                chunks.append(np.column_stack([self.ax[ia], self.ay[ib], np.full(len(ia), sz)]))
+                weights.append(w[ia, ib])
+            elif kind == "y":
+                ia, jj = np.nonzero(w)
                 chunks.append(np.column_stack([
-                    np.repeat(plane_x[ii], nz), np.repeat(self.ay[ib], nz), np.tile(self.oz, len(ib))]))
+                    np.repeat(self.ax[ia], nz), np.repeat(plane[jj], nz), np.tile(self.oz, len(ia))]))
+                weights.append(np.repeat(w[ia, jj], nz))
+            else:
+                ib, ii = np.nonzero(w)
+                chunks.append(np.column_stack([
+                    np.repeat(plane[ii], nz), np.repeat(self.ay[ib], nz), np.tile(self.oz, len(ib))]))
                 weights.append(np.repeat(w[ib, ii], nz))
-        counts += _pixel_counts(camera, np.concatenate(chunks), np.concatenate(weights).astype(np.float64))
-        return _normalised(counts, camera)
+        return _pixel_counts(camera, np.concatenate(chunks), np.concatenate(weights).astype(np.float64))
+
+    def _counts_x_aligned(self, hidden: np.ndarray, camera: Camera, eye: np.ndarray) -> np.ndarray:
+        """Pixel counts (H * W,) float64 for a camera whose x axis is the shelf's x axis (any pitch, no yaw or
+        roll: every camera built by ``camera_pose``). Then x_C = x - x_eye, and y_C, z_C depend on (y, z)
+        only: image rows and depths are computed once per (y, z) pair of a face, and each point costs one
+        division for its column. The arithmetic per point is that of ``_pixel_counts`` (same operations in
+        the same order on the same values), so the counts are identical to ``_counts_generic``'s."""
+        size = camera.height * camera.width
+        counts = np.zeros(size + 1, dtype=np.float64)  # the last bin collects points outside the image
+        fx_x = camera.fx * (self.ax - camera.X_SC[0, 3])  # (n_a,)
+        for kind, plane, w in self._face_weights(hidden, eye):
+            if kind == "top":
+                ia, ib = np.nonzero(w)
+                row, depth = _image_rows(camera, self.ay, np.array([self.size[2]]))
+                index = _pixel_index(camera, fx_x[ia][:, None], row[ib], depth[ib])
+                weights = w[ia, ib].astype(np.float64)
+            elif kind == "y":
+                ia, jj = np.nonzero(w)
+                row, depth = _image_rows(camera, plane, self.oz)
+                index = _pixel_index(camera, fx_x[ia][:, None], row[jj], depth[jj])
+                weights = np.repeat(w[ia, jj].astype(np.float64), len(self.oz))
+            else:
+                ib, ii = np.nonzero(w)
+                row, depth = _image_rows(camera, self.ay, self.oz)
+                fx_plane = camera.fx * (plane - camera.X_SC[0, 3])
+                index = _pixel_index(camera, fx_plane[ii][:, None], row[ib], depth[ib])
+                weights = np.repeat(w[ib, ii].astype(np.float64), len(self.oz))
+            if len(weights):
+                counts += np.bincount(index.ravel(), weights=weights, minlength=size + 1)
+        return counts[:size]
+
+
+def _x_aligned(camera: Camera) -> bool:
+    R = camera.X_SC[:3, :3]
+    return bool(R[0, 0] == 1.0 and R[0, 1] == 0.0 and R[0, 2] == 0.0 and R[1, 0] == 0.0 and R[2, 0] == 0.0)
+
+
+def _image_rows(camera: Camera, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For an x-aligned camera: the flat index of the start of the image row, v * width (int64, or
+    height * width when the row is off the image or behind the camera), and the depth z_C (float64), of the
+    points (x, y[j], z[k]) for any x; both (len(y), len(z))."""
+    pts = np.empty((len(y) * len(z), 3))
+    pts[:, 0] = camera.X_SC[0, 3]
+    pts[:, 1] = np.repeat(y, len(z))
+    pts[:, 2] = np.tile(z, len(y))
+    p_C = camera.to_camera(pts)  # the same transform as _pixel_counts: y_C and z_C to the last bit
+    depth = p_C[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = np.rint(camera.fy * p_C[:, 1] / depth + camera.cy)
+    inside = (v >= 0) & (v < camera.height) & (depth > 0)
+    row = np.where(inside, v, camera.height).astype(np.int64) * camera.width
+    shape = (len(y), len(z))
+    return row.reshape(shape), depth.reshape(shape)
+
+
+def _pixel_index(camera: Camera, fx_x: np.ndarray, row: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """Flat pixel index (int64) of points with fx * x_C ``fx_x``, image row start ``row`` and depth ``depth``
+    (broadcast together); height * width for points outside the image."""
+    size = camera.height * camera.width
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.rint(fx_x / depth + camera.cx)
+    outside = ~((u >= 0) & (u < camera.width))  # NaN (depth 0) counts as outside
+    index = np.where(outside, 0.0, u).astype(np.int64) + row
+    index[outside] = size
+    np.minimum(index, size, out=index)  # rows off the image start at size
+    return index
 
 
 def _uniform(values: np.ndarray) -> bool:

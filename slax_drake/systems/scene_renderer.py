@@ -76,7 +76,10 @@ class SceneRenderer:
         self._context = self._diagram.CreateDefaultContext()
         self._sg_context = scene_graph.GetMyMutableContextFromRoot(self._context)
         self._sensor_context = sensor.GetMyContextFromRoot(self._context)
-        self._geometry_ids: list = []
+        self._geometry_ids: list = []  # the current scene's objects and target
+        self._shelf = None  # the shelf whose panels are registered, and their ids
+        self._shelf_ids: list = []
+        self._label_properties: dict = {}
 
     def render(self, scene: Scene, include_target: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Depth (H, W) float32 metres and label (H, W) int32 of ``scene`` (its camera is ignored: the
@@ -95,31 +98,49 @@ class SceneRenderer:
     # ------------------------------------------------------------------------------------------------
 
     def _set_scene(self, scene: Scene, include_target: bool) -> None:
-        from pydrake.geometry import Box, Cylinder, GeometryInstance, PerceptionProperties, RenderLabel, Rgba
-        from pydrake.math import RigidTransform, RotationMatrix
+        """Registers the scene's geometry in the diagram's context. The shelf's panels stay registered while
+        the shelf does not change (every scene of a scenario shares it); the objects and the target are
+        removed and registered again for every scene (their sizes differ, and Drake geometry has no scale)."""
+        from pydrake.geometry import Box, Cylinder
 
         sg, ctx = self._scene_graph, self._sg_context
         for gid in self._geometry_ids:
             sg.RemoveGeometry(ctx, self._source_id, gid)
         self._geometry_ids = []
-        world = sg.world_frame_id()
+        if scene.shelf != self._shelf:
+            for gid in self._shelf_ids:
+                sg.RemoveGeometry(ctx, self._source_id, gid)
+            self._shelf_ids = []
+            for k, (lo, hi) in enumerate(shelf_boxes(scene.shelf)):
+                X = np.eye(4)
+                X[:3, 3] = (lo + hi) / 2.0
+                self._shelf_ids.append(self._register(f"shelf_{k}", Box(*(hi - lo)), X, 0))
+            self._shelf = scene.shelf
+        for i, obj in enumerate(scene.objects):
+            shape = Box(*obj.size) if obj.shape == "box" else Cylinder(obj.size[0] / 2.0, obj.size[2])
+            self._geometry_ids.append(self._register(f"object_{i}", shape, obj.X_SO, i + 1))
+        self._max_label = len(scene.objects)
+        if include_target and scene.target is not None:
+            self._geometry_ids.append(
+                self._register("target", Box(*scene.target.size), scene.target.X_ST, len(scene.objects) + 1))
+            self._max_label += 1
 
-        def add(name: str, shape, X: np.ndarray, label: int) -> None:
-            instance = GeometryInstance(RigidTransform(RotationMatrix(X[:3, :3]), X[:3, 3]), shape, name)
+    def _register(self, name: str, shape, X: np.ndarray, label: int):
+        from pydrake.geometry import GeometryInstance
+        from pydrake.math import RigidTransform, RotationMatrix
+
+        instance = GeometryInstance(RigidTransform(RotationMatrix(X[:3, :3]), X[:3, 3]), shape, name)
+        instance.set_perception_properties(self._properties(label))
+        return self._scene_graph.RegisterGeometry(self._sg_context, self._source_id,
+                                                  self._scene_graph.world_frame_id(), instance)
+
+    def _properties(self, label: int):
+        """Perception properties of a geometry with ``label`` (stored shifted by one), made once per label."""
+        from pydrake.geometry import PerceptionProperties, RenderLabel, Rgba
+
+        if label not in self._label_properties:
             props = PerceptionProperties()
             props.AddProperty("label", "id", RenderLabel(label + 1))
             props.AddProperty("phong", "diffuse", Rgba(0.6, 0.6, 0.6, 1.0))
-            instance.set_perception_properties(props)
-            self._geometry_ids.append(sg.RegisterGeometry(ctx, self._source_id, world, instance))
-
-        for k, (lo, hi) in enumerate(shelf_boxes(scene.shelf)):
-            X = np.eye(4)
-            X[:3, 3] = (lo + hi) / 2.0
-            add(f"shelf_{k}", Box(*(hi - lo)), X, 0)
-        for i, obj in enumerate(scene.objects):
-            shape = Box(*obj.size) if obj.shape == "box" else Cylinder(obj.size[0] / 2.0, obj.size[2])
-            add(f"object_{i}", shape, obj.X_SO, i + 1)
-        self._max_label = len(scene.objects)
-        if include_target and scene.target is not None:
-            add("target", Box(*scene.target.size), scene.target.X_ST, len(scene.objects) + 1)
-            self._max_label += 1
+            self._label_properties[label] = props
+        return self._label_properties[label]
