@@ -53,6 +53,8 @@ DEFAULT_GRID_STEP = 0.005
 DEFAULT_SURFACE_SPACING = 0.005
 # Lattice points this close (metres) to the wall shadow's edge are decided by a ray, not by the 2D test.
 WALL_MARGIN = 1e-3
+# An object is collision-tested only against placements whose bounding box comes this close (metres) to its own.
+_NEAR = 1e-6
 _FAR = 20.0  # how far (in units of the eye-to-vertex distance) a shadow polygon reaches behind an object
 
 
@@ -232,33 +234,33 @@ def _multiple(step: float, sample: float) -> int | None:
     return int(r) if r >= 1 and abs(m - r) < 1e-6 else None
 
 
-def _box_sums(values: np.ndarray, starts_a, starts_b, na: int, nb: int) -> np.ndarray:
-    """Sums of ``values`` over the windows [a, a + na) x [b, b + nb) for every a in starts_a, b in starts_b."""
+def _box_sums(values: np.ndarray, stride_a: int, stride_b: int, count_a: int, count_b: int, na: int,
+              nb: int) -> np.ndarray:
+    """Sums of ``values`` over the windows [i * stride_a, i * stride_a + na) x [j * stride_b, j * stride_b + nb)
+    for i < count_a, j < count_b (int64, (count_a, count_b))."""
     sat = np.zeros((values.shape[0] + 1, values.shape[1] + 1), dtype=np.int64)
-    np.cumsum(np.cumsum(values, axis=0), axis=1, out=sat[1:, 1:])
-    a0, b0 = np.asarray(starts_a)[:, None], np.asarray(starts_b)[None, :]
-    return sat[a0 + na, b0 + nb] - sat[a0, b0 + nb] - sat[a0 + na, b0] + sat[a0, b0]
+    np.cumsum(np.cumsum(values, axis=0, dtype=np.int64), axis=1, out=sat[1:, 1:])
+    lo_a, hi_a = sat[::stride_a][:count_a], sat[na::stride_a][:count_a]
+    return (hi_a[:, nb::stride_b][:, :count_b] - hi_a[:, ::stride_b][:, :count_b]
+            - lo_a[:, nb::stride_b][:, :count_b] + lo_a[:, ::stride_b][:, :count_b])
 
 
 def _spread(marks: np.ndarray, stride_a: int, stride_b: int, na: int, nb: int, shape) -> np.ndarray:
     """How many marked placements' windows cover each lattice point: placement (i, j) covers
     [i * stride_a, i * stride_a + na) x [j * stride_b, j * stride_b + nb)."""
-    z = np.zeros((shape[0] + 1, shape[1] + 1), dtype=np.int64)
-    z[1::stride_a, 1::stride_b][: marks.shape[0], : marks.shape[1]] = marks
-    sat = np.cumsum(np.cumsum(z, axis=0), axis=1)
-    a = np.arange(1, shape[0] + 1)
-    b = np.arange(1, shape[1] + 1)
-    a_lo, b_lo = np.maximum(a - na, 0)[:, None], np.maximum(b - nb, 0)[None, :]
-    return sat[a[:, None], b[None, :]] - sat[a_lo, b[None, :]] - sat[a[:, None], b_lo] + sat[a_lo, b_lo]
+    along_a = _spread_1d(marks, stride_a, na, shape[0])
+    return _spread_1d(along_a.T, stride_b, nb, shape[1]).T
 
 
 def _spread_1d(marks: np.ndarray, stride: int, n: int, length: int) -> np.ndarray:
-    """Along axis 0 only: how many marked placements' windows [i * stride, i * stride + n) cover each index."""
-    z = np.zeros((length + 1, marks.shape[1]), dtype=np.int64)
-    z[1::stride][: marks.shape[0]] = marks
+    """Along axis 0 only: how many marked placements' windows [i * stride, i * stride + n) cover each index
+    (int64, (length, marks.shape[1]))."""
+    z = np.zeros((length, marks.shape[1]), dtype=np.int64)
+    z[::stride][: marks.shape[0]] = marks
     c = np.cumsum(z, axis=0)
-    a = np.arange(1, length + 1)
-    return c[a] - c[np.maximum(a - n, 0)]
+    if n < length:
+        c[n:] -= c[: length - n].copy()
+    return c
 
 
 def _pixel_counts(camera: Camera, points: np.ndarray, weights: np.ndarray | None) -> np.ndarray:
@@ -318,6 +320,7 @@ class _Lattice:
     oz: np.ndarray  # vertical faces' sample heights above the support (nz,)
     ax: np.ndarray  # fine lattice x coordinates (n_a,)
     ay: np.ndarray  # fine lattice y coordinates (n_b,)
+    _memo: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)  # per camera / eye
 
     @staticmethod
     def build(width: float, depth: float, size, step: float, spacing: float) -> "_Lattice | None":
@@ -340,13 +343,7 @@ class _Lattice:
 
     def window_counts(self, per_point: np.ndarray) -> np.ndarray:
         """For each placement, the number of flagged lattice points among its top-face samples."""
-        return _box_sums(
-            per_point.astype(np.int64),
-            np.arange(len(self.cx)) * self.mx,
-            np.arange(len(self.cy)) * self.my,
-            len(self.ox),
-            len(self.oy),
-        )
+        return _box_sums(per_point, self.mx, self.my, len(self.cx), len(self.cy), len(self.ox), len(self.oy))
 
     def covered(self, placements: np.ndarray) -> np.ndarray:
         """How many of the marked placements have each lattice point among their top-face samples."""
@@ -355,8 +352,7 @@ class _Lattice:
 
     def candidates(self, scene: Scene) -> _Candidates:
         """Collision free placements not proved visible by the 2D test, and the lattice points they need."""
-        gx, gy = np.meshgrid(self.cx, self.cy, indexing="ij")
-        placements = collision_free(scene, self.size, np.column_stack([gx.ravel(), gy.ravel()])).reshape(gx.shape)
+        placements = self._collision_free(scene)
         if placements.any():
             placements &= self.window_counts(self._certainly_visible(scene)) == 0
         if not placements.any():
@@ -373,6 +369,26 @@ class _Lattice:
         seen = np.zeros((len(self.ax), len(self.ay)), dtype=bool)
         seen[ia, ib] = raycaster.visible(scene.camera.position, pts)
         return candidates.placements & (self.window_counts(seen) == 0)
+
+    def _collision_free(self, scene: Scene) -> np.ndarray:
+        """``collision_free`` of every placement, bool (n_i, n_j). An object is tested (with the same
+        ``clear_of``) only against the placements whose bounding box comes within ``_NEAR`` of its own: all
+        others are clear of it by at least that gap."""
+        hx, hy = self.size[0] / 2.0, self.size[1] / 2.0
+        in_x = np.abs(self.cx) + hx <= scene.shelf.width / 2.0 + 1e-12
+        in_y = np.abs(self.cy) + hy <= scene.shelf.depth / 2.0 + 1e-12
+        free = in_x[:, None] & in_y[None, :]
+        for obj in scene.objects:
+            fp = Footprint.of(obj)
+            ex, ey = fp.extents()
+            i0, i1 = np.searchsorted(self.cx, [fp.x - ex - hx - _NEAR, fp.x + ex + hx + _NEAR])
+            j0, j1 = np.searchsorted(self.cy, [fp.y - ey - hy - _NEAR, fp.y + ey + hy + _NEAR])
+            if i0 >= i1 or j0 >= j1:
+                continue
+            gx, gy = np.meshgrid(self.cx[i0:i1], self.cy[j0:j1], indexing="ij")
+            clear = clear_of("box", np.column_stack([gx.ravel(), gy.ravel()]), 0.0, (hx, hy), fp, 0.0)
+            free[i0:i1, j0:j1] &= clear.reshape(gx.shape)
+        return free
 
     def _certainly_visible(self, scene: Scene) -> np.ndarray:
         """bool (n_a, n_b): lattice points that the top-down (2D) test proves visible from the camera."""
@@ -392,13 +408,27 @@ class _Lattice:
             cv2.fillConvexPoly(shadow, np.rint(pix * (1 << shift)).astype(np.int32), 1, lineType=cv2.LINE_8,
                                shift=shift)
         shadow = cv2.dilate(shadow, np.ones((3, 3), np.uint8))
-        # Seen through the opening: the top-down segment crosses the front plane y = -depth/2 inside the bay.
-        y_front = -scene.shelf.depth / 2.0
-        gx, gy = np.meshgrid(self.ax, self.ay, indexing="ij")
-        t = (y_front - ey) / (gy - ey)
-        x_cross = ex + t * (gx - ex)
-        through = np.abs(x_cross) < scene.shelf.width / 2.0 - WALL_MARGIN
-        return (shadow == 0) & through & (ey < y_front)
+        return (shadow == 0) & self._through_opening(scene)
+
+    def _through_opening(self, scene: Scene) -> np.ndarray:
+        """bool (n_a, n_b): the top-down segment from the eye to the lattice point crosses the front plane
+        y = -depth/2 inside the bay (kept per eye and shelf: the same for every scene of a scenario)."""
+        eye = scene.camera.position
+        key = ("through", eye.tobytes(), scene.shelf.width, scene.shelf.depth)
+        if key not in self._memo:
+            ex, ey = float(eye[0]), float(eye[1])
+            y_front = -scene.shelf.depth / 2.0
+            t = (y_front - ey) / (self.ay - ey)
+            x_cross = ex + t[None, :] * (self.ax[:, None] - ex)
+            through = (np.abs(x_cross) < scene.shelf.width / 2.0 - WALL_MARGIN) & (ey < y_front)
+            through.setflags(write=False)
+            self._remember(key, through)
+        return self._memo[key]
+
+    def _remember(self, key, value) -> None:
+        if len(self._memo) > 64:
+            self._memo.clear()
+        self._memo[key] = value
 
     def distribution(self, hidden: np.ndarray, camera: Camera, eye: np.ndarray) -> np.ndarray:
         """p2d (H, W) float32: every eye-facing surface sample of every hidden placement, projected once per
@@ -409,76 +439,94 @@ class _Lattice:
             return _normalised(self._counts_x_aligned(hidden, camera, eye), camera)
         return _normalised(self._counts_generic(hidden, camera, eye), camera)
 
-    def _face_weights(self, hidden: np.ndarray, eye: np.ndarray):
-        """The weighted sample points of the eye-facing faces, by face: ("top", w (n_a, n_b)) for the top
-        face at height size_z; ("y", plane_y (n_j,), w (n_a, n_j)) for the front and back faces, points
-        (ax[a], plane_y[j], oz); ("x", plane_x (n_i,), w (n_b, n_i)) for the left and right faces, points
-        (plane_x[i], ay[b], oz). Weights are the number of hidden placements sharing each point."""
+    def _faces(self, hidden: np.ndarray, eye: np.ndarray) -> list[tuple]:
+        """The eye-facing faces' sample points with their weights (the number of hidden placements that share
+        each point), as (kind, plane, first, second, weight) with index arrays ``first``, ``second``:
+
+        - ("top", None, a, b, w): points (ax[a], ay[b], size_z) of the top faces;
+        - ("y", plane_y (n_j,), a, j, w): points (ax[a], plane_y[j], oz[k]) for every k, front or back faces;
+        - ("x", plane_x (n_i,), b, i, w): points (plane_x[i], ay[b], oz[k]) for every k, left or right faces.
+        """
         ex, ey, ez = (float(v) for v in eye)
-        hx, hy = self.size[0] / 2.0, self.size[1] / 2.0
         faces = []
         if ez > self.size[2]:
-            faces.append(("top", None, self.covered(hidden)))
+            w = self.covered(hidden)
+            a, b = np.nonzero(w)
+            faces.append(("top", None, a, b, w[a, b]))
         wx = _spread_1d(hidden, self.mx, len(self.ox), len(self.ax))  # (n_a, n_j)
-        for sign in (-1.0, 1.0):
-            plane_y = self.cy + sign * hy
-            faces.append(("y", plane_y, wx * (sign * (ey - plane_y) > 0)[None, :]))
+        a, j = np.nonzero(wx)
+        wx = wx[a, j]
         wy = _spread_1d(hidden.T, self.my, len(self.oy), len(self.ay))  # (n_b, n_i)
+        b, i = np.nonzero(wy)
+        wy = wy[b, i]
         for sign in (-1.0, 1.0):
-            plane_x = self.cx + sign * hx
-            faces.append(("x", plane_x, wy * (sign * (ex - plane_x) > 0)[None, :]))
+            plane_y = self.cy + sign * self.size[1] / 2.0
+            keep = (sign * (ey - plane_y) > 0)[j]
+            if keep.any():
+                faces.append(("y", plane_y, a[keep], j[keep], wx[keep]))
+        for sign in (-1.0, 1.0):
+            plane_x = self.cx + sign * self.size[0] / 2.0
+            keep = (sign * (ex - plane_x) > 0)[i]
+            if keep.any():
+                faces.append(("x", plane_x, b[keep], i[keep], wy[keep]))
         return faces
 
     def _counts_generic(self, hidden: np.ndarray, camera: Camera, eye: np.ndarray) -> np.ndarray:
         """Pixel counts (H * W,) float64, every distinct point projected through ``Camera.to_camera``."""
         sz, nz = self.size[2], len(self.oz)
         chunks, weights = [], []
-        for kind, plane, w in self._face_weights(hidden, eye):
+        for kind, plane, first, second, w in self._faces(hidden, eye):
             if kind == "top":
-                ia, ib = np.nonzero(w)
-                chunks.append(np.column_stack([self.ax[ia], self.ay[ib], np.full(len(ia), sz)]))
-                weights.append(w[ia, ib])
+                chunks.append(np.column_stack([self.ax[first], self.ay[second], np.full(len(first), sz)]))
+                weights.append(w)
             elif kind == "y":
-                ia, jj = np.nonzero(w)
                 chunks.append(np.column_stack([
-                    np.repeat(self.ax[ia], nz), np.repeat(plane[jj], nz), np.tile(self.oz, len(ia))]))
-                weights.append(np.repeat(w[ia, jj], nz))
+                    np.repeat(self.ax[first], nz), np.repeat(plane[second], nz), np.tile(self.oz, len(first))]))
+                weights.append(np.repeat(w, nz))
             else:
-                ib, ii = np.nonzero(w)
                 chunks.append(np.column_stack([
-                    np.repeat(plane[ii], nz), np.repeat(self.ay[ib], nz), np.tile(self.oz, len(ib))]))
-                weights.append(np.repeat(w[ib, ii], nz))
+                    np.repeat(plane[second], nz), np.repeat(self.ay[first], nz), np.tile(self.oz, len(first))]))
+                weights.append(np.repeat(w, nz))
         return _pixel_counts(camera, np.concatenate(chunks), np.concatenate(weights).astype(np.float64))
 
     def _counts_x_aligned(self, hidden: np.ndarray, camera: Camera, eye: np.ndarray) -> np.ndarray:
         """Pixel counts (H * W,) float64 for a camera whose x axis is the shelf's x axis (any pitch, no yaw or
         roll: every camera built by ``camera_pose``). Then x_C = x - x_eye, and y_C, z_C depend on (y, z)
-        only: image rows and depths are computed once per (y, z) pair of a face, and each point costs one
+        only: image rows and depths are tabulated once per face plane and camera, and each point costs one
         division for its column. The arithmetic per point is that of ``_pixel_counts`` (same operations in
         the same order on the same values), so the counts are identical to ``_counts_generic``'s."""
         size = camera.height * camera.width
-        counts = np.zeros(size + 1, dtype=np.float64)  # the last bin collects points outside the image
-        fx_x = camera.fx * (self.ax - camera.X_SC[0, 3])  # (n_a,)
-        for kind, plane, w in self._face_weights(hidden, eye):
+        x0 = camera.X_SC[0, 3]
+        fx_ax = camera.fx * (self.ax - x0)  # fx * x_C of the lattice's x coordinates (n_a,)
+        index, weights = [], []
+        for kind, plane, first, second, w in self._faces(hidden, eye):
             if kind == "top":
-                ia, ib = np.nonzero(w)
-                row, depth = _image_rows(camera, self.ay, np.array([self.size[2]]))
-                index = _pixel_index(camera, fx_x[ia][:, None], row[ib], depth[ib])
-                weights = w[ia, ib].astype(np.float64)
+                row, depth = self._rows(camera, "top", self.ay, np.array([self.size[2]]))
+                index.append(_pixel_index(camera, fx_ax[first][:, None], row[second], depth[second]).ravel())
+                weights.append(w)
             elif kind == "y":
-                ia, jj = np.nonzero(w)
-                row, depth = _image_rows(camera, plane, self.oz)
-                index = _pixel_index(camera, fx_x[ia][:, None], row[jj], depth[jj])
-                weights = np.repeat(w[ia, jj].astype(np.float64), len(self.oz))
+                row, depth = self._rows(camera, ("y", float(plane[0])), plane, self.oz)
+                index.append(_pixel_index(camera, fx_ax[first][:, None], row[second], depth[second]).ravel())
+                weights.append(np.repeat(w, len(self.oz)))
             else:
-                ib, ii = np.nonzero(w)
-                row, depth = _image_rows(camera, self.ay, self.oz)
-                fx_plane = camera.fx * (plane - camera.X_SC[0, 3])
-                index = _pixel_index(camera, fx_plane[ii][:, None], row[ib], depth[ib])
-                weights = np.repeat(w[ib, ii].astype(np.float64), len(self.oz))
-            if len(weights):
-                counts += np.bincount(index.ravel(), weights=weights, minlength=size + 1)
-        return counts[:size]
+                row, depth = self._rows(camera, "x", self.ay, self.oz)
+                fx_plane = camera.fx * (plane - x0)
+                index.append(_pixel_index(camera, fx_plane[second][:, None], row[first], depth[first]).ravel())
+                weights.append(np.repeat(w, len(self.oz)))
+        counts = np.bincount(np.concatenate(index), weights=np.concatenate(weights).astype(np.float64),
+                             minlength=size + 1)
+        return counts[:size]  # the last bin collected the points outside the image
+
+    def _rows(self, camera: Camera, name, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``_image_rows(camera, y, z)``, kept per camera for this lattice (the same for every scene)."""
+        key = ("rows", _camera_key(camera), name)
+        if key not in self._memo:
+            self._remember(key, _image_rows(camera, y, z))
+        return self._memo[key]
+
+
+def _camera_key(camera: Camera) -> tuple:
+    return (camera.width, camera.height, camera.fx, camera.fy, camera.cx, camera.cy, camera.X_SC.tobytes())
 
 
 def _x_aligned(camera: Camera) -> bool:
@@ -489,7 +537,7 @@ def _x_aligned(camera: Camera) -> bool:
 def _image_rows(camera: Camera, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For an x-aligned camera: the flat index of the start of the image row, v * width (int64, or
     height * width when the row is off the image or behind the camera), and the depth z_C (float64), of the
-    points (x, y[j], z[k]) for any x; both (len(y), len(z))."""
+    points (x, y[j], z[k]) for any x; both (len(y), len(z)), read-only."""
     pts = np.empty((len(y) * len(z), 3))
     pts[:, 0] = camera.X_SC[0, 3]
     pts[:, 1] = np.repeat(y, len(z))
@@ -501,7 +549,10 @@ def _image_rows(camera: Camera, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarra
     inside = (v >= 0) & (v < camera.height) & (depth > 0)
     row = np.where(inside, v, camera.height).astype(np.int64) * camera.width
     shape = (len(y), len(z))
-    return row.reshape(shape), depth.reshape(shape)
+    row, depth = row.reshape(shape), np.ascontiguousarray(depth.reshape(shape))
+    row.setflags(write=False)
+    depth.setflags(write=False)
+    return row, depth
 
 
 def _pixel_index(camera: Camera, fx_x: np.ndarray, row: np.ndarray, depth: np.ndarray) -> np.ndarray:
@@ -509,11 +560,14 @@ def _pixel_index(camera: Camera, fx_x: np.ndarray, row: np.ndarray, depth: np.nd
     (broadcast together); height * width for points outside the image."""
     size = camera.height * camera.width
     with np.errstate(divide="ignore", invalid="ignore"):
-        u = np.rint(fx_x / depth + camera.cx)
-    outside = ~((u >= 0) & (u < camera.width))  # NaN (depth 0) counts as outside
-    index = np.where(outside, 0.0, u).astype(np.int64) + row
-    index[outside] = size
-    np.minimum(index, size, out=index)  # rows off the image start at size
+        u = fx_x / depth
+        u += camera.cx
+        np.rint(u, out=u)
+        inside = (u >= 0) & (u < camera.width)  # NaN (depth 0) is outside
+        index = u.astype(np.int64)
+    index += row
+    index[~inside] = size
+    np.minimum(index, size, out=index)  # rows off the image start at ``size``
     return index
 
 
