@@ -1,0 +1,92 @@
+"""Full Drake trials: a short default-suite trial that reveals the target, CLI errors; slow: reproducibility and
+the HTML replay drawn by headless Chromium."""
+
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from slax_drake.cli import main
+from slax_drake.systems.robot import joint_limits
+from slax_drake.systems.trial import TrialOptions, run_trial, write_trial
+
+SHORT = dict(objects=2, seed=7)  # the shelf simulator reveals this scene with one push
+
+
+@pytest.fixture(scope="module")
+def short_trial(tmp_path_factory):
+    record = run_trial(TrialOptions(**SHORT))
+    out = tmp_path_factory.mktemp("trial")
+    write_trial(record, out)
+    return record, out
+
+
+def test_short_trial_reveals_the_target(short_trial):
+    record, out = short_trial
+    d = json.loads((out / "trial.json").read_text())
+    assert d["success"] is True and d["result"] == "revealed"
+    assert d["visible_fraction"] >= 0.80
+    assert 1 <= d["steps"] <= d["horizon"] == 4
+    assert d["cost"] == pytest.approx(sum(1.0 if a["type"] == "push" else 1.3 for a in d["actions"]))
+    assert len(d["support_per_step"]) == d["steps"]
+    for a in d["actions"]:
+        assert a["type"] in ("push", "suction") and a["motion"]["duration_s"] > 0
+        assert a["outcome"] is not None and a["predicted"]["object"] == a["object"]
+    assert set(d["final_objects"]) == {"object_0", "object_1"}
+    assert (out / "step_00.png").stat().st_size > 1000
+
+
+def test_executed_trajectory_in_trial_json(short_trial):
+    record, out = short_trial
+    d = json.loads((out / "trial.json").read_text())
+    traj = d["executed_trajectory"]
+    lim = joint_limits()
+    assert traj["joint_names"] == list(lim.names)
+    q = np.array(traj["positions"])
+    v = np.array(traj["velocities"])
+    a = np.array(traj["accelerations"])
+    t = np.array(traj["times"])
+    assert q.shape == v.shape == a.shape == (len(t), len(lim.names))
+    assert np.all(np.diff(t) > 0) and t[-1] == pytest.approx(d["sim_time_s"], abs=0.01)
+    assert np.all(np.abs(v) <= lim.velocity + 1e-6) and np.all(np.abs(a) <= lim.acceleration + 1e-6)
+
+
+def test_trial_cli_rejects_bad_input(capsys):
+    assert main(["trial", "--objects", "0"]) == 2
+    assert "--objects must be at least 1" in capsys.readouterr().err
+    assert main(["trial", "--config", "no/such.yaml"]) == 2
+    assert main(["trial", "--policy", "oracle-p"]) == 2
+
+
+@pytest.mark.slow
+def test_trial_is_reproducible():
+    a = run_trial(TrialOptions(**SHORT)).data
+    b = run_trial(TrialOptions(**SHORT)).data
+    for key in ("success", "steps", "cost", "support_per_step", "final_objects", "executed_trajectory"):
+        assert a[key] == b[key]
+    assert [x["motion"]["waypoint_times"] for x in a["actions"]] == [x["motion"]["waypoint_times"] for x in b["actions"]]
+
+
+@pytest.mark.slow
+def test_html_replay_draws_the_robot(tmp_path):
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.skip("Debian's chromium package is not installed")
+    html = tmp_path / "trial.html"
+    assert main(["trial", *sum(([f"--{k}", str(v)] for k, v in SHORT.items()), []), "--html", str(html),
+                 "--out", str(tmp_path / "out")]) == 0
+    shot = tmp_path / "shot.png"
+    subprocess.run([browser, "--headless", "--no-sandbox", "--use-gl=swiftshader", "--window-size=800,600",
+                    "--virtual-time-budget=15000", f"--screenshot={shot}", html.as_uri()], check=True, timeout=120)
+    import cv2
+
+    image = cv2.imread(str(shot))
+    assert image is not None
+    # Meshcat's background is light; the only dark, unsaturated things are the robot's base (0.35 grey) and
+    # its camera and cup (0.1 grey): the shelf is brown, the objects green and the target red.
+    pixels = image.astype(int)
+    unsaturated = (pixels.max(axis=2) - pixels.min(axis=2)) < 20
+    dark = pixels.mean(axis=2) < 110
+    assert (unsaturated & dark).mean() > 0.002
