@@ -11,8 +11,13 @@ Physics choices (documented numbers):
 - Coulomb friction 0.5 (static = dynamic) for objects, 0.4 for the shelf (cardboard and wood, plausible);
 - point contact: stiffness 2e5 N/m per contact point and Hunt-Crossley dissipation 5 s/m;
 - Drake's point contact between two boxes returns one contact point, which lets a resting box rock; each box
-  therefore carries eight 1 mm spheres inset at its corners (tangent to its faces), and each cylinder eight
-  spheres around each rim, so a resting object stands on four or more points like a real one.
+  therefore carries eight 1 mm spheres inset at its corners (tangent to its faces), and each cylinder
+  ``CYLINDER_RIM_SPHERES`` (6) spheres around each rim, so a resting object stands on four or more points like
+  a real one. The object's own shape does not touch the support board (``support_by_corner_spheres_only``):
+  with it, each resting object had one more, deepest-point contact that made it chatter at 1e-2 m/s.
+- Speed (the station's real-time factor, benchmarks/bench_station.py) is roughly proportional to the number of
+  resting contacts: 6 rim spheres instead of 8 ran 1.2x faster with 10 objects (4 would give 1.4x). The price:
+  a cylinder tips over a hexagon, whose narrowest half-width is cos(30 deg) = 0.87 of its radius (0.92 with 8).
 
 Render labels (``label_image``): the shelf is 0, ``objects[i]`` is i + 1 and the target len(objects) + 1, the
 same numbering as ``SceneRaycaster``; the robot has no perception role (it is not drawn in the camera images).
@@ -33,7 +38,7 @@ SHELF_FRICTION = 0.4
 POINT_STIFFNESS = 2.0e5  # N/m
 HUNT_CROSSLEY_DISSIPATION = 5.0  # s/m
 CORNER_SPHERE_RADIUS = 0.001  # m
-CYLINDER_RIM_SPHERES = 8  # contact spheres around each rim of a cylinder
+CYLINDER_RIM_SPHERES = 6  # contact spheres around each rim of a cylinder (see the module docstring)
 SHELF_PANEL_NAMES = ("support", "left_wall", "right_wall", "top", "back")
 SHELF_COLOR = (0.76, 0.60, 0.42, 1.0)
 
@@ -204,7 +209,7 @@ def support_by_corner_spheres_only(scene_graph, plant, shelf_instance, bodies: S
     ``CYLINDER_RIM_SPHERES`` (cylinder) points instead of those plus one more point from its shape, which saves
     one contact pair per object on every step. The object's shape still touches the walls, the top, the back,
     the other objects and the tool. Cost: a toppled cylinder lying on its side rests on its rim spheres only and
-    sinks by at most r (1 - cos(pi / CYLINDER_RIM_SPHERES)) into the board (7.6 % of its radius at 8).
+    sinks by at most r (1 - cos(pi / CYLINDER_RIM_SPHERES)) into the board (13 % of its radius at 6).
     """
     from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 
