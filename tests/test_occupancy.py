@@ -128,3 +128,96 @@ def test_bad_arguments_raise(sim_scenario):
         compute_occupancy(scene, (0.06, 0.06), 0.01)
     with pytest.raises(ValueError, match="grid_step"):
         compute_occupancy(scene, (0.06, 0.06, 0.06), 0.0)
+
+
+# ---- the fast paths against the plain ones -------------------------------------------------------------
+
+
+def test_shared_sizes_equal_separate_calls(sim_scenario):
+    from slax_drake.occupancy import compute_occupancies
+
+    sizes = (*SIZES, (0.04, 0.08, 0.05))  # the three ratios share a footprint; the last one does not
+    for n, seed in ((3, 31), (8, 32), (12, 33)):
+        scene = sample_scene(sim_scenario, n, seed)
+        camera = scene.camera.with_resolution(160, 120)
+        together = compute_occupancies(scene, sizes, 0.005, camera)
+        for size, occ in zip(sizes, together):
+            alone = compute_occupancy(scene, size, 0.005, camera)
+            assert occ.target_size == alone.target_size == size
+            np.testing.assert_array_equal(occ.hidden_xy, alone.hidden_xy)
+            np.testing.assert_array_equal(occ.p2d, alone.p2d)
+            np.testing.assert_array_equal(occ.p1d, alone.p1d)
+        assert together[0].num_hidden >= together[1].num_hidden >= together[2].num_hidden  # taller: fewer
+
+
+def _lattice_cases(sim_scenario):
+    from slax_drake.occupancy.hidden import _lattice
+
+    for n, seed in ((4, 41), (8, 42), (12, 43)):
+        scene = sample_scene(sim_scenario, n, seed)
+        raycaster = SceneRaycaster(scene)
+        for size in SIZES:
+            lattice = _lattice(scene.shelf.width, scene.shelf.depth, size, 0.005, 0.005)
+            yield scene, lattice, lattice.hidden_mask(scene, raycaster, lattice.candidates(scene))
+
+
+def test_x_aligned_projection_equals_generic_projection(sim_scenario):
+    from slax_drake.occupancy.hidden import _x_aligned
+
+    for scene, lattice, hidden in _lattice_cases(sim_scenario):
+        for camera in (scene.camera, scene.camera.with_resolution(256, 192)):
+            assert _x_aligned(camera) and hidden.any()
+            fast = lattice._counts_x_aligned(hidden, camera, scene.camera.position)
+            plain = lattice._counts_generic(hidden, camera, scene.camera.position)
+            assert fast.sum() > 0
+            np.testing.assert_array_equal(fast, plain)
+
+
+def test_grid_collision_test_equals_collision_free(sim_scenario):
+    for scene, lattice, _ in _lattice_cases(sim_scenario):
+        gx, gy = np.meshgrid(lattice.cx, lattice.cy, indexing="ij")
+        plain = collision_free(scene, lattice.size, np.column_stack([gx.ravel(), gy.ravel()])).reshape(gx.shape)
+        fast = lattice._collision_free(scene)
+        assert 0 < fast.sum() < fast.size
+        np.testing.assert_array_equal(fast, plain)
+
+
+def test_window_sums_and_spreads_against_loops():
+    from slax_drake.occupancy.hidden import _box_sums, _spread, _spread_1d
+
+    rng = np.random.default_rng(0)
+    for stride_a, stride_b, na, nb in ((1, 1, 3, 2), (2, 3, 5, 7), (2, 2, 13, 13)):
+        ci, cj = 6, 5
+        shape = ((ci - 1) * stride_a + na, (cj - 1) * stride_b + nb)
+        values = rng.random(shape) < 0.3
+        sums = _box_sums(values, stride_a, stride_b, ci, cj, na, nb)
+        marks = rng.random((ci, cj)) < 0.5
+        cover = np.zeros(shape, dtype=np.int64)
+        for i in range(ci):
+            for j in range(cj):
+                a, b = i * stride_a, j * stride_b
+                assert sums[i, j] == values[a:a + na, b:b + nb].sum()
+                cover[a:a + na, b:b + nb] += marks[i, j]
+        np.testing.assert_array_equal(_spread(marks, stride_a, stride_b, na, nb, shape), cover)
+        cover_a = np.zeros((shape[0], cj), dtype=np.int64)
+        for i in range(ci):
+            cover_a[i * stride_a:i * stride_a + na] += marks[i]
+        np.testing.assert_array_equal(_spread_1d(marks, stride_a, na, shape[0]), cover_a)
+
+
+def test_rolled_camera_uses_the_generic_projection(sim_scenario):
+    """A camera whose x axis is not the shelf's (here rolled by 3 degrees) takes the generic projection,
+    which still matches the definition's direct projection."""
+    from slax_drake.occupancy.hidden import _x_aligned
+
+    scene = sample_scene(sim_scenario, 6, 51)
+    c, s = np.cos(np.radians(3.0)), np.sin(np.radians(3.0))
+    X_SC = scene.camera.X_SC.copy()
+    X_SC[:3, :3] = X_SC[:3, :3] @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # about the optical axis
+    camera = dataclasses.replace(scene.camera.with_resolution(160, 120), X_SC=X_SC)
+    assert not _x_aligned(camera)
+    size = (0.06, 0.06, 0.06)
+    occ = compute_occupancy(scene, size, 0.01, camera)
+    assert occ.num_hidden > 0
+    direct = project_placements(camera, scene.camera.position, size, occ.hidden_xy, 0.005)
+    assert np.abs(direct - occ.p2d).sum() < 0.02

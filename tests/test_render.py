@@ -80,3 +80,17 @@ def test_target_pixels_inside_projected_support(renderer, scenes):
     for scene in scenes:
         _, label = renderer.render(scene)
         assert not (label == len(scene.objects) + 1).any()
+
+
+def test_shelf_change_and_object_count_changes_match_a_fresh_renderer(renderer, scenes, physical_scenario):
+    """The renderer keeps the shelf's panels registered between scenes and swaps only objects and target:
+    after scenes with another shelf and other object counts, each image equals that of a new renderer."""
+    from slax_drake.systems.scene_renderer import SceneRenderer
+
+    other_shelf = dataclasses.replace(sample_scene(physical_scenario, 5, 3), camera=scenes[0].camera)
+    assert other_shelf.shelf != scenes[0].shelf
+    for scene in (scenes[2], other_shelf, scenes[1].with_objects(()), scenes[1]):
+        depth, label = renderer.render(scene)
+        ref_depth, ref_label = SceneRenderer(renderer.camera).render(scene)
+        np.testing.assert_array_equal(depth, ref_depth)
+        np.testing.assert_array_equal(label, ref_label)
