@@ -12,9 +12,11 @@ from pydrake.multibody.tree import FixedOffsetFrame, SpatialInertia, UnitInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
+from slax_drake.systems.station import load_station_scenario
 from slax_drake.systems.suction import SuctionCup, SuctionParameters
 
 BOX = 0.10  # m, cube
+STATION_TIME_STEP = load_station_scenario().plant_config.time_step  # s, the fixture steps like the station (5 ms)
 
 
 def _props(mu):
@@ -27,7 +29,7 @@ def _fixture(cup_axis, mass, command):
     """A cup welded at 1 m with its axis along ``cup_axis`` ('down' or 'side') and a box touching its lip."""
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(
-        MultibodyPlantConfig(time_step=0.002, contact_model="point", discrete_contact_approximation="lagged"), builder
+        MultibodyPlantConfig(time_step=STATION_TIME_STEP, contact_model="point", discrete_contact_approximation="lagged"), builder
     )
     cup = plant.AddRigidBody("cup", SpatialInertia(0.1, np.zeros(3), UnitInertia.SolidSphere(0.02)))
     # cup frame: x along the cup axis; lip spheres with their tips at x = 0 (the cup tip)

@@ -54,7 +54,7 @@ class SceneMismatchError(UserError):
 def _default_plant_config():
     from pydrake.multibody.plant import MultibodyPlantConfig
 
-    return MultibodyPlantConfig(time_step=0.002, contact_model="point", discrete_contact_approximation="lagged")
+    return MultibodyPlantConfig(time_step=0.005, contact_model="point", discrete_contact_approximation="lagged")
 
 
 @dataclasses.dataclass
