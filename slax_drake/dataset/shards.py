@@ -9,7 +9,8 @@ A shard ``shard_XXXXX.h5`` holds consecutive scenes. Datasets (n = samples in th
 ``depth`` (n, H, W) float16 metres (0 = no return; float16 keeps 0.5 mm at 1 m), ``label`` (n, H, W) int8,
 ``p2d`` (n, 3, H, W) float32 and ``p1d`` (n, 3, W) float32 (small probabilities need float32),
 ``num_hidden`` (n, 3) int32, ``target_ratio`` (n,) int8, ``num_objects`` (n,) int8, ``scene_index`` (n,) int64,
-``scene_seed`` (n,) int64, ``scene_json`` (n,) UTF-8 strings. One sample per chunk, gzip with shuffle.
+``scene_seed`` (n,) int64, ``scene_json`` (n,) UTF-8 strings. One sample per chunk, gzip (level 1) with the
+byte shuffle filter, except ``p2d`` (mostly zeros: gzip alone).
 Shards are written under a temporary name and renamed, so a reader never sees a half-written shard.
 """
 
@@ -63,13 +64,15 @@ def write_shard(path: Path, samples: list[Sample]) -> None:
     os.close(fd)
     try:
         with h5py.File(tmp, "w") as f:
-            def put(name, data, dtype, chunk):
+            def put(name, data, dtype, chunk, shuffle=True):
                 f.create_dataset(name, data=np.asarray(data, dtype=dtype), chunks=chunk, compression="gzip",
-                                 compression_opts=1, shuffle=True)
+                                 compression_opts=1, shuffle=shuffle)
 
             put("depth", [s.depth for s in samples], np.float16, (1, h, w))
             put("label", [s.label for s in samples], np.int8, (1, h, w))
-            put("p2d", [s.p2d for s in samples], np.float32, (1, len(TARGET_SIZES), h, w))
+            # p2d is about 95 % zeros: without the byte shuffle it compresses faster and smaller (measured at
+            # 256x192: 1.7 vs 2.3 ms and 21 vs 28 KiB per sample)
+            put("p2d", [s.p2d for s in samples], np.float32, (1, len(TARGET_SIZES), h, w), shuffle=False)
             put("p1d", [s.p1d for s in samples], np.float32, (1, len(TARGET_SIZES), w))
             f["num_hidden"] = np.array([s.num_hidden for s in samples], dtype=np.int32)
             f["target_ratio"] = np.array([s.target_ratio for s in samples], dtype=np.int8)

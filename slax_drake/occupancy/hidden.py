@@ -450,23 +450,17 @@ class _Lattice:
         ex, ey, ez = (float(v) for v in eye)
         faces = []
         if ez > self.size[2]:
-            w = self.covered(hidden)
-            a, b = np.nonzero(w)
-            faces.append(("top", None, a, b, w[a, b]))
-        wx = _spread_1d(hidden, self.mx, len(self.ox), len(self.ax))  # (n_a, n_j)
-        a, j = np.nonzero(wx)
-        wx = wx[a, j]
-        wy = _spread_1d(hidden.T, self.my, len(self.oy), len(self.ay))  # (n_b, n_i)
-        b, i = np.nonzero(wy)
-        wy = wy[b, i]
+            faces.append(("top", None, *_nonzero(self.covered(hidden))))
+        a, j, wx = _nonzero(_spread_1d(hidden, self.mx, len(self.ox), len(self.ax)))  # w (n_a, n_j)
+        b, i, wy = _nonzero(_spread_1d(hidden.T, self.my, len(self.oy), len(self.ay)))  # w (n_b, n_i)
         for sign in (-1.0, 1.0):
             plane_y = self.cy + sign * self.size[1] / 2.0
-            keep = (sign * (ey - plane_y) > 0)[j]
+            keep = np.take(sign * (ey - plane_y) > 0, j)
             if keep.any():
                 faces.append(("y", plane_y, a[keep], j[keep], wx[keep]))
         for sign in (-1.0, 1.0):
             plane_x = self.cx + sign * self.size[0] / 2.0
-            keep = (sign * (ex - plane_x) > 0)[i]
+            keep = np.take(sign * (ex - plane_x) > 0, i)
             if keep.any():
                 faces.append(("x", plane_x, b[keep], i[keep], wy[keep]))
         return faces
@@ -500,21 +494,20 @@ class _Lattice:
         fx_ax = camera.fx * (self.ax - x0)  # fx * x_C of the lattice's x coordinates (n_a,)
         index, weights = [], []
         for kind, plane, first, second, w in self._faces(hidden, eye):
+            # np.take: a gather several times faster than fancy indexing on this path
             if kind == "top":
                 row, depth = self._rows(camera, "top", self.ay, np.array([self.size[2]]))
-                index.append(_pixel_index(camera, fx_ax[first][:, None], row[second], depth[second]).ravel())
-                weights.append(w)
+                fx_x, lattice_row = np.take(fx_ax, first)[:, None], second
             elif kind == "y":
                 row, depth = self._rows(camera, ("y", float(plane[0])), plane, self.oz)
-                index.append(_pixel_index(camera, fx_ax[first][:, None], row[second], depth[second]).ravel())
-                weights.append(np.repeat(w, len(self.oz)))
+                fx_x, lattice_row = np.take(fx_ax, first)[:, None], second
             else:
                 row, depth = self._rows(camera, "x", self.ay, self.oz)
-                fx_plane = camera.fx * (plane - x0)
-                index.append(_pixel_index(camera, fx_plane[second][:, None], row[first], depth[first]).ravel())
-                weights.append(np.repeat(w, len(self.oz)))
-        counts = np.bincount(np.concatenate(index), weights=np.concatenate(weights).astype(np.float64),
-                             minlength=size + 1)
+                fx_x, lattice_row = np.take(camera.fx * (plane - x0), second)[:, None], first
+            index.append(_pixel_index(camera, fx_x, np.take(row, lattice_row, axis=0),
+                                      np.take(depth, lattice_row, axis=0)).ravel())
+            weights.append(np.repeat(w.astype(np.float64), row.shape[1]))
+        counts = np.bincount(np.concatenate(index), weights=np.concatenate(weights), minlength=size + 1)
         return counts[:size]  # the last bin collected the points outside the image
 
     def _rows(self, camera: Camera, name, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -523,6 +516,13 @@ class _Lattice:
         if key not in self._memo:
             self._remember(key, _image_rows(camera, y, z))
         return self._memo[key]
+
+
+def _nonzero(w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Row indices, column indices and values of the non-zero entries of a 2D array (row-major order)."""
+    flat = np.flatnonzero(w)
+    rows, cols = np.divmod(flat, w.shape[1])
+    return rows, cols, np.take(w, flat)
 
 
 def _camera_key(camera: Camera) -> tuple:
@@ -566,7 +566,7 @@ def _pixel_index(camera: Camera, fx_x: np.ndarray, row: np.ndarray, depth: np.nd
         inside = (u >= 0) & (u < camera.width)  # NaN (depth 0) is outside
         index = u.astype(np.int64)
     index += row
-    index[~inside] = size
+    np.putmask(index, ~inside, size)
     np.minimum(index, size, out=index)  # rows off the image start at ``size``
     return index
 
