@@ -30,6 +30,13 @@ How it stays fast (the paper's pruning plus two exact reductions):
    call decides the lattice points that the remaining candidates need.
 4. p2d by multiplicity: every face's samples also lie on lattices, so the number of hidden placements sharing a
    sample point is again a box sum; each distinct point is projected once with that weight.
+5. Shared across heights (``compute_occupancies``): target sizes with one footprint (x, y), like the paper's
+   three aspect ratios, share the collision-free grid, the 2D pruning and the set of lattice points to decide;
+   only the rays (one height each) and the projections are made per size.
+6. Projection by tables: for a camera whose x axis is the shelf's (any pitch, no roll or yaw: every
+   ``camera_pose`` camera), y_C and z_C depend only on a point's (y, z), so image rows and depths are tabulated
+   per face plane once per camera and lattice, and a point costs one division. The per-point arithmetic is
+   the same as the generic projection's, so the result is identical to the bit (tested).
 
 When the grid is not aligned with the samples, or the camera is above the shelf's top, the same definitions are
 evaluated directly (every placement, every sample point): correct, only slower.
