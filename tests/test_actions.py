@@ -53,12 +53,28 @@ def test_blade_does_not_fit_against_a_wall():
     assert max(abs(p.d) for p in pushes_of(c, "a", -1)) <= 0.03 - 0.002 + 1e-9  # toward the wall: 3 cm at most
 
 
-def test_shaft_way_in_must_be_clear():
-    front, back = box("front", 0.0, -0.20, sx=0.24), box("back", 0.0, 0.05, sx=0.06)
-    c = model().enumerate((front, back), suctions=False)
-    assert reasons(c, "push back") == ["blade shaft's way in left of back blocked by front",
-                                       "blade shaft's way in right of back blocked by front"]
-    assert not [a for a in c.feasible if a.name == "back"]
+def test_shaft_way_in_must_be_clear_in_the_strict_variant_only():
+    front, back = box("front", 0.0, -0.20, sx=0.24, sz=0.06), box("back", 0.0, 0.05, sx=0.06)
+    strict = model(shaft_lane_check=True, hidden_space="overhead").enumerate((front, back), suctions=False)
+    assert reasons(strict, "push back") == ["blade shaft's way in left of back blocked by front",
+                                            "blade shaft's way in right of back blocked by front"]
+    assert not [a for a in strict.feasible if a.name == "back"]
+    # First order (default): the shaft's way in is the planner's business; "back" is pushable, and
+    # "front" (0.06 m tall) hides no space where "back" moves, the camera seeing over it.
+    first_order = model().enumerate((front, back), suctions=False)
+    assert not any("shaft" in r for r in reasons(first_order, "push back"))
+    assert pushes_of(first_order, "back", +1) and pushes_of(first_order, "back", -1)
+
+
+def test_thin_blade_gap_is_the_tube_width_and_the_strict_gap_the_blade_width():
+    # 5 cm between a and b: enough for the 3.5 cm first-order gap, not for the 6.5 cm strict one.
+    a, b = box("a", -0.10, -0.10), box("b", -0.10 + 0.08 + 0.05, -0.10)
+    assert pushes_of(model().enumerate((a, b), suctions=False), "b", +1)
+    strict = model(blade_gap=0.065).enumerate((a, b), suctions=False)
+    assert reasons(strict, "push b +x") == ["blade gap left of b blocked by a"]
+    # q keeps its meaning (the 6.5 cm lane's centre beside the object) whatever the gap
+    q = pushes_of(model().enumerate((a, b), suctions=False), "b", +1)[0].q
+    assert q[0] == pytest.approx(b.center[0] - 0.04 - 0.065 / 2)
 
 
 def test_push_moves_exactly_one_object_and_stops_before_its_neighbour():
@@ -81,7 +97,7 @@ def test_push_moves_exactly_one_object_and_stops_before_its_neighbour():
 
 def test_nothing_is_pushed_into_space_hidden_behind_another_object():
     # "front" hides the space behind it; "back" stands to its right, deeper, in the open.
-    front = box("front", -0.05, -0.20, sx=0.16, sy=0.06)
+    front = box("front", -0.05, -0.20, sx=0.16, sy=0.06, sz=0.20)
     back = box("back", 0.15, 0.10, sx=0.07, sy=0.07)
     m = model()
     c = m.enumerate((front, back), suctions=False)
@@ -98,6 +114,20 @@ def test_nothing_is_pushed_into_space_hidden_behind_another_object():
     to_corner = corner - EYE[:2]
     assert ray[0] * to_corner[1] - ray[1] * to_corner[0] <= 0.01 * np.hypot(*to_corner)  # corner not left of ray
     assert any("hidden space" in r for r in reasons(c, "push back -x"))
+
+
+@pytest.mark.parametrize("hidden_space", ["overhead", "3d"])
+def test_low_objects_hide_space_only_overhead(hidden_space):
+    # A 6 cm tall box in front: the camera (z = 0.20) sees over it, so only the overhead rule forbids
+    # pushing "back" into the space behind it.
+    front = box("front", -0.05, -0.20, sx=0.16, sy=0.06, sz=0.06)
+    back = box("back", 0.15, 0.10, sx=0.07, sy=0.07)
+    c = model(hidden_space=hidden_space).enumerate((front, back), suctions=False)
+    longest = -min(p.d for p in pushes_of(c, "back", -1))
+    if hidden_space == "overhead":
+        assert longest < 0.10 and any("hidden space" in r for r in reasons(c, "push back -x"))
+    else:
+        assert longest == pytest.approx(0.15 - 0.035 + 0.30 - 0.002, abs=0.006)  # to the left wall
 
 
 def test_suction_placements_are_collision_free_and_inside_the_shelf():
@@ -119,11 +149,53 @@ def test_suction_rejections_say_why():
     heavy = box("heavy", -0.15, -0.15, 0.20, 0.20, 0.20)  # 3.2 kg at 400 kg/m^3
     thin = cyl("thin", 0.15, -0.15, d=0.06)  # radius 3 cm < 4 cm seal radius
     blocked = box("blocked", 0.15, 0.10, sz=0.12)  # thin stands in its way out
-    c = model().enumerate((heavy, thin, blocked), pushes=False)
+    strict = dict(max_suction_mass=2.0, min_seal_radius=0.04, tube_approach_check=True, suction_lift="slight")
+    c = model(**strict).enumerate((heavy, thin, blocked), pushes=False)
     assert reasons(c, "suction heavy") == ["heavy weighs 3.20 kg > 2.00 kg"]
     assert reasons(c, "suction thin") == ["thin's camera-facing side is too small or curved for the cup"]
     assert reasons(c, "suction blocked") == ["tube approach to blocked blocked by thin"] or reasons(
         c, "suction blocked") == ["path out of the shelf blocked by thin"]
+
+
+def test_first_order_suction_defaults():
+    # No weight limit, a 3 cm radius cylinder seals (the cup is 1.5 cm), a 2 cm wide face is too small.
+    heavy = box("heavy", -0.15, -0.15, 0.20, 0.20, 0.20)
+    thin = cyl("thin", 0.15, -0.15, d=0.06)
+    sliver = box("sliver", 0.0, 0.15, sx=0.02, sy=0.10, sz=0.10)  # its camera-facing face is 2 cm wide
+    c = model().enumerate((heavy, thin, sliver), pushes=False)
+    names = {a.name for a in c.feasible}
+    assert {"heavy", "thin"} <= names and "sliver" not in names
+    assert reasons(c, "suction sliver") == ["sliver's camera-facing side is too small or curved for the cup"]
+
+
+@pytest.mark.parametrize("lift", ["slight", "over-lower"])
+def test_lifted_object_passes_over_lower_objects_only_when_allowed(lift):
+    low = box("low", 0.0, -0.20, sx=0.20, sy=0.08, sz=0.06)  # right in front of "tall"
+    tall = box("tall", 0.0, 0.0, sx=0.10, sy=0.08, sz=0.15)
+    c = model(suction_lift=lift).enumerate((low, tall), pushes=False)
+    tall_moves = [a for a in c.feasible if a.name == "tall"]
+    if lift == "slight":
+        assert tall_moves == [] and reasons(c, "suction tall") == ["path out of the shelf blocked by low"]
+    else:
+        assert tall_moves  # 0.06 + 0.02 + 0.15 < 0.60: lifted over "low"
+        for s in tall_moves:  # and never put down on it
+            after = apply_action((low, tall), s)
+            assert footprints_clear(Footprint.of(after[0]), Footprint.of(after[1]), 0.002 - 1e-9)
+
+
+def test_suction_placements_avoid_hidden_space():
+    objs = (box("a", -0.15, -0.15, sz=0.18), box("b", 0.10, -0.05, sx=0.12), cyl("c", 0.0, 0.18, d=0.10))
+    m = model()
+    from slax_drake.policies.actions import _StateContext
+
+    ctx = _StateContext(m, objs, ())
+    sucs = [a for a in m.enumerate(objs, pushes=False).feasible]
+    assert sucs
+    for s in sucs:
+        i = [o.name for o in objs].index(s.name)
+        placed = apply_action(objs, s)[i]
+        mask = m.grid.footprint_mask(Footprint.of(placed))
+        assert not (mask & ctx.hidden_all & ~ctx.masks[i]).any(), s
 
 
 def test_suction_beyond_the_tube_is_not_reachable():

@@ -55,8 +55,8 @@ class ToolConfig:
     cup_diameter: float = 0.03
     tube_diameter: float = 0.03
     max_suction_depth: float = 0.40  # the tube's length: deepest contact behind the opening
-    max_suction_mass: float = 2.0
-    min_seal_radius: float = 0.04  # a cylinder of smaller radius curves too much for the cup to seal
+    max_suction_mass: float = math.inf  # kg; strict variant 2.0 (the paper's FOSS weighs nothing)
+    min_seal_radius: float = 0.015  # a cylinder of smaller radius curves more than the cup (strict: 0.04)
     lift_height: float = 0.02
     object_density: float = 400.0  # kg/m^3, to weigh objects
     clearance: float = 0.002  # moved objects stop this far from neighbours and walls
@@ -65,6 +65,16 @@ class ToolConfig:
     min_push: float = 0.01
     push_contact_depth: float = 0.03  # the blade's tip goes this far past the object's front extreme
     cell: float = 0.005  # the path step and the hidden-space raster's cell
+    # Rules of the first-order model (see the module docstring; the defaults follow the paper's FOSS):
+    shaft_lane_check: bool = False  # strict: the shaft's way in from outside the shelf touches no object
+    suction_lift: str = "over-lower"  # "slight": the lifted object passes over nothing; "over-lower": see doc
+    blade_gap: float = 0.035  # free width beside the object for the thin blade and the 3 cm tube along its edge
+    hidden_space: str = "3d"  # "overhead": 2D shadows of infinitely tall objects; "3d": see the module doc
+    hidden_probe_height: float = 0.05  # "3d": a cell is hidden when this point above it is not seen (m)
+    tube_approach_check: bool = False  # strict: the tube's straight way in to the cup's contact touches no
+    # taller object (first order: False, the planner's collision checks decide)
+    suction_hidden_rule: str = "placement"  # "path": the whole way in avoids hidden space; "placement": the
+    # final placement only (pushes always sweep their whole path, so for them the two are the same)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -139,10 +149,16 @@ class ActionModel:
         ) > 1e-9:
             raise ValueError("push_resolution and suction_resolution must be multiples of cell")
         self.shelf = shelf
-        self.eye_xy = np.asarray(eye_xy, dtype=float)[:2]
+        eye = np.asarray(eye_xy, dtype=float)
+        self.eye_xy = eye[:2]
+        self.eye_z = float(eye[2]) if len(eye) > 2 else None  # needed by hidden_space="3d"
+        if tool.hidden_space not in ("overhead", "3d") or tool.suction_hidden_rule not in ("path", "placement") \
+                or tool.suction_lift not in ("slight", "over-lower"):
+            raise ValueError(f"unknown rule variant in {tool}")
         self.tool = tool
         self.grid = FloorGrid(shelf, tool.cell)
         self.y_front = -shelf.depth / 2 - FRONT_MARGIN
+        self._raster_cache: dict = {}
 
     # ----------------------------------------------------------------------------------------------------
     def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True) -> Candidates:
@@ -167,12 +183,16 @@ class ActionModel:
         x, y = fp.x, fp.y
         side = "left" if sign > 0 else "right"
         what = f"push {obj.name} {'+x' if sign > 0 else '-x'}"
-        rects = self.push_tool_rects(fp, sign)
-        lane_x = rects[0][0]
-        if abs(lane_x) + t.blade_width / 2 > shelf.width / 2 + 1e-9:
+        rects = self.push_swept_rects(fp, sign)
+        lane_x = self.push_tool_rects(fp, sign)[0][0]
+        gap_x = rects[0][0]
+        if abs(gap_x) + rects[0][2] > shelf.width / 2 + 1e-9:
             rejected.append(Rejected(what, f"blade does not fit between {obj.name} and the {side} wall"))
             return
-        for j in ctx.others(i):
+        y_lo = min([y - ey] + [r[1] - r[3] for r in rects]) - t.clearance - 1e-6
+        y_hi = max([y + ey] + [r[1] + r[3] for r in rects]) + t.clearance + 1e-6
+        band = ctx.others_in_band(i, 1, y_lo, y_hi)
+        for j in band:
             for k_r, (rx, ry, hx, hy) in enumerate(rects):
                 if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
                     where = "gap" if k_r == 0 else "shaft's way in"
@@ -184,7 +204,7 @@ class ActionModel:
         ok = np.abs(xs) + ex <= shelf.width / 2 - t.clearance + 1e-12
         first_bad, stopper = _first_false(ok), "the wall"
         centers = np.column_stack([xs, np.full(n, y)])
-        for j in ctx.others(i):
+        for j in band:
             other = ctx.all_fps[j]
             clear = clear_of(fp.shape, centers, fp.yaw, (fp.half_x, fp.half_y), other, t.clearance)
             for rx, ry, hx, hy in rects:
@@ -231,7 +251,7 @@ class ActionModel:
         tube_r = t.tube_diameter / 2
         corridor_half = (tube_r, (cy - self.y_front) / 2)
         corridor = np.array([[cx, (cy + self.y_front) / 2]])
-        for j in ctx.others(i):
+        for j in (ctx.others(i) if t.tube_approach_check else ()):
             if ctx.all_heights[j] <= cz - tube_r:
                 continue  # the tube passes over it
             if not clear_of("box", corridor, 0.0, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
@@ -242,15 +262,20 @@ class ActionModel:
         n_out = int(math.ceil((fp.y - y_out) / t.cell))
         ys = fp.y - np.arange(1, n_out + 1) * t.cell
         path = np.column_stack([np.full(n_out, fp.x), ys])
-        for j in ctx.others(i):
+        blocking = [j for j in ctx.others(i) if not self.passes_over(obj, ctx.all_heights[j])]
+        for j in ctx.others_in_band(i, 0, fp.x - ex - t.clearance - 1e-6, fp.x + ex + t.clearance + 1e-6):
+            if j not in blocking:
+                continue
             if not clear_of(fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.clearance).all():
                 rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
                 return
         cols, first_rows, last_rows = column_extents(ctx.masks[i])
-        hidden_o = ctx.hidden_others(i)
-        if any(hidden_o[:r, c].any() for c, r in zip(cols, first_rows)):
-            rejected.append(Rejected(what, f"path out of the shelf crosses space hidden from the camera"))
-            return
+        path_rule = t.suction_hidden_rule == "path"
+        if path_rule:
+            hidden_o = ctx.hidden_others(i)
+            if any(hidden_o[:r, c].any() for c, r in zip(cols, first_rows)):
+                rejected.append(Rejected(what, f"path out of the shelf crosses space hidden from the camera"))
+                return
         q = (float(cx), float(cy), float(cz))
         # Placements on a lattice around the object: x' = x + a res, y' = y + b res.
         res = t.suction_resolution
@@ -271,33 +296,52 @@ class ActionModel:
         xs = fp.x + a_all * res
         grid_c = np.column_stack([np.repeat(xs, n_in), np.tile(steps, len(xs))])
         clear = np.ones(len(grid_c), dtype=bool)
-        for j in ctx.others(i):
+        for j in blocking:
             clear &= clear_of(fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.clearance)
         clear = clear.reshape(len(xs), n_in)
         first_bad = np.where(clear.all(axis=1), n_in, np.argmin(clear, axis=1))
         y_reach_exact = np.where(
             first_bad >= n_in, np.inf, np.where(first_bad == 0, -np.inf, steps[np.maximum(first_bad - 1, 0)])
         )
-        # Hidden-space rule on the raster: the shifted footprint, sweeping in from the front.
+        # Hidden-space rule on the raster: the shifted footprint, sweeping in from the front ("path"), or the
+        # shifted footprint at its placement only ("placement"; per column, a prefix count of hidden rows).
         hidden_in = ctx.hidden_all & ~ctx.masks[i]
         first_h = first_hidden_row(hidden_in)
+        prefix = np.vstack([np.zeros((1, self.grid.nx), dtype=np.int32), np.cumsum(hidden_in, axis=0, dtype=np.int32)])
+        passed_over = [j for j in ctx.others(i) if j not in blocking]
+        ny = self.grid.ny
         n_found = 0
         for a, x_new, y_ex in zip(a_all, xs, y_reach_exact):
             shifted_cols = cols + a * cells_per
             inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
             if not inside.any():
                 continue
-            # rows the footprint may advance by (relative to its current rows) before touching hidden cells
-            adv = (first_h[shifted_cols[inside]] - last_rows[inside] - 1).min()
-            y_reach_hidden = fp.y + adv * t.cell if adv < NOT_FOUND // 2 else np.inf
-            y_reach = min(y_ex, y_reach_hidden)
-            for b in b_all:
-                if a == 0 and b == 0:
-                    continue
+            if path_rule:
+                # rows the footprint may advance by (relative to its current rows) before touching hidden cells
+                adv = (first_h[shifted_cols[inside]] - last_rows[inside] - 1).min()
+                y_reach = min(y_ex, fp.y + adv * t.cell if adv < NOT_FOUND // 2 else np.inf)
+            else:
+                y_reach = y_ex
+            bs = [b for b in b_all if not (a == 0 and b == 0) and fp.y + b * res <= y_reach + 1e-9]
+            if not bs:
+                continue
+            bs = np.array(bs)
+            if not path_rule:
+                c_in = shifted_cols[inside]
+                r0 = np.clip(first_rows[inside][None, :] + bs[:, None] * cells_per, 0, ny)
+                r1 = np.clip(last_rows[inside][None, :] + bs[:, None] * cells_per + 1, 0, ny)
+                hidden_count = (prefix[r1, c_in[None, :]] - prefix[r0, c_in[None, :]]).sum(axis=1)
+                bs = bs[hidden_count == 0]
+            if passed_over and len(bs):
+                placed = np.column_stack([np.full(len(bs), x_new), fp.y + bs * res])
+                ok = np.ones(len(bs), dtype=bool)
+                for j in passed_over:
+                    ok &= clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.clearance)
+                bs = bs[ok]
+            for b in bs:
                 y_new = fp.y + b * res
-                if y_new <= y_reach + 1e-9:
-                    feasible.append(Suction(obj.name, q, round(float(a * res), 6), round(float(y_new), 6)))
-                    n_found += 1
+                feasible.append(Suction(obj.name, q, round(float(a * res), 6), round(float(y_new), 6)))
+                n_found += 1
         if n_found == 0:
             rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
 
@@ -309,12 +353,46 @@ class ActionModel:
         t = self.tool
         ex, ey = fp.extents()
         edge = fp.x - ex if sign > 0 else fp.x + ex
-        blade_x = edge - sign * t.blade_width / 2
+        blade_x = edge - sign * t.blade_width / 2  # q's x: the lane centre, whatever blade_gap is
         y_tip = self.blade_depth(fp)
         y_face = fp.y - ey
         blade = (blade_x, (y_face + y_tip) / 2, t.blade_width / 2, max(1e-4, (y_tip - y_face) / 2))
         shaft = (blade_x, (self.y_front + y_tip) / 2, t.tube_diameter / 2, (y_tip - self.y_front) / 2)
         return [blade, shaft]
+
+    def rasters(self, obj: SceneObject, fp: Footprint):
+        """(footprint mask, shadow mask) of an object, cached by its shape and pose (searches revisit them)."""
+        key = (obj.name, obj.shape, tuple(obj.size), round(fp.x, 6), round(fp.y, 6), round(fp.yaw, 6))
+        hit = self._raster_cache.get(key)
+        if hit is not None:
+            return hit
+        grid, t = self.grid, self.tool
+        if t.hidden_space == "3d" and self.eye_z is not None:
+            shadow = grid.shadow_mask(fp, self.eye_xy, obj.size[2], self.eye_z, t.hidden_probe_height)
+        else:
+            shadow = grid.shadow_mask(fp, self.eye_xy)
+        if len(self._raster_cache) >= 1500:
+            self._raster_cache.clear()
+        self._raster_cache[key] = (grid.footprint_mask(fp), shadow)
+        return self._raster_cache[key]
+
+    def push_swept_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
+        """The parts of :meth:`push_tool_rects` the model requires to be free (and drags along the push):
+        the blade in the gap, plus the shaft's way in when ``shaft_lane_check`` is on."""
+        t = self.tool
+        blade, shaft = self.push_tool_rects(fp, sign)
+        edge = blade[0] + sign * t.blade_width / 2
+        gap = (edge - sign * t.blade_gap / 2, blade[1], t.blade_gap / 2, blade[3])
+        return [gap, shaft] if t.shaft_lane_check else [gap]
+
+    def passes_over(self, lifted: SceneObject, obstacle_height: float) -> bool:
+        """Whether the suctioned object, lifted, passes over an obstacle ``obstacle_height`` tall: never for
+        ``suction_lift="slight"``; for ``"over-lower"`` when the object lifted ``lift_height`` above the
+        obstacle still fits under the shelf's top (clearance to spare)."""
+        if self.tool.suction_lift == "slight":
+            return False
+        t = self.tool
+        return obstacle_height + t.lift_height + lifted.size[2] + t.clearance <= self.shelf.height
 
     def blade_depth(self, fp: Footprint) -> float:
         """How deep the blade goes (y of its tip): ``push_contact_depth`` past the object's front extreme,
@@ -360,15 +438,25 @@ class _StateContext:
         self.all_names = [o.name for o in self.all_objs]
         self.all_heights = [o.size[2] for o in self.all_objs]
         grid = model.grid
-        self.masks = [grid.footprint_mask(fp) for fp in self.fps]
-        shadows = [grid.shadow_mask(fp, model.eye_xy) for fp in self.fps]
+        rasters = [model.rasters(o, fp) for o, fp in zip(objects, self.fps)]
+        self.masks = [r[0] for r in rasters]
+        shadows = [r[1] for r in rasters]
         self.shadows = shadows
+        self.aabbs = np.array([[fp.x - e[0], fp.x + e[0], fp.y - e[1], fp.y + e[1]]
+                               for fp, e in ((fp, fp.extents()) for fp in self.all_fps)]).reshape(-1, 4)
         self.count = np.sum(shadows, axis=0) if shadows else np.zeros((grid.ny, grid.nx), dtype=int)
         self.hidden_all = erode(self.count > 0)
         self._n = len(self.all_objs)
 
     def others(self, i):
         return [j for j in range(self._n) if j != i]
+
+    def others_in_band(self, i, axis: int, lo: float, hi: float):
+        """Others whose bounding box meets the band lo <= x (axis 0) or y (axis 1) <= hi: the only ones a
+        motion confined to that band can touch (an exact pre-filter)."""
+        a = self.aabbs
+        near = (a[:, 2 * axis + 1] >= lo) & (a[:, 2 * axis] <= hi)
+        return [j for j in range(self._n) if j != i and near[j]]
 
     def hidden_others(self, i) -> np.ndarray:
         return erode((self.count - self.shadows[i]) > 0)

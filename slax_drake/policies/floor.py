@@ -40,17 +40,32 @@ class FloorGrid:
         inside = ~clear_of("cylinder", self.centers, 0.0, (0.0, 0.0), fp, 1e-9)
         return inside.reshape(self.ny, self.nx)
 
-    def shadow_mask(self, fp: Footprint, eye_xy: np.ndarray) -> np.ndarray:
+    def shadow_mask(self, fp: Footprint, eye_xy: np.ndarray, height: float | None = None,
+                    eye_z: float | None = None, probe_z: float = 0.0) -> np.ndarray:
         """Cells (ny, nx) hidden by the footprint from ``eye_xy``: the segment eye -> centre meets it
-        (the footprint's own cells included)."""
-        e = np.asarray(eye_xy, dtype=float)
+        (the footprint's own cells included).
+
+        Overhead (``height`` None): the object is taken as infinitely tall. 3D (``height`` and ``eye_z``
+        given): the segment from the eye (at ``eye_z``) to the point ``probe_z`` above the cell's centre must
+        meet the object's solid of height ``height``: the segment descends, so it does exactly when its height
+        where it leaves the footprint's outline is at most ``height``."""
+        e = np.asarray(eye_xy, dtype=float)[:2]
         p = self.centers
+        solid = height is not None and eye_z is not None and eye_z > height
         if fp.shape == "cylinder":
             c = np.array([fp.x, fp.y])
             d = p - e
-            t = np.clip(((c - e) @ d.T) / np.einsum("ij,ij->i", d, d), 0.0, 1.0)
+            dd = np.einsum("ij,ij->i", d, d)
+            t_c = ((c - e) @ d.T) / dd
+            t = np.clip(t_c, 0.0, 1.0)
             closest = e + t[:, None] * d
-            hit = np.hypot(closest[:, 0] - c[0], closest[:, 1] - c[1]) <= fp.half_x
+            dist = np.hypot(closest[:, 0] - c[0], closest[:, 1] - c[1])
+            hit = dist <= fp.half_x
+            if solid:
+                dist_line = np.hypot(*(e + t_c[:, None] * d - c).T)
+                half_chord = np.sqrt(np.maximum(fp.half_x ** 2 - dist_line ** 2, 0.0) / dd)
+                t_out = np.clip(t_c + half_chord, 0.0, 1.0)
+                hit &= eye_z + t_out * (probe_z - eye_z) <= height
             return hit.reshape(self.ny, self.nx)
         cos, sin = math.cos(fp.yaw), math.sin(fp.yaw)
         R = np.array([[cos, -sin], [sin, cos]])
@@ -70,7 +85,10 @@ class FloorGrid:
             outside = small & (abs(e_l[axis]) > half)
             t_lo = np.maximum(t_lo, lo)
             t_hi = np.where(outside, -1.0, np.minimum(t_hi, hi))
-        return (t_lo <= t_hi).reshape(self.ny, self.nx)
+        hit = t_lo <= t_hi
+        if solid:
+            hit &= eye_z + np.clip(t_hi, 0.0, 1.0) * (probe_z - eye_z) <= height
+        return hit.reshape(self.ny, self.nx)
 
 
 def shift_mask(mask: np.ndarray, rows: int, cols: int) -> np.ndarray:

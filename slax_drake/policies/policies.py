@@ -206,3 +206,80 @@ class DER(DistributionPolicy):
             level = [(c[1], c[2], c[3]) for c in children[: self.beam]]
         return best_leaf[1] if best_leaf else None
 
+
+
+class BluctionLookahead(DistributionPolicy):
+    """Ours: Bluction-DAR with a two-step lookahead when no single action shrinks the support.
+
+    Step one is Bluction-DAR's greedy choice (pushes and suctions, suction reductions weighted by psi as in
+    the paper). When the best weighted reduction is not positive (every action leaves the support as it is,
+    typically because the occluder cannot move until a neighbour makes room), the ``top_k`` first actions
+    (ranked by the support of their raw predicted distribution, then cost) are each followed by every second
+    action, and the first action of the pair with the largest support reduction per unit of action cost
+    (pushes 1, suctions psi) is taken. A pair's second action is predicted on the objects after the first,
+    min-ed with P'_t and the first prediction (the history encoding applied twice). Deterministic ties as in
+    DAR; no random numbers."""
+
+    name = "bluction-la2"
+    use_suctions = True
+
+    def __init__(self, *args, top_k: int = 4, **kwargs):
+        kwargs.setdefault("max_placements", 6)
+        super().__init__(*args, **kwargs)
+        self.top_k = top_k
+
+    def _scored(self, obs, objects, h):
+        """[(key, weighted reduction, action, predicted p, objects after)] for every candidate evaluated."""
+        r_t = support(h)
+        cands = self.candidates(objects)
+        out = []
+        for order, a in enumerate(c for c in cands if isinstance(c, Push)):
+            after = apply_action(objects, a)
+            p = self.predict(obs, after)
+            dr = r_t - support(np.minimum(p, h))
+            out.append(((-dr, support(p), 1.0, abs(a.d), order), dr, a, p, after))
+        suctions = [c for c in cands if isinstance(c, Suction)]
+        if suctions:
+            for name, p_removed, placements in self.ranked_suctions(obs, objects, h, suctions):
+                dr_removed = r_t - support(np.minimum(p_removed, h))
+                for order, a in enumerate(placements[: self.max_placements]):
+                    after = apply_action(objects, a)
+                    p = self.predict(obs, after)
+                    dr = r_t - support(np.minimum(p, h))
+                    w = self.psi * dr
+                    disp = abs(a.dx) + abs(a.dz - next(o for o in objects if o.name == a.name).center[1])
+                    out.append(((-w, support(p), self.psi, disp, 10_000 + order), w, a, p, after))
+                    if dr >= dr_removed:
+                        break
+        out.sort(key=lambda e: e[0])
+        return out
+
+    def reset(self, scene) -> None:
+        super().reset(scene)
+        self.visited = set()
+
+    def decide(self, obs):
+        from slax_drake.policies.distribution import state_key
+
+        h = self.history
+        self.visited.add(state_key(obs.known))
+        scored = self._scored(obs, obs.known, h)
+        fresh = [e for e in scored if state_key(e[4]) not in self.visited]  # never undo a step: no cycles
+        scored = fresh or scored
+        if not scored:
+            self.stop_reason = "no feasible action"
+            return None
+        if scored[0][1] > 0:
+            return scored[0][2]
+        r_t = support(h)
+        firsts = sorted(scored, key=lambda e: (e[0][1], e[0][2], e[0][3], e[0][4]))[: self.top_k]
+        best, best_key = None, None
+        for rank, (_, _, a1, p1, after1) in enumerate(firsts):
+            h1 = np.minimum(p1, h)
+            for key2, _, a2, p2, _ in self._scored(obs, after1, h1)[:1]:
+                dr = r_t - support(np.minimum(p2, h1))
+                cost = self.action_cost(a1) + self.action_cost(a2)
+                k = (-dr / cost, cost, rank)
+                if dr > 0 and (best_key is None or k < best_key):
+                    best, best_key = a1, k
+        return best if best is not None else scored[0][2]

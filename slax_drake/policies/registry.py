@@ -9,7 +9,7 @@ from slax_drake.policies.distribution import make_distribution_model
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.sampling import shelf_of
 
-POLICY_NAMES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar", "bluction-dar-cost")
+POLICY_NAMES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar", "bluction-dar-cost", "bluction-la2")
 
 
 class UnknownPolicyError(UserError):
@@ -21,17 +21,19 @@ def tool_config(scenario: Scenario, **overrides) -> ToolConfig:
 
 
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,
-                target_size=None):
+                target_size=None, tool_overrides: dict | None = None, oracle_options: dict | None = None):
     """A fresh policy object named ``name`` (see POLICY_NAMES) for ``scenario``'s shelf and camera."""
     from slax_drake.policies.oracle import Oracle
-    from slax_drake.policies.policies import DAR, DER, BluctionDAR
+    from slax_drake.policies.policies import DAR, DER, BluctionDAR, BluctionLookahead
 
     if name not in POLICY_NAMES:
         raise UnknownPolicyError(f"unknown policy '{name}' (known: {', '.join(POLICY_NAMES)})")
     psi = scenario.protocol.suction_cost
-    model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position, tool_config(scenario))
+    model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position,
+                        tool_config(scenario, **(tool_overrides or {})))
     if name.startswith("oracle"):
-        return Oracle(model, suctions=name == "oracle-p+s", psi=psi, horizon=horizon)
+        return Oracle(model, suctions=name == "oracle-p+s", psi=psi, horizon=horizon,
+                      threshold=scenario.target.visibility_threshold, **(oracle_options or {}))
     size = target_size or tuple(scenario.target.sizes[0])
     dist = make_distribution_model(perception, size)
     if name == "dar":
@@ -42,4 +44,6 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
         return BluctionDAR(model, dist, psi=psi, suction_weighting="paper")
     if name == "bluction-dar-cost":
         return BluctionDAR(model, dist, psi=psi, suction_weighting="cost")
+    if name == "bluction-la2":
+        return BluctionLookahead(model, dist, psi=psi)
     raise AssertionError(name)

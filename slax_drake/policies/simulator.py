@@ -64,14 +64,18 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
     obj = scene.objects[i]
     fp = Footprint.of(obj)
     obstacles = [(o.name, Footprint.of(o)) for j, o in enumerate(scene.objects) if j != i]
+    heights = [o.size[2] for j, o in enumerate(scene.objects) if j != i]
     if scene.target is not None:
         obstacles.append(("target", Footprint.of(scene.target.as_object())))
+        heights.append(scene.target.size[2])
     half = (fp.half_x, fp.half_y)
     ex, ey = fp.extents()
 
-    def first_blocked(centers, lane=None, lane_half=None):
+    def first_blocked(centers, lane=None, lane_half=None, lifted=False):
         ok = np.ones(len(centers), dtype=bool)
-        for _, other in obstacles:
+        for (_, other), h in zip(obstacles, heights):
+            if lifted and model.passes_over(obj, h):
+                continue
             ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.clearance)
             if lane is not None:
                 ok &= clear_of("box", lane, 0.0, lane_half, other, BLADE_CONTACT_CLEARANCE)
@@ -80,7 +84,7 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
 
     if isinstance(action, Push):
         sign = 1 if action.d > 0 else -1
-        rects = model.push_tool_rects(fp, sign)
+        rects = model.push_swept_rects(fp, sign)
         for name, other in obstacles:
             for rx, ry, hx, hy in rects:
                 if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)[0]:
@@ -108,14 +112,17 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         y_out = -shelf.depth / 2 - ey - t.cell
         n_out = max(1, int(math.ceil((fp.y - y_out) / t.cell)))
         ys = np.linspace(fp.y, y_out, n_out + 1)[1:]
-        if first_blocked(np.column_stack([np.full(n_out, fp.x), ys])) < n_out:
+        if first_blocked(np.column_stack([np.full(n_out, fp.x), ys]), lifted=True) < n_out:
             return scene, "path out blocked by an unseen obstacle"
         x_new = fp.x + action.dx
         if abs(x_new) + ex > shelf.width / 2 - t.clearance + 1e-9:
             return scene, "placement outside the walls"
         n_in = max(1, int(math.ceil((action.dz - y_out) / t.cell)))
         ys = np.linspace(y_out, action.dz, n_in + 1)[1:]
-        k = first_blocked(np.column_stack([np.full(n_in, x_new), ys]))
+        path_in = np.column_stack([np.full(n_in, x_new), ys])
+        k = first_blocked(path_in, lifted=True)
+        while k > 0 and first_blocked(path_in[k - 1:k]) == 0:
+            k -= 1  # lowered there it would land on something it passed over: back out along the way in
         y_final = ys[k - 1] if k > 0 else None
         if y_final is None or y_final + ey < -shelf.depth / 2 + 1e-9:
             return scene, "could not place the object: put back"
