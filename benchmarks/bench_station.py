@@ -48,6 +48,7 @@ def main() -> None:
     parser.add_argument("--station", default="sim_configs/station_sim_shelf.yaml")
     parser.add_argument("--time-step", type=float, default=None, help="override plant_config.time_step (s)")
     parser.add_argument("--approximation", default=None, help="override plant_config.discrete_contact_approximation")
+    parser.add_argument("--sleep", action="store_true", help="let resting objects sleep (slax_drake.systems.sleep)")
     args = parser.parse_args()
 
     from pydrake.systems.analysis import Simulator
@@ -67,6 +68,12 @@ def main() -> None:
     build = time.perf_counter() - t0
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()
+    sleep = None
+    if args.sleep:
+        from slax_drake.systems.sleep import ObjectSleep
+
+        sleep = ObjectSleep(diagram)
+        sleep.install(simulator)
     q = diagram.GetOutputPort("measured_state").Eval(context)[:9]
     diagram.GetInputPort("desired_state").FixValue(context, np.concatenate([q, np.zeros(9)]))
     diagram.GetInputPort("suction_command").FixValue(context, [0.0])
@@ -81,9 +88,10 @@ def main() -> None:
         cpus.append(time.process_time() - c0)
     plant = diagram.GetSubsystemByName("plant")
     contacts = plant.get_contact_results_output_port().Eval(plant.GetMyContextFromRoot(context)).num_point_pair_contacts()
+    asleep = f", {sum(sleep.sleeping(context))} of {len(sleep.names())} objects asleep" if sleep else ""
     print(
         f"station: {args.objects} objects + target (seed {args.seed}), time_step {scenario.plant_config.time_step} s, "
-        f"{scenario.plant_config.discrete_contact_approximation}, {contacts} contacts at rest, build {build:.2f} s"
+        f"{scenario.plant_config.discrete_contact_approximation}, {contacts} contacts at rest{asleep}, build {build:.2f} s"
     )
     print(
         f"simulated {args.seconds:.2f} s in {sum(walls):.2f} s wall ({sum(cpus):.2f} s CPU); best of {args.repeats} "

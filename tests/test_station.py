@@ -99,3 +99,34 @@ def test_bad_station_file(tmp_path):
         load_station_scenario(bad)
     with pytest.raises(ConfigError, match="no such station file"):
         load_station_scenario(tmp_path / "missing.yaml")
+
+
+def test_resting_objects_fall_asleep_where_the_json_puts_them(sim_scenario):
+    from pydrake.systems.analysis import Simulator
+
+    from slax_drake.systems.sleep import ObjectSleep
+
+    scenario = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    scene = sample_scene(sim_scenario, 10, seed=0)
+    diagram = MakeStation(scenario, scene, camera=False)
+    simulator = Simulator(diagram)
+    sleep = ObjectSleep(diagram)
+    sleep.install(simulator)
+    context = simulator.get_mutable_context()
+    q = diagram.GetOutputPort("measured_state").Eval(context)[:9]
+    diagram.GetInputPort("desired_state").FixValue(context, np.concatenate([q, np.zeros(9)]))
+    diagram.GetInputPort("suction_command").FixValue(context, [0.0])
+    simulator.AdvanceTo(0.6)
+    assert all(sleep.sleeping(context)), dict(zip(sleep.names(), sleep.sleeping(context)))
+    assert sorted(sleep.names()) == sorted(o.name for o in scene.objects + (scene.target.as_object(),))
+    plant = diagram.GetSubsystemByName("plant")
+    plant_context = plant.GetMyContextFromRoot(context)
+    X_SW = plant.GetFrameByName("shelf_body").CalcPoseInWorld(plant_context).inverse()
+    for obj in scene.objects + (scene.target.as_object(),):
+        X_SO = X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.GetBodyByName(obj.name))
+        assert np.linalg.norm(X_SO.translation() - obj.X_SO[:3, 3]) < 1e-3, obj.name
+    # Asleep, they stay exactly where they are.
+    bodies = [plant.GetBodyByName(name) for name in sleep.names()]
+    poses = [plant.EvalBodyPoseInWorld(plant_context, b).GetAsMatrix4() for b in bodies]
+    simulator.AdvanceTo(1.0)
+    assert all(np.array_equal(plant.EvalBodyPoseInWorld(plant_context, b).GetAsMatrix4(), X) for b, X in zip(bodies, poses))

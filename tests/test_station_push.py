@@ -83,11 +83,14 @@ def _one_box_scene(sim_scenario, size):
     return Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (box,), None, 0)
 
 
-@pytest.mark.parametrize("case", list(BOXES))
-def test_blade_push_moves_a_box_along_x_without_toppling_it(sim_scenario, station_scenario, blade_ik, case):
+def _simulate_push(sim_scenario, station_scenario, blade_ik, case, sleep=False):
+    """Runs the push of BOXES[case]; returns (box pose before the push, after it, tool parts touching the box
+    half-way, whether the box slept while the blade was still outside the bay)."""
     from pydrake.systems.analysis import Simulator
     from pydrake.systems.framework import DiagramBuilder
     from pydrake.systems.primitives import TrajectorySource
+
+    from slax_drake.systems.sleep import ObjectSleep
 
     size, lead = BOXES[case]
     traj, t_push0, t_push1 = _push_trajectory(blade_ik, station_scenario, size, lead)
@@ -108,6 +111,12 @@ def test_blade_push_moves_a_box_along_x_without_toppling_it(sim_scenario, statio
     q_robot = plant.GetPositions(plant_context, robot)
     q_robot[_robot_local(plant, robot)] = traj.value(0.0).ravel()
     plant.SetPositions(plant_context, robot, q_robot)
+    slept = False
+    if sleep:
+        sleeper = ObjectSleep(station)
+        sleeper.install(simulator)
+        simulator.AdvanceTo(0.5)  # the blade is still 0.3 m in front of the box
+        slept = sleeper.sleeping(context) == [True]
 
     shelf = plant.GetFrameByName("shelf_body")
     box = plant.GetBodyByName("box")
@@ -117,13 +126,18 @@ def test_blade_push_moves_a_box_along_x_without_toppling_it(sim_scenario, statio
 
     simulator.AdvanceTo(t_push0)
     before = box_pose()
-    # Inserting the blade beside the box leaves it where the scene put it.
-    assert np.linalg.norm(before.translation() - [0.0, 0.0, size[2] / 2]) < 2e-3
     simulator.AdvanceTo((t_push0 + t_push1) / 2)
     touching = _robot_geometries_touching(plant, plant_context, box)
     simulator.AdvanceTo(traj.end_time())
-    after = box_pose()
+    return before, box_pose(), touching, slept
 
+
+@pytest.mark.parametrize("case", list(BOXES))
+def test_blade_push_moves_a_box_along_x_without_toppling_it(sim_scenario, station_scenario, blade_ik, case):
+    size, lead = BOXES[case]
+    before, after, touching, _ = _simulate_push(sim_scenario, station_scenario, blade_ik, case)
+    # Inserting the blade beside the box leaves it where the scene put it.
+    assert np.linalg.norm(before.translation() - [0.0, 0.0, size[2] / 2]) < 2e-3
     moved = after.translation() - before.translation()
     print(f"{case}: moved {np.round(moved, 4)} m, touching {sorted(touching)}")
     expected = PUSH - GAP  # the tool first closes the gap, then carries the box
@@ -138,6 +152,16 @@ def test_blade_push_moves_a_box_along_x_without_toppling_it(sim_scenario, statio
         assert touching == {"blade"}
     else:
         assert "tube" in touching, touching
+
+
+def test_a_sleeping_box_wakes_for_the_push_and_moves_as_an_awake_one(sim_scenario, station_scenario, blade_ik):
+    case = "low box, blade alone"
+    _, awake, _, _ = _simulate_push(sim_scenario, station_scenario, blade_ik, case)
+    _, woken, touching, slept = _simulate_push(sim_scenario, station_scenario, blade_ik, case, sleep=True)
+    assert slept  # asleep while the blade was far, so the push itself had to wake it
+    assert touching == {"blade"}
+    assert np.linalg.norm(woken.translation() - awake.translation()) < 1e-3
+    assert np.allclose(woken.rotation().matrix(), awake.rotation().matrix(), atol=1e-3)
 
 
 def _robot_geometries_touching(plant, plant_context, body):
