@@ -13,12 +13,14 @@ Rules, checked every ``check_period`` seconds of simulated time from a Simulator
   objects that are not still.
 - An awake object that has been still for ``still_time`` falls asleep unless an active body's collision geometry
   lies within ``wake_distance`` of one of its own.
-- A sleeping object wakes when an active body's geometry comes within ``wake_distance``. The robot's tool moving
-  at 1.5 m/s covers 3 cm in one 20 ms check period, well inside the 5 cm wake distance.
+- A sleeping object wakes when an active body's geometry comes within ``wake_distance``.
+- Both tests use ``wake_distance`` plus the distance the fastest active body could cover in two check periods
+  (a bound on the speed of any point of its geometry: |v| + |w| * reach from the body origin), so a fast arm
+  wakes objects earlier instead of running into a sleeping one.
 
-Cost of the approximation: a sleeping object is immovable until woken, so a push that reaches it faster than the
-wake rule foresees (faster than wake_distance per check_period) would meet a fixed object; a sleeping object
-does not feel a change of gravity or an external force other than contact.
+Cost of the approximation: a sleeping object is immovable until woken; one that a body reaches faster than the
+speed bound foresees (accelerating hard within one check period) would meet a fixed object for up to one period;
+a sleeping object does not feel an external force other than contact (gravity is balanced by the board anyway).
 
 Usage: ``ObjectSleep(station).install(simulator)`` (one per Simulator; it replaces the simulator's monitor). The
 bookkeeping (how long each object has been still) lives in this object, not in the Context: reset it with
@@ -28,6 +30,7 @@ bookkeeping (how long each object has been still) lives in this object, not in t
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -82,6 +85,8 @@ class ObjectSleep:
                     (plant.get_body(b), np.array([c for c, _ in spheres]), np.array([r for _, r in spheres]))
                 )
         self._num_robot_spheres = sum(len(r) for _, _, r in self._robot_spheres)
+        # Farthest point of each robot body's geometry from the body origin (m), for the speed bound.
+        self._robot_reach = [(body, float(np.max(np.linalg.norm(c, axis=1) + r))) for body, c, r in self._robot_spheres]
         self._object_radius = []
         for body_index, _ in self._joints:
             spheres = [_bounding_sphere(inspector, g) for g in plant.GetCollisionGeometriesForBody(plant.get_body(body_index))]
@@ -139,8 +144,9 @@ class ObjectSleep:
                 self._still_since[k] = t
         active = [not asleep[k] and not still[k] for k in range(n)]
         near_active = [False] * n
-        if self._maybe_near_active(context, active):
-            near_active = self._near_active(context, active)
+        reach = p.wake_distance + 2.0 * p.check_period * self._fastest_active_speed(context, active)
+        if self._maybe_near_active(context, active, reach):
+            near_active = self._near_active(context, active, reach)
         for k, (_, joint) in enumerate(self._joints):
             if asleep[k] and near_active[k]:
                 joint.Unlock(context)
@@ -148,8 +154,20 @@ class ObjectSleep:
             elif not asleep[k] and still[k] and not near_active[k] and t - self._still_since[k] >= p.still_time:
                 joint.Lock(context)
 
-    def _maybe_near_active(self, context, active) -> bool:
-        """Whether the bounding spheres put any object within wake_distance of the robot or an active object."""
+    def _fastest_active_speed(self, context, active) -> float:
+        """A bound (m/s) on the speed of any point of the robot's or an active object's collision geometry."""
+        plant = self._plant
+        best = 0.0
+        bodies = [(body, reach) for body, reach in self._robot_reach] + [
+            (plant.get_body(b), self._object_radius[k]) for k, (b, _) in enumerate(self._joints) if active[k]
+        ]
+        for body, reach in bodies:
+            w_x, w_y, w_z, v_x, v_y, v_z = plant.EvalBodySpatialVelocityInWorld(context, body).get_coeffs()
+            best = max(best, math.sqrt(v_x * v_x + v_y * v_y + v_z * v_z) + math.sqrt(w_x * w_x + w_y * w_y + w_z * w_z) * reach)
+        return best
+
+    def _maybe_near_active(self, context, active, reach) -> bool:
+        """Whether the bounding spheres put any object within ``reach`` of the robot or an active object."""
         plant = self._plant
         if not self._joints:
             return False
@@ -166,14 +184,14 @@ class ObjectSleep:
         oc, orad = np.concatenate(oc), np.concatenate(orad)
         gap = np.linalg.norm(centres[:, None, :] - oc[None, :, :], axis=2) - radii[:, None] - orad[None, :]
         gap[moving, self._num_robot_spheres + np.arange(len(moving))] = np.inf  # an active object is not near itself
-        return bool((gap < self.params.wake_distance).any())
+        return bool((gap < reach).any())
 
-    def _near_active(self, context, active) -> list[bool]:
-        """Exact test: an object's geometry within wake_distance of the robot's or an active object's."""
+    def _near_active(self, context, active, reach) -> list[bool]:
+        """Exact test: an object's geometry within ``reach`` of the robot's or an active object's."""
         n = len(active)
         near_active = [False] * n
         query = self._plant.get_geometry_query_input_port().Eval(context)
-        for pair in query.ComputeSignedDistancePairwiseClosestPoints(self.params.wake_distance):
+        for pair in query.ComputeSignedDistancePairwiseClosestPoints(reach):
             a, b = self._owner.get(pair.id_A), self._owner.get(pair.id_B)
             if a is None or b is None or a == b:
                 continue
