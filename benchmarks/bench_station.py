@@ -2,7 +2,7 @@
 no camera rendering (the RgbdSensor renders only when its port is evaluated; here it is left out).
 
 Run on one core:  taskset -c 0 python benchmarks/bench_station.py [--objects 10] [--seconds 3] [--seed 0]
-                  [--time-step 0.005] [--approximation lagged]
+                  [--time-step 0.005] [--approximation lagged] [--sleep]
 
 It prints the real-time factor from wall-clock time and from the process's CPU time (``time.process_time``), each
 the best of ``--repeats`` consecutive segments: on a shared machine the CPU-time figure is the steadier one, but
@@ -26,11 +26,15 @@ What made the station faster (measured with this script, 10 objects + target, se
   settling error reaches 0.67 mm, too close to the 1 mm limit to be the default.
 - Measured and not kept: SAP instead of lagged (no faster at 5 ms); filtering the robot's base, torso and head
   against the world (about 5 %, within noise, and only true for some shelf placements).
+- ``--sleep``: resting objects far from the robot and from moving objects are locked out of the step
+  (slax_drake.systems.sleep.ObjectSleep, a Simulator monitor). Interleaved in one process (same load): 8.6x
+  against 6.0x CPU. Cost: a sleeping object is fixed until the wake test (every 20 ms, 5 cm plus a speed bound)
+  frees it; the push test gives the same box displacement with and without sleep (to 1e-5 mm).
 
-Result: 5.3-5.5x at 5 ms when the machine was least loaded (3-4x under heavier load from other jobs); the cost
-now lies in building the contact problem (60 % of a step, proportional to the number of resting contacts) and the
-geometry query (about 20 %). Not tried: putting resting objects to sleep (locking their joints and waking them
-when the tool or a moving object comes near).
+Result (one core, a machine shared with other jobs at a load average of about 8 on 2 cores, so wall time is
+inflated; 10 objects + target, 5 ms): without sleep 4.6-6.2x CPU-time (3.1-4.3x wall); with --sleep 7.0-9.3x
+CPU-time (4.6-7.2x wall). Of the remaining awake-step cost, building the contact problem is about 60 % (in
+proportion to the number of resting contacts) and the geometry query about 20 %.
 """
 
 import argparse

@@ -25,6 +25,11 @@ outputs
 - ``depth_image`` (ImageDepth32F, metres), ``label_image`` (ImageLabel16I: shelf 0, objects[i] i + 1, target
   last, background/robot empty), ``color_image``: the tool camera, rendered only when evaluated (camera=True).
 - ``query_object``, ``body_poses``, ``contact_results``, ``suction_force`` (1: the pull in N).
+
+Speed: the plant steps at 5 ms (``plant_config.time_step``); objects stand on small corner/rim spheres only
+(scene_world). For long runs, ``slax_drake.systems.sleep.ObjectSleep(station).install(simulator)`` locks resting
+objects out of the step until something comes near (about 1.4x faster with 10 objects at rest;
+benchmarks/bench_station.py documents the measurements and trade-offs).
 """
 
 # No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
