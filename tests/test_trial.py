@@ -78,8 +78,12 @@ def test_html_replay_draws_the_robot(tmp_path):
     assert main(["trial", *sum(([f"--{k}", str(v)] for k, v in SHORT.items()), []), "--html", str(html),
                  "--out", str(tmp_path / "out")]) == 0
     shot = tmp_path / "shot.png"
-    subprocess.run([browser, "--headless", "--no-sandbox", "--use-gl=swiftshader", "--window-size=800,600",
-                    "--virtual-time-budget=15000", f"--screenshot={shot}", html.as_uri()], check=True, timeout=120)
+    # WebGL in headless Chromium needs ANGLE's software rasteriser; without it the page stays blank.
+    subprocess.run([browser, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                    "--no-first-run", f"--user-data-dir={tmp_path / 'chromium'}", "--window-size=800,600",
+                    "--virtual-time-budget=20000", f"--screenshot={shot}", html.as_uri()],
+                   check=True, timeout=120, capture_output=True)
     import cv2
 
     image = cv2.imread(str(shot))
