@@ -50,3 +50,44 @@ def test_suction_when_no_push_fits(sim_scenario):
     r_ps = run_trial(s, make_policy("oracle-p+s", sim_scenario, horizon=2), 2)
     assert r_ps.success and r_ps.suctions == 1 and r_ps.steps == 1
     assert np.isclose(r_ps.cost, 1.3)
+
+
+def test_occlusion_union_equals_the_simulators_visible_fraction(sim_scenario):
+    from slax_drake.policies.visibility import TargetOcclusion
+    from slax_drake.scene import sample_scene
+
+    for seed in range(3):
+        s = sample_scene(sim_scenario, 6, seed, target_size=(0.06, 0.06, 0.06))
+        occ = TargetOcclusion(s)
+        for k in range(len(s.objects)):
+            sub = s.objects[:k] + s.objects[k + 1:]
+            assert occ.visible_fraction(sub) == target_visible_fraction(s.with_objects(sub))
+
+
+def test_low_object_is_no_obstacle_for_the_visibility_goal(sim_scenario):
+    # A 4 cm tall box between the camera and the target: the camera (z = 0.20, 12 deg down) sees over it,
+    # the target is visible, but it overlaps the overhead triangle, so the triangle goal would move it.
+    s = scene_with([box("low", 0.0, 0.0, sx=0.12, sz=0.04)], (0.0, 0.15), sim_scenario)
+    assert target_visible_fraction(s) >= 0.8
+    vis = make_policy("oracle-p", sim_scenario, horizon=2)
+    vis.reset(s)
+    assert vis.search(s, 2) == []
+    tri = make_policy("oracle-p", sim_scenario, horizon=2, oracle_options={"goal": "triangle"})
+    tri.reset(s)
+    assert len(tri.search(s, 2)) == 1
+
+
+def test_the_heuristic_never_overestimates(sim_scenario):
+    # Removing objects until revealed takes at least min_objects_to_move removals (checked by brute force).
+    import itertools
+
+    from slax_drake.policies.visibility import TargetOcclusion
+    from slax_drake.scene import sample_scene
+
+    for seed in range(3):
+        s = sample_scene(sim_scenario, 8, 50 + seed, target_size=(0.06, 0.06, 0.06))
+        occ = TargetOcclusion(s)
+        h = occ.min_objects_to_move(s.objects, cap=8)
+        best = next(k for k in range(len(s.objects) + 1) for rm in itertools.combinations(range(len(s.objects)), k)
+                    if occ.revealed([o for i, o in enumerate(s.objects) if i not in rm]))
+        assert h == best

@@ -45,3 +45,11 @@ def test_unknown_policy_and_learned_perception_are_user_errors(sim_scenario):
         make_policy("nope", sim_scenario)
     with pytest.raises(UserError, match="not implemented yet"):
         make_policy("dar", sim_scenario, perception="learned")
+
+
+def test_lookahead_policy_is_deterministic(sim_scenario):
+    scene = sample_scene(sim_scenario, 6, 11, target_size=(0.06, 0.06, 0.06))
+    a = run_trial(scene, make_policy("bluction-la2", sim_scenario, horizon=4), 4)
+    b = run_trial(scene, make_policy("bluction-la2", sim_scenario, horizon=4), 4)
+    assert a.actions == b.actions and a.success == b.success
+    assert a.steps >= 1 or a.reason != "horizon"

@@ -3,26 +3,39 @@
 Shared by the fast shelf simulator and (later) the Drake planner LeafSystem, so the two agree on which
 actions exist. Everything is in the shelf frame S (x right, y into the shelf, z up; metres).
 
-Push (q, d) (paper Sec. III): the blade (``blade_width`` along x, ``blade_height`` tall) is inserted from the
-front along +y, edge first on its shaft (``tube_diameter`` wide), and turned in the gap beside the object, from
-the object's front extreme to ``push_contact_depth`` behind it (at most its centre), against the object's
-extreme x (its axis-aligned extent) on the side opposite the push (:meth:`ActionModel.push_tool_rects`). The
-blade needs a gap of at least ``blade_width`` between the object and its neighbour or the wall, and the
-shaft's way in from outside the shelf must touch no other object. The blade then moves a signed distance d along x and the
-object translates with it (first order: no rotation). The object stops ``clearance`` before a neighbour or a
-wall; the blade and its shaft (the lane, dragged along) must touch no other object; exactly one object moves;
-no cell the object newly covers may be hidden behind *another* object in the overhead view
-(:mod:`slax_drake.policies.floor`).
+Push (q, d) (paper Sec. III-IV: "the robot inserts the flat face of the blade next to the object and then pushes
+along the blade's surface normal"): the thin blade (faces normal to x, ``blade_width`` along y, ``blade_height``
+tall) goes in beside the object's extreme x (its axis-aligned extent) on the side opposite the push, from the
+object's front extreme to ``push_contact_depth`` behind it (at most its centre). It needs a free gap
+``blade_gap`` wide there, between the object and its neighbour or the wall (:meth:`ActionModel.push_swept_rects`;
+default 3.5 cm: the 3 cm tube runs along the blade's upper edge, centred on its plane). q = (the centre of a
+``blade_width`` lane beside the object, the blade tip's y, blade_height / 2), whatever the gap, as the planner
+reads it. The blade then moves a signed distance d along x and the object translates with it (first order: no
+rotation). The object stops ``clearance`` before a neighbour or a wall; the blade in its gap (dragged along)
+must touch no other object; exactly one object moves; no cell the object newly covers may be hidden from the
+camera by *another* object (:mod:`slax_drake.policies.floor`; ``hidden_space``: "3d", default, the point
+``hidden_probe_height`` above the cell is not seen, i.e. an unseen object at least that tall could stand there;
+"overhead", the paper's 2D shadows of infinitely tall objects), counting only hidden space wide enough to hold an
+unseen object (``min_hidden_width``: a disc of the smallest object's size fits in it).
 
 Suction (q, d_x, d_z): the cup (``cup_diameter``) seals on the camera-facing side: a box's side face whose
-outward normal points most toward the camera, or a cylinder's front (sealable only when its radius is at least
-``min_seal_radius``), at the highest sealable point. The tube approaches straight along +y from outside the
-shelf; objects taller than the tube's underside in its corridor block it; the contact must lie within
-``max_suction_depth`` of the opening and the object must weigh at most ``max_suction_mass``. The object is
-lifted ``lift_height``, pulled straight out of the shelf (the path must be collision free and not cross
-hidden space), translated by d_x, and pushed straight in to depth y = d_z (the path and the placement must be
-collision free, inside the walls, and cross no cell hidden behind any known object, the object's own old
-shadow included, since nobody has seen it yet).
+outward normal points most toward the camera (at least ``cup_diameter`` wide), or a cylinder's front (radius
+at least ``min_seal_radius``), at the highest sealable point. The contact must lie within ``max_suction_depth``
+of the opening (the tube's length) and the object must weigh at most ``max_suction_mass``. The object is
+lifted, pulled straight out of the shelf, translated by d_x, and pushed straight in to depth y = d_z: those
+paths must be collision free (``suction_lift``: "over-lower", default, the object is lifted over any object
+that leaves room for it under the shelf's top, "lifted... clear of the clutter"; "slight", it is lifted only
+``lift_height`` and passes over nothing); the placement must be collision free, inside the walls, and cover no
+cell hidden from the camera by any known object, the object's own old shadow included, since nobody has seen
+it yet (``suction_hidden_rule`` "placement", default; "path": the whole way in and out too).
+
+Rule variants (ToolConfig fields; first-order defaults follow the paper's FOSS, where physical feasibility is
+left to the planner's kinematic checks): ``blade_gap`` 0.035 (strict: 0.065, the blade turned flat in the
+gap); ``shaft_lane_check`` False (strict: the shaft's way in from outside the shelf touches no object);
+``tube_approach_check`` False (strict: the tube's straight way in to the contact touches no object taller than
+its underside); ``hidden_space`` "3d" (strict: "overhead"); ``suction_lift`` "over-lower" (strict: "slight");
+``suction_hidden_rule`` "placement" (strict: "path"); ``min_hidden_width`` 0.06 (strict: 0); ``max_suction_mass`` inf (strict: 2.0);
+``min_seal_radius`` 0.015 (strict: 0.04). :data:`STRICT_RULES` holds the strict set.
 
 ``enumerate`` lists a state's candidates with d discretised at ``push_resolution`` (the maximal push is always a
 candidate) and placements on a ``suction_resolution`` lattice around the object, and returns every rejected
@@ -37,7 +50,7 @@ import math
 import numpy as np
 
 from slax_drake.policies.floor import (
-    NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, shift_mask,
+    NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc, shift_mask,
 )
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import SceneObject, Shelf
@@ -71,10 +84,16 @@ class ToolConfig:
     blade_gap: float = 0.035  # free width beside the object for the thin blade and the 3 cm tube along its edge
     hidden_space: str = "3d"  # "overhead": 2D shadows of infinitely tall objects; "3d": see the module doc
     hidden_probe_height: float = 0.05  # "3d": a cell is hidden when this point above it is not seen (m)
+    min_hidden_width: float = 0.06  # hidden space counts only where a disc this wide fits in it: the smallest
+    # object (0.06 m) contains such a disc, so narrower hidden slivers hold no unseen object (strict: 0)
     tube_approach_check: bool = False  # strict: the tube's straight way in to the cup's contact touches no
     # taller object (first order: False, the planner's collision checks decide)
     suction_hidden_rule: str = "placement"  # "path": the whole way in avoids hidden space; "placement": the
     # final placement only (pushes always sweep their whole path, so for them the two are the same)
+
+
+STRICT_RULES = dict(min_hidden_width=0.0, blade_gap=0.065, shaft_lane_check=True, tube_approach_check=True, hidden_space="overhead",
+                    suction_lift="slight", suction_hidden_rule="path", max_suction_mass=2.0, min_seal_radius=0.04)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -445,7 +464,8 @@ class _StateContext:
         self.aabbs = np.array([[fp.x - e[0], fp.x + e[0], fp.y - e[1], fp.y + e[1]]
                                for fp, e in ((fp, fp.extents()) for fp in self.all_fps)]).reshape(-1, 4)
         self.count = np.sum(shadows, axis=0) if shadows else np.zeros((grid.ny, grid.nx), dtype=int)
-        self.hidden_all = erode(self.count > 0)
+        self._radius_cells = int(math.floor(model.tool.min_hidden_width / 2 / grid.cell + 1e-9))
+        self.hidden_all = self._open(erode(self.count > 0))
         self._n = len(self.all_objs)
 
     def others(self, i):
@@ -458,8 +478,11 @@ class _StateContext:
         near = (a[:, 2 * axis + 1] >= lo) & (a[:, 2 * axis] <= hi)
         return [j for j in range(self._n) if j != i and near[j]]
 
+    def _open(self, mask: np.ndarray) -> np.ndarray:
+        return open_with_disc(mask, self._radius_cells) if self._radius_cells > 0 else mask
+
     def hidden_others(self, i) -> np.ndarray:
-        return erode((self.count - self.shadows[i]) > 0)
+        return self._open(erode((self.count - self.shadows[i]) > 0))
 
 
 def _first_false(ok: np.ndarray) -> int:

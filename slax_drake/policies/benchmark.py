@@ -157,7 +157,10 @@ def markdown_table(table: dict) -> str:
         cells_s, cells_m = [], []
         for p in policies:
             e = table["policies"][p][key]
-            cells_s.append("-" if e["success_rate"] is None else f"{100 * e['success_rate']:.0f} %")
+            paper = ""
+            if p in PAPER_TABLE1 and key in ("4", "6", "8", "10", "all"):
+                paper = f" (paper {PAPER_TABLE1[p][['4', '6', '8', '10', 'all'].index(key)]})"
+            cells_s.append("-" if e["success_rate"] is None else f"{100 * e['success_rate']:.0f} %{paper}")
             cells_m.append("-" if e["median_steps"] is None else
                            f"{e['median_steps']:.1f} ({e['iqr'][0]:.1f} - {e['iqr'][1]:.1f})")
         label = "All" if key == "all" else key

@@ -148,3 +148,27 @@ def column_extents(footprint: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nd
 def first_hidden_row(hidden: np.ndarray) -> np.ndarray:
     """Per column, the first (front-most) hidden row; NOT_FOUND where the column is clear."""
     return np.where(hidden.any(axis=0), np.argmax(hidden, axis=0), NOT_FOUND)
+
+
+def disc_offsets(radius_cells: int) -> list[tuple[int, int]]:
+    """(row, column) offsets of the cells whose centres lie within ``radius_cells`` of a cell's centre."""
+    r = int(radius_cells)
+    return [(dr, dc) for dr in range(-r, r + 1) for dc in range(-r, r + 1) if dr * dr + dc * dc <= r * r]
+
+
+def open_with_disc(mask: np.ndarray, radius_cells: int) -> np.ndarray:
+    """Morphological opening by a disc: the cells covered by some disc of ``radius_cells`` lying entirely in
+    ``mask`` (cells outside the raster count as outside the mask). Where no such disc fits, no object whose
+    footprint contains that disc can stand unseen."""
+    if radius_cells <= 0 or not mask.any():
+        return mask.copy()
+    offsets = disc_offsets(radius_cells)
+    centres = mask.copy()
+    for dr, dc in offsets:
+        centres &= shift_mask(mask, -dr, -dc)  # the disc centred here lies in the mask
+        if not centres.any():
+            return centres
+    out = np.zeros_like(mask)
+    for dr, dc in offsets:
+        out |= shift_mask(centres, dr, dc)
+    return out

@@ -223,7 +223,7 @@ class BluctionLookahead(DistributionPolicy):
     name = "bluction-la2"
     use_suctions = True
 
-    def __init__(self, *args, top_k: int = 4, **kwargs):
+    def __init__(self, *args, top_k: int = 2, **kwargs):
         kwargs.setdefault("max_placements", 6)
         super().__init__(*args, **kwargs)
         self.top_k = top_k
