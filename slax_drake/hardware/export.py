@@ -1,0 +1,133 @@
+"""A trial's ``trial.json`` -> :class:`~slax_drake.hardware.trajectory_file.ExportedTrajectory`.
+
+The trial records ``executed_trajectory``: the commanded joint trajectory over the whole trial (holds between
+motions), every ``stride``-th 1 ms sample (10 ms by default), rounded to 1e-6. Each action's motion starts at its
+decision time (``steps_log[*].time`` of the entries with an action) and lasts ``actions[*].motion.duration_s``;
+its suction command is on over ``actions[*].motion.suction_intervals`` (seconds from the motion's start).
+
+Export cuts the record into motions: the samples from the motion's start to its end; when the end (a multiple of
+1 ms) falls between two records, the end point is added from the next record (the robot holds still there, so
+its position is exact, velocity and acceleration zero). With ``rate=None`` the points are the trial's own
+samples (nothing is interpolated: a replay feeds exactly what the trial recorded). With a rate (Hz) each motion
+is resampled at t = k / rate from its start, plus its end point, by quintic Hermite interpolation of the
+recorded positions, velocities and accelerations (:mod:`slax_drake.hardware.interpolation`); at rate 100 and
+the trial's default 10 ms records the samples coincide with the records.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from slax_drake.hardware.fetch_limits import FETCH_JOINTS
+from slax_drake.hardware.interpolation import quintic_hermite
+from slax_drake.hardware.trajectory_file import ExportedTrajectory, Motion, TrajectoryFileError
+
+TIME_EPS = 1e-6  # s: trial.json rounds its times to 1e-6
+
+
+class TrialFileError(TrajectoryFileError):
+    """A trial.json cannot be exported (missing, malformed, or without the executed trajectory)."""
+
+
+def read_trial(path: str | Path) -> dict:
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise TrialFileError(f"{path}: no such file") from None
+    except json.JSONDecodeError as e:
+        raise TrialFileError(f"{path}: not valid JSON (truncated or corrupt): {e.msg} at line {e.lineno}") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise TrialFileError(f"{path}: cannot read ({e})") from None
+    for key in ("executed_trajectory", "actions", "steps_log"):
+        if not isinstance(data, dict) or key not in data:
+            raise TrialFileError(f"{path}: not a trial record (no {key!r}; written by 'slax-drake trial')")
+    return data
+
+
+def trial_scene(data: dict):
+    """The trial's initial scene, sampled again from its config, object count and seed (the trial does the same),
+    checked against the trial's recorded initial object poses (1e-4 m, 1e-4 rad)."""
+    from slax_drake.config import load_scenario
+    from slax_drake.scene.sampling import sample_scene
+
+    scene = sample_scene(load_scenario(data["config"]), int(data["objects"]), seed=int(data["seed"]))
+    recorded = data.get("initial_objects") or {}
+    for o in scene.objects:
+        r = recorded.get(o.name)
+        if r is None or abs(r["x"] - o.center[0]) > 1e-4 or abs(r["y"] - o.center[1]) > 1e-4 or abs(r["yaw"] - o.yaw) > 1e-4:
+            raise TrialFileError(f"the scene sampled from {data['config']} (objects {data['objects']}, seed "
+                                 f"{data['seed']}) differs from the trial's initial objects at {o.name}: pass --scene")
+    return scene
+
+
+def export_trial(data: dict, rate: float | None = None, source: str | None = None, scene=None) -> ExportedTrajectory:
+    """Cuts the trial's executed trajectory into motions (module docstring); ``rate`` in Hz or None."""
+    from slax_drake.scene.io import scene_to_dict
+
+    if rate is not None and not rate > 0:
+        raise TrialFileError(f"--rate must be positive (got {rate})")
+    et = data["executed_trajectory"]
+    try:
+        names = tuple(et["joint_names"])
+        times = np.asarray(et["times"], float)
+        q = np.asarray(et["positions"], float)
+        v = np.asarray(et["velocities"], float)
+        a = np.asarray(et["accelerations"], float)
+    except (KeyError, TypeError, ValueError) as e:
+        raise TrialFileError(f"{source or 'trial'}: executed_trajectory is malformed ({e})") from None
+    if names != FETCH_JOINTS:
+        raise TrialFileError(f"{source or 'trial'}: executed_trajectory joints {list(names)} are not {list(FETCH_JOINTS)}")
+    if times.ndim != 1 or len(times) < 2 or any(x.shape != (len(times), len(names)) for x in (q, v, a)):
+        raise TrialFileError(f"{source or 'trial'}: executed_trajectory arrays have inconsistent shapes")
+    if not np.all(np.diff(times) > 0):
+        raise TrialFileError(f"{source or 'trial'}: executed_trajectory times are not strictly increasing")
+    starts = [e for e in data["steps_log"] if "action" in e]
+    if len(starts) != len(data["actions"]):
+        raise TrialFileError(f"{source or 'trial'}: {len(data['actions'])} actions but {len(starts)} decisions with one")
+    motions = []
+    for entry, action in zip(starts, data["actions"]):
+        t0 = float(entry["time"])
+        duration = float(action["motion"]["duration_s"])
+        t1 = t0 + duration
+        inside = (times >= t0 - TIME_EPS) & (times <= t1 + TIME_EPS)
+        idx = np.flatnonzero(inside)
+        if len(idx) == 0 or abs(times[idx[0]] - t0) > TIME_EPS:
+            raise TrialFileError(f"{source or 'trial'}: no record at the start of the motion at {t0} s")
+        mt, mq, mv, ma = times[idx] - t0, q[idx], v[idx], a[idx]
+        if abs(mt[-1] - duration) > TIME_EPS:  # the end falls between records: the next record holds the end pose
+            nxt = idx[-1] + 1
+            if nxt >= len(times):
+                raise TrialFileError(f"{source or 'trial'}: the record ends before the motion at {t0} s does")
+            mt = np.append(mt, duration)
+            mq = np.vstack([mq, q[nxt]])
+            mv = np.vstack([mv, np.zeros(len(names))])
+            ma = np.vstack([ma, np.zeros(len(names))])
+        else:
+            mt[-1] = duration
+        mt[0] = 0.0
+        if rate is not None:
+            count = max(1, int(np.ceil(duration * rate - 1e-6)))  # samples k / rate < duration, then the end
+            new_t = np.append(np.arange(count) / rate, duration)
+            q_end = mq[-1].copy()
+            mq, mv, ma = quintic_hermite(mt, mq, mv, ma, new_t)
+            mq[-1], mv[-1], ma[-1] = q_end, 0.0, 0.0  # the end pose exactly, at rest
+            mt = new_t
+        events = []
+        for on, off in action["motion"].get("suction_intervals") or []:
+            events += [(float(on), True), (float(off), False)]
+        act = {k: action[k] for k in ("type", "object", "d", "dx", "dz") if k in action}
+        motions.append(Motion(t0, mt, mq, mv, ma, events, act, entry.get("poses_before"), list(entry.get("lost", []))))
+    metadata = {
+        "source": source, "config": data.get("config"), "station": data.get("station"),
+        "objects": data.get("objects"), "seed": data.get("seed"), "policy": data.get("policy"),
+        "rate_hz": rate, "samples": "trial records" if rate is None else f"resampled at {rate} Hz (quintic Hermite)",
+        "initial_positions": q[0].tolist(), "end_time": float(times[-1]),
+        "final_objects": data.get("final_objects"),
+    }
+    if scene is not None:
+        metadata["scene"] = scene_to_dict(scene)
+    return ExportedTrajectory(motions, metadata)
