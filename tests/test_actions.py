@@ -206,3 +206,16 @@ def test_suction_beyond_the_tube_is_not_reachable():
 def test_enumeration_is_deterministic():
     objs = (box("a", -0.15, -0.15), box("b", 0.10, -0.05, sx=0.12, yaw=0.4), cyl("c", 0.0, 0.18))
     assert model().enumerate(objs).feasible == model().enumerate(objs).feasible
+
+
+def test_hidden_slivers_narrower_than_the_smallest_object_do_not_count():
+    from slax_drake.policies.floor import open_with_disc
+
+    mask = np.zeros((40, 40), dtype=bool)
+    mask[5:30, 5:9] = True  # 4 cells (2 cm) wide: no 6 cm disc (radius 6 cells) fits
+    mask[5:25, 20:35] = True  # 15 x 20 cells: it does
+    opened = open_with_disc(mask, 6)
+    assert not opened[:, :10].any()
+    assert opened[11:19, 20:35].all() and opened[5:25, 26:29].all()  # all but the rounded corners
+    assert not (opened & ~mask).any()
+    assert (open_with_disc(mask, 0) == mask).all()

@@ -16,7 +16,7 @@ must touch no other object; exactly one object moves; no cell the object newly c
 camera by *another* object (:mod:`slax_drake.policies.floor`; ``hidden_space``: "3d", default, the point
 ``hidden_probe_height`` above the cell is not seen, i.e. an unseen object at least that tall could stand there;
 "overhead", the paper's 2D shadows of infinitely tall objects), counting only hidden space wide enough to hold an
-unseen object (``min_hidden_width``: a disc of the smallest object's size fits in it).
+unseen object (``min_hidden_width``: a disc of the smallest object's size fits in it, clear of known objects).
 
 Suction (q, d_x, d_z): the cup (``cup_diameter``) seals on the camera-facing side: a box's side face whose
 outward normal points most toward the camera (at least ``cup_diameter`` wide), or a cylinder's front (radius
@@ -465,6 +465,9 @@ class _StateContext:
                                for fp, e in ((fp, fp.extents()) for fp in self.all_fps)]).reshape(-1, 4)
         self.count = np.sum(shadows, axis=0) if shadows else np.zeros((grid.ny, grid.nx), dtype=int)
         self._radius_cells = int(math.floor(model.tool.min_hidden_width / 2 / grid.cell + 1e-9))
+        # cells under known objects hold no unseen object (only with min_hidden_width > 0, the strict
+        # variant keeps the overhead shadows whole)
+        self.occupied = np.any(self.masks, axis=0) if self.masks and self._radius_cells > 0 else None
         self.hidden_all = self._open(erode(self.count > 0))
         self._n = len(self.all_objs)
 
@@ -479,7 +482,11 @@ class _StateContext:
         return [j for j in range(self._n) if j != i and near[j]]
 
     def _open(self, mask: np.ndarray) -> np.ndarray:
-        return open_with_disc(mask, self._radius_cells) if self._radius_cells > 0 else mask
+        """Hidden space where an unseen object could stand: free of known objects, a disc
+        ``min_hidden_width`` wide fits (unchanged when min_hidden_width is 0)."""
+        if self._radius_cells <= 0:
+            return mask
+        return open_with_disc(mask & ~self.occupied if self.occupied is not None else mask, self._radius_cells)
 
     def hidden_others(self, i) -> np.ndarray:
         return self._open(erode((self.count - self.shadows[i]) > 0))
