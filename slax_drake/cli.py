@@ -21,6 +21,7 @@ COMMAND_MODULES = (
     "slax_drake.dataset.commands",
     "slax_drake.systems.commands",
     "slax_drake.systems.trial_commands",
+    "slax_drake.hardware.commands",
 )
 
 

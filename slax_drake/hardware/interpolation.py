@@ -42,3 +42,27 @@ def quintic_hermite(times, q, v, a, t_query):
         qs[before], vs[before], as_[before] = q[0], 0.0, 0.0
         qs[after], vs[after], as_[after] = q[-1], 0.0, 0.0
     return qs, vs, as_
+
+
+def resample(times, q, v, a, t_query):
+    """Resampling used by ``export --rate``: positions by :func:`quintic_hermite`; accelerations linearly between
+    samples (a jerk-limited profile's acceleration is piecewise linear, so this never exceeds the samples'
+    accelerations nor the largest jerk between them); velocities by integrating that acceleration from the left
+    sample, plus the linear correction that makes them meet the right sample (the trapezoid rule's error, at most
+    j_max dt^2 / 8 at a jerk switch), so they do not overshoot a saturated velocity."""
+    times = np.asarray(times, float)
+    q, v, a = (np.asarray(x, float) for x in (q, v, a))
+    t = np.asarray(t_query, float)
+    qs, _, _ = quintic_hermite(times, q, v, a, t)
+    if len(times) == 1:
+        return qs, np.zeros_like(qs), np.zeros_like(qs)
+    k = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 2)
+    h = (times[k + 1] - times[k])[:, None]
+    tau = np.clip((t - times[k])[:, None], 0.0, h)
+    a0, a1, v0, v1 = a[k], a[k + 1], v[k], v[k + 1]
+    as_ = a0 + (a1 - a0) * tau / h
+    v_end = v0 + 0.5 * (a0 + a1) * h
+    vs = v0 + a0 * tau + 0.5 * (a1 - a0) * tau * tau / h + (v1 - v_end) * tau / h
+    outside = (t < times[0]) | (t > times[-1])
+    vs[outside], as_[outside] = 0.0, 0.0
+    return qs, vs, as_

@@ -1,0 +1,148 @@
+"""``slax-drake export``, ``slax-drake check-trajectory`` and ``slax-drake replay``: a trial's motions for a real Fetch."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from slax_drake.hardware.trajectory_file import FORMATS
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "export", help="export a trial's executed motions as ROS JointTrajectory messages (JSON, YAML goals, CSV)",
+        description="Cut trial.json's executed trajectory into one JointTrajectory-shaped message per motion (joint "
+        "names as on the real Fetch plus tool_shaft_joint) with timed suction events. Without --rate the points "
+        "are the trial's own records; with --rate they are resampled (quintic positions, linear accelerations).")
+    p.add_argument("trial", help="trial.json written by 'slax-drake trial'")
+    p.add_argument("--format", choices=tuple(FORMATS), default=None,
+                   help="ros-json, ros-yaml (FollowJointTrajectory goals) or csv (default: from --out's extension)")
+    p.add_argument("--rate", type=float, default=None, help="resample at this rate in Hz (default: the trial's records)")
+    p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv)")
+    p.add_argument("--scene", default=None, help="scene JSON to embed (default: sampled again from the trial's config and seed)")
+    p.add_argument("--write-scene", default=None, help="also write the trial's initial scene as a scene JSON here")
+    p.set_defaults(func=run_export)
+
+    c = subparsers.add_parser(
+        "check-trajectory", help="check an exported trajectory against the real Fetch's limits and for collisions",
+        description="Independent of the planner: positions (with --margin), velocities, accelerations, jerk (finite "
+        "differences of the sampled accelerations), continuity within and between motions, collisions of the robot "
+        "with itself, the shelf and the scene's objects. Exit code 0 when all pass, 1 with a report otherwise.")
+    c.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv)")
+    c.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export, if any)")
+    c.add_argument("--station", default=None, help="station YAML (default: the trial's, or the scene's shelf's)")
+    c.add_argument("--margin", type=float, default=0.0, help="position margin inside the limits (rad, m for the torso)")
+    c.add_argument("--no-collision", action="store_true", help="skip the collision checks")
+    c.add_argument("--collision-step", type=float, default=0.005, help="seconds between checked configurations")
+    c.add_argument("--json", default=None, help="also write the report as JSON here")
+    c.set_defaults(func=run_check)
+
+    r = subparsers.add_parser(
+        "replay", help="play an exported trajectory open loop in the Drake station",
+        description="Feed the exported motions and suction events to the station (the trial's scene) and report the "
+        "final object poses; compares with the trial's final poses when the file carries them.")
+    r.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv)")
+    r.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export)")
+    r.add_argument("--station", default=None, help="station YAML (default: the trial's, or the scene's shelf's)")
+    r.add_argument("--html", default=None, help="write a self-contained Meshcat replay here")
+    r.add_argument("--meshcat", action="store_true", help="serve the live view on localhost and print its URL")
+    r.add_argument("--json", default=None, help="write the replayed final object poses as JSON here")
+    r.set_defaults(func=run_replay)
+
+
+def _scene_and_station(traj, scene_path, station_path):
+    from slax_drake.hardware.trajectory_file import TrajectoryFileError
+    from slax_drake.scene.io import load_scene, scene_from_dict
+    from slax_drake.systems.station import load_station_scenario
+    from slax_drake.systems.trial import station_for
+
+    if scene_path:
+        scene = load_scene(scene_path)
+    elif traj.metadata.get("scene"):
+        try:
+            scene = scene_from_dict(traj.metadata["scene"])
+        except Exception as e:  # noqa: BLE001 - any malformed embedded scene
+            raise TrajectoryFileError(f"the trajectory's embedded scene is malformed ({e}); pass --scene") from None
+    else:
+        scene = None
+    station = station_path or traj.metadata.get("station")
+    if station is None:
+        station = station_for(traj.metadata.get("config") or "sim_configs/sim_shelf.yaml")
+    return scene, load_station_scenario(station)
+
+
+def run_export(args: argparse.Namespace) -> int:
+    from slax_drake.hardware.export import export_trial, read_trial, trial_scene
+    from slax_drake.hardware.trajectory_file import format_of, save_trajectory
+    from slax_drake.scene.io import load_scene, save_scene
+
+    data = read_trial(args.trial)
+    fmt = args.format or format_of(args.out)
+    scene = load_scene(args.scene) if args.scene else trial_scene(data)
+    traj = export_trial(data, rate=args.rate, source=str(args.trial), scene=scene)
+    save_trajectory(traj, args.out, fmt)
+    if args.write_scene:
+        save_scene(scene, args.write_scene)
+    points = sum(len(m.times) for m in traj.motions)
+    events = sum(len(m.suction_events) for m in traj.motions)
+    print(f"wrote {args.out} ({fmt}): {len(traj.motions)} motions, {points} points, {events} suction events, "
+          f"{'trial records' if args.rate is None else f'{args.rate:g} Hz'}")
+    return 0
+
+
+def run_check(args: argparse.Namespace) -> int:
+    from slax_drake.hardware.check import check_trajectory
+    from slax_drake.hardware.collision import CollisionWorld
+    from slax_drake.hardware.trajectory_file import load_trajectory
+    from slax_drake.scene.io import write_text_atomic
+
+    traj = load_trajectory(args.trajectory)
+    world = None
+    if not args.no_collision:
+        scene, station = _scene_and_station(traj, args.scene, args.station)
+        q_ref = traj.metadata.get("initial_positions") or (traj.motions[0].q[0] if traj.motions else None)
+        world = CollisionWorld(station, scene, q_reference=q_ref)
+    report = check_trajectory(traj, world, margin=args.margin, collision_step=args.collision_step)
+    print(report.summary())
+    if args.json:
+        write_text_atomic(Path(args.json), json.dumps({
+            "ok": report.ok, "checked": report.checked,
+            "margins": {k: (None if v == float("inf") else v) for k, v in report.margins.items()},
+            "violations": [v.__dict__ for v in report.violations]}, indent=1))
+    return 0 if report.ok else 1
+
+
+def run_replay(args: argparse.Namespace) -> int:
+    from slax_drake.hardware.replay import compare_final_objects, replay
+    from slax_drake.hardware.trajectory_file import TrajectoryFileError, load_trajectory
+    from slax_drake.scene.io import write_text_atomic
+
+    traj = load_trajectory(args.trajectory)
+    scene, station = _scene_and_station(traj, args.scene, args.station)
+    if scene is None:
+        raise TrajectoryFileError(f"{args.trajectory} embeds no scene: pass --scene (export --write-scene writes one)")
+    meshcat = None
+    if args.meshcat or args.html:
+        from pydrake.geometry import Meshcat
+
+        meshcat = Meshcat()
+        if args.meshcat:
+            print(f"meshcat: {meshcat.web_url()}", flush=True)
+    result = replay(traj, station, scene, meshcat=meshcat)
+    print(f"replayed {len(traj.motions)} motions: {result.sim_time:.2f} s simulated in {result.wall_s:.1f} s")
+    recorded = traj.metadata.get("final_objects")
+    diffs = compare_final_objects(result.final_objects, recorded) if recorded else {}
+    for name, p in result.final_objects.items():
+        line = f"  {name}: x {p['x']:+.4f} y {p['y']:+.4f} z {p['z']:+.4f} m, yaw {p['yaw']:+.3f} rad"
+        if name in diffs:
+            line += f"; {diffs[name]['xyz_m'] * 1000:.2f} mm from the trial's final pose"
+        print(line)
+    if args.html and result.html:
+        Path(args.html).parent.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(Path(args.html), result.html)
+        print(f"wrote {args.html}")
+    if args.json:
+        write_text_atomic(Path(args.json), json.dumps({"final_objects": result.final_objects, "difference": diffs,
+                                                       "sim_time_s": result.sim_time}, indent=1))
+    return 0
