@@ -5,9 +5,9 @@ motions), every ``stride``-th 1 ms sample (10 ms by default), rounded to 1e-6. E
 decision time (``steps_log[*].time`` of the entries with an action) and lasts ``actions[*].motion.duration_s``;
 its suction command is on over ``actions[*].motion.suction_intervals`` (seconds from the motion's start).
 
-Export cuts the record into motions: the samples from the motion's start to its end; when the end (a multiple of
-1 ms) falls between two records, the end point is added from the next record (the robot holds still there, so
-its position is exact, velocity and acceleration zero). With ``rate=None`` the points are the trial's own
+Export cuts the record into motions: the samples from the motion's start to its end; when the start or the end
+(multiples of 1 ms) falls between two records, the point is added from the record before the start or after the
+end (the robot holds still there, so its position is exact, velocity and acceleration zero). With ``rate=None`` the points are the trial's own
 samples (nothing is interpolated: a replay feeds exactly what the trial recorded). With a rate (Hz) each motion
 is resampled at t = k / rate from its start, plus its end point (:func:`slax_drake.hardware.interpolation.resample`):
 positions by quintic Hermite interpolation of the recorded positions, velocities and accelerations (on a Ruckig
@@ -99,9 +99,15 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
         t1 = t0 + duration
         inside = (times >= t0 - TIME_EPS) & (times <= t1 + TIME_EPS)
         idx = np.flatnonzero(inside)
-        if len(idx) == 0 or abs(times[idx[0]] - t0) > TIME_EPS:
-            raise TrialFileError(f"{source or 'trial'}: no record at the start of the motion at {t0} s")
+        if len(idx) == 0:
+            raise TrialFileError(f"{source or 'trial'}: no record during the motion at {t0} s")
         mt, mq, mv, ma = times[idx] - t0, q[idx], v[idx], a[idx]
+        if abs(mt[0]) > TIME_EPS:  # the start falls between records: the robot holds the previous record's pose
+            if idx[0] == 0:
+                raise TrialFileError(f"{source or 'trial'}: the record starts after the motion at {t0} s")
+            zero = np.zeros((1, len(names)))
+            mt, mq = np.append(0.0, mt), np.vstack([q[idx[0] - 1], mq])
+            mv, ma = np.vstack([zero, mv]), np.vstack([zero, ma])
         if abs(mt[-1] - duration) > TIME_EPS:  # the end falls between records: the next record holds the end pose
             nxt = idx[-1] + 1
             if nxt >= len(times):

@@ -1,0 +1,156 @@
+"""slax-drake export: trial.json -> per-motion JointTrajectory messages in three formats, strict parsing back."""
+
+import json
+
+import numpy as np
+import pytest
+from test_export_helpers import fake_trial
+
+from slax_drake.cli import main
+from slax_drake.hardware.export import export_trial
+from slax_drake.hardware.fetch_limits import FETCH_JOINTS
+from slax_drake.hardware.trajectory_file import TrajectoryFileError, load_trajectory, save_trajectory
+
+
+@pytest.fixture(scope="module")
+def trial():
+    return fake_trial()
+
+
+def _same(a, b, time_tol=0.0):
+    assert len(a.motions) == len(b.motions)
+    for m1, m2 in zip(a.motions, b.motions):
+        assert m1.start_time == m2.start_time
+        np.testing.assert_allclose(m2.times, m1.times, rtol=0, atol=time_tol)
+        for x in ("q", "v", "a"):
+            np.testing.assert_array_equal(getattr(m2, x), getattr(m1, x))
+        assert [(pytest.approx(t, abs=time_tol), on) for t, on in m1.suction_events] == m2.suction_events
+        assert m2.action == m1.action
+
+
+@pytest.mark.parametrize("ext,time_tol", [(".json", 0.0), (".yaml", 1e-9), (".csv", 0.0)])
+def test_every_format_parses_back(trial, tmp_path, ext, time_tol):
+    traj = export_trial(trial)
+    path = tmp_path / f"traj{ext}"
+    save_trajectory(traj, path)
+    back = load_trajectory(path)
+    assert back.joint_names == FETCH_JOINTS
+    _same(traj, back, time_tol)
+
+
+def test_motions_cut_at_decision_times_with_exact_end_points(trial):
+    traj = export_trial(trial)
+    full = trial["full_trajectory"]
+    assert [m.start_time for m in traj.motions] == [e["time"] for e in trial["steps_log"]]
+    for m, action in zip(traj.motions, trial["actions"]):
+        assert m.duration == pytest.approx(action["motion"]["duration_s"], abs=1e-9)
+        # every point equals the 1 ms trajectory at its time (records rounded to 1e-6)
+        k = np.rint((m.times + m.start_time) / 0.001).astype(int)
+        np.testing.assert_allclose(m.q, full.q[k], atol=1e-6, rtol=0)
+        np.testing.assert_allclose(m.v[[0, -1]], 0.0, atol=1e-6)
+    assert traj.motions[1].suction_events == [(0.27, True), (0.63, False)]
+    assert traj.motions[0].suction_events == []
+
+
+def test_rate_resamples_on_a_uniform_clock_and_keeps_records(trial):
+    native = export_trial(trial)
+    for rate in (100.0, 1000.0):
+        traj = export_trial(trial, rate=rate)
+        full = trial["full_trajectory"]
+        for m0, m in zip(native.motions, traj.motions):
+            assert m.times[-1] == m0.times[-1]
+            np.testing.assert_allclose(np.diff(m.times[:-1]), 1.0 / rate, atol=1e-12)
+            k = np.rint((m.times + m.start_time) / 0.001).astype(int)
+            # quintic positions: within 2e-6 of the exact 1 ms profile (the records are rounded to 1e-6)
+            np.testing.assert_allclose(m.q, full.q[k], atol=2e-6, rtol=0)
+        if rate == 100.0:  # the 10 ms records themselves, except where the start was not on a record
+            np.testing.assert_allclose(traj.motions[0].q, native.motions[0].q, atol=1e-12, rtol=0)
+
+
+def test_yaml_is_a_follow_joint_trajectory_goal(trial, tmp_path):
+    import yaml
+
+    path = tmp_path / "t.yaml"
+    save_trajectory(export_trial(trial), path)
+    doc = yaml.safe_load(path.read_text())
+    goal = doc["motions"][0]["goal"]
+    assert set(goal) == {"trajectory", "path_tolerance", "goal_tolerance", "goal_time_tolerance"}
+    assert goal["trajectory"]["joint_names"] == list(FETCH_JOINTS)
+    p = goal["trajectory"]["points"][1]
+    assert p["time_from_start"] == {"secs": 0, "nsecs": 10_000_000}
+    assert len(p["positions"]) == len(p["velocities"]) == len(p["accelerations"]) == 9
+
+
+def _write_bad(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize("ext", [".json", ".yaml", ".csv"])
+def test_truncated_files_give_clear_errors(trial, tmp_path, ext):
+    good = tmp_path / f"good{ext}"
+    save_trajectory(export_trial(trial), good)
+    text = good.read_text()
+    for cut in (0.3, 0.6, 0.95):
+        bad = _write_bad(tmp_path, f"bad{ext}", text[: int(len(text) * cut)])
+        with pytest.raises(TrajectoryFileError, match="bad"):
+            load_trajectory(bad)
+
+
+def test_corrupt_content_errors(trial, tmp_path):
+    doc = json.loads(json.dumps(json.loads(_json(trial, tmp_path))))
+    cases = {
+        "wrong joint names": lambda d: d["joint_names"].__setitem__(0, "torso_joint"),
+        "wrong message joints": lambda d: d["motions"][0]["trajectory"]["joint_names"].reverse(),
+        "non-monotonic": lambda d: d["motions"][0]["trajectory"]["points"][5].__setitem__("time_from_start", 0.01),
+        "nan": lambda d: d["motions"][0]["trajectory"]["points"][3].__setitem__("positions", [None] * 9),
+        "short vector": lambda d: d["motions"][1]["trajectory"]["points"][3]["velocities"].pop(),
+        "overlap": lambda d: d["motions"][1].__setitem__("start_time", 0.6),
+        "format": lambda d: d.__setitem__("format", "other"),
+    }
+    messages = {}
+    for name, edit in cases.items():
+        d = json.loads(json.dumps(doc))
+        edit(d)
+        p = _write_bad(tmp_path, "c.json", json.dumps(d))
+        with pytest.raises(TrajectoryFileError) as e:
+            load_trajectory(p)
+        messages[name] = str(e.value)
+    assert "torso_joint" in messages["wrong joint names"]
+    assert "not strictly increasing" in messages["non-monotonic"]
+    assert "not monotonic" in messages["overlap"]
+    with pytest.raises(TrajectoryFileError, match="no such file"):
+        load_trajectory(tmp_path / "missing.json")
+    with pytest.raises(TrajectoryFileError, match="extension"):
+        load_trajectory(_write_bad(tmp_path, "x.txt", "1"))
+
+
+def _json(trial, tmp_path):
+    p = tmp_path / "ref.json"
+    save_trajectory(export_trial(trial), p)
+    return p.read_text()
+
+
+def test_cli_export_and_bad_input_exit_codes(trial, tmp_path, capsys):
+    data = {k: v for k, v in trial.items() if k != "full_trajectory"}
+    src = tmp_path / "trial.json"
+    src.write_text(json.dumps(data))
+    scene = tmp_path / "scene.json"
+    from slax_drake.config import load_scenario
+    from slax_drake.scene.io import save_scene
+    from slax_drake.scene.sampling import sample_scene
+
+    save_scene(sample_scene(load_scenario("sim_configs/sim_shelf.yaml"), 2, seed=3), scene)
+    for fmt, ext in (("ros-json", "json"), ("ros-yaml", "yaml"), ("csv", "csv")):
+        out = tmp_path / f"t.{ext}"
+        assert main(["export", str(src), "--format", fmt, "--rate", "100", "--scene", str(scene), "--out", str(out)]) == 0
+        assert len(load_trajectory(out).motions) == 2
+    src.write_text(json.dumps(data)[:-200])
+    capsys.readouterr()
+    assert main(["export", str(src), "--out", str(tmp_path / "u.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not valid JSON" in err[0]
+    bad = _write_bad(tmp_path, "b.csv", "# something else\n")
+    assert main(["check-trajectory", str(bad), "--no-collision"]) == 2
+    assert main(["replay", str(bad)]) == 2
