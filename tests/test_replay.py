@@ -15,7 +15,7 @@ def test_replay_source_feeds_the_points_and_the_suction_events():
     full = trial["full_trajectory"]
     for m in traj.motions:
         for t, q in zip(m.times + m.start_time, m.q):
-            np.testing.assert_array_equal(source.command(t)[0], q)
+            np.testing.assert_allclose(source.command(t)[0], q, atol=1e-12, rtol=0)
     # between records too: the 1 ms trajectory within 2e-6 (quintic Hermite of the 10 ms records)
     ts = np.arange(0.0, full.times[-1], 0.003)
     commanded = np.array([source.command(t)[0] for t in ts])
