@@ -22,7 +22,7 @@ def test_replay_source_feeds_the_points_and_the_suction_events():
     k = np.rint(ts / 0.001).astype(int)
     np.testing.assert_allclose(commanded, full.q[k], atol=2e-6, rtol=0)
     m = traj.motions[1]
-    on = [source.command(m.start_time + s)[2] for s in (0.0, 0.269, 0.27, 0.5, 0.629, 0.63, 0.8)]
+    on = [source.command(m.start_time + s)[2] for s in (0.0, 0.269, 0.2705, 0.5, 0.6295, 0.6305, 0.8)]
     assert on == [False, False, True, True, True, False, False]
 
 
