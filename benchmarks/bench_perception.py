@@ -3,9 +3,16 @@ batch of 32, training images per second on the CPU (all of torch's threads and o
 sees one. Uses the shipped model (or --model); timings on a shared machine are noisy, so medians are printed.
 
     python benchmarks/bench_perception.py [--model PATH] [--repeats 50] [--train-steps 20]
+
+With ``--policy-gap N`` it instead runs Bluction-DAR on the Table I protocol's first N scenes per density with
+ground-truth and with learned distributions (the learned model plugged into the policies' registry exactly as
+the one-line hook in ``make_distribution_model`` would), and prints both success rates:
+
+    python benchmarks/bench_perception.py --policy-gap 10 --out results/perception_gap [--workers 1]
 """
 
 import argparse
+import json
 import statistics
 import time
 
@@ -56,12 +63,52 @@ def train_images_per_second(config, device: torch.device, threads: int | None, s
     return steps * batch / (time.perf_counter() - t)
 
 
+def policy_gap(model_path: str, scenes: int, out: str, config: str = "sim_configs/table1.yaml") -> None:
+    from pathlib import Path
+
+    import slax_drake.policies.registry as registry
+    from slax_drake.config import load_scenario
+    from slax_drake.perception.distribution_model import LearnedDistribution
+    from slax_drake.policies.benchmark import run_benchmark
+
+    ground_truth = registry.make_distribution_model
+
+    def with_learned(perception, target_size):
+        if perception == "learned":
+            return LearnedDistribution(target_size, model=model_path)
+        return ground_truth(perception, target_size)
+
+    registry.make_distribution_model = with_learned
+    scenario = load_scenario(config)
+    rows = {}
+    for perception in ("ground-truth", "learned"):
+        t = time.perf_counter()
+        table = run_benchmark(scenario, ["bluction-dar"], scenes, scenario.protocol.seed, Path(out) / perception,
+                              workers=1, perception=perception, progress=False)
+        rows[perception] = table["policies"]["bluction-dar"]
+        print(f"{perception:>12}: " + ", ".join(
+            f"{k}: {100 * (v['success_rate'] or 0):.0f}%"
+            for k, v in rows[perception].items()) + f"  ({time.perf_counter() - t:.0f} s)", flush=True)
+    # Per-trial comparison on the same scenes.
+    trials = {p: {(t["density"], t["seed"]): t["success"] for t in
+                  json.loads((Path(out) / p / "table1.json").read_text())["trials"]} for p in rows}
+    both = trials["ground-truth"].keys() & trials["learned"].keys()
+    lost = sum(trials["ground-truth"][k] and not trials["learned"][k] for k in both)
+    gained = sum(trials["learned"][k] and not trials["ground-truth"][k] for k in both)
+    print(f"same scenes: {len(both)}; solved with ground truth only: {lost}; with learned only: {gained}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", default=DEFAULT_MODEL)
     parser.add_argument("--repeats", type=int, default=50)
     parser.add_argument("--train-steps", type=int, default=20)
+    parser.add_argument("--policy-gap", type=int, metavar="N", help="Bluction-DAR success, ground truth vs learned")
+    parser.add_argument("--out", default="results/perception_gap", help="trial folder for --policy-gap")
     args = parser.parse_args()
+    if args.policy_gap:
+        policy_gap(args.model, args.policy_gap, args.out)
+        return
     model = load_weights(args.model)
     cfg = model.config
     params = sum(p.numel() for p in model.network.parameters())

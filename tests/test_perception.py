@@ -195,11 +195,9 @@ def test_bad_weight_files_fail_with_one_clear_line(tmp_path):
         load_weights(other)
     with pytest.raises(WeightFileError, match="model takes 32x24 depth images, but 64x48 images are given"):
         load_weights(good, expected_resolution=(64, 48))
-    for err in (WeightFileError,):
-        try:
-            load_weights(truncated)
-        except err as e:
-            assert "\n" not in str(e)
+    with pytest.raises(WeightFileError) as info:
+        load_weights(truncated)
+    assert "\n" not in str(info.value) and str(truncated) in str(info.value)
 
 
 def test_tiny_network_overfits_eight_samples(tiny_data):
