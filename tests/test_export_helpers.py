@@ -14,9 +14,11 @@ from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.systems.robot import PLANNED_JOINTS, joint_limits
 from slax_drake.systems.station import load_station_scenario, observation_positions
 
-# A configuration the planner reached in 'slax-drake trial --objects 2 --seed 7' (push, t = 3.13 s into the first
-# motion): the forearm and wrist boxes lie inside the torso_lift_link box by up to 45 mm.
-FOLDED_INTO_TORSO = [0.2935, -0.3044, 1.1968, -2.2676, -2.251, -1.5126, 2.0833, 1.0869, 0.0]
+# The arm swung right (pan at its limit) and folded back at the elbow: the forearm, wrist and tool lie inside the
+# torso column (models/fetch_bluction.urdf's torso_lift_link: column + shoulder mount) by 35 to 127 mm. (The pose
+# the planner once reached in 'slax-drake trial --objects 2 --seed 7', inside the former whole-bounding-box torso,
+# is in front of the refined column.)
+FOLDED_INTO_TORSO = [0.192, 1.6, -0.5961, -1.4248, -2.25, -2.5026, 1.0495, -0.8012, 0.0]
 
 
 def q_observation() -> np.ndarray:

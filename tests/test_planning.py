@@ -164,3 +164,69 @@ def test_planning_is_deterministic(setup, motions):
     assert again.feasible
     assert np.array_equal(again.trajectory.q, motion.trajectory.q)
     assert np.array_equal(again.trajectory.times, motion.trajectory.times)
+
+
+@pytest.mark.parametrize("kind", ["push", "suction"])
+def test_trajectory_keeps_the_joint_limit_margin(motions, kind):
+    """IK keeps LIMIT_MARGIN inside the position limits and the straight timed segments keep it (the hardware
+    checker's 'check-trajectory --margin 0.01' passes)."""
+    from slax_drake.hardware.check import check_trajectory
+    from slax_drake.hardware.trajectory_file import ExportedTrajectory, Motion
+    from slax_drake.planning.ik import LIMIT_MARGIN
+
+    assert LIMIT_MARGIN >= 0.01
+    traj = motions[1][kind].trajectory
+    lim = joint_limits()
+    limited = np.isfinite(lim.position_lower)
+    q = traj.q[:, limited]
+    assert np.all(q >= lim.position_lower[limited] + LIMIT_MARGIN - 1e-6)
+    assert np.all(q <= lim.position_upper[limited] - LIMIT_MARGIN + 1e-6)
+    exported = ExportedTrajectory([Motion(start_time=0.0, times=traj.times, q=traj.q, v=traj.v, a=traj.a)])
+    report = check_trajectory(exported, margin=0.01)
+    assert not report.by_kind()["position"], report.summary()
+
+
+def test_self_collision_is_checked_and_avoided(setup):
+    """A configuration with the forearm in the torso column collides in the planning world (self-collision);
+    the straight joint line from the observation pose through it is refused and free_path finds a way around."""
+    from test_export_helpers import FOLDED_INTO_TORSO
+
+    from slax_drake.planning.free_path import free_path
+    from slax_drake.planning.ik import LIMIT_MARGIN
+
+    station, planner, scene, _ = setup
+    world = _world(station, scene)
+    folded = np.array(FOLDED_INTO_TORSO)
+    assert not world.config_free(folded)
+    assert any("itself" in b for b in world.colliding_bodies(folded))
+    q_obs = observation_positions(station)
+    assert world.config_free(q_obs)
+    # a goal beyond the torso: mirror the observation pose's shoulder pan; the straight way sweeps the arm
+    # through the torso or itself for this one, so the RRT is exercised
+    goal = q_obs.copy()
+    goal[1] = -q_obs[1]
+    goal[4] = -q_obs[4]
+    assert world.config_free(goal) and not world.edge_free(q_obs, goal)
+    path = free_path(world, q_obs, goal, joint_limits(), LIMIT_MARGIN, seed=0)
+    assert path is not None and np.array_equal(path[0], q_obs) and np.array_equal(path[-1], goal)
+    assert all(world.edge_free(a, b) for a, b in zip(path[:-1], path[1:]))
+    again = free_path(world, q_obs, goal, joint_limits(), LIMIT_MARGIN, seed=0)
+    assert len(again) == len(path) and all(np.array_equal(a, b) for a, b in zip(again, path))
+
+
+def test_timed_segment_stays_on_its_straight_line():
+    """Large multi-joint segments (where Ruckig's phase synchronisation falls back to time synchronisation) are
+    still timed on the straight line, within every joint's limits."""
+    from slax_drake.planning.timing import time_segment
+
+    lim = joint_limits()
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        qa = rng.uniform(-1.0, 1.0, len(lim.names)) * np.array([0.1, 1, 1, 3, 1, 3, 1, 3, 1]) + np.array([0.15] + [0.0] * 8)
+        qb = qa + rng.uniform(-1.0, 1.0, len(lim.names)) * np.array([0.1, 1, 1, 3.5, 1, 3.5, 1, 3.5, 2])
+        t, q, v, a = time_segment(qa, qb, lim.velocity, lim.acceleration, lim.jerk)
+        d = qb - qa
+        s = (q - qa) @ d / (d @ d)
+        assert np.abs(q - (qa + s[:, None] * d)).max() < 1e-9
+        assert s.min() >= -1e-12 and s.max() <= 1 + 1e-12
+        assert np.all(np.abs(v) <= lim.velocity * (1 + 1e-9)) and np.all(np.abs(a) <= lim.acceleration * (1 + 1e-9))

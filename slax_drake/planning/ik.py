@@ -1,10 +1,11 @@
 """Inverse kinematics of a tool frame pose with Drake's InverseKinematics (SNOPT from the pip wheel).
 
 One solve places a tool frame (``blade_face_frame`` or ``cup_tip_frame``) at a pose in the shelf frame S
-within ``position_tolerance`` metres (a box) and ``angle_tolerance`` radians, within the joint limits, with the
-head and the tool shaft locked (the shaft angle is given: ``SHAFT_BLADE_DOWN`` or ``SHAFT_BLADE_UP``; it
+within ``position_tolerance`` metres (a box) and ``angle_tolerance`` radians, ``LIMIT_MARGIN`` inside the joint
+limits, with the head and the tool shaft locked (the shaft angle is given: ``SHAFT_BLADE_DOWN`` or ``SHAFT_BLADE_UP``; it
 turns about the same axis as the wrist roll, so leaving it free would make the problem redundant) and, when
-``min_distance`` is given, every robot-environment distance above it (AddMinimumDistanceLowerBoundConstraint).
+``min_distance`` is given, every unfiltered distance (robot-environment, and between non-adjacent robot links)
+above it (AddMinimumDistanceLowerBoundConstraint).
 The cost keeps the solution near the warm start (the previous waypoint's configuration), so consecutive
 waypoints along a path give neighbouring configurations.
 """
@@ -16,8 +17,29 @@ import numpy as np
 from slax_drake.systems import robot as robot_model
 
 POSITION_TOLERANCE = 5e-4  # m
+# Joint-limit margin: every planned configuration keeps this far inside the position limits of the limited
+# joints (rad for revolute joints, m for the torso), so that the trajectories pass the hardware checker's
+# ``check-trajectory --margin 0.01``; solved with LIMIT_SOLVER_SLACK more to absorb the solver's tolerance.
+# Rest-to-rest Ruckig segments move on the straight line between their ends (no overshoot), so the margin of
+# the waypoints holds along the whole trajectory (the planner verifies it after timing).
+LIMIT_MARGIN = 0.01
+LIMIT_SOLVER_SLACK = 1e-4
 ANGLE_TOLERANCE = 0.01  # rad
 CONTINUOUS_JOINTS = ("upperarm_roll_joint", "forearm_roll_joint", "wrist_roll_joint")
+
+
+def margin_limits(plant, robot, margin: float):
+    """(lower, upper) of the plant's positions shrunk by ``margin`` for the robot's limited joints (planned and
+    head); +-inf elsewhere. The head is locked during IK and only needs its own value inside the range."""
+    lower = np.full(plant.num_positions(), -np.inf)
+    upper = np.full(plant.num_positions(), np.inf)
+    for name in robot_model.PLANNED_JOINTS:
+        joint = plant.GetJointByName(name, robot)
+        lo, hi = joint.position_lower_limits()[0], joint.position_upper_limits()[0]
+        if np.isfinite(lo) and np.isfinite(hi):
+            lower[joint.position_start()] = lo + margin
+            upper[joint.position_start()] = hi - margin
+    return lower, upper
 
 
 def solve_tool_pose(world, frame: str, X_S_target, q_guess, shaft: float, min_distance: float | None = None,
@@ -49,6 +71,10 @@ def solve_tool_pose(world, frame: str, X_S_target, q_guess, shaft: float, min_di
     for name in CONTINUOUS_JOINTS:  # unbounded joints: stay within half a turn of the warm start
         i = plant.GetJointByName(name, world.robot).position_start()
         prog.AddBoundingBoxConstraint(q0[i] - np.pi, q0[i] + np.pi, q[i])
+    lower, upper = margin_limits(plant, world.robot, LIMIT_MARGIN + LIMIT_SOLVER_SLACK)
+    limited = np.isfinite(lower) & np.isfinite(upper)
+    prog.AddBoundingBoxConstraint(lower[limited], upper[limited], q[limited])
+    q0 = np.clip(q0, np.where(limited, lower, -np.inf), np.where(limited, upper, np.inf))
     prog.AddQuadraticErrorCost(np.eye(len(q0)), q0, q)
     prog.SetInitialGuess(q, q0)
     result = Solve(prog)

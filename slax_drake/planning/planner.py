@@ -3,14 +3,18 @@
 :meth:`MotionPlanner.plan` (action, scene as it stands, start configuration):
 
 1. tool waypoints of the action (:func:`slax_drake.planning.waypoints.action_waypoints`);
-2. IK per waypoint (:func:`slax_drake.planning.ik.solve_tool_pose`), warm-started from the previous one; the
+2. IK per waypoint (:func:`slax_drake.planning.ik.solve_tool_pose`, ``LIMIT_MARGIN`` inside the position
+   limits), warm-started from the previous one; the
    first from the start configuration and a few fixed seeds. A solution that collides is solved again with a
    minimum-distance constraint;
 3. each straight tool segment is refined: where the joint-space straight line between two solutions moves the
    tool more than ``deviation_tolerance`` from the Cartesian segment, the midpoint is solved and inserted;
-4. every joint segment (the free ones from the start and back to the observation pose included) is checked
-   densely with SceneGraphCollisionChecker against the world as it stands (padding 2 mm; the tool may touch
-   the manipulated object only on the action's contact segments);
+4. the free segments from the start to the first waypoint and from the last one back to the observation pose
+   are straight when that is collision-free, else found by :func:`slax_drake.planning.free_path.free_path`
+   (RRT-Connect around the robot itself); every joint segment is checked
+   densely with SceneGraphCollisionChecker against the world as it stands and against the robot itself
+   (:mod:`slax_drake.planning.world`: padding 2 mm to the environment, 3 mm between non-adjacent links; the
+   tool may touch the manipulated object only on the action's contact segments);
 5. Ruckig times the chain rest to rest (:mod:`slax_drake.planning.timing`), with dwells at rest where the
    waypoints ask for them; the suction command is on during the segments that carry the object.
 
@@ -25,7 +29,8 @@ import time
 
 import numpy as np
 
-from slax_drake.planning.ik import solve_tool_pose
+from slax_drake.planning.free_path import free_path
+from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import ToolWaypoint, action_waypoints
@@ -41,7 +46,8 @@ MAX_REFINE_DEPTH = 6
 NUM_RANDOM_SEEDS = 12
 SEED_LIBRARY_SEED = 0
 MAX_FIRST_SOLUTIONS = 3
-MIN_DISTANCE = 0.004  # m, IK's robot-environment distance when the unconstrained solution collides
+MIN_DISTANCE = 0.004  # m, IK's robot-environment and self distance when the unconstrained solution collides
+FREE_PATH_SEED = 0
 
 
 @dataclasses.dataclass
@@ -147,14 +153,18 @@ class MotionPlanner:
             if self._free(world, q, timings):
                 return q
             found_colliding = q
-        if found_colliding is not None and not wp.contact:
-            for guess in guesses[:1]:
-                q = self._ik(world, wp, guess, timings, min_distance=MIN_DISTANCE)
-                if q is not None and self._free(world, q, timings):
-                    return q
+        if found_colliding is not None:
+            world.ik_tool_contact(name, wp.contact)
+            try:
+                for guess in guesses[:1]:
+                    q = self._ik(world, wp, guess, timings, min_distance=MIN_DISTANCE)
+                    if q is not None and self._free(world, q, timings):
+                        return q
+            finally:
+                world.ik_tool_contact(name, False)
         if found_colliding is not None:
             hits = ", ".join(world.colliding_bodies(found_colliding)) or "the environment"
-            raise _Reject(f"{wp.label}: every IK solution collides with {hits}")
+            raise _Reject(f"{wp.label}: every IK solution collides: {hits}")
         raise _Reject(f"{wp.label}: tool pose out of reach (no IK solution)")
 
     def _seeds(self, q_start):
@@ -220,7 +230,18 @@ class MotionPlanner:
             max_dev = max(max_dev, dev)
             chain.extend((q, b.contact, b.suction, None) for q in inner)
             chain.append((qs[k], b.contact, b.suction, b))
-        chain.append((self.q_observation.copy(), False, False, None))
+        # Free segments from the start and back to the observation pose: straight, or around the robot itself.
+        t0 = time.perf_counter()
+        world.allow_tool_contact(name, False)
+        to_first = free_path(world, q_start, qs[0], self.limits, LIMIT_MARGIN, seed=FREE_PATH_SEED)
+        back = free_path(world, qs[-1], self.q_observation, self.limits, LIMIT_MARGIN, seed=FREE_PATH_SEED)
+        timings["check_s"] += time.perf_counter() - t0
+        if to_first is None:
+            raise _Reject(f"{waypoints[0].label}: no collision-free way from the start")
+        if back is None:
+            raise _Reject("no collision-free way back to the observation pose")
+        chain[1:1] = [(q, False, False, None) for q in to_first[1:-1]]
+        chain.extend((q, False, False, None) for q in back[1:])
         # 4. Dense collision checks of every joint segment.
         segments = []
         t0 = time.perf_counter()
@@ -257,6 +278,13 @@ class MotionPlanner:
         if on_since is not None:
             suction.append((on_since, float(traj.times[-1])))
         timings["timing_s"] += time.perf_counter() - t0
+        # The joint-limit margin of IK holds along the timed trajectory (straight rest-to-rest segments); the
+        # start configuration, which the planner does not choose, may only be as close to a limit as it is.
+        lower = np.minimum(lim.position_lower + LIMIT_MARGIN, q_start)
+        upper = np.maximum(lim.position_upper - LIMIT_MARGIN, q_start)
+        outside = np.flatnonzero(np.any((traj.q < lower - 1e-9) | (traj.q > upper + 1e-9), axis=0))
+        if len(outside):
+            raise _Reject(f"{lim.names[outside[0]]} comes within {LIMIT_MARGIN} of its position limit")
         return PlannedMotion(action, traj, [(round(float(a), 6), round(float(b), 6)) for a, b in suction],
                              waypoint_times, float(max_dev), {}, segments)
 

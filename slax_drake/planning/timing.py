@@ -1,9 +1,9 @@
 """Time a chain of joint waypoints with Ruckig (community edition), one rest-to-rest segment at a time.
 
 Each segment starts and ends at rest (zero velocity and acceleration) and is computed by Ruckig's offline
-``calculate`` under the per-joint velocity, acceleration and jerk limits, with phase synchronisation, which
-makes a rest-to-rest motion a straight line in joint space (so the geometric path that the planner checked is
-the path that is executed). ``intermediate_positions`` is never set: that feature needs Ruckig's web service.
+``calculate`` as a one-dimensional profile of the path parameter along the straight line in joint space, under
+the per-joint velocity, acceleration and jerk limits (so the geometric path that the planner checked is the
+path that is executed, and no joint overshoots its ends). ``intermediate_positions`` is never set: that feature needs Ruckig's web service.
 """
 
 from __future__ import annotations
@@ -21,42 +21,46 @@ class TimingError(UserError):
 
 
 def time_segment(q0, q1, velocity, acceleration, jerk, dt: float = SAMPLE_PERIOD):
-    """Samples (t, q, v, a) at period dt of the rest-to-rest Ruckig motion q0 -> q1 (arrays per joint).
+    """Samples (t, q, v, a) at period dt of the rest-to-rest motion q0 -> q1 (arrays per joint) on the straight
+    line between them.
 
-    The last sample lies exactly at the segment's end (duration rounded up to a multiple of dt, where the
-    profile holds at rest)."""
-    from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
+    Ruckig times the path parameter s in [0, 1] (q = q0 + s (q1 - q0)) under the tightest of the joints' limits
+    divided by their travel, so every joint stays within its own velocity, acceleration and jerk limits and the
+    motion never leaves the line (Ruckig's multi-joint phase synchronisation, which would give the same
+    profile, silently falls back to time synchronisation, off the line, when it cannot synchronise). The last
+    sample lies exactly at the segment's end (duration rounded up to a multiple of dt, where the profile holds at
+    rest)."""
+    from ruckig import InputParameter, Result, Ruckig, Trajectory
 
     q0 = np.asarray(q0, float)
     q1 = np.asarray(q1, float)
     n = len(q0)
     if np.allclose(q0, q1, atol=1e-12, rtol=0.0):
         return np.zeros(1), q0[None, :].copy(), np.zeros((1, n)), np.zeros((1, n))
-    otg = Ruckig(n)
-    inp = InputParameter(n)
-    inp.current_position = q0.tolist()
-    inp.current_velocity = [0.0] * n
-    inp.current_acceleration = [0.0] * n
-    inp.target_position = q1.tolist()
-    inp.target_velocity = [0.0] * n
-    inp.target_acceleration = [0.0] * n
-    inp.max_velocity = np.asarray(velocity, float).tolist()
-    inp.max_acceleration = np.asarray(acceleration, float).tolist()
-    inp.max_jerk = np.asarray(jerk, float).tolist()
-    inp.synchronization = Synchronization.Phase
-    traj = Trajectory(n)
+    d = q1 - q0
+    moving = np.abs(d) > 0.0
+    travel = np.abs(d[moving])
+    otg = Ruckig(1)
+    inp = InputParameter(1)
+    inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
+    inp.target_position, inp.target_velocity, inp.target_acceleration = [1.0], [0.0], [0.0]
+    inp.max_velocity = [float(np.min(np.asarray(velocity, float)[moving] / travel))]
+    inp.max_acceleration = [float(np.min(np.asarray(acceleration, float)[moving] / travel))]
+    inp.max_jerk = [float(np.min(np.asarray(jerk, float)[moving] / travel))]
+    traj = Trajectory(1)
     result = otg.calculate(inp, traj)
     if result not in (Result.Working, Result.Finished):
         raise TimingError(f"Ruckig failed to time a segment: {result}")
     duration = traj.duration
     steps = int(np.ceil(duration / dt - 1e-9))
     t = np.arange(steps + 1) * dt
-    q = np.empty((steps + 1, n))
-    v = np.empty((steps + 1, n))
-    a = np.empty((steps + 1, n))
+    sv = np.empty((steps + 1, 3))
     for k, tk in enumerate(t):
         p, vel, acc = traj.at_time(min(tk, duration))
-        q[k], v[k], a[k] = p, vel, acc
+        sv[k] = p[0], vel[0], acc[0]
+    q = q0 + sv[:, :1] * d
+    v = sv[:, 1:2] * d
+    a = sv[:, 2:3] * d
     q[-1], v[-1], a[-1] = q1, 0.0, 0.0
     return t, q, v, a
 

@@ -7,8 +7,10 @@ collision shape. The plant's positions are the robot's alone (planned joints and
 
 Collision semantics (the same for IK and for the checker):
 - robot vs environment (shelf panels and objects) is checked with ``padding`` metres of margin;
-- the robot's links are not checked against each other, as in the station (its primitive link boxes overlap at
-  the joints); the tool's tube stays out of the arm by the tool waypoints' geometry;
+- robot vs robot (self-collision) is checked with ``self_padding`` metres of margin, except between links joined
+  by a joint (the plant's adjacency filter; the primitive link boxes overlap at the joints) and the pairs of
+  ``NESTED_PAIRS`` (the telescoping torso). The station itself does not simulate self-contact: the planner
+  is what keeps the arm out of the torso and out of itself;
 - during an action's contact phases, the tool link (tube, blade, cup) is allowed to touch the manipulated
   object: :meth:`PlanningWorld.allow_tool_contact` toggles that single pair in the checker.
 """
@@ -22,6 +24,10 @@ from slax_drake.systems import robot as robot_model
 from slax_drake.systems.station import SHELF_BODY, StationScenario, _base_weld, shelf_pose
 
 PADDING = 0.002  # m, robot-environment margin of the collision checker
+SELF_PADDING = 0.003  # m, margin between non-adjacent robot links
+# Robot link pairs that overlap by design and are never checked against each other: the torso lift link slides
+# over the fixed torso column (they are siblings on base_link, so the plant's adjacency filter misses them).
+NESTED_PAIRS = (("torso_fixed_link", "torso_lift_link"),)
 EDGE_STEP = 0.005  # rad (weighted joint distance) between checked configurations along a segment
 
 
@@ -29,7 +35,7 @@ class PlanningWorld:
     """A frozen world for planning (see the module docstring). Frames: world W = the station's world."""
 
     def __init__(self, scenario: StationScenario, scene: Scene, include_target: bool = False,
-                 padding: float = PADDING, edge_step: float = EDGE_STEP):
+                 padding: float = PADDING, edge_step: float = EDGE_STEP, self_padding: float = SELF_PADDING):
         from pydrake.geometry import Box, CollisionFilterDeclaration, Cylinder, GeometrySet, ProximityProperties
         from pydrake.math import RigidTransform
         from pydrake.multibody.tree import SpatialInertia
@@ -59,9 +65,13 @@ class PlanningWorld:
             self.object_bodies[obj.name] = body
         plant.Finalize()
         scene_graph = builder.scene_graph()
-        robot_geometries = [g for b in plant.GetBodyIndices(robot) for g in plant.GetCollisionGeometriesForBody(plant.get_body(b))]
-        scene_graph.collision_filter_manager().Apply(
-            CollisionFilterDeclaration().ExcludeWithin(GeometrySet(robot_geometries)))
+        # Self-collision: the plant already filters bodies joined by a joint (adjacent links) and bodies welded
+        # together; the pairs that nest by design (the telescoping torso) are filtered here.
+        decl = CollisionFilterDeclaration()
+        for a, b in NESTED_PAIRS:
+            decl.ExcludeBetween(GeometrySet(plant.GetCollisionGeometriesForBody(plant.GetBodyByName(a, robot))),
+                                GeometrySet(plant.GetCollisionGeometriesForBody(plant.GetBodyByName(b, robot))))
+        scene_graph.collision_filter_manager().Apply(decl)
         self.robot = robot
         self.planned_indices = robot_model.planned_joint_indices(plant, robot)
         self.head_indices = np.array([plant.GetJointByName(n, robot).position_start() for n in robot_model.HEAD_JOINTS])
@@ -69,8 +79,9 @@ class PlanningWorld:
         diagram = builder.Build()
         self.checker = SceneGraphCollisionChecker(
             model=diagram, robot_model_instances=[robot], edge_step_size=edge_step,
-            env_collision_padding=padding, self_collision_padding=0.0,
+            env_collision_padding=padding, self_collision_padding=self_padding,
         )
+        self.self_padding = self_padding
         self.padding = padding
         self.diagram = self.checker.model()
         self.plant = self.checker.plant()
@@ -78,6 +89,9 @@ class PlanningWorld:
         # A context of our own for IK and forward kinematics.
         self.diagram_context = self.diagram.CreateDefaultContext()
         self.plant_context = self.plant.GetMyMutableContextFromRoot(self.diagram_context)
+        self.scene_graph = self.checker.model().scene_graph()
+        self.scene_graph_context = self.scene_graph.GetMyMutableContextFromRoot(self.diagram_context)
+        self._ik_filter = None
         self.frames = {name: self.plant.GetFrameByName(name, robot) for name in
                        (robot_model.BLADE_FACE_FRAME, robot_model.CUP_TIP_FRAME, robot_model.CAMERA_FRAME)}
 
@@ -104,6 +118,21 @@ class PlanningWorld:
             return
         self.checker.SetCollisionFilteredBetween(self.tool_body, self.object_bodies[name], allowed)
 
+    def ik_tool_contact(self, name: str | None, allowed: bool) -> None:
+        """The same as :meth:`allow_tool_contact` for IK's distance constraint (a transient collision filter in
+        this world's own SceneGraph context, which IK queries)."""
+        from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
+
+        manager = self.scene_graph.collision_filter_manager(self.scene_graph_context)
+        if self._ik_filter is not None:
+            manager.RemoveDeclaration(self._ik_filter)
+            self._ik_filter = None
+        if allowed and name in self.object_bodies:
+            tool = self.plant.GetCollisionGeometriesForBody(self.tool_body)
+            obj = self.plant.GetCollisionGeometriesForBody(self.object_bodies[name])
+            self._ik_filter = manager.ApplyTransient(
+                CollisionFilterDeclaration().ExcludeBetween(GeometrySet(tool), GeometrySet(obj)))
+
     def config_free(self, q_planned) -> bool:
         return bool(self.checker.CheckConfigCollisionFree(self.full_q(q_planned)))
 
@@ -111,15 +140,15 @@ class PlanningWorld:
         return bool(self.checker.CheckEdgeCollisionFree(self.full_q(q0), self.full_q(q1)))
 
     def colliding_bodies(self, q_planned) -> list[str]:
-        """Names of the environment bodies the robot touches (within the padding) at q."""
+        """Names of the robot bodies in collision (within the paddings) at q, each with what it touches
+        ("environment", "itself" or both)."""
         from pydrake.planning import RobotCollisionType
 
         types = self.checker.ClassifyBodyCollisions(self.full_q(q_planned))
-        names = []
-        for i, t in enumerate(types):
-            if t in (RobotCollisionType.kEnvironmentCollision, RobotCollisionType.kEnvironmentAndSelfCollision):
-                names.append(self.plant.get_body(self.plant.get_body(_body_index(i)).index()).name())
-        return names
+        what = {RobotCollisionType.kEnvironmentCollision: "environment",
+                RobotCollisionType.kSelfCollision: "itself",
+                RobotCollisionType.kEnvironmentAndSelfCollision: "environment and itself"}
+        return [f"{self.plant.get_body(_body_index(i)).name()} ({what[t]})" for i, t in enumerate(types) if t in what]
 
 
 def _body_index(i: int):
