@@ -69,11 +69,15 @@ class JointTrajectory:
         """The same samples with times starting at t0."""
         return dataclasses.replace(self, times=self.times - self.times[0] + t0)
 
-    def to_dict(self, stride: int = 1) -> dict:
-        """JSON-ready: every ``stride``-th sample and the last one (rounded to 1e-6)."""
+    def to_dict(self, stride: int = 1, keep_times=()) -> dict:
+        """JSON-ready: every ``stride``-th sample, the last one and the samples at ``keep_times`` (s; e.g. where
+        motions start), rounded to 1e-6."""
         idx = np.arange(0, len(self.times), stride)
         if len(self.times) and idx[-1] != len(self.times) - 1:
             idx = np.append(idx, len(self.times) - 1)
+        if len(self.times) and len(keep_times):
+            keep = np.clip(np.searchsorted(self.times, np.asarray(keep_times, float) - 1e-9), 0, len(self.times) - 1)
+            idx = np.union1d(idx, keep)
         r = lambda x: np.round(x[idx], 6).tolist()  # noqa: E731
         return {"joint_names": list(self.names), "times": r(self.times), "positions": r(self.q),
                 "velocities": r(self.v), "accelerations": r(self.a)}

@@ -5,7 +5,7 @@ the shelf simulator for the same config, object count and seed), builds the diag
 ``desired_state`` and ``suction_command`` from the planner; the planner reads ``measured_state``,
 ``depth_image``, ``label_image`` and ``body_poses``), simulates until the planner is done, and returns a
 :class:`TrialRecord` (success, steps, cost, actions with outcome and timings, supports, the executed joint
-trajectory, final object poses). :func:`write_trial` writes ``trial.json``, per-step PNGs and the HTML replay.
+trajectory, final object poses). :func:`write_trial` writes ``trial.json``, ``scene.json`` (the initial scene), per-step PNGs and the HTML replay.
 """
 
 from __future__ import annotations
@@ -48,6 +48,7 @@ class TrialRecord:
     data: dict
     step_images: list  # (step, depth, labels, history, p1d)
     html: str | None = None
+    scene: object = None  # the trial's initial Scene (written as scene.json)
 
 
 def station_for(config: str) -> str:
@@ -170,10 +171,12 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         "initial_objects": {o.name: {"x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                      "yaw": round(float(o.yaw), 5)} for o in scene.objects},
         "final_objects": final,
-        "executed_trajectory": trajectory.to_dict(stride=opts.stride),
-        "executed_trajectory_note": f"the commanded (planned) joint trajectory, every {opts.stride} ms",
+        "executed_trajectory": trajectory.to_dict(stride=opts.stride,
+                                                  keep_times=[t for t, _ in planner_system.motions]),
+        "executed_trajectory_note": f"the commanded (planned) joint trajectory, every {opts.stride} ms and at the "
+                                    "first commanded sample of each motion",
     }
-    return TrialRecord(data, steps, html)
+    return TrialRecord(data, steps, html, scene)
 
 
 def _executed_trajectory(planner_system, t_end: float):
@@ -194,13 +197,16 @@ def _executed_trajectory(planner_system, t_end: float):
 
 
 def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -> list[Path]:
-    """Writes trial.json, step_<k>.png per decision, and the HTML replay (when recorded)."""
-    from slax_drake.scene.io import write_bytes_atomic, write_text_atomic
+    """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, and the HTML replay."""
+    from slax_drake.scene.io import save_scene, write_bytes_atomic, write_text_atomic
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "trial.json"]
     write_text_atomic(out / "trial.json", json.dumps(record.data, indent=1))
+    if record.scene is not None:
+        save_scene(record.scene, out / "scene.json")
+        written.append(out / "scene.json")
     for step, depth, labels, history, p1d in record.step_images:
         path = out / f"step_{step:02d}.png"
         write_bytes_atomic(path, _step_png(step, depth, labels, history, p1d))
