@@ -41,6 +41,9 @@ class TrialOptions:
     out: str | None = "out/trial"
     max_sim_time: float | None = None  # default: 40 s per allowed action + 5 s
     stride: int = 10  # trial.json keeps every stride-th 1 ms sample of the executed trajectory
+    sleep: bool = False  # lock resting objects out of the physics step (slax_drake.systems.sleep.ObjectSleep)
+    target_size: tuple | None = None  # (x, y, z) m; default: drawn from the scenario's target sizes
+    horizon: int | None = None  # actions at most; default: 2 per object
 
 
 @dataclasses.dataclass
@@ -79,8 +82,9 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     station_path = opts.station or station_for(opts.config)
     station = load_station_scenario(station_path)
     t0 = time.perf_counter()
-    scene = sample_scene(scenario, opts.objects, seed=opts.seed)
-    horizon = 2 * opts.objects
+    target_size = None if opts.target_size is None else tuple(float(v) for v in opts.target_size)
+    scene = sample_scene(scenario, opts.objects, seed=opts.seed, target_size=target_size)
+    horizon = opts.horizon if opts.horizon is not None else 2 * opts.objects
     policy = make_policy(opts.policy, scenario, perception=opts.perception, horizon=horizon)
     if not hasattr(policy, "decide") or not hasattr(policy, "distribution"):
         raise TrialError(f"policy '{opts.policy}' cannot run in a Drake trial (it needs the true scene: an oracle)")
@@ -108,6 +112,10 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     diagram = builder.Build()
     simulator = Simulator(diagram)
     simulator.set_target_realtime_rate(0.0)
+    if opts.sleep:
+        from slax_drake.systems.sleep import ObjectSleep
+
+        ObjectSleep(station_diagram).install(simulator)
     setup_s = time.perf_counter() - t0
     if meshcat is not None:
         meshcat.StartRecording(frames_per_second=30.0)
@@ -133,7 +141,9 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         X = (X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.get_body(b))).GetAsMatrix4()
         final[o.name] = {"x": round(float(X[0, 3]), 5), "y": round(float(X[1, 3]), 5), "z": round(float(X[2, 3]), 5),
                          "yaw": round(math.atan2(X[1, 0], X[0, 0]), 5),
-                         "upright": bool(abs(X[2, 2]) > math.cos(math.radians(20.0)))}
+                         "upright": bool(abs(X[2, 2]) > math.cos(math.radians(20.0))),
+                         "inside": bool(abs(X[0, 3]) < scene.shelf.width / 2 and abs(X[1, 3]) < scene.shelf.depth / 2
+                                        and -0.02 < X[2, 3] < scene.shelf.height)}
     actions = []
     for entry in planner_system.log:
         if "action" not in entry:
@@ -161,7 +171,7 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         "steps": len(actions),
         "cost": round(n_push + scenario.protocol.suction_cost * n_suction, 6),
         "config": opts.config, "station": station_path, "objects": opts.objects, "seed": opts.seed,
-        "policy": opts.policy, "perception": opts.perception, "horizon": horizon,
+        "policy": opts.policy, "perception": opts.perception, "horizon": horizon, "sleep": opts.sleep,
         "visible_fraction": round(planner_system.visible_fraction, 4),
         "sim_time_s": round(sim_time, 3), "wall_s": round(wall, 3), "setup_s": round(setup_s, 3),
         "real_time_factor": round(sim_time / wall, 4) if wall > 0 else None,

@@ -25,6 +25,9 @@ def register(subparsers) -> None:
     p.add_argument("--html", default=None, help="write a self-contained Meshcat replay (e.g. out/trial.html)")
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
     p.add_argument("--max-sim-time", type=float, default=None, help="simulated seconds at most")
+    p.add_argument("--sleep", action="store_true",
+                   help="lock resting objects out of the physics step until something comes near (faster; "
+                   "see slax_drake/systems/sleep.py)")
     p.set_defaults(func=run)
 
 
@@ -33,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
 
     opts = TrialOptions(config=args.config, objects=args.objects, seed=args.seed, policy=args.policy,
                         perception=args.perception, station=args.station, meshcat=args.meshcat, html=args.html,
-                        out=args.out, max_sim_time=args.max_sim_time)
+                        out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep)
     meshcat = None
     if args.meshcat or args.html:
         from pydrake.geometry import Meshcat
