@@ -1,0 +1,97 @@
+"""The physics benchmark: a tiny run (one 2-object scene) writes physics.json/physics.md with the schema, resumes
+from its per-scene file, refuses bad requests and corrupt files; the prediction-match rule."""
+
+import json
+import math
+
+import pytest
+
+from slax_drake.policies.benchmark import scene_seed
+from slax_drake.systems.physics_benchmark import (
+    PhysicsBenchmarkError, action_matches, main, run_physics_benchmark, trial_path,
+)
+
+CONFIG = "sim_configs/sim_shelf.yaml"
+TINY = dict(policies=["bluction-dar"], scenes_per_density=1, seed=3, densities=[2], progress=False)
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    out = tmp_path_factory.mktemp("physics")
+    return run_physics_benchmark(CONFIG, out=out, **TINY), out
+
+
+def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
+    summary, out = tiny
+    on_disk = json.loads((out / "physics.json").read_text())
+    assert on_disk["policies"] == summary["policies"]
+    assert set(on_disk["policies"]["bluction-dar"]) == {"2", "all"}
+    e = on_disk["policies"]["bluction-dar"]["2"]
+    assert e["trials"] == 1
+    for key in ("shelf_success_rate", "drake_success_rate", "same_outcome_rate"):
+        assert e[key] in (0.0, 1.0)
+    assert 0 <= e["actions_matched"] <= e["actions_judged"]
+    assert e["toppled"] >= 0 and e["dropped"] >= 0
+    (row,) = on_disk["trials"]
+    assert row["seed"] == scene_seed(3, 2, 0)
+    assert on_disk["meta"]["densities"] == [2] and on_disk["meta"]["scenes_per_density"] == 1
+    md = (out / "physics.md").read_text()
+    assert md.startswith("| Policy | Objects |") and "| bluction-dar | 2 | 1 |" in md
+
+    scene = json.loads(trial_path(out, "bluction-dar", 2, 0).read_text())
+    drake = scene["drake"]
+    assert drake["steps"] == len(drake["actions"]) <= 4
+    assert e["drake_success_rate"] == float(drake["success"])
+    assert e["actions_judged"] == sum(a["matched"] is not None for a in drake["actions"])
+    for a in drake["actions"]:
+        assert a["matched"] == action_matches(a["predicted"], a["outcome"])
+    assert set(drake["final_objects"]) == {"object_0", "object_1"}
+
+
+def test_shelf_side_is_the_shelf_benchmarks_scene(tiny):
+    """The shelf simulator result in the file is the one of the shelf benchmark's scene for that seed."""
+    from slax_drake.config import load_scenario
+    from slax_drake.policies.registry import make_policy
+    from slax_drake.policies.simulator import run_trial
+    from slax_drake.scene.sampling import sample_scene
+
+    _, out = tiny
+    scenario = load_scenario(CONFIG)
+    scene = sample_scene(scenario, 2, scene_seed(3, 2, 0), target_size=tuple(scenario.target.sizes[0]))
+    expected = run_trial(scene, make_policy("bluction-dar", scenario, perception="ground-truth", horizon=4), 4)
+    shelf = json.loads(trial_path(out, "bluction-dar", 2, 0).read_text())["shelf"]
+    assert (shelf["success"], shelf["steps"], shelf["actions"]) == (expected.success, expected.steps, expected.actions)
+
+
+def test_rerun_resumes_from_the_scene_file(tiny):
+    summary, out = tiny
+    again = run_physics_benchmark(CONFIG, out=out, **TINY)
+    assert again["policies"] == summary["policies"]
+    assert again["meta"]["wall_seconds_this_run"] < 1.0  # nothing was rerun: the file was read
+
+
+def test_corrupt_scene_file_is_refused(tiny, tmp_path):
+    _, out = tiny
+    path = trial_path(tmp_path, "bluction-dar", 2, 0)
+    path.parent.mkdir(parents=True)
+    path.write_text('{"shelf": ')
+    with pytest.raises(PhysicsBenchmarkError, match="unreadable result file"):
+        run_physics_benchmark(CONFIG, out=tmp_path, **TINY)
+
+
+def test_bad_requests_exit_with_code_2(capsys, tmp_path):
+    assert main(["--config", CONFIG, "--policies", "oracle-p", "--out", str(tmp_path)]) == 2
+    assert "cannot run in a Drake trial" in capsys.readouterr().err
+    assert main(["--config", CONFIG, "--policies", "nonsense", "--out", str(tmp_path)]) == 2
+    assert "unknown policy 'nonsense'" in capsys.readouterr().err
+    assert main(["--config", CONFIG, "--scenes-per-density", "0", "--out", str(tmp_path)]) == 2
+    assert main(["--config", CONFIG, "--densities", "2,x", "--out", str(tmp_path)]) == 2
+    assert main(["--config", "no/such.yaml", "--out", str(tmp_path)]) == 2
+
+
+def test_action_matches_within_2_cm_and_10_deg():
+    p = {"x": 0.1, "y": 0.0, "yaw": math.pi - 0.01}
+    assert action_matches(p, {"x": 0.1 + 0.019, "y": 0.0, "yaw": -math.pi + 0.05}) is True  # yaw wraps around pi
+    assert action_matches(p, {"x": 0.1, "y": 0.021, "yaw": p["yaw"]}) is False
+    assert action_matches(p, {"x": 0.1, "y": 0.0, "yaw": p["yaw"] - math.radians(11)}) is False
+    assert action_matches(p, None) is None
