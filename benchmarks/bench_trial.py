@@ -2,9 +2,13 @@
 
     python benchmarks/bench_trial.py                 # the default trial (3 objects, seed 7)
     python benchmarks/bench_trial.py --objects 6 --seed 2
+    python benchmarks/bench_trial.py --sleep         # with object sleep (slax_drake/systems/sleep.py)
+
+Prints the load average too: the real-time factor depends on what else runs on the machine.
 """
 
 import argparse
+import os
 
 import numpy as np
 
@@ -16,12 +20,15 @@ def main():
     parser.add_argument("--objects", type=int, default=DEFAULT_OBJECTS)
     parser.add_argument("--seed", type=int, default=DEFAULT_SEED)
     parser.add_argument("--policy", default="bluction-dar")
+    parser.add_argument("--sleep", action="store_true", help="lock resting objects out of the physics step")
     args = parser.parse_args()
-    d = run_trial(TrialOptions(objects=args.objects, seed=args.seed, policy=args.policy)).data
-    print(f"{args.objects} objects, seed {args.seed}, {args.policy}: success {d['success']} ({d['result']}), "
-          f"{d['steps']} actions, cost {d['cost']}")
+    load_before = os.getloadavg()[0]
+    d = run_trial(TrialOptions(objects=args.objects, seed=args.seed, policy=args.policy, sleep=args.sleep)).data
+    print(f"{args.objects} objects, seed {args.seed}, {args.policy}, sleep {'on' if args.sleep else 'off'}: "
+          f"success {d['success']} ({d['result']}), {d['steps']} actions, cost {d['cost']}")
     print(f"simulated {d['sim_time_s']:.1f} s in {d['wall_s']:.1f} s wall: real-time factor {d['real_time_factor']:.2f} "
-          f"(setup {d['setup_s']:.1f} s)")
+          f"(setup {d['setup_s']:.1f} s); 1-min load average {load_before:.2f} before, {os.getloadavg()[0]:.2f} after "
+          f"on {os.cpu_count()} cores")
     for a in d["actions"]:
         t = a["motion"]["timings"]
         print(f"  {a['type']:>7} {a['object']}: planning {t['total_s'] * 1000:.0f} ms (world {t['world_s'] * 1000:.0f}, "
