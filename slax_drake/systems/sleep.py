@@ -4,7 +4,9 @@ Most of a station step is spent building and solving the contact problem of obje
 board. ``ObjectSleep`` locks the floating joint of such an object (Drake's ``Joint.Lock``: the discrete solver
 drops its six velocities and treats it as fixed, its velocities are set to zero) and unlocks it as soon as
 something could touch it. With 10 objects at rest this made the station about 2x faster (see
-benchmarks/bench_station.py).
+benchmarks/bench_station.py). In full trials with 2-3 objects it made the trial slower instead (the Python
+monitor runs every step; `python benchmarks/bench_trial.py [--sleep]`), so ``slax-drake trial`` uses it only with
+``--sleep``; the outcome was the same (same actions, final poses within 0.03 mm on the 2-object seed-7 trial).
 
 Rules, checked every ``check_period`` seconds of simulated time from a Simulator monitor:
 
