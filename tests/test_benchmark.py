@@ -37,8 +37,8 @@ def test_corrupt_trial_file_is_a_user_error(sim_scenario, tmp_path, capsys):
 def test_cli_rejects_bad_requests(capsys):
     assert main(["benchmark", "--policies", "nope", "--out", "/tmp/unused"]) == 2
     assert "unknown policy 'nope'" in capsys.readouterr().err
-    assert main(["benchmark", "--perception", "learned", "--out", "/tmp/unused"]) == 2
-    assert "not implemented yet" in capsys.readouterr().err
+    assert main(["benchmark", "--physics", "--policies", "oracle-p", "--out", "/tmp/unused"]) == 2
+    assert "non-oracle policies only" in capsys.readouterr().err
 
 
 @pytest.mark.slow

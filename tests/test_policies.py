@@ -38,13 +38,26 @@ def test_policies_act_only_on_seen_objects(sim_scenario):
         assert action.name in {o.name for o in obs.known}
 
 
-def test_unknown_policy_and_learned_perception_are_user_errors(sim_scenario):
+def test_unknown_policy_and_unknown_perception_are_user_errors(sim_scenario):
     from slax_drake.errors import UserError
 
     with pytest.raises(UserError, match="unknown policy"):
         make_policy("nope", sim_scenario)
-    with pytest.raises(UserError, match="not implemented yet"):
-        make_policy("dar", sim_scenario, perception="learned")
+    with pytest.raises(UserError, match="unknown perception 'psychic'"):
+        make_policy("dar", sim_scenario, perception="psychic")
+
+
+def test_learned_perception_plugs_into_the_policies(sim_scenario):
+    """--perception learned: the shipped network predicts the 1D distribution of a believed scene."""
+    from slax_drake.perception.distribution_model import LearnedDistribution
+    from slax_drake.policies.distribution import make_distribution_model
+
+    model = make_distribution_model("learned", (0.06, 0.06, 0.06))
+    assert isinstance(model, LearnedDistribution)
+    scene = sample_scene(sim_scenario, 6, 2)
+    p = model.distribution(scene)
+    assert p.ndim == 1 and np.all(p >= 0) and p.sum() == pytest.approx(1.0, abs=1e-4)
+    assert (p > 0).sum() < p.size  # the network's support is cut, not the whole image width
 
 
 def test_lookahead_policy_is_deterministic(sim_scenario):

@@ -70,12 +70,17 @@ class GroundTruthDistribution(DistributionModel):
 
 
 def make_distribution_model(perception: str, target_size) -> DistributionModel:
+    """The policies' distribution model: ``ground-truth`` (compute_occupancy on the believed scene) or ``learned``
+    (the shipped perception network on the believed scene's depth image)."""
     if perception == "ground-truth":
         return GroundTruthDistribution(target_size)
+    if perception == "learned":
+        from slax_drake.perception.distribution_model import LearnedDistribution
+
+        return LearnedDistribution(target_size)
     from slax_drake.errors import UserError
 
-    raise UserError(f"perception '{perception}' is not implemented yet (only 'ground-truth'; the learned "
-                    "network arrives with the perception issue)")
+    raise UserError(f"unknown perception '{perception}' (known: {', '.join(PERCEPTION_MODES)})")
 
 
 def state_key(objects) -> tuple:
