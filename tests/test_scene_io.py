@@ -113,3 +113,14 @@ def test_save_is_atomic_and_keeps_old_file_on_failure(tmp_path, sim_scenario, mo
         save_scene(sample_scene(sim_scenario, 4, 2), path)
     assert path.read_text() == before
     assert [p.name for p in tmp_path.iterdir()] == ["scene.json"]
+
+
+def test_atomic_writes_get_the_ordinary_file_mode(tmp_path, sim_scenario):
+    """mkstemp creates 0600 files; a saved scene must be as readable as any other new file (0666 less umask)."""
+    import os
+
+    umask = os.umask(0)
+    os.umask(umask)
+    path = tmp_path / "scene.json"
+    save_scene(sample_scene(sim_scenario, 3, 1), path)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask

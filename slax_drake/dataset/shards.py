@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.errors import UserError
+from slax_drake.scene.io import set_default_file_mode
 
 # The paper's three target aspect ratios (x, y, z in metres), in the order of the network's heads.
 TARGET_SIZES = ((0.06, 0.06, 0.03), (0.06, 0.06, 0.06), (0.06, 0.06, 0.12))
@@ -82,6 +83,7 @@ def write_shard(path: Path, samples: list[Sample]) -> None:
             f.create_dataset("scene_json", data=[s.scene_json for s in samples], dtype=h5py.string_dtype())
             f.attrs["count"] = n
             f.attrs["target_sizes"] = json.dumps(TARGET_SIZES)
+        set_default_file_mode(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

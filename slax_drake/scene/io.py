@@ -141,10 +141,19 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
+        set_default_file_mode(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def set_default_file_mode(path) -> None:
+    """Gives a temporary file (mkstemp makes it 0600) the mode an ordinary new file would get (0666 less the
+    umask), so that atomically written outputs are as readable as any other file the user writes."""
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(path, 0o666 & ~umask)
 
 
 def _rounded(value):
