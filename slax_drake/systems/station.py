@@ -39,6 +39,8 @@ import typing
 from pathlib import Path
 
 import numpy as np
+from pydrake.multibody.parsing import ModelDirective
+from pydrake.multibody.plant import MultibodyPlantConfig
 
 from slax_drake.config import REPO_ROOT, load_scenario
 from slax_drake.errors import ConfigError, UserError
@@ -57,8 +59,6 @@ class SceneMismatchError(UserError):
 
 
 def _default_plant_config():
-    from pydrake.multibody.plant import MultibodyPlantConfig
-
     return MultibodyPlantConfig(time_step=0.005, contact_model="point", discrete_contact_approximation="lagged")
 
 
@@ -72,8 +72,8 @@ class StationScenario:
     """
 
     scene_config: str = "sim_configs/sim_shelf.yaml"
-    directives: typing.List[typing.Any] = dataclasses.field(default_factory=list)
-    plant_config: typing.Any = dataclasses.field(default_factory=_default_plant_config)
+    directives: typing.List[ModelDirective] = dataclasses.field(default_factory=list)
+    plant_config: MultibodyPlantConfig = dataclasses.field(default_factory=_default_plant_config)
     robot_model: str = "fetch"
     shelf_model: str = "shelf"
     observation_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
@@ -85,20 +85,6 @@ class StationScenario:
 def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:
     """Reads a station YAML; raises ConfigError naming the file on a missing file or a bad key/value."""
     from pydrake.common.yaml import yaml_load_typed
-    from pydrake.multibody.parsing import ModelDirective
-    from pydrake.multibody.plant import MultibodyPlantConfig
-
-    @dataclasses.dataclass
-    class _Schema:  # the same fields, with Drake's types for the typed loader
-        scene_config: str = "sim_configs/sim_shelf.yaml"
-        directives: typing.List[ModelDirective] = dataclasses.field(default_factory=list)
-        plant_config: MultibodyPlantConfig = dataclasses.field(default_factory=_default_plant_config)
-        robot_model: str = "fetch"
-        shelf_model: str = "shelf"
-        observation_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
-        head_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
-        suction: SuctionParameters = dataclasses.field(default_factory=SuctionParameters)
-        camera: bool = True
 
     path = Path(path)
     if not path.is_file() and not path.is_absolute() and (REPO_ROOT / path).is_file():
@@ -106,10 +92,9 @@ def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario
     if not path.is_file():
         raise ConfigError(f"{path}: no such station file")
     try:
-        raw = yaml_load_typed(schema=_Schema, filename=str(path), defaults=_Schema())
+        scenario = yaml_load_typed(schema=StationScenario, filename=str(path), defaults=StationScenario())
     except Exception as e:
         raise ConfigError(f"{path}: {' '.join(str(e).split())}") from None
-    scenario = StationScenario(**{f.name: getattr(raw, f.name) for f in dataclasses.fields(_Schema)})
     _validate(scenario, str(path))
     return scenario
 
