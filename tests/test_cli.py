@@ -56,3 +56,13 @@ def test_console_script_reports_bad_config_with_exit_2(tmp_path):
     assert proc.stderr.strip().endswith("key 'shelf.width' = -1.0: must be a positive number")
     assert "Traceback" not in proc.stderr
     assert not (tmp_path / "s.json").exists()
+
+
+def test_unwritable_output_is_a_one_line_error(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    code = main(["scene", "--objects", "3", "--out", str(blocker / "scene.json")])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "Traceback" not in err and err.count("\n") == 1
+    assert str(blocker) in err

@@ -103,8 +103,10 @@ def load_weights(path: str | Path | None = None, expected_resolution: tuple[int,
     try:
         blob = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # truncated zip, not a torch file, pickled code, ...
-        reason = " ".join(str(e).split())[:160]
-        raise WeightFileError(f"{path}: not a readable weight file (truncated or corrupt?): {reason}") from None
+        # torch's own text here is advice about `weights_only`, which misleads more than it helps.
+        raise WeightFileError(
+            f"{path}: not a readable weight file (truncated or corrupt? torch.load raised {type(e).__name__})"
+        ) from None
     if not isinstance(blob, dict) or not isinstance(blob.get("header"), dict) or "state_dict" not in blob:
         raise WeightFileError(f"{path}: not a slax-drake perception weight file (no header/state_dict)")
     header = blob["header"]
