@@ -219,3 +219,28 @@ def test_hidden_slivers_narrower_than_the_smallest_object_do_not_count():
     assert opened[11:19, 20:35].all() and opened[5:25, 26:29].all()  # all but the rounded corners
     assert not (opened & ~mask).any()
     assert (open_with_disc(mask, 0) == mask).all()
+
+
+def test_disc_opening_equals_the_union_of_fitting_discs():
+    """OpenCV's opening against the definition: a cell is kept when some disc lying entirely inside the mask
+    (cells beyond the raster's edge are outside) covers it."""
+    from slax_drake.policies.floor import disc_offsets, open_with_disc, shift_mask
+
+    rng = np.random.default_rng(3)
+    for radius in (1, 3, 6):
+        kept = 0
+        for _ in range(5):
+            # blocks of free cells with holes, so discs of every radius fit in some places and not in others
+            mask = np.kron(rng.random((8, 9)) < 0.6, np.ones((5, 5), dtype=bool))[:37, :45]
+            mask &= rng.random(mask.shape) < 0.98
+            offsets = disc_offsets(radius)
+            centres = mask.copy()
+            for dr, dc in offsets:
+                centres &= shift_mask(mask, -dr, -dc)
+            expected = np.zeros_like(mask)
+            for dr, dc in offsets:
+                expected |= shift_mask(centres, dr, dc)
+            assert (open_with_disc(mask, radius) == expected).all()
+            kept += int(expected.sum())
+        assert kept > 0
+
