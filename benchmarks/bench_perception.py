@@ -129,6 +129,11 @@ def main() -> None:
         ips = train_images_per_second(cfg, torch.device("cpu"), t, args.train_steps)
         print(f"training, CPU, {t} thread(s), batch 16: {ips:7.1f} images/s")
     if torch.cuda.is_available():
+        gpu = OccupancyPredictor(model, num_threads=1, device="cuda")
+        ms_gpu1 = median_ms(lambda: gpu.predict(depth[0]), args.repeats)
+        ms_gpu32 = median_ms(lambda: gpu.predict(depth), args.repeats) / 32
+        print(f"inference, GPU ({torch.cuda.get_device_name()}), 1 image: {ms_gpu1:7.2f} ms/image; "
+              f"batch 32: {ms_gpu32:7.3f} ms/image (with host copies)")
         ips = train_images_per_second(cfg, torch.device("cuda"), None, args.train_steps * 5)
         print(f"training, GPU ({torch.cuda.get_device_name()}), batch 16: {ips:7.1f} images/s")
     else:

@@ -8,6 +8,7 @@ calibrated thresholds (``support_threshold_2d / (H*W)`` per pixel, ``support_thr
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from pathlib import Path
 
@@ -31,13 +32,18 @@ class PredictedOccupancy:
 
 
 class OccupancyPredictor:
-    """Runs a loaded model on depth images; thread count fixed at construction (one core by default)."""
+    """Runs a loaded model on depth images; thread count fixed at construction (one core by default).
+
+    ``device`` ("cpu", "cuda", ...) is where the network runs; inputs and outputs stay numpy on the CPU."""
 
     def __init__(self, model: LoadedModel | str | Path | None = None, num_threads: int | None = 1,
-                 batch_size: int = 32):
+                 batch_size: int = 32, device: str = "cpu"):
         self.model = model if isinstance(model, LoadedModel) else load_weights(model)
         self.num_threads = num_threads
         self.batch_size = batch_size
+        self.device = torch.device(device)
+        self._network = self.model.network if self.device.type == "cpu" else \
+            copy.deepcopy(self.model.network).to(self.device)
 
     @property
     def resolution(self) -> tuple[int, int]:
@@ -72,8 +78,9 @@ class OccupancyPredictor:
             with torch.inference_mode():
                 raw = []
                 for start in range(0, len(depth), self.batch_size):
-                    logits = self.model.network(torch.from_numpy(depth[start : start + self.batch_size]))
-                    raw.append(distributions_2d(logits[:, head].double()).numpy())
+                    batch = torch.from_numpy(depth[start : start + self.batch_size]).to(self.device)
+                    logits = self._network(batch)
+                    raw.append(distributions_2d(logits[:, head].double()).cpu().numpy())
                 raw_p2d = np.concatenate(raw) if raw else np.zeros((0, h, w))
         finally:
             torch.set_num_threads(previous)
