@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from slax_drake.perception.inference import OccupancyPredictor
-from slax_drake.scene.model import Scene
+from slax_drake.scene.model import Scene, state_key
 
 
 class LearnedDistribution:
@@ -39,10 +39,7 @@ class LearnedDistribution:
         return np.where(np.isfinite(depth), depth, 0.0).astype(np.float32)
 
     def distribution(self, scene: Scene) -> np.ndarray:
-        key = tuple(
-            (o.name, round(float(o.center[0]), 4), round(float(o.center[1]), 4), round(float(o.yaw), 4))
-            for o in scene.objects
-        )
+        key = state_key(scene.objects)
         hit = self._cache.get(key)
         if hit is not None:
             return hit

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from slax_drake.scene.model import Scene
+from slax_drake.scene.model import Scene, state_key  # state_key: re-exported for the policies and planner
 
 PERCEPTION_MODES = ("ground-truth", "learned")
 
@@ -81,13 +81,6 @@ def make_distribution_model(perception: str, target_size) -> DistributionModel:
     from slax_drake.errors import UserError
 
     raise UserError(f"unknown perception '{perception}' (known: {', '.join(PERCEPTION_MODES)})")
-
-
-def state_key(objects) -> tuple:
-    """A hashable key of the objects' names and planar poses (0.1 mm, 1e-4 rad)."""
-    return tuple(
-        (o.name, round(float(o.center[0]), 4), round(float(o.center[1]), 4), round(o.yaw, 4)) for o in objects
-    )
 
 
 def history_min(p: np.ndarray, previous: np.ndarray | None) -> np.ndarray:

@@ -112,3 +112,11 @@ def planar_pose(x: float, y: float, z: float, yaw: float) -> np.ndarray:
     X[:2, :2] = [[c, -s], [s, c]]
     X[:3, 3] = (x, y, z)
     return X
+
+
+def state_key(objects) -> tuple:
+    """A hashable key of the objects' names and planar poses (x, y to 0.1 mm, yaw to 1e-4 rad): the state of a
+    shelf as the first-order model sees it, used to cache distributions and to deduplicate search states."""
+    return tuple(
+        (o.name, round(float(o.center[0]), 4), round(float(o.center[1]), 4), round(float(o.yaw), 4)) for o in objects
+    )
