@@ -8,7 +8,8 @@
    first from the start configuration and a few fixed seeds. A solution that collides is solved again with a
    minimum-distance constraint;
 3. each straight tool segment is refined: where the joint-space straight line between two solutions moves the
-   tool more than ``deviation_tolerance`` from the Cartesian segment, the midpoint is solved and inserted;
+   tool more than ``deviation_tolerance`` (``CARRIED_DEVIATION_TOLERANCE`` while carrying an object) from the
+   Cartesian segment, the midpoint is solved and inserted;
 4. the free segments from the start to the first waypoint and from the last one back to the observation pose
    are straight when that is collision-free, else found by :func:`slax_drake.planning.free_path.free_path`
    (RRT-Connect around the robot itself); every joint segment is checked
@@ -33,21 +34,35 @@ from slax_drake.planning.free_path import free_path
 from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
-from slax_drake.planning.waypoints import ToolWaypoint, action_waypoints
+from slax_drake.planning.waypoints import APPROACH_MARGINS, ToolWaypoint, action_waypoints, pull_out_options
 from slax_drake.planning.world import PlanningWorld
-from slax_drake.policies.actions import ToolConfig
+from slax_drake.policies.actions import Suction, ToolConfig
 from slax_drake.policies.distribution import state_key
 from slax_drake.scene.model import Scene
 from slax_drake.systems import robot as robot_model
 from slax_drake.systems.station import StationScenario, observation_positions
 
 DEVIATION_TOLERANCE = 0.004  # m; the requirement is < 5 mm, 1 mm is left for the 1 ms sampling and IK tolerance
+CARRIED_DEVIATION_TOLERANCE = 0.001  # m, on segments carrying an object, which may slide along a wall it touches
 MAX_REFINE_DEPTH = 6
 NUM_RANDOM_SEEDS = 12
 SEED_LIBRARY_SEED = 0
 MAX_FIRST_SOLUTIONS = 3
 MIN_DISTANCE = 0.004  # m, IK's robot-environment and self distance when the unconstrained solution collides
+MAX_DISTANCE_RETRIES = 2  # colliding IK solutions re-solved with the distance constraint, per waypoint
+CARRIED_PROBES = 21  # poses along a colliding carried segment examined to name what the object meets
+# Rejections that a smaller approach margin may avoid (the waypoints in front of the opening and the free ways)
+MARGIN_DEPENDENT = ("pre-approach", "retract", "segment to pre-approach", "segment to retract",
+                    "no collision-free way back")
+# Rejections that carrying a suctioned object across at another depth may avoid
+PULL_DEPENDENT = ("pull out", "translate", "push in", "segment to pull out", "segment to translate",
+                  "segment to push in")
+MAX_REANCHORS = 2  # waypoints re-solved from the seed library (and the path before them backward) per plan
 FREE_PATH_SEED = 0
+# IK tolerances while the cup holds the object (seal to release): the object turns and shifts with the tool, and
+# IK's default tolerances (0.5 mm, 0.01 rad) would let it wander ~2 mm between waypoints.
+HOLD_POSITION_TOLERANCE = 1e-4  # m
+HOLD_ANGLE_TOLERANCE = 1e-3  # rad
 
 
 @dataclasses.dataclass
@@ -73,7 +88,7 @@ class PlannedMotion:
     waypoint_times: list
     max_deviation: float
     timings: dict
-    segments: list  # (q_a, q_b, contact) of every checked joint segment, for tests and re-checks
+    segments: list  # (q_a, q_b, contact, carried) of every checked joint segment, for tests and re-checks
 
     feasible = True
 
@@ -83,6 +98,11 @@ class PlannedMotion:
 
 class _Reject(Exception):
     pass
+
+
+class _PoseReject(_Reject):
+    """A waypoint's tool pose itself is infeasible (the tool meets the environment there): no other IK solution,
+    first solution or re-anchoring can help."""
 
 
 class MotionPlanner:
@@ -97,6 +117,9 @@ class MotionPlanner:
         self.limits = robot_model.joint_limits()
         self._world_key = None
         self._world = None
+        # Results of IK solves and free paths in the current world (both deterministic), keyed by their inputs:
+        # the candidates of one decision share waypoints (every suction of an object has the same approach).
+        self._memo = {}
 
     def world(self, scene: Scene) -> PlanningWorld:
         """The planning world of the scene's objects as they stand (built once per object state)."""
@@ -104,6 +127,7 @@ class MotionPlanner:
         if key != self._world_key:
             self._world = PlanningWorld(self.scenario, scene)
             self._world_key = key
+            self._memo = {}
         return self._world
 
     def plan(self, action, scene: Scene, q_start=None):
@@ -115,13 +139,36 @@ class MotionPlanner:
         world = self.world(scene)
         timings["world_s"] = time.perf_counter() - t0
         q_start = self.q_observation.copy() if q_start is None else np.asarray(q_start, float)
-        try:
-            waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool)
-            motion = self._plan(world, action, waypoints, q_start, timings)
-        except _Reject as e:
-            world.allow_tool_contact(action.name, False)
+        reasons = []
+        motion = None
+        for margin in APPROACH_MARGINS:
+            pulls = [None]
+            if isinstance(action, Suction):
+                obj = next(o for o in scene.objects if o.name == action.name)
+                pulls = pull_out_options(action, obj, scene.shelf, scene.target, margin)
+            for pull in pulls:
+                self._anchor_failed = set()
+                try:
+                    waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool, approach_margin=margin,
+                                                 pull_to=pull)
+                    motion = self._plan(world, action, waypoints, q_start, timings)
+                    break
+                except _Reject as e:
+                    world.allow_tool_contact(action.name, False)
+                    where = f"approach margin {margin * 100:.0f} cm" + (f", carried across at y = {pull:+.3f}"
+                                                                        if len(pulls) > 1 else "")
+                    reasons.append((where, str(e)))
+                    if not str(e).startswith(PULL_DEPENDENT):
+                        break
+            if motion is not None or not reasons[-1][1].startswith(MARGIN_DEPENDENT):
+                break
+        if motion is None:
             timings["total_s"] = time.perf_counter() - t_all
-            return Rejection(action, str(e), _rounded(timings))
+            # The last variant's reason leads (it starts with the waypoint's label, which the PlannerSystem reads);
+            # the other variants follow in brackets.
+            reason = reasons[-1][1] if len(reasons) == 1 else (
+                f"{reasons[-1][1]} [{reasons[-1][0]}; before: " + " | ".join(f"{w}: {r}" for w, r in reasons[:-1]) + "]")
+            return Rejection(action, reason, _rounded(timings))
         timings["total_s"] = time.perf_counter() - t_all
         motion.timings = _rounded(timings)
         return motion
@@ -130,11 +177,26 @@ class MotionPlanner:
     def _ik(self, world, wp: ToolWaypoint, guess, timings, min_distance=None):
         from pydrake.math import RigidTransform
 
+        key = ("ik", wp.frame, wp.X_SF.tobytes(), np.asarray(guess, float).tobytes(), wp.shaft, wp.suction,
+               min_distance, world._ik_filter is not None)
+        if key in self._memo:
+            q = self._memo[key]
+            return None if q is None else q.copy()
         t0 = time.perf_counter()
-        q = solve_tool_pose(world, wp.frame, RigidTransform(wp.X_SF), guess, wp.shaft, min_distance=min_distance)
+        tol = {} if not wp.suction else dict(position_tolerance=HOLD_POSITION_TOLERANCE, angle_tolerance=HOLD_ANGLE_TOLERANCE)
+        q = solve_tool_pose(world, wp.frame, RigidTransform(wp.X_SF), guess, wp.shaft, min_distance=min_distance, **tol)
         timings["ik_s"] += time.perf_counter() - t0
         timings["ik_solves"] += 1
+        self._memo[key] = None if q is None else q.copy()
         return q
+
+    def _free_path(self, world, qa, qb):
+        """:func:`free_path` (no tool contact), memoised in the current world."""
+        key = ("free", np.asarray(qa, float).tobytes(), np.asarray(qb, float).tobytes())
+        if key not in self._memo:
+            self._memo[key] = free_path(world, qa, qb, self.limits, LIMIT_MARGIN, seed=FREE_PATH_SEED)
+        path = self._memo[key]
+        return None if path is None else [np.array(q) for q in path]
 
     def _free(self, world, q, timings) -> bool:
         t0 = time.perf_counter()
@@ -143,27 +205,31 @@ class MotionPlanner:
         return ok
 
     def _solve_waypoint(self, world, wp, guesses, name, timings):
-        """IK for a waypoint from the guesses in turn; a colliding solution is re-solved with a distance bound."""
+        """IK for a waypoint from the guesses in turn; when every solution collides, solved again with a
+        minimum-distance constraint from the colliding solutions (at most ``MAX_DISTANCE_RETRIES``) and the
+        first guess."""
         world.allow_tool_contact(name, wp.contact)
-        found_colliding = None
+        colliding = []
         for guess in guesses:
             q = self._ik(world, wp, guess, timings)
             if q is None:
                 continue
             if self._free(world, q, timings):
                 return q
-            found_colliding = q
-        if found_colliding is not None:
+            colliding.append(q)
+        if colliding:
+            tool_hits = world.tool_environment_hits(colliding[0])
+            if tool_hits:
+                raise _PoseReject(f"{wp.label}: the tool collides at its pose: {', '.join(tool_hits)} (environment)")
             world.ik_tool_contact(name, wp.contact)
             try:
-                for guess in guesses[:1]:
+                for guess in colliding[:MAX_DISTANCE_RETRIES] + list(guesses[:1]):
                     q = self._ik(world, wp, guess, timings, min_distance=MIN_DISTANCE)
                     if q is not None and self._free(world, q, timings):
                         return q
             finally:
                 world.ik_tool_contact(name, False)
-        if found_colliding is not None:
-            hits = ", ".join(world.colliding_bodies(found_colliding)) or "the environment"
+            hits = ", ".join(world.colliding_bodies(colliding[0])) or "the environment"
             raise _Reject(f"{wp.label}: every IK solution collides: {hits}")
         raise _Reject(f"{wp.label}: tool pose out of reach (no IK solution)")
 
@@ -187,20 +253,32 @@ class MotionPlanner:
 
     def _first_waypoints(self, world, wp, q_start, name, timings):
         """Up to ``MAX_FIRST_SOLUTIONS`` distinct collision-free IK solutions of the first waypoint, nearest to
-        the start first."""
+        the start first; when every seed's solution collides, one solved with the distance constraint."""
         world.allow_tool_contact(name, False)
-        found = []
-        for guess in self._seeds(q_start):
+        found, colliding = [], []
+        seeds = self._seeds(q_start)
+        for guess in seeds:
             q = self._ik(world, wp, guess, timings)
-            if q is None or not self._free(world, q, timings):
+            if q is None:
+                continue
+            if not self._free(world, q, timings):
+                colliding.append(q)
                 continue
             if all(np.linalg.norm(q - f) > 0.1 for f in found):
                 found.append(q)
             if len(found) >= MAX_FIRST_SOLUTIONS:
                 break
+        if not found and colliding:
+            tool_hits = world.tool_environment_hits(colliding[0])
+            if tool_hits:
+                raise _PoseReject(f"{wp.label}: the tool collides at its pose: {', '.join(tool_hits)} (environment)")
+            try:
+                found.append(self._solve_waypoint(world, wp, colliding[:1] + seeds[:1], name, timings))
+            except _Reject:
+                pass
         if not found:
-            raise _Reject(f"{wp.label}: tool pose out of reach (no collision-free IK solution from "
-                          f"{len(self._seeds(q_start))} seeds)")
+            what = "every solution collides" if colliding else "no IK solution"
+            raise _Reject(f"{wp.label}: tool pose out of reach ({what}; {len(seeds)} seeds)")
         found.sort(key=lambda q: float(np.linalg.norm(q - q_start)))
         return found
 
@@ -209,52 +287,94 @@ class MotionPlanner:
         for q_first in self._first_waypoints(world, waypoints[0], q_start, action.name, timings):
             try:
                 return self._plan_from(world, action, waypoints, q_start, q_first, timings)
+            except _PoseReject:
+                raise
             except _Reject as e:
                 reasons.append(str(e))
         raise _Reject(reasons[0] if len(set(reasons)) == 1 else "; ".join(dict.fromkeys(reasons)))
 
     def _plan_from(self, world, action, waypoints, q_start, q_first, timings) -> PlannedMotion:
         name = action.name
-        # 2. IK along the path, warm-started from the previous waypoint.
+        # 2. IK along the path, warm-started from the previous waypoint. A waypoint the warm start cannot reach
+        # is solved from the seed library and the waypoints before it again, backward, warm-started from it.
         qs = [q_first]
-        for wp in waypoints[1:]:
-            qs.append(self._solve_waypoint(world, wp, [qs[-1]], name, timings))
+        anchors = 0
+        for k in range(1, len(waypoints)):
+            try:
+                qs.append(self._solve_waypoint(world, waypoints[k], [qs[-1]], name, timings))
+                continue
+            except _PoseReject:
+                raise
+            except _Reject as e:
+                if anchors >= MAX_REANCHORS or k in self._anchor_failed:
+                    raise
+                first_error = e
+            anchors += 1
+            self._anchor_failed.add(k)  # tried once per plan: later first solutions do not repeat it
+            try:
+                q_k = self._solve_waypoint(world, waypoints[k], self._seeds(qs[-1]), name, timings)
+                back = [q_k]
+                for j in range(k - 1, -1, -1):
+                    back.append(self._solve_waypoint(world, waypoints[j], [back[-1]], name, timings))
+            except _Reject:
+                raise first_error
+            qs = back[::-1]
+            self._anchor_failed.discard(k)
         # 3. Cartesian refinement of each straight tool segment.
         # (q, contact and suction of the segment arriving here, the waypoint or None for inserted points)
         chain = [(q_start, False, False, None), (qs[0], False, waypoints[0].suction, waypoints[0])]
+        carried = {0: False, 1: waypoints[0].carried}  # chain index -> the segment arriving there carries
         max_dev = 0.0
         for k in range(1, len(waypoints)):
             a, b = waypoints[k - 1], waypoints[k]
             world.allow_tool_contact(name, b.contact)
             inner, dev = self._refine(world, qs[k - 1], a.X_SF, qs[k], b.X_SF, b, timings, 0)
             max_dev = max(max_dev, dev)
-            chain.extend((q, b.contact, b.suction, None) for q in inner)
+            for q in inner:
+                carried[len(chain)] = b.carried
+                chain.append((q, b.contact, b.suction, None))
+            carried[len(chain)] = b.carried
             chain.append((qs[k], b.contact, b.suction, b))
         # Free segments from the start and back to the observation pose: straight, or around the robot itself.
         t0 = time.perf_counter()
         world.allow_tool_contact(name, False)
-        to_first = free_path(world, q_start, qs[0], self.limits, LIMIT_MARGIN, seed=FREE_PATH_SEED)
-        back = free_path(world, qs[-1], self.q_observation, self.limits, LIMIT_MARGIN, seed=FREE_PATH_SEED)
+        to_first = self._free_path(world, q_start, qs[0])
+        back = self._free_path(world, qs[-1], self.q_observation)
         timings["check_s"] += time.perf_counter() - t0
         if to_first is None:
             raise _Reject(f"{waypoints[0].label}: no collision-free way from the start")
         if back is None:
             raise _Reject("no collision-free way back to the observation pose")
+        carried = [carried[i] for i in range(len(chain))]
         chain[1:1] = [(q, False, False, None) for q in to_first[1:-1]]
+        carried[1:1] = [False] * len(to_first[1:-1])
+        carried.extend(False for _ in back[1:])
         chain.extend((q, False, False, None) for q in back[1:])
+        obj = next((o for o in world.scene.objects if o.name == name), None)
+        i_seal = next((i for i, wp in enumerate(waypoints) if wp.suction), None)
         # 4. Dense collision checks of every joint segment.
         segments = []
         t0 = time.perf_counter()
-        for (qa, _, _, wa), (qb, contact, _, wb) in zip(chain[:-1], chain[1:]):
-            world.allow_tool_contact(name, contact)
-            if not world.edge_free(qa, qb):
-                world.allow_tool_contact(name, False)
-                timings["check_s"] += time.perf_counter() - t0
-                where = wb.label if wb is not None else ("the return to the observation pose" if wa is not None and wb is None
-                                                         else "the way between waypoints")
-                raise _Reject(f"segment to {where} collides")
-            segments.append((np.asarray(qa).copy(), np.asarray(qb).copy(), contact))
-        world.allow_tool_contact(name, False)
+        try:
+            for i, ((qa, _, _, wa), (qb, contact, _, wb), carry) in enumerate(zip(chain[:-1], chain[1:], carried[1:])):
+                world.allow_tool_contact(name, contact)
+                if carry and world.carried is None:
+                    world.carry(obj, qs[i_seal])
+                elif not carry:
+                    world.drop()
+                if not world.edge_free(qa, qb):
+                    timings["check_s"] += time.perf_counter() - t0
+                    ahead = next((w for _, _, _, w in chain[i + 1:] if w is not None), None)
+                    where = ahead.label if ahead is not None else "the return to the observation pose"
+                    if carry:
+                        hits = _carried_hits(world, qa, qb)
+                        if hits is not None:
+                            raise _Reject(f"segment to {where}: the carried {name} collides with {hits}")
+                    raise _Reject(f"segment to {where} collides")
+                segments.append((np.asarray(qa).copy(), np.asarray(qb).copy(), contact, carry))
+        finally:
+            world.drop()
+            world.allow_tool_contact(name, False)
         timings["check_s"] += time.perf_counter() - t0
         # 5. Ruckig timing, segment by segment, with dwells and the suction schedule.
         t0 = time.perf_counter()
@@ -297,7 +417,7 @@ class MotionPlanner:
         for s in np.linspace(0.0, 1.0, n)[1:-1]:
             p = world.tool_pose_S(qa + s * (qb - qa), wp.frame).translation()
             dev = max(dev, _distance_to_segment(p, pa, pb))
-        if dev <= self.deviation_tolerance:
+        if dev <= (min(self.deviation_tolerance, CARRIED_DEVIATION_TOLERANCE) if wp.carried else self.deviation_tolerance):
             return [], dev
         if depth >= MAX_REFINE_DEPTH:
             raise _Reject(f"{wp.label}: the tool leaves its straight segment by {dev * 1000:.1f} mm")
@@ -310,6 +430,38 @@ class MotionPlanner:
         left, d1 = self._refine(world, qa, Xa, q_mid, X_mid, wp, timings, depth + 1)
         right, d2 = self._refine(world, q_mid, X_mid, qb, Xb, wp, timings, depth + 1)
         return left + [q_mid] + right, max(d1, d2)
+
+
+def _carried_hits(world, qa, qb) -> str | None:
+    """What the carried object meets on the segment qa -> qb, or None when the segment collides without it too
+    (the robot is at fault). Named from the carried object's pose at ``CARRIED_PROBES`` configurations along
+    the segment: the other objects whose footprint it overlaps (within the checker's margin) at an overlapping
+    height, and the shelf when it leaves the bay; "the robot" when neither (it meets a link)."""
+    from slax_drake.planning.world import CARRIED_MARGIN
+    from slax_drake.scene.footprint import Footprint, clear_of
+
+    if not world.edge_free_uncarried(qa, qb):
+        return None
+    obj, shelf = world.carried, world.scene.shelf
+    names = []
+    for s in np.linspace(0.0, 1.0, CARRIED_PROBES):
+        X = world.carried_pose_S(qa + s * (qb - qa))
+        moved = dataclasses.replace(obj, X_SO=X)
+        fp = Footprint.of(moved)
+        z0, z1 = X[2, 3] - obj.size[2] / 2, X[2, 3] + obj.size[2] / 2
+        for other in world.scene.objects:
+            if other.name == obj.name or other.name in names or z0 >= other.size[2] + CARRIED_MARGIN:
+                continue
+            centre = np.array([[X[0, 3], X[1, 3]]])
+            if not clear_of(fp.shape, centre, fp.yaw, (fp.half_x, fp.half_y), Footprint.of(other), CARRIED_MARGIN)[0]:
+                names.append(other.name)
+        ex, ey = fp.extents()
+        m = CARRIED_MARGIN
+        in_bay = X[1, 3] + ey > -shelf.depth / 2
+        if "the shelf" not in names and in_bay and (z1 + m > shelf.height or z0 < m or abs(X[0, 3]) + ex + m > shelf.width / 2
+                                                    or X[1, 3] + ey + m > shelf.depth / 2):
+            names.append("the shelf")
+    return ", ".join(names) if names else "the robot"
 
 
 def _distance_to_segment(p, a, b) -> float:

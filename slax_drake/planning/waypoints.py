@@ -15,8 +15,13 @@ depth, push d + standoff along x, back off the standoff, retract along -y.
 Suction (q, d_x, d_z): q = the contact point on the camera-facing side. The blade is turned up
 (``SHAFT_BLADE_UP``), the cup (``cup_tip_frame``, its axis along S +y) approaches to 1 cm before the face,
 seals (suction on, pressing ``SEAL_PRESS`` in), lifts ``LIFT`` (about 1 cm), pulls the object out of the shelf
-toward the camera, translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
-(suction off), backs off and retracts.
+toward the camera (by default until its back is out of the shelf; the planner may carry it across shallower,
+:func:`pull_out_options`), translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
+(suction off), backs off and retracts. The lift is ``LIFT`` unless the carried object's straight way out, across
+and in (its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above
+the tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones). The segments
+arriving at "pull out", "translate" and "push in" carry the object clear of the support (``carried``): the
+planner checks the object with the tool there.
 """
 
 from __future__ import annotations
@@ -31,6 +36,9 @@ from slax_drake.scene.model import SceneObject, Shelf
 from slax_drake.systems import robot as robot_model
 
 APPROACH_MARGIN = 0.05  # the tool's tip this far in front of the opening before entering (m)
+# The planner's margins to try in turn: the nominal one, then with the tip just outside the opening, which keeps
+# the wrist 4 cm farther from the robot's body (the front of the bay is at the edge of the arm's folded reach).
+APPROACH_MARGINS = (APPROACH_MARGIN, 0.01)
 BLADE_HALF_LENGTH = 0.0325  # blade_face_frame to the blade's tip along the tube (m, URDF)
 BLADE_HALF_THICKNESS = 0.002  # m (URDF)
 TUBE_RADIUS = 0.015  # m (URDF); the tube runs along the blade's upper edge, centred on the blade's plane
@@ -39,6 +47,10 @@ BLADE_LIFT = 0.008  # blade's lower edge above the support surface (m)
 SEAL_PRESS = 0.001  # cup pressed this far into the face (m)
 CUP_STANDOFF = 0.01  # m before the face, then the cup moves in with suction on
 LIFT = 0.01  # m
+LIFT_CLEARANCE = 0.01  # the carried object's bottom this far above the tallest object it passes over (m)
+PULL_STEP = 0.04  # m between the pull-out depths the planner tries
+TARGET_CLEARANCE = 0.005  # m, an object carried across inside the shelf keeps this far from the target
+SWEEP_STEP = 0.005  # m between footprints of the carried object's sweep when looking for objects it crosses
 OUT_MARGIN = 0.01  # the carried object's back this far in front of the opening (m)
 RELEASE_BACKOFF = 0.02  # m
 DWELL = 0.3  # s at rest after sealing and after releasing
@@ -65,6 +77,7 @@ class ToolWaypoint:
     contact: bool = False  # the segment arriving here may touch the manipulated object
     suction: bool = False  # the suction command while moving to this waypoint and during its dwell
     dwell: float = 0.0  # seconds at rest on arrival
+    carried: bool = False  # the segment arriving here carries the manipulated object clear of the support
 
     @property
     def position(self) -> np.ndarray:
@@ -78,8 +91,11 @@ def _pose(R: np.ndarray, p) -> np.ndarray:
     return X
 
 
-def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, tool: ToolConfig = ToolConfig()):
-    """The tool waypoints of ``action`` (Push or Suction) on the objects as they stand."""
+def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, tool: ToolConfig = ToolConfig(),
+                     approach_margin: float = APPROACH_MARGIN, pull_to: float | None = None):
+    """The tool waypoints of ``action`` (Push or Suction) on the objects as they stand; the tool's tip is
+    ``approach_margin`` in front of the opening at the pre-approach and retract waypoints. ``pull_to``: the
+    cup's y (S) while a suctioned object is carried across (default :func:`full_pull_out`)."""
     obj = next((o for o in objects if o.name == action.name), None)
     if obj is None:
         raise ValueError(f"no object named {action.name!r}")
@@ -90,7 +106,7 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         x = edge - sign * (BLADE_HALF_THICKNESS + PUSH_STANDOFF)
         y = action.q[1] - BLADE_HALF_LENGTH
         z = tool.blade_height / 2.0 + BLADE_LIFT
-        y_pre = y_open - APPROACH_MARGIN - BLADE_HALF_LENGTH
+        y_pre = y_open - approach_margin - BLADE_HALF_LENGTH
         x_end = x + action.d + sign * PUSH_STANDOFF
         R, f, s = push_rotation(), robot_model.BLADE_FACE_FRAME, robot_model.SHAFT_BLADE_DOWN
         return [
@@ -104,22 +120,86 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         cx, cy, cz = action.q
         _, ey = Footprint.of(obj).extents()
         oy = float(obj.center[1])
-        y_out = cy + (y_open - ey - OUT_MARGIN - oy)  # cup y when the object's back is out of the shelf
         y_place = cy + (action.dz - oy)
-        y_pre = y_open - APPROACH_MARGIN
+        y_pre = y_open - approach_margin
         x2 = cx + action.dx
+        y_far = full_pull_out(action, obj, shelf, approach_margin) if pull_to is None else pull_to
+        lift = carry_lift(obj, objects, [(0.0, 0.0), (0.0, y_far - cy), (action.dx, y_far - cy),
+                                         (action.dx, y_place - cy)])
         R, f, s = suction_rotation(), robot_model.CUP_TIP_FRAME, robot_model.SHAFT_BLADE_UP
+        on = dict(contact=True, suction=True)
         return [
             ToolWaypoint("pre-approach", f, _pose(R, (cx, y_pre, cz)), s),
             ToolWaypoint("approach", f, _pose(R, (cx, cy - CUP_STANDOFF, cz)), s),
             ToolWaypoint("seal", f, _pose(R, (cx, cy + SEAL_PRESS, cz)), s, contact=True, suction=True, dwell=DWELL),
-            ToolWaypoint("lift", f, _pose(R, (cx, cy + SEAL_PRESS, cz + LIFT)), s, contact=True, suction=True),
-            ToolWaypoint("pull out", f, _pose(R, (cx, min(y_out, y_pre), cz + LIFT)), s, contact=True, suction=True),
-            ToolWaypoint("translate", f, _pose(R, (x2, min(y_out, y_pre), cz + LIFT)), s, contact=True, suction=True),
-            ToolWaypoint("push in", f, _pose(R, (x2, y_place + SEAL_PRESS, cz + LIFT)), s, contact=True, suction=True),
+            ToolWaypoint("lift", f, _pose(R, (cx, cy + SEAL_PRESS, cz + lift)), s, **on),
+            ToolWaypoint("pull out", f, _pose(R, (cx, y_far, cz + lift)), s, carried=True, **on),
+            ToolWaypoint("translate", f, _pose(R, (x2, y_far, cz + lift)), s, carried=True, **on),
+            ToolWaypoint("push in", f, _pose(R, (x2, y_place + SEAL_PRESS, cz + lift)), s, carried=True, **on),
             ToolWaypoint("lower", f, _pose(R, (x2, y_place + SEAL_PRESS, cz)), s, contact=True, suction=True),
             ToolWaypoint("release", f, _pose(R, (x2, y_place + SEAL_PRESS, cz)), s, contact=True, dwell=DWELL),
             ToolWaypoint("back off", f, _pose(R, (x2, y_place - RELEASE_BACKOFF, cz)), s, contact=True),
             ToolWaypoint("retract", f, _pose(R, (x2, y_pre, cz)), s, contact=True),
         ]
     raise TypeError(f"not an action: {action!r}")
+
+
+def full_pull_out(action, obj: SceneObject, shelf: Shelf, approach_margin: float = APPROACH_MARGIN) -> float:
+    """The cup's y (S) when the suctioned object's back is ``OUT_MARGIN`` in front of the opening (the action
+    model's way out of the shelf), and at least as far out as the pre-approach."""
+    _, ey = Footprint.of(obj).extents()
+    y_open = -shelf.depth / 2.0
+    y_out = action.q[1] + (y_open - ey - OUT_MARGIN - float(obj.center[1]))
+    return min(y_out, y_open - approach_margin)
+
+
+def pull_out_options(action, obj: SceneObject, shelf: Shelf, target=None,
+                     approach_margin: float = APPROACH_MARGIN) -> list[float]:
+    """Cup y values (S) at which to carry a suctioned object across, in the order to try: the full pull-out,
+    then shallower ones ``PULL_STEP`` apart (the object crosses inside the shelf, which the planner's
+    carried-object checks then clear against the known objects and the shelf) while the cup is pulled at least
+    ``PULL_STEP`` back from its seal. A depth at which the carried object's way across would overlap the
+    target's footprint (which the planning world does not hold) is left out."""
+    from slax_drake.scene.footprint import clear_of
+
+    y_full = full_pull_out(action, obj, shelf, approach_margin)
+    cy = action.q[1]
+    options = [y_full]
+    y = y_full + PULL_STEP
+    fp = Footprint.of(obj)
+    while y <= cy - PULL_STEP + 1e-9:
+        ok = True
+        if target is not None:
+            x0, y0 = float(obj.center[0]), float(obj.center[1]) + (y - cy)
+            n = max(1, int(np.ceil(abs(action.dx) / SWEEP_STEP)))
+            xs = x0 + np.linspace(0.0, action.dx, n + 1)
+            centres = np.column_stack([xs, np.full(len(xs), y0)])
+            ok = bool(clear_of(fp.shape, centres, fp.yaw, (fp.half_x, fp.half_y), Footprint.of(target.as_object()),
+                               TARGET_CLEARANCE).all())
+        if ok:
+            options.append(float(y))
+        y += PULL_STEP
+    return options
+
+
+def carry_lift(obj: SceneObject, objects, offsets) -> float:
+    """How high (m) to lift ``obj`` for its carried way: the polyline of centre offsets (dx, dy) from where it
+    stands, in S. ``LIFT``, or ``LIFT_CLEARANCE`` above the tallest other object whose footprint the swept
+    footprint (``SWEEP_STEP`` apart, no clearance) overlaps."""
+    from slax_drake.scene.footprint import clear_of
+
+    fp = Footprint.of(obj)
+    x0, y0 = float(obj.center[0]), float(obj.center[1])
+    centres = []
+    for (ax, ay), (bx, by) in zip(offsets[:-1], offsets[1:]):
+        n = max(1, int(np.ceil(np.hypot(bx - ax, by - ay) / SWEEP_STEP)))
+        s = np.linspace(0.0, 1.0, n + 1)
+        centres.append(np.column_stack([x0 + ax + s * (bx - ax), y0 + ay + s * (by - ay)]))
+    centres = np.vstack(centres)
+    tallest = 0.0
+    for other in objects:
+        if other.name == obj.name:
+            continue
+        if not clear_of(fp.shape, centres, fp.yaw, (fp.half_x, fp.half_y), Footprint.of(other), 0.0).all():
+            tallest = max(tallest, float(other.size[2]))
+    return LIFT if tallest == 0.0 else max(LIFT, tallest + LIFT_CLEARANCE)

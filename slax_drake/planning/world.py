@@ -12,7 +12,14 @@ Collision semantics (the same for IK and for the checker):
   ``NESTED_PAIRS`` (the telescoping torso). The station itself does not simulate self-contact: the planner
   is what keeps the arm out of the torso and out of itself;
 - during an action's contact phases, the tool link (tube, blade, cup) is allowed to touch the manipulated
-  object: :meth:`PlanningWorld.allow_tool_contact` toggles that single pair in the checker.
+  object: :meth:`PlanningWorld.allow_tool_contact` toggles that single pair in the checker;
+- while the suction cup carries an object clear of the support (pull out, translate, push in),
+  :meth:`PlanningWorld.carry` attaches the object's box or cylinder to the tool link in the checker (an added
+  collision shape, group ``CARRIED_GROUP``), shrunk by ``padding - CARRIED_MARGIN`` on every side so that it is
+  checked with ``CARRIED_MARGIN`` against the shelf, the other objects and the robot; its welded copy where it
+  stood is ignored by the tool link during contact phases, so only the carried copy counts. An object that rests
+  closer than ``CARRIED_MARGIN`` to a wall or a neighbour (physics leaves objects touching) has its footprint
+  shrunk by the difference plus ``REST_CONTACT_ALLOWANCE``, so that it may slide out along what it touches.
 """
 
 from __future__ import annotations
@@ -28,7 +35,16 @@ SELF_PADDING = 0.003  # m, margin between non-adjacent robot links
 # Robot link pairs that overlap by design and are never checked against each other: the torso lift link slides
 # over the fixed torso column (they are siblings on base_link, so the plant's adjacency filter misses them).
 NESTED_PAIRS = (("torso_fixed_link", "torso_lift_link"),)
+# Robot bodies whose pose a tool waypoint fixes (rigid with the tool frame while the shaft is locked): when one of
+# them meets the environment at an IK solution of a waypoint, no other solution of that waypoint avoids it.
+TOOL_RIGID_BODIES = ("wrist_roll_link", "bluction_mount_link", "camera_link", "tool_shaft_link")
 EDGE_STEP = 0.005  # rad (weighted joint distance) between checked configurations along a segment
+CARRIED_GROUP = "carried_object"
+# An object resting closer than CARRIED_MARGIN to a wall or neighbour may press this far into it while it slides
+# out along it (the planner keeps the tool within 1 mm of its straight segments while carrying).
+REST_CONTACT_ALLOWANCE = 0.0012  # m
+CARRIED_MARGIN = 0.001  # m, the carried object's margin to everything else (the action model places objects
+# 2 mm clear of neighbours, so the environment padding of 2 mm would reject exact placements)
 
 
 class PlanningWorld:
@@ -92,6 +108,9 @@ class PlanningWorld:
         self.scene_graph = self.checker.model().scene_graph()
         self.scene_graph_context = self.scene_graph.GetMyMutableContextFromRoot(self.diagram_context)
         self._ik_filter = None
+        self.carried = None
+        self._tool_rigid_index = {n: int(self.plant.GetBodyByName(n, robot).index()) for n in TOOL_RIGID_BODIES
+                                  if self.plant.HasBodyNamed(n, robot)}
         self.frames = {name: self.plant.GetFrameByName(name, robot) for name in
                        (robot_model.BLADE_FACE_FRAME, robot_model.CUP_TIP_FRAME, robot_model.CAMERA_FRAME)}
 
@@ -133,11 +152,72 @@ class PlanningWorld:
             self._ik_filter = manager.ApplyTransient(
                 CollisionFilterDeclaration().ExcludeBetween(GeometrySet(tool), GeometrySet(obj)))
 
+    def carry(self, obj, q_planned) -> None:
+        """Attaches ``obj`` (a SceneObject, pose X_SO as it stands, i.e. where the cup seals on it at the
+        configuration ``q_planned``) to the tool link for the checks that follow, until :meth:`drop`."""
+        from pydrake.geometry import Box, Cylinder
+        from pydrake.math import RigidTransform
+
+        self.drop()
+        shrink = max(0.0, self.padding - CARRIED_MARGIN)
+        # An object resting against a wall or a neighbour (physics leaves them touching) slides along it: its
+        # footprint is shrunk further by what it lacks of CARRIED_MARGIN there.
+        gap = rest_gap(obj, self.scene)
+        shrink_xy = shrink + (CARRIED_MARGIN - gap + REST_CONTACT_ALLOWANCE if gap < CARRIED_MARGIN else 0.0)
+        sx, sy = (max(1e-4, v - 2.0 * shrink_xy) for v in obj.size[:2])
+        sz = max(1e-4, obj.size[2] - 2.0 * shrink)
+        shape = Box(sx, sy, sz) if obj.shape == "box" else Cylinder(sx / 2.0, sz)
+        self.plant.SetPositions(self.plant_context, self.full_q(q_planned))
+        X_WT = self.tool_body.EvalPoseInWorld(self.plant_context)
+        X_TO = X_WT.inverse() @ self.X_WS @ RigidTransform(obj.X_SO)
+        if not self.checker.AddCollisionShapeToBody(CARRIED_GROUP, self.tool_body, shape, X_TO):
+            raise RuntimeError("the collision checker refused the carried object's shape")
+        self.carried = obj
+        self._X_TO = X_TO
+
+    def drop(self) -> None:
+        """Detaches the carried object (no-op when none)."""
+        if self.carried is not None:
+            self.checker.RemoveAllAddedCollisionShapes(CARRIED_GROUP)
+            self.carried = None
+
+    def carried_pose_S(self, q_planned) -> np.ndarray:
+        """X_SO (4x4) of the carried object at the planned joint values."""
+        from pydrake.math import RigidTransform
+
+        if self.carried is None:
+            raise ValueError("no object is carried")
+        self.plant.SetPositions(self.plant_context, self.full_q(q_planned))
+        X_WT = self.tool_body.EvalPoseInWorld(self.plant_context)
+        return (self.X_WS.inverse() @ X_WT @ self._X_TO).GetAsMatrix4()
+
+    def edge_free_uncarried(self, q0, q1) -> bool:
+        """:meth:`edge_free` with the carried object detached for this one check (the robot alone)."""
+        from pydrake.geometry import Box, Cylinder
+
+        if self.carried is None:
+            return self.edge_free(q0, q1)
+        shapes = self.checker.GetAllAddedCollisionShapes()[CARRIED_GROUP]
+        self.checker.RemoveAllAddedCollisionShapes(CARRIED_GROUP)
+        try:
+            return self.edge_free(q0, q1)
+        finally:
+            for d in shapes:
+                self.checker.AddCollisionShapeToBody(CARRIED_GROUP, self.tool_body, d.shape(), d.pose_in_body())
+
     def config_free(self, q_planned) -> bool:
         return bool(self.checker.CheckConfigCollisionFree(self.full_q(q_planned)))
 
     def edge_free(self, q0, q1) -> bool:
         return bool(self.checker.CheckEdgeCollisionFree(self.full_q(q0), self.full_q(q1)))
+
+    def tool_environment_hits(self, q_planned) -> list[str]:
+        """The bodies of ``TOOL_RIGID_BODIES`` that meet the environment (within the padding) at q."""
+        from pydrake.planning import RobotCollisionType
+
+        types = self.checker.ClassifyBodyCollisions(self.full_q(q_planned))
+        env = (RobotCollisionType.kEnvironmentCollision, RobotCollisionType.kEnvironmentAndSelfCollision)
+        return [n for n in TOOL_RIGID_BODIES if n in self._tool_rigid_index and types[self._tool_rigid_index[n]] in env]
 
     def colliding_bodies(self, q_planned) -> list[str]:
         """Names of the robot bodies in collision (within the paddings) at q, each with what it touches
@@ -149,6 +229,26 @@ class PlanningWorld:
                 RobotCollisionType.kSelfCollision: "itself",
                 RobotCollisionType.kEnvironmentAndSelfCollision: "environment and itself"}
         return [f"{self.plant.get_body(_body_index(i)).name()} ({what[t]})" for i, t in enumerate(types) if t in what]
+
+
+def rest_gap(obj, scene: Scene) -> float:
+    """The smallest horizontal gap (m; negative when overlapping) between ``obj``'s footprint and the side and
+    back walls or another object's footprint, as they stand."""
+    from slax_drake.scene.footprint import Footprint
+
+    poly = Footprint.of(obj).polygon()
+    shelf = scene.shelf
+    minx, miny, maxx, maxy = poly.bounds
+    gaps = [minx + shelf.width / 2, shelf.width / 2 - maxx, shelf.depth / 2 - maxy]
+    for other in scene.objects:
+        if other.name == obj.name:
+            continue
+        other_poly = Footprint.of(other).polygon()
+        d = poly.distance(other_poly)
+        if d == 0.0 and poly.intersects(other_poly):
+            d = -0.001
+        gaps.append(d)
+    return float(min(gaps))
 
 
 def _body_index(i: int):
