@@ -34,7 +34,7 @@ from slax_drake.planning.free_path import free_path
 from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
-from slax_drake.planning.waypoints import APPROACH_MARGINS, ToolWaypoint, action_waypoints, pull_out_options
+from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, pull_out_options
 from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import Suction, ToolConfig
 from slax_drake.policies.distribution import state_key
@@ -89,6 +89,7 @@ class PlannedMotion:
     max_deviation: float
     timings: dict
     segments: list  # (q_a, q_b, contact, carried) of every checked joint segment, for tests and re-checks
+    waypoints: list = dataclasses.field(default_factory=list)  # the ToolWaypoints planned (after any fallback)
 
     feasible = True
 
@@ -323,7 +324,7 @@ class MotionPlanner:
         # 3. Cartesian refinement of each straight tool segment.
         # (q, contact and suction of the segment arriving here, the waypoint or None for inserted points)
         chain = [(q_start, False, False, None), (qs[0], False, waypoints[0].suction, waypoints[0])]
-        carried = {0: False, 1: waypoints[0].carried}  # chain index -> the segment arriving there carries
+        carried = {0: "", 1: waypoints[0].carried}  # chain index -> how the segment arriving there carries
         max_dev = 0.0
         for k in range(1, len(waypoints)):
             a, b = waypoints[k - 1], waypoints[k]
@@ -347,21 +348,23 @@ class MotionPlanner:
             raise _Reject("no collision-free way back to the observation pose")
         carried = [carried[i] for i in range(len(chain))]
         chain[1:1] = [(q, False, False, None) for q in to_first[1:-1]]
-        carried[1:1] = [False] * len(to_first[1:-1])
-        carried.extend(False for _ in back[1:])
+        carried[1:1] = [""] * len(to_first[1:-1])
+        carried.extend("" for _ in back[1:])
         chain.extend((q, False, False, None) for q in back[1:])
         obj = next((o for o in world.scene.objects if o.name == name), None)
         i_seal = next((i for i, wp in enumerate(waypoints) if wp.suction), None)
         # 4. Dense collision checks of every joint segment.
         segments = []
+        attached = ""
         t0 = time.perf_counter()
         try:
             for i, ((qa, _, _, wa), (qb, contact, _, wb), carry) in enumerate(zip(chain[:-1], chain[1:], carried[1:])):
                 world.allow_tool_contact(name, contact)
-                if carry and world.carried is None:
-                    world.carry(obj, qs[i_seal])
-                elif not carry:
+                if carry != attached:
                     world.drop()
+                    if carry:
+                        world.carry(obj, qs[i_seal], trim_bottom=LIFT if carry == "resting" else 0.0)
+                    attached = carry
                 if not world.edge_free(qa, qb):
                     timings["check_s"] += time.perf_counter() - t0
                     ahead = next((w for _, _, _, w in chain[i + 1:] if w is not None), None)
@@ -406,7 +409,7 @@ class MotionPlanner:
         if len(outside):
             raise _Reject(f"{lim.names[outside[0]]} comes within {LIMIT_MARGIN} of its position limit")
         return PlannedMotion(action, traj, [(round(float(a), 6), round(float(b), 6)) for a, b in suction],
-                             waypoint_times, float(max_dev), {}, segments)
+                             waypoint_times, float(max_dev), {}, segments, list(waypoints))
 
     def _refine(self, world, qa, Xa, qb, Xb, wp, timings, depth):
         """Configurations to insert between qa and qb (excluding both) so that the joint-space straight line
@@ -448,7 +451,7 @@ def _carried_hits(world, qa, qb) -> str | None:
         X = world.carried_pose_S(qa + s * (qb - qa))
         moved = dataclasses.replace(obj, X_SO=X)
         fp = Footprint.of(moved)
-        z0, z1 = X[2, 3] - obj.size[2] / 2, X[2, 3] + obj.size[2] / 2
+        z0, z1 = X[2, 3] - obj.size[2] / 2 + world.carried_trim, X[2, 3] + obj.size[2] / 2
         for other in world.scene.objects:
             if other.name == obj.name or other.name in names or z0 >= other.size[2] + CARRIED_MARGIN:
                 continue

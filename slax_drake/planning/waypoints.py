@@ -21,7 +21,8 @@ toward the camera (by default until its back is out of the shelf; the planner ma
 and in (its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above
 the tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones). The segments
 arriving at "pull out", "translate" and "push in" carry the object clear of the support (``carried``): the
-planner checks the object with the tool there.
+planner checks the object with the tool there ("clear"); on the lift and the lowering ("resting") it checks the
+object less its bottom ``LIFT``, which touches the support at one end of the segment.
 """
 
 from __future__ import annotations
@@ -77,7 +78,8 @@ class ToolWaypoint:
     contact: bool = False  # the segment arriving here may touch the manipulated object
     suction: bool = False  # the suction command while moving to this waypoint and during its dwell
     dwell: float = 0.0  # seconds at rest on arrival
-    carried: bool = False  # the segment arriving here carries the manipulated object clear of the support
+    carried: str = ""  # the segment arriving here carries the manipulated object: "clear" of its support all the
+    # way, or "resting" (it leaves or reaches its support: lift, lower)
 
     @property
     def position(self) -> np.ndarray:
@@ -132,11 +134,11 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
             ToolWaypoint("pre-approach", f, _pose(R, (cx, y_pre, cz)), s),
             ToolWaypoint("approach", f, _pose(R, (cx, cy - CUP_STANDOFF, cz)), s),
             ToolWaypoint("seal", f, _pose(R, (cx, cy + SEAL_PRESS, cz)), s, contact=True, suction=True, dwell=DWELL),
-            ToolWaypoint("lift", f, _pose(R, (cx, cy + SEAL_PRESS, cz + lift)), s, **on),
-            ToolWaypoint("pull out", f, _pose(R, (cx, y_far, cz + lift)), s, carried=True, **on),
-            ToolWaypoint("translate", f, _pose(R, (x2, y_far, cz + lift)), s, carried=True, **on),
-            ToolWaypoint("push in", f, _pose(R, (x2, y_place + SEAL_PRESS, cz + lift)), s, carried=True, **on),
-            ToolWaypoint("lower", f, _pose(R, (x2, y_place + SEAL_PRESS, cz)), s, contact=True, suction=True),
+            ToolWaypoint("lift", f, _pose(R, (cx, cy + SEAL_PRESS, cz + lift)), s, carried="resting", **on),
+            ToolWaypoint("pull out", f, _pose(R, (cx, y_far, cz + lift)), s, carried="clear", **on),
+            ToolWaypoint("translate", f, _pose(R, (x2, y_far, cz + lift)), s, carried="clear", **on),
+            ToolWaypoint("push in", f, _pose(R, (x2, y_place + SEAL_PRESS, cz + lift)), s, carried="clear", **on),
+            ToolWaypoint("lower", f, _pose(R, (x2, y_place + SEAL_PRESS, cz)), s, carried="resting", **on),
             ToolWaypoint("release", f, _pose(R, (x2, y_place + SEAL_PRESS, cz)), s, contact=True, dwell=DWELL),
             ToolWaypoint("back off", f, _pose(R, (x2, y_place - RELEASE_BACKOFF, cz)), s, contact=True),
             ToolWaypoint("retract", f, _pose(R, (x2, y_pre, cz)), s, contact=True),

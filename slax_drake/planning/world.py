@@ -109,6 +109,7 @@ class PlanningWorld:
         self.scene_graph_context = self.scene_graph.GetMyMutableContextFromRoot(self.diagram_context)
         self._ik_filter = None
         self.carried = None
+        self.carried_trim = 0.0
         self._tool_rigid_index = {n: int(self.plant.GetBodyByName(n, robot).index()) for n in TOOL_RIGID_BODIES
                                   if self.plant.HasBodyNamed(n, robot)}
         self.frames = {name: self.plant.GetFrameByName(name, robot) for name in
@@ -152,9 +153,10 @@ class PlanningWorld:
             self._ik_filter = manager.ApplyTransient(
                 CollisionFilterDeclaration().ExcludeBetween(GeometrySet(tool), GeometrySet(obj)))
 
-    def carry(self, obj, q_planned) -> None:
+    def carry(self, obj, q_planned, trim_bottom: float = 0.0) -> None:
         """Attaches ``obj`` (a SceneObject, pose X_SO as it stands, i.e. where the cup seals on it at the
-        configuration ``q_planned``) to the tool link for the checks that follow, until :meth:`drop`."""
+        configuration ``q_planned``) to the tool link for the checks that follow, until :meth:`drop`; less its
+        bottom ``trim_bottom`` metres (for segments that start or end with it on its support)."""
         from pydrake.geometry import Box, Cylinder
         from pydrake.math import RigidTransform
 
@@ -165,14 +167,16 @@ class PlanningWorld:
         gap = rest_gap(obj, self.scene)
         shrink_xy = shrink + (CARRIED_MARGIN - gap + REST_CONTACT_ALLOWANCE if gap < CARRIED_MARGIN else 0.0)
         sx, sy = (max(1e-4, v - 2.0 * shrink_xy) for v in obj.size[:2])
-        sz = max(1e-4, obj.size[2] - 2.0 * shrink)
+        sz = max(1e-4, obj.size[2] - 2.0 * shrink - trim_bottom)
         shape = Box(sx, sy, sz) if obj.shape == "box" else Cylinder(sx / 2.0, sz)
         self.plant.SetPositions(self.plant_context, self.full_q(q_planned))
         X_WT = self.tool_body.EvalPoseInWorld(self.plant_context)
         X_TO = X_WT.inverse() @ self.X_WS @ RigidTransform(obj.X_SO)
-        if not self.checker.AddCollisionShapeToBody(CARRIED_GROUP, self.tool_body, shape, X_TO):
+        if not self.checker.AddCollisionShapeToBody(CARRIED_GROUP, self.tool_body, shape,
+                                                    X_TO @ RigidTransform([0.0, 0.0, trim_bottom / 2.0])):
             raise RuntimeError("the collision checker refused the carried object's shape")
         self.carried = obj
+        self.carried_trim = trim_bottom
         self._X_TO = X_TO
 
     def drop(self) -> None:
