@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 MAX_ITERATIONS = 600
+SEARCH_STEP = 0.02  # rad (m) between configurations checked while the trees grow; the path found is then
+# checked densely (PlanningWorld.edge_free), and searched again with dense checks if that fails
 STEP = 0.35  # rad (m for the torso) of the largest joint change per tree extension
 SHORTCUT_TRIES = 40
 
@@ -33,11 +35,24 @@ def _toward(q_from, q_to, step):
 
 def free_path(world, qa, qb, limits, margin: float, seed: int = 0, max_iterations: int = MAX_ITERATIONS):
     """Configurations [qa, ..., qb] joined by collision-free straight segments, or None if none was found in
-    ``max_iterations`` extensions. ``world``: a PlanningWorld (its tool-contact filter as the caller set it)."""
+    ``max_iterations`` extensions. ``world``: a PlanningWorld (its tool-contact filter as the caller set it).
+    The trees grow with configurations ``SEARCH_STEP`` apart checked; every segment of the path returned is
+    checked densely, and when one fails the search runs again with dense checks."""
     qa = np.asarray(qa, float)
     qb = np.asarray(qb, float)
     if world.edge_free(qa, qb):
         return [qa, qb]
+    coarse = _search(world, qa, qb, limits, margin, seed, max_iterations,
+                     lambda a, b: world.edge_free_coarse(a, b, SEARCH_STEP))
+    if coarse is None:
+        return None
+    if all(world.edge_free(a, b) for a, b in zip(coarse[:-1], coarse[1:])):
+        return coarse
+    return _search(world, qa, qb, limits, margin, seed, max_iterations, world.edge_free)
+
+
+def _search(world, qa, qb, limits, margin, seed, max_iterations, edge_free):
+    """RRT-Connect from qa and qb with ``edge_free`` as the edge test; the shortened path, or None."""
     rng = np.random.default_rng(seed)
     lo, hi = _bounds(limits, qa, qb, margin)
     trees = [([qa], [-1]), ([qb], [-1])]  # (nodes, parent index) grown from qa and from qb
@@ -50,7 +65,7 @@ def free_path(world, qa, qb, limits, margin: float, seed: int = 0, max_iteration
         """One step of ``tree`` toward q_target; the new node's index, or None when blocked."""
         i = nearest(tree, q_target)
         q_new = _toward(tree[0][i], q_target, STEP)
-        if not world.edge_free(tree[0][i], q_new):
+        if not edge_free(tree[0][i], q_new):
             return None
         tree[0].append(q_new)
         tree[1].append(i)
@@ -77,17 +92,17 @@ def free_path(world, qa, qb, limits, margin: float, seed: int = 0, max_iteration
             if np.array_equal(other[0][j], q_new):
                 a_side = path_to_root(trees[0], i_new if grow is trees[0] else j)[::-1]
                 b_side = path_to_root(trees[1], j if grow is trees[0] else i_new)
-                return _shortcut(world, a_side + b_side[1:], rng)
+                return _shortcut(edge_free, a_side + b_side[1:], rng)
     return None
 
 
-def _shortcut(world, path, rng):
+def _shortcut(edge_free, path, rng):
     """Removes intermediate nodes where two nodes can be joined directly (seeded random pairs, then greedy)."""
     path = list(path)
     for _ in range(SHORTCUT_TRIES):
         if len(path) <= 2:
             break
         i, j = sorted(rng.choice(len(path), size=2, replace=False))
-        if j - i >= 2 and world.edge_free(path[i], path[j]):
+        if j - i >= 2 and edge_free(path[i], path[j]):
             path = path[:i + 1] + path[j:]
     return path

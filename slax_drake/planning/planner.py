@@ -253,8 +253,10 @@ class MotionPlanner:
         return seeds
 
     def _first_waypoints(self, world, wp, q_start, name, timings):
-        """Up to ``MAX_FIRST_SOLUTIONS`` distinct collision-free IK solutions of the first waypoint, nearest to
-        the start first; when every seed's solution collides, one solved with the distance constraint."""
+        """Up to ``MAX_FIRST_SOLUTIONS`` distinct collision-free IK solutions of the first waypoint, in seed order,
+        or the first one joined to the start by a collision-free straight line alone (the free path's random
+        search is by far the slowest step); when every seed's solution collides, one solved with the distance
+        constraint."""
         world.allow_tool_contact(name, False)
         found, colliding = [], []
         seeds = self._seeds(q_start)
@@ -267,6 +269,12 @@ class MotionPlanner:
                 continue
             if all(np.linalg.norm(q - f) > 0.1 for f in found):
                 found.append(q)
+                t0 = time.perf_counter()
+                straight = world.edge_free(q_start, q)
+                timings["check_s"] += time.perf_counter() - t0
+                if straight:  # reachable from the start in a straight line: no better first solution needed
+                    found = [q] + [f for f in found if f is not q]
+                    break
             if len(found) >= MAX_FIRST_SOLUTIONS:
                 break
         if not found and colliding:
@@ -280,7 +288,6 @@ class MotionPlanner:
         if not found:
             what = "every solution collides" if colliding else "no IK solution"
             raise _Reject(f"{wp.label}: tool pose out of reach ({what}; {len(seeds)} seeds)")
-        found.sort(key=lambda q: float(np.linalg.norm(q - q_start)))
         return found
 
     def _plan(self, world, action, waypoints, q_start, timings) -> PlannedMotion:
@@ -340,7 +347,15 @@ class MotionPlanner:
         t0 = time.perf_counter()
         world.allow_tool_contact(name, False)
         to_first = self._free_path(world, q_start, qs[0])
-        back = self._free_path(world, qs[-1], self.q_observation)
+        back = None
+        if to_first is not None and not world.edge_free(qs[-1], self.q_observation):
+            # back the way it came: to the first waypoint's configuration, then the way from the start reversed
+            via = [qs[-1], qs[0]] + to_first[::-1][1:] + [self.q_observation]
+            via = [q for i, q in enumerate(via) if i == 0 or not np.array_equal(q, via[i - 1])]
+            if all(world.edge_free(a, b) for a, b in zip(via[:-1], via[1:])):
+                back = via
+        if back is None:
+            back = self._free_path(world, qs[-1], self.q_observation)
         timings["check_s"] += time.perf_counter() - t0
         if to_first is None:
             raise _Reject(f"{waypoints[0].label}: no collision-free way from the start")

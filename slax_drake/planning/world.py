@@ -215,6 +215,14 @@ class PlanningWorld:
     def edge_free(self, q0, q1) -> bool:
         return bool(self.checker.CheckEdgeCollisionFree(self.full_q(q0), self.full_q(q1)))
 
+    def edge_free_coarse(self, q0, q1, step: float) -> bool:
+        """Configurations ``step`` apart (largest joint change) along the segment, both ends included, are free:
+        a quick screen for searches; :meth:`edge_free` is the dense check."""
+        q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+        n = max(1, int(np.ceil(float(np.max(np.abs(q1 - q0))) / step)))
+        qs = [self.full_q(q0 + s * (q1 - q0)) for s in np.linspace(0.0, 1.0, n + 1)]
+        return all(self.checker.CheckConfigsCollisionFree(qs, parallelize=False))
+
     def tool_environment_hits(self, q_planned) -> list[str]:
         """The bodies of ``TOOL_RIGID_BODIES`` that meet the environment (within the padding) at q."""
         from pydrake.planning import RobotCollisionType
