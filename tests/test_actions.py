@@ -244,3 +244,24 @@ def test_disc_opening_equals_the_union_of_fitting_discs():
             kept += int(expected.sum())
         assert kept > 0
 
+
+
+@pytest.mark.parametrize("obj", [box("b", 0.0, 0.0, sx=0.16, sy=0.06, yaw=y) for y in (0.0, 0.4, 1.2, 2.55, 3.0)]
+                         + [cyl("c", 0.0, 0.0, d=0.16)])
+@pytest.mark.parametrize("sign", [+1, -1])
+def test_the_blade_meets_the_object_where_the_push_starts(obj, sign):
+    """The blade (a plate at the object's extreme x on its side, blade_width along y, its tip at q's y) touches
+    the object within 1 mm of travel: for turned boxes its extreme corner, for discs the point level with the
+    centre, lies within the blade's span."""
+    from shapely.geometry import LineString, Point
+
+    m = model()
+    fp = Footprint.of(obj)
+    ex, _ = fp.extents()
+    tip = m.blade_depth(fp, sign)
+    x_plate = fp.x - sign * ex + sign * 0.001  # the blade's face after 1 mm of travel
+    plate = LineString([(x_plate, tip - m.tool.blade_width), (x_plate, tip)])
+    # a disc's true outline (the polygon circumscribes it), a rectangle's exact one
+    outline = fp.polygon(16) if fp.shape == "box" else Point(fp.x, fp.y).buffer(fp.half_x, 256)
+    assert plate.intersects(outline)
+    assert tip >= fp.y - fp.extents()[1] + m.tool.push_contact_depth - 1e-12

@@ -6,7 +6,9 @@ actions exist. Everything is in the shelf frame S (x right, y into the shelf, z 
 Push (q, d) (paper Sec. III-IV: "the robot inserts the flat face of the blade next to the object and then pushes
 along the blade's surface normal"): the thin blade (faces normal to x, ``blade_width`` along y, ``blade_height``
 tall) goes in beside the object's extreme x (its axis-aligned extent) on the side opposite the push, from the
-object's front extreme to ``push_contact_depth`` behind it (at most its centre). It needs a free gap
+object's front extreme to where its blade spans the point of the object at that extreme x (a rectangle's extreme
+corner, a disc's point level with its centre; :meth:`ActionModel.blade_depth`), so that the blade meets the object
+where the push begins. It needs a free gap
 ``blade_gap`` wide there, between the object and its neighbour or the wall (:meth:`ActionModel.push_swept_rects`;
 default 3.5 cm: the 3 cm tube runs along the blade's upper edge, centred on its plane). q = (the centre of a
 ``blade_width`` lane beside the object, the blade tip's y, blade_height / 2), whatever the gap, as the planner
@@ -56,6 +58,7 @@ from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import SceneObject, Shelf
 
 FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
+CONTACT_INSET = 0.01  # the blade's tip this far past the point where it meets the object (m)
 BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
 
 
@@ -76,7 +79,7 @@ class ToolConfig:
     push_resolution: float = 0.05
     suction_resolution: float = 0.05
     min_push: float = 0.01
-    push_contact_depth: float = 0.03  # the blade's tip goes this far past the object's front extreme
+    push_contact_depth: float = 0.03  # the blade's tip goes at least this far past the object's front extreme
     cell: float = 0.005  # the path step and the hidden-space raster's cell
     # Rules of the first-order model (see the module docstring; the defaults follow the paper's FOSS):
     shaft_lane_check: bool = False  # strict: the shaft's way in from outside the shelf touches no object
@@ -237,7 +240,7 @@ class ActionModel:
             first_bad, stopper = hidden_cells, "hidden space"
         d_max = first_bad * t.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
         step = t.push_resolution
-        q = (lane_x, self.blade_depth(fp), t.blade_height / 2)
+        q = (lane_x, self.blade_depth(fp, sign), t.blade_height / 2)
         if d_max < t.min_push - 1e-12:
             rejected.append(Rejected(what, f"no room: {obj.name} is stopped by {stopper} at once"))
             return
@@ -373,7 +376,7 @@ class ActionModel:
         ex, ey = fp.extents()
         edge = fp.x - ex if sign > 0 else fp.x + ex
         blade_x = edge - sign * t.blade_width / 2  # q's x: the lane centre, whatever blade_gap is
-        y_tip = self.blade_depth(fp)
+        y_tip = self.blade_depth(fp, sign)
         y_face = fp.y - ey
         blade = (blade_x, (y_face + y_tip) / 2, t.blade_width / 2, max(1e-4, (y_tip - y_face) / 2))
         shaft = (blade_x, (self.y_front + y_tip) / 2, t.tube_diameter / 2, (y_tip - self.y_front) / 2)
@@ -413,10 +416,19 @@ class ActionModel:
         t = self.tool
         return obstacle_height + t.lift_height + lifted.size[2] + t.clearance <= self.shelf.height
 
-    def blade_depth(self, fp: Footprint) -> float:
-        """How deep the blade goes (y of its tip): ``push_contact_depth`` past the object's front extreme,
-        at most to its centre."""
-        return min(fp.y, fp.y - fp.extents()[1] + self.tool.push_contact_depth)
+    def blade_depth(self, fp: Footprint, sign: int) -> float:
+        """How deep the blade goes to push ``fp`` toward ``sign`` x (y of its tip, S): ``CONTACT_INSET`` past the
+        object's point at its extreme x on the blade's side (a rectangle's extreme corner, the front one of two
+        tied corners; a disc's point level with its centre), so that the blade, ``blade_width`` along y, meets
+        the object at that point; and at least ``push_contact_depth`` past the object's front extreme. (A blade
+        only 3 cm past the front of a turned box or a disc meets it late or not at all.)"""
+        if fp.shape == "cylinder":
+            y_contact = fp.y
+        else:
+            corners = fp.corners()
+            reach = -sign * corners[:, 0]  # pushing +x, the blade stands at the object's least x
+            y_contact = float(corners[reach >= reach.max() - 1e-9, 1].min())
+        return max(fp.y - fp.extents()[1] + self.tool.push_contact_depth, y_contact + CONTACT_INSET)
 
     def suction_contact(self, obj: SceneObject):
         """Where the cup seals on the object's camera-facing side (x, y, z), or None when it cannot."""
