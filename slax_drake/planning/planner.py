@@ -4,23 +4,35 @@
 
 1. tool waypoints of the action (:func:`slax_drake.planning.waypoints.action_waypoints`);
 2. IK per waypoint (:func:`slax_drake.planning.ik.solve_tool_pose`, ``LIMIT_MARGIN`` inside the position
-   limits), warm-started from the previous one; the
-   first from the start configuration and a few fixed seeds. A solution that collides is solved again with a
-   minimum-distance constraint;
+   limits; while the cup holds the object, ``HOLD_*_TOLERANCE``), warm-started from the previous one; the
+   first from the start configuration and a fixed seed library (the first solution joined to the start by a
+   collision-free straight line is taken, else up to ``MAX_FIRST_SOLUTIONS``). A solution that collides is
+   solved again with a minimum-distance constraint, unless the tool itself (the bodies rigid with the tool
+   frame) meets the environment, which no other solution of that pose avoids: then the action is rejected at
+   once. A waypoint the warm start cannot reach is solved from the seed library and the waypoints before it
+   are solved again backward from there (at most ``MAX_REANCHORS`` times);
 3. each straight tool segment is refined: where the joint-space straight line between two solutions moves the
    tool more than ``deviation_tolerance`` (``CARRIED_DEVIATION_TOLERANCE`` while carrying an object) from the
    Cartesian segment, the midpoint is solved and inserted;
 4. the free segments from the start to the first waypoint and from the last one back to the observation pose
-   are straight when that is collision-free, else found by :func:`slax_drake.planning.free_path.free_path`
+   are straight when that is collision-free; the way back then tries the way it came (last waypoint, first
+   waypoint, the way from the start reversed); else :func:`slax_drake.planning.free_path.free_path`
    (RRT-Connect around the robot itself); every joint segment is checked
    densely with SceneGraphCollisionChecker against the world as it stands and against the robot itself
    (:mod:`slax_drake.planning.world`: padding 2 mm to the environment, 3 mm between non-adjacent links; the
-   tool may touch the manipulated object only on the action's contact segments);
+   tool may touch the manipulated object only on the action's contact segments; a suctioned object is
+   attached to the tool on the segments that carry it and checked with 1 mm margin, see
+   :meth:`slax_drake.planning.world.PlanningWorld.carry`);
 5. Ruckig times the chain rest to rest (:mod:`slax_drake.planning.timing`), with dwells at rest where the
    waypoints ask for them; the suction command is on during the segments that carry the object.
 
-Any failure returns a :class:`Rejection` with a reason naming the waypoint (and the colliding body).
-Timings of each stage are kept (seconds of wall clock) for the benchmark.
+When the waypoints in front of the opening fail (out of reach, no free way), the action is planned again with
+the tool's tip 1 cm in front of the opening (``APPROACH_MARGINS``); when a carried segment fails, a suctioned
+object is carried across at shallower depths inside the shelf (:func:`slax_drake.planning.waypoints.
+pull_out_options`). IK solves and free paths are memoised per planning world (one decision's candidates share
+their approach waypoints). Any failure returns a :class:`Rejection` with a reason naming the waypoint (and the
+colliding body, or what the carried object meets); the reason of the last variant tried leads, the others
+follow in brackets. Timings of each stage are kept (seconds of wall clock) for the benchmark.
 """
 
 from __future__ import annotations
@@ -54,9 +66,9 @@ CARRIED_PROBES = 21  # poses along a colliding carried segment examined to name 
 # Rejections that a smaller approach margin may avoid (the waypoints in front of the opening and the free ways)
 MARGIN_DEPENDENT = ("pre-approach", "retract", "segment to pre-approach", "segment to retract",
                     "no collision-free way back")
-# Rejections that carrying a suctioned object across at another depth may avoid
-PULL_DEPENDENT = ("pull out", "translate", "push in", "segment to pull out", "segment to translate",
-                  "segment to push in")
+# Rejections that carrying a suctioned object across at another depth (hence, perhaps, lifted less) may avoid
+PULL_DEPENDENT = ("lift", "pull out", "translate", "push in", "lower", "segment to lift", "segment to pull out",
+                  "segment to translate", "segment to push in", "segment to lower")
 MAX_REANCHORS = 2  # waypoints re-solved from the seed library (and the path before them backward) per plan
 FREE_PATH_SEED = 0
 # IK tolerances while the cup holds the object (seal to release): the object turns and shifts with the tool, and
