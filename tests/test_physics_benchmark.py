@@ -95,3 +95,20 @@ def test_action_matches_within_2_cm_and_10_deg():
     assert action_matches(p, {"x": 0.1, "y": 0.021, "yaw": p["yaw"]}) is False
     assert action_matches(p, {"x": 0.1, "y": 0.0, "yaw": p["yaw"] - math.radians(11)}) is False
     assert action_matches(p, None) is None
+
+
+def test_a_diverged_simulation_is_a_failed_trial_not_a_crash(tmp_path, monkeypatch):
+    """Drake raises on a non-finite pose when a contact blows up; the benchmark records that scene as a Drake
+    failure with the reason and goes on (one unstable scene stopped a 40-scene run)."""
+    import slax_drake.systems.trial as trial
+
+    def blow_up(*args, **kwargs):
+        raise RuntimeError("SceneGraph encountered a non-finite value (e.g., NaN or infinity) on a pose input port.")
+
+    monkeypatch.setattr(trial, "run_trial", blow_up)
+    summary = run_physics_benchmark(CONFIG, out=tmp_path, **TINY)
+    row = summary["trials"][0]
+    assert row["drake_success"] is False and row["drake_result"].startswith("simulation diverged: SceneGraph")
+    assert summary["policies"]["bluction-dar"]["2"]["drake_success_rate"] == 0.0
+    saved = json.loads(trial_path(tmp_path, "bluction-dar", 2, 0).read_text())
+    assert saved["drake"]["result"] == row["drake_result"]

@@ -56,6 +56,14 @@ def action_matches(predicted: dict, outcome: dict | None) -> bool | None:
     return distance <= MATCH_DISTANCE and dyaw <= MATCH_YAW
 
 
+def _diverged_trial(message: str, wall_s: float) -> dict:
+    """The record of a Drake trial whose simulation blew up (a non-finite pose): a failure with no actions kept,
+    so that one unstable contact does not stop the benchmark."""
+    return {"success": False, "result": f"simulation diverged: {message.splitlines()[0][:200]}", "steps": 0,
+            "cost": 0.0, "visible_fraction": 0.0, "sim_time_s": None, "wall_s": round(wall_s, 3),
+            "real_time_factor": None, "actions": [], "final_objects": {}, "initial_objects": {}}
+
+
 def _run_scene(job) -> tuple[str, dict]:
     """Runs one scene in both simulators (in a worker process) and writes its result file."""
     config, station, policy_name, density, index, seed, out, sleep = job
@@ -73,8 +81,13 @@ def _run_scene(job) -> tuple[str, dict]:
     shelf = run_shelf_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                             suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
     t0 = time.perf_counter()
-    d = run_trial(TrialOptions(config=config, station=station, objects=density, seed=seed, policy=policy_name,
-                               out=None, target_size=target_size, horizon=horizon, sleep=sleep)).data
+    try:
+        d = run_trial(TrialOptions(config=config, station=station, objects=density, seed=seed, policy=policy_name,
+                                   out=None, target_size=target_size, horizon=horizon, sleep=sleep)).data
+    except RuntimeError as e:
+        if "non-finite" not in str(e):
+            raise
+        d = _diverged_trial(str(e), time.perf_counter() - t0)
     actions = []
     for a in d["actions"]:
         params = {k: a[k] for k in ("d", "dx", "dz") if k in a}
