@@ -221,10 +221,21 @@ def test_hidden_slivers_narrower_than_the_smallest_object_do_not_count():
     assert (open_with_disc(mask, 0) == mask).all()
 
 
+def shift_mask(mask: np.ndarray, rows: int, cols: int) -> np.ndarray:
+    """The mask translated by (rows, cols) cells; cells shifted in from outside are False."""
+    out = np.zeros_like(mask)
+    ny, nx = mask.shape
+    if abs(rows) >= ny or abs(cols) >= nx:
+        return out
+    src = mask[max(0, -rows): ny - max(0, rows), max(0, -cols): nx - max(0, cols)]
+    out[max(0, rows): ny - max(0, -rows), max(0, cols): nx - max(0, -cols)] = src
+    return out
+
+
 def test_disc_opening_equals_the_union_of_fitting_discs():
     """OpenCV's opening against the definition: a cell is kept when some disc lying entirely inside the mask
     (cells beyond the raster's edge are outside) covers it."""
-    from slax_drake.policies.floor import disc_offsets, open_with_disc, shift_mask
+    from slax_drake.policies.floor import disc_offsets, open_with_disc
 
     rng = np.random.default_rng(3)
     for radius in (1, 3, 6):

@@ -49,7 +49,7 @@ from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, pull_out_options
 from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import Suction, ToolConfig
-from slax_drake.policies.distribution import state_key
+from slax_drake.scene.model import state_key
 from slax_drake.scene.model import Scene
 from slax_drake.systems import robot as robot_model
 from slax_drake.systems.station import StationScenario, observation_positions

@@ -52,7 +52,7 @@ import math
 import numpy as np
 
 from slax_drake.policies.floor import (
-    NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc, shift_mask,
+    NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
 )
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import SceneObject, Shelf

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from slax_drake.scene.model import Scene, state_key  # state_key: re-exported for the policies and planner
+from slax_drake.scene.model import Scene, state_key
 
 PERCEPTION_MODES = ("ground-truth", "learned")
 

@@ -92,17 +92,6 @@ class FloorGrid:
         return hit.reshape(self.ny, self.nx)
 
 
-def shift_mask(mask: np.ndarray, rows: int, cols: int) -> np.ndarray:
-    """The mask translated by (rows, cols) cells; cells shifted in from outside are False."""
-    out = np.zeros_like(mask)
-    ny, nx = mask.shape
-    if abs(rows) >= ny or abs(cols) >= nx:
-        return out
-    src = mask[max(0, -rows): ny - max(0, rows), max(0, -cols): nx - max(0, cols)]
-    out[max(0, rows): ny - max(0, -rows), max(0, cols): nx - max(0, -cols)] = src
-    return out
-
-
 def erode(mask: np.ndarray) -> np.ndarray:
     """One-cell erosion (4-neighbourhood) that absorbs the raster's edge noise."""
     out = mask.copy()

@@ -30,7 +30,7 @@ import itertools
 from shapely.geometry import Polygon
 
 from slax_drake.policies.actions import ActionModel, Push, apply_action
-from slax_drake.policies.distribution import state_key
+from slax_drake.scene.model import state_key
 from slax_drake.policies.visibility import TargetOcclusion
 from slax_drake.scene.footprint import Footprint
 

@@ -259,7 +259,7 @@ class BluctionLookahead(DistributionPolicy):
         self.visited = set()
 
     def decide(self, obs):
-        from slax_drake.policies.distribution import state_key
+        from slax_drake.scene.model import state_key
 
         h = self.history
         self.visited.add(state_key(obs.known))
