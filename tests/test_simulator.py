@@ -1,7 +1,7 @@
 """The first-order shelf simulator never creates overlaps, and stops on the target's visibility."""
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 
 from slax_drake.policies.actions import Push, Suction
 from slax_drake.policies.registry import make_policy
@@ -11,8 +11,9 @@ from slax_drake.scene.footprint import Footprint, inside_shelf
 from slax_drake.scene.model import SceneObject, planar_pose
 
 
-@settings(max_examples=12, deadline=None)
+@settings(max_examples=12, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 10_000), n=st.sampled_from([4, 6, 8]))
+@example(seed=56, n=4)  # a placement stopped by the unseen target at the opening left the object hanging out
 def test_random_rollouts_never_overlap(sim_scenario, seed, n):
     scene = sample_scene(sim_scenario, n, seed, target_size=(0.06, 0.06, 0.06))
     model = make_policy("oracle-p+s", sim_scenario).action_model

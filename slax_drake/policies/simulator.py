@@ -124,7 +124,8 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         while k > 0 and first_blocked(path_in[k - 1:k]) == 0:
             k -= 1  # lowered there it would land on something it passed over: back out along the way in
         y_final = ys[k - 1] if k > 0 else None
-        if y_final is None or y_final + ey < -shelf.depth / 2 + 1e-9:
+        if y_final is None or y_final - ey < -shelf.depth / 2 + t.clearance - 1e-9:
+            # stopped before the whole object is back inside the bay: it is put back where it was
             return scene, "could not place the object: put back"
         moved = obj.moved_to(float(x_new), float(y_final))
         note = "" if k == n_in else "placement stopped early by an unseen obstacle"
