@@ -99,13 +99,13 @@ def reach_seeds(scenario) -> list[np.ndarray]:
     return seeds
 
 
-def reach_map(xs=(-0.25, -0.23, -0.2, -0.1, 0.0, 0.1, 0.2, 0.23, 0.25), ys=(-0.2, -0.1, 0.0, 0.1, 0.15, 0.2, 0.24)):
+def reach_map(path=None, xs=(-0.25, -0.23, -0.2, -0.1, 0.0, 0.1, 0.2, 0.23, 0.25), ys=(-0.2, -0.1, 0.0, 0.1, 0.15, 0.2, 0.24)):
     """Prints which blade centres (shelf x across, y deep) the sim station reaches collision-free in pushing pose:
     'Y' with the shaft at 0 (camera left of the tube), 'F' only with the wrist rolled over (shaft at pi), '-' with
     neither (from the seeds of ``reach_seeds``; a local solver, so '-' means not found, not proven impossible)."""
     from slax_drake.systems.station import MakeStation, load_station_scenario
 
-    scenario = load_station_scenario()
+    scenario = load_station_scenario(path) if path else load_station_scenario()
     ik = BladeIk(MakeStation(scenario, None, camera=False))
     z = blade_centre_height()
     roll = robot_model.PLANNED_JOINTS.index("wrist_roll_joint")
@@ -130,4 +130,5 @@ def reach_map(xs=(-0.25, -0.23, -0.2, -0.1, 0.0, 0.1, 0.2, 0.23, 0.25), ys=(-0.2
 
 
 if __name__ == "__main__":
-    reach_map()
+    import sys
+    reach_map(sys.argv[1] if len(sys.argv) > 1 else None)

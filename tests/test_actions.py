@@ -276,3 +276,17 @@ def test_the_blade_meets_the_object_where_the_push_starts(obj, sign):
     outline = fp.polygon(16) if fp.shape == "box" else Point(fp.x, fp.y).buffer(fp.half_x, 256)
     assert plate.intersects(outline)
     assert tip >= fp.y - fp.extents()[1] + m.tool.push_contact_depth - 1e-12
+
+
+def test_the_tube_must_reach_the_cup_contact_past_the_objects_in_front():
+    # "back" is seen above "front" from the camera, but its sealable face is lower than front's top: the
+    # horizontal tube would pass through front. Over-lower lifting would carry back over front on the way out.
+    back = box("back", 0.0, 0.12, sx=0.10, sy=0.08, sz=0.20)
+    front = box("front", 0.0, -0.10, sx=0.12, sy=0.08, sz=0.19)
+    contact = model().suction_contact(back)
+    assert contact[2] - 0.015 < 0.19  # the tube's underside is below front's top
+    strict = model().enumerate((back, front), pushes=False)
+    assert not [a for a in strict.feasible if a.name == "back"]
+    assert reasons(strict, "suction back") == ["tube approach to back blocked by front"]
+    loose = model(tube_approach_check=False).enumerate((back, front), pushes=False)
+    assert [a for a in loose.feasible if a.name == "back"]

@@ -200,11 +200,11 @@ def test_self_collision_is_checked_and_avoided(setup):
     assert any("itself" in b for b in world.colliding_bodies(folded))
     q_obs = observation_positions(station)
     assert world.config_free(q_obs)
-    # a goal beyond the torso: mirror the observation pose's shoulder pan; the straight way sweeps the arm
-    # through the torso or itself for this one, so the RRT is exercised
+    # a goal beyond the torso: mirror the observation pose's shoulder pan, elbow and wrist flex; the straight
+    # way sweeps the arm through the torso or itself for this one, so the RRT is exercised
     goal = q_obs.copy()
-    goal[1] = -q_obs[1]
-    goal[4] = -q_obs[4]
+    for joint in (1, 4, 6):
+        goal[joint] = -q_obs[joint]
     assert world.config_free(goal) and not world.edge_free(q_obs, goal)
     path = free_path(world, q_obs, goal, joint_limits(), LIMIT_MARGIN, seed=0)
     assert path is not None and np.array_equal(path[0], q_obs) and np.array_equal(path[-1], goal)
