@@ -45,6 +45,12 @@ def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
     assert e["actions_judged"] == sum(a["matched"] is not None for a in drake["actions"])
     for a in drake["actions"]:
         assert a["matched"] == action_matches(a["predicted"], a["outcome"])
+        assert a["planning_s"] > 0.0 and a["rejected_before"] >= 0
+        assert set(a["motion_timings"]) == {"ik_s", "check_s", "timing_s"}
+    planned = sorted(a["planning_s"] for a in drake["actions"])
+    assert e["planned_actions"] == len(planned) == drake["steps"]
+    if planned:
+        assert planned[0] - 1e-3 <= e["planning_median_s"] <= e["planning_p90_s"] <= planned[-1] + 1e-3
     assert set(drake["final_objects"]) == {"object_0", "object_1"}
 
 

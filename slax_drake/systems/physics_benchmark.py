@@ -91,8 +91,11 @@ def _run_scene(job) -> tuple[str, dict]:
     actions = []
     for a in d["actions"]:
         params = {k: a[k] for k in ("d", "dx", "dz") if k in a}
+        timings = (a.get("motion") or {}).get("timings", {})
         actions.append({"type": a["type"], "object": a["object"], **params, "predicted": a["predicted"],
-                        "outcome": a["outcome"], "matched": action_matches(a["predicted"], a["outcome"])})
+                        "outcome": a["outcome"], "matched": action_matches(a["predicted"], a["outcome"]),
+                        "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
+                        "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}})
     final = d["final_objects"]
     drake = {
         "success": d["success"], "result": d["result"], "steps": d["steps"], "cost": d["cost"],
@@ -220,6 +223,7 @@ def summarise(results: list[dict], policies, densities) -> dict:
             "actions_with_outcome": sum(1 for a in d["actions"] if a["matched"] is not None),
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],
             "drake_wall_s": d["wall_s"],
+            "planning_s": [a["planning_s"] for a in d["actions"] if a.get("planning_s") is not None],
         })
     for p in policies:
         per = {}
@@ -240,9 +244,19 @@ def summarise(results: list[dict], policies, densities) -> dict:
                 "toppled": sum(t["toppled"] for t in sel), "dropped": sum(t["dropped"] for t in sel),
                 "median_real_time_factor": _median([t["real_time_factor"] for t in sel
                                                     if t["real_time_factor"] is not None]),
+                **_planning_stats([s for t in sel for s in t["planning_s"]]),
             }
         summary["policies"][p] = per
     return summary
+
+
+def _planning_stats(seconds: list[float]) -> dict:
+    """Median and 90th percentile of the planning time per executed action (s): every candidate motion planned
+    for that decision, the rejected ones first included (IK, collision checks, RRT, Ruckig)."""
+    if not seconds:
+        return {"planned_actions": 0, "planning_median_s": None, "planning_p90_s": None}
+    return {"planned_actions": len(seconds), "planning_median_s": round(float(np.median(seconds)), 3),
+            "planning_p90_s": round(float(np.percentile(seconds, 90)), 3)}
 
 
 def markdown_table(summary: dict) -> str:
@@ -252,10 +266,13 @@ def markdown_table(summary: dict) -> str:
     def num(v):
         return "-" if v is None else f"{v:.1f}"
 
+    def _seconds(v):
+        return "-" if v is None else f"{v:.2f}"
+
     lines = ["| Policy | Objects | Scenes | Success (shelf sim) | Success (Drake) | Median steps (shelf sim) | "
              "Median steps (Drake) | Same outcome | Actions matching prediction | Toppled | Dropped | "
-             "Real-time factor |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "Real-time factor | Planning per action, median / p90 (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for p, per in summary["policies"].items():
         for key, e in per.items():
             match = "-" if e["match_rate"] is None else \
@@ -263,13 +280,16 @@ def markdown_table(summary: dict) -> str:
             lines.append(f"| {p} | {'All' if key == 'all' else key} | {e['trials']} | {pct(e['shelf_success_rate'])} | "
                          f"{pct(e['drake_success_rate'])} | {num(e['shelf_median_steps'])} | "
                          f"{num(e['drake_median_steps'])} | {pct(e['same_outcome_rate'])} | {match} | "
-                         f"{e['toppled']} | {e['dropped']} | {num(e['median_real_time_factor'])} |")
+                         f"{e['toppled']} | {e['dropped']} | {num(e['median_real_time_factor'])} | "
+                         f"{_seconds(e.get('planning_median_s'))} / {_seconds(e.get('planning_p90_s'))} |")
     meta = summary.get("meta", {})
     lines += ["", f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
               f"ground-truth distributions, the same scenes in both simulators. Steps over successful trials. "
               f"An action matches when the object's physical pose at the next decision is within "
               f"{100 * MATCH_DISTANCE:.0f} cm and {math.degrees(MATCH_YAW):.0f} deg of the first-order prediction. "
               f"Toppled/dropped: objects tilted > 20 deg / outside the bay at the end of the Drake trial. "
+              f"Planning per executed action: every candidate motion planned for that decision (rejected ones "
+              f"included), one worker process each. "
               f"Object sleep {'on' if meta.get('sleep') else 'off'}."]
     return "\n".join(lines) + "\n"
 
