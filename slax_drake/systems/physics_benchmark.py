@@ -162,7 +162,9 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     jobs = [(config, station, p, n, i, scene_seed(seed, n, i), str(out), sleep)
             for p in policies for n in densities for i in range(scenes_per_density)
             if not trial_path(out, p, n, i).is_file()]
-    jobs.sort(key=lambda j: (-j[3], j[4], j[2]))  # the longest (densest) first keeps the pool busy to the end
+    # Scene index by scene index, densest first within each: a run stopped early holds the same number of scenes
+    # of every density (and the long dense trials are spread over the run).
+    jobs.sort(key=lambda j: (j[4], -j[3], j[2]))
     start = time.perf_counter()
     if jobs:
         from tqdm import tqdm

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 
-from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
+from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialError, TrialOptions
 
 
 def register(subparsers) -> None:
@@ -17,8 +18,12 @@ def register(subparsers) -> None:
     )
     p.add_argument("--config", default="sim_configs/sim_shelf.yaml", help="scene scenario YAML")
     p.add_argument("--station", default=None, help="station YAML (default: sim_configs/station_<config stem>.yaml)")
-    p.add_argument("--objects", type=int, default=DEFAULT_OBJECTS, help=f"occluding objects (default {DEFAULT_OBJECTS})")
-    p.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"scene seed (default {DEFAULT_SEED})")
+    p.add_argument("--objects", type=int, default=None, help=f"occluding objects (default {DEFAULT_OBJECTS})")
+    p.add_argument("--seed", type=int, default=None, help=f"scene seed (default {DEFAULT_SEED})")
+    p.add_argument("--benchmark-scene", default=None, metavar="N:INDEX",
+                   help="the scene INDEX of N objects of the Table I protocol in --config (e.g. --config "
+                   "sim_configs/table1.yaml --benchmark-scene 8:1): the scene seed, target size, horizon and station "
+                   "that 'slax-drake benchmark' and the physics benchmark use; replaces --objects and --seed")
     p.add_argument("--policy", default="bluction-dar", help="policy name (default bluction-dar)")
     p.add_argument("--perception", default="ground-truth", choices=("ground-truth", "learned"))
     p.add_argument("--meshcat", action="store_true", help="serve the live view on localhost and print its URL")
@@ -31,12 +36,39 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
+    """``opts`` set to the protocol scene ``spec`` = "N:INDEX" of ``opts.config``: N objects, the scene seed
+    ``scene_seed(protocol seed, N, INDEX)``, the protocol's first target size, H = horizon_per_object * N and, unless
+    a station is given, the physics benchmark's default station: the very trial the physics benchmark runs."""
+    from slax_drake.config import load_scenario
+    from slax_drake.policies.benchmark import scene_seed
+    from slax_drake.systems.physics_benchmark import default_station
+
+    try:
+        density, index = (int(v) for v in spec.split(":"))
+    except ValueError:
+        raise TrialError(f"--benchmark-scene takes N:INDEX, e.g. 8:1 (got {spec!r})") from None
+    if density < 1 or index < 0:
+        raise TrialError(f"--benchmark-scene needs N >= 1 objects and INDEX >= 0 (got {spec!r})")
+    scenario = load_scenario(opts.config)
+    protocol = scenario.protocol
+    target_size = tuple(float(v) for v in scenario.target.sizes[0])
+    return dataclasses.replace(opts, objects=density, seed=scene_seed(protocol.seed, density, index),
+                               target_size=target_size, horizon=protocol.horizon_per_object * density,
+                               station=opts.station or default_station(opts.config))
+
+
 def run(args: argparse.Namespace) -> int:
     from slax_drake.systems.trial import run_trial, write_trial
 
-    opts = TrialOptions(config=args.config, objects=args.objects, seed=args.seed, policy=args.policy,
+    opts = TrialOptions(config=args.config, objects=DEFAULT_OBJECTS if args.objects is None else args.objects,
+                        seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy,
                         perception=args.perception, station=args.station, meshcat=args.meshcat, html=args.html,
                         out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep)
+    if args.benchmark_scene is not None:
+        if args.objects is not None or args.seed is not None:
+            raise TrialError("--benchmark-scene replaces --objects and --seed: give one or the other")
+        opts = benchmark_scene_options(opts, args.benchmark_scene)
     meshcat = None
     if args.meshcat or args.html:
         from pydrake.geometry import Meshcat
