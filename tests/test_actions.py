@@ -290,3 +290,14 @@ def test_the_tube_must_reach_the_cup_contact_past_the_objects_in_front():
     assert reasons(strict, "suction back") == ["tube approach to back blocked by front"]
     loose = model(tube_approach_check=False).enumerate((back, front), pushes=False)
     assert [a for a in loose.feasible if a.name == "back"]
+
+
+def test_an_object_hanging_too_much_weight_off_the_cup_is_not_suctioned():
+    # 0.08 x 0.20 x 0.10 m at 400 kg/m^3 = 0.64 kg, its centre 0.10 m behind its face: 0.63 N m off the cup.
+    long = box("long", 0.0, 0.0, sx=0.08, sy=0.20, sz=0.10)
+    short = box("short", 0.0, 0.0, sx=0.08, sy=0.08, sz=0.10)  # 0.256 kg, 0.04 m: 0.10 N m
+    held = model(max_suction_moment=0.4)
+    assert reasons(held.enumerate((long,), pushes=False), "suction long") == [
+        "long's weight hangs 0.63 N m off the cup > 0.40 N m"]
+    assert [a for a in held.enumerate((short,), pushes=False).feasible if a.name == "short"]
+    assert [a for a in model().enumerate((long,), pushes=False).feasible if a.name == "long"]
