@@ -118,3 +118,22 @@ def test_a_diverged_simulation_is_a_failed_trial_not_a_crash(tmp_path, monkeypat
     assert summary["policies"]["bluction-dar"]["2"]["drake_success_rate"] == 0.0
     saved = json.loads(trial_path(tmp_path, "bluction-dar", 2, 0).read_text())
     assert saved["drake"]["result"] == row["drake_result"]
+
+
+def test_tool_rules_are_typed_and_bad_ones_exit_with_code_2(capsys, tmp_path):
+    from slax_drake.policies.registry import parse_tool_rules
+
+    assert parse_tool_rules(["max_suction_moment=0.4", "tube_approach_check=false"]) == {
+        "max_suction_moment": 0.4, "tube_approach_check": False}
+    for bad, message in ((["no_such_rule=1"], "ToolConfig field"), (["max_suction_moment=heavy"], "needs a float"),
+                         (["tube_approach_check=maybe"], "needs a bool")):
+        assert main(["--config", CONFIG, "--densities", "2", "--scenes-per-density", "1", "--out", str(tmp_path),
+                     *[a for rule in bad for a in ("--tool-rule", rule)]]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_resumed_run_refuses_scene_files_made_under_other_rules(tiny):
+    _, out = tiny
+    with pytest.raises(PhysicsBenchmarkError, match="tool rules"):
+        run_physics_benchmark(CONFIG, out=out, tool_rules={"max_suction_moment": 0.4}, **TINY)

@@ -16,6 +16,34 @@ class UnknownPolicyError(UserError):
     """A policy name that does not exist."""
 
 
+def parse_tool_rules(items) -> dict:
+    """``["max_suction_moment=0.4", "tube_approach_check=false"]`` -> typed ToolConfig overrides; UserError for an
+    unknown field or a value of the wrong type."""
+    import dataclasses
+
+    fields = {f.name: f for f in dataclasses.fields(ToolConfig)}
+    defaults = ToolConfig()
+    rules = {}
+    for item in items or ():
+        key, sep, text = item.partition("=")
+        key, text = key.strip(), text.strip()
+        if not sep or key not in fields:
+            raise UserError(f"--tool-rule takes FIELD=VALUE with a ToolConfig field (got {item!r}; fields: "
+                            f"{', '.join(fields)})")
+        kind = type(getattr(defaults, key))
+        try:
+            if kind is bool:
+                if text.lower() not in ("true", "false"):
+                    raise ValueError(text)
+                value = text.lower() == "true"
+            else:
+                value = kind(text)
+        except ValueError:
+            raise UserError(f"--tool-rule {key} needs a {kind.__name__} (got {text!r})") from None
+        rules[key] = value
+    return rules
+
+
 def tool_config(scenario: Scenario, **overrides) -> ToolConfig:
     return ToolConfig(object_density=scenario.objects.density, clearance=scenario.objects.clearance, **overrides)
 

@@ -66,7 +66,7 @@ def _diverged_trial(message: str, wall_s: float) -> dict:
 
 def _run_scene(job) -> tuple[str, dict]:
     """Runs one scene in both simulators (in a worker process) and writes its result file."""
-    config, station, policy_name, density, index, seed, out, sleep = job
+    config, station, policy_name, density, index, seed, out, sleep, tool_rules = job
     from slax_drake.config import load_scenario
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial as run_shelf_trial
@@ -77,13 +77,14 @@ def _run_scene(job) -> tuple[str, dict]:
     target_size = tuple(float(v) for v in scenario.target.sizes[0])
     horizon = scenario.protocol.horizon_per_object * density
     scene = sample_scene(scenario, density, seed, target_size=target_size)
-    policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=horizon)
+    policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=horizon, tool_overrides=tool_rules)
     shelf = run_shelf_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                             suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
     t0 = time.perf_counter()
     try:
         d = run_trial(TrialOptions(config=config, station=station, objects=density, seed=seed, policy=policy_name,
-                                   out=None, target_size=target_size, horizon=horizon, sleep=sleep)).data
+                                   out=None, target_size=target_size, horizon=horizon, sleep=sleep,
+                                   tool_rules=tool_rules)).data
     except RuntimeError as e:
         if "non-finite" not in str(e):
             raise
@@ -108,7 +109,7 @@ def _run_scene(job) -> tuple[str, dict]:
     }
     shelf_keep = {k: shelf[k] for k in ("success", "steps", "cost", "reason", "actions", "notes", "visible_fraction")}
     result = {"policy": policy_name, "density": density, "index": index, "seed": seed, "shelf": shelf_keep,
-              "drake": drake}
+              "drake": drake, "tool_rules": tool_rules}
     path = trial_path(Path(out), policy_name, density, index)
     write_text_atomic(path, json.dumps(result, indent=1, sort_keys=True))
     return str(path), result
@@ -130,11 +131,14 @@ def default_station(config: str) -> str:
 
 def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: int | None = None,
                           out: str | Path = "results/physics", workers: int = 1, densities=None,
-                          station: str | None = None, sleep: bool = False, progress: bool = True) -> dict:
+                          station: str | None = None, sleep: bool = False, progress: bool = True,
+                          tool_rules: dict | None = None) -> dict:
     """Runs the missing scenes (both simulators) and writes physics.json and physics.md; returns the summary.
 
     ``config``: the protocol scenario YAML (e.g. sim_configs/table1.yaml); ``seed``: protocol seed (default the
-    protocol's); ``densities``: default the protocol's; ``station``: default :func:`default_station`.
+    protocol's); ``densities``: default the protocol's; ``station``: default :func:`default_station`;
+    ``tool_rules``: ToolConfig overrides (rule variants) for both simulators, recorded in every scene file (a
+    resumed run refuses scene files made under other rules).
     """
     from slax_drake.config import load_scenario
     from slax_drake.policies.benchmark import scene_seed
@@ -159,7 +163,8 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     if not Path(station).is_file():
         raise PhysicsBenchmarkError(f"station file not found: {station}")
     out = Path(out)
-    jobs = [(config, station, p, n, i, scene_seed(seed, n, i), str(out), sleep)
+    tool_rules = dict(tool_rules or {})
+    jobs = [(config, station, p, n, i, scene_seed(seed, n, i), str(out), sleep, tool_rules)
             for p in policies for n in densities for i in range(scenes_per_density)
             if not trial_path(out, p, n, i).is_file()]
     # Scene index by scene index, densest first within each: a run stopped early holds the same number of scenes
@@ -181,9 +186,14 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
         bar.close()
     elapsed = time.perf_counter() - start
     trials = load_results(out, policies, densities, scenes_per_density)
+    for r in trials:
+        if (r.get("tool_rules") or {}) != tool_rules:
+            raise PhysicsBenchmarkError(f"{trial_path(out, r['policy'], r['density'], r['index'])} was made with tool "
+                                        f"rules {r.get('tool_rules') or {}}, not {tool_rules}: use another --out")
     summary = summarise(trials, policies, densities)
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
                        "seed": seed, "densities": densities, "sleep": sleep, "workers": workers,
+                       "tool_rules": tool_rules,
                        "wall_seconds_this_run": round(elapsed, 1), "match_distance_m": MATCH_DISTANCE,
                        "match_yaw_deg": math.degrees(MATCH_YAW)}
     write_text_atomic(out / "physics.json", json.dumps(summary, indent=1, sort_keys=True))
@@ -292,7 +302,9 @@ def markdown_table(summary: dict) -> str:
               f"Toppled/dropped: objects tilted > 20 deg / outside the bay at the end of the Drake trial. "
               f"Planning per executed action: every candidate motion planned for that decision (rejected ones "
               f"included), one worker process each. "
-              f"Object sleep {'on' if meta.get('sleep') else 'off'}."]
+              f"Object sleep {'on' if meta.get('sleep') else 'off'}."
+              + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
+                 if meta.get("tool_rules") else "")]
     return "\n".join(lines) + "\n"
 
 
@@ -309,6 +321,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=None, help="protocol seed (default: the protocol's)")
     p.add_argument("--workers", type=int, default=1, help="parallel worker processes (default: 1)")
     p.add_argument("--sleep", action="store_true", help="object sleep in the Drake trials")
+    p.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
+                   help="an action-model rule variant for both simulators (a ToolConfig field of "
+                   "slax_drake/policies/actions.py, e.g. max_suction_moment=0.4); repeatable")
     p.add_argument("--out", default="results/physics", help="output folder (default: results/physics)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p
@@ -316,6 +331,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def run_from_args(args: argparse.Namespace) -> int:
     from slax_drake.config import load_scenario
+    from slax_drake.policies.registry import parse_tool_rules
 
     scenario = load_scenario(args.config)
     n = args.scenes_per_density if args.scenes_per_density is not None else scenario.protocol.scenes_per_density
@@ -325,7 +341,8 @@ def run_from_args(args: argparse.Namespace) -> int:
         raise PhysicsBenchmarkError(f"--densities must be comma-separated integers (got '{args.densities}')")
     summary = run_physics_benchmark(args.config, [p.strip() for p in args.policies.split(",") if p.strip()], n,
                                     seed=args.seed, out=args.out, workers=args.workers, densities=densities,
-                                    station=args.station, sleep=args.sleep, progress=not args.no_progress)
+                                    station=args.station, sleep=args.sleep, progress=not args.no_progress,
+                                    tool_rules=parse_tool_rules(args.tool_rule))
     for p, per in summary["policies"].items():
         e = per["all"]
         match = "-" if e["match_rate"] is None else f"{100 * e['match_rate']:.0f} %"

@@ -44,6 +44,7 @@ class TrialOptions:
     sleep: bool = False  # lock resting objects out of the physics step (slax_drake.systems.sleep.ObjectSleep)
     target_size: tuple | None = None  # (x, y, z) m; default: drawn from the scenario's target sizes
     horizon: int | None = None  # actions at most; default: 2 per object
+    tool_rules: dict | None = None  # ToolConfig overrides (rule variants) for the policy and the planner
 
 
 @dataclasses.dataclass
@@ -85,11 +86,12 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     target_size = None if opts.target_size is None else tuple(float(v) for v in opts.target_size)
     scene = sample_scene(scenario, opts.objects, seed=opts.seed, target_size=target_size)
     horizon = opts.horizon if opts.horizon is not None else 2 * opts.objects
-    policy = make_policy(opts.policy, scenario, perception=opts.perception, horizon=horizon)
+    policy = make_policy(opts.policy, scenario, perception=opts.perception, horizon=horizon,
+                         tool_overrides=opts.tool_rules)
     if not hasattr(policy, "decide") or not hasattr(policy, "distribution"):
         raise TrialError(f"policy '{opts.policy}' cannot run in a Drake trial (it needs the true scene: an oracle)")
     policy.reset(scene)
-    planner = MotionPlanner(station, tool_config(scenario))
+    planner = MotionPlanner(station, tool_config(scenario, **(opts.tool_rules or {})))
 
     builder = DiagramBuilder()
     station_diagram = builder.AddNamedSystem("station", MakeStation(station, scene, meshcat=meshcat))
