@@ -49,8 +49,7 @@ from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, pull_out_options
 from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import Suction, ToolConfig
-from slax_drake.scene.model import state_key
-from slax_drake.scene.model import Scene
+from slax_drake.scene.model import Scene, state_key
 from slax_drake.systems import robot as robot_model
 from slax_drake.systems.station import StationScenario, observation_positions
 
@@ -231,9 +230,7 @@ class MotionPlanner:
                 return q
             colliding.append(q)
         if colliding:
-            tool_hits = world.tool_environment_hits(colliding[0])
-            if tool_hits:
-                raise _PoseReject(f"{wp.label}: the tool collides at its pose: {', '.join(tool_hits)} (environment)")
+            _reject_if_the_tool_hits(world, wp, colliding[0])
             world.ik_tool_contact(name, wp.contact)
             try:
                 for guess in colliding[:MAX_DISTANCE_RETRIES] + list(guesses[:1]):
@@ -290,9 +287,7 @@ class MotionPlanner:
             if len(found) >= MAX_FIRST_SOLUTIONS:
                 break
         if not found and colliding:
-            tool_hits = world.tool_environment_hits(colliding[0])
-            if tool_hits:
-                raise _PoseReject(f"{wp.label}: the tool collides at its pose: {', '.join(tool_hits)} (environment)")
+            _reject_if_the_tool_hits(world, wp, colliding[0])
             try:
                 found.append(self._solve_waypoint(world, wp, colliding[:1] + seeds[:1], name, timings))
             except _Reject:
@@ -460,6 +455,14 @@ class MotionPlanner:
         left, d1 = self._refine(world, qa, Xa, q_mid, X_mid, wp, timings, depth + 1)
         right, d2 = self._refine(world, q_mid, X_mid, qb, Xb, wp, timings, depth + 1)
         return left + [q_mid] + right, max(d1, d2)
+
+
+def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q) -> None:
+    """Raises _PoseReject when, at the waypoint's solution q, a body rigid with the tool meets the environment:
+    every other solution of that tool pose meets it too."""
+    tool_hits = world.tool_environment_hits(q)
+    if tool_hits:
+        raise _PoseReject(f"{wp.label}: the tool collides at its pose: {', '.join(tool_hits)} (environment)")
 
 
 def _carried_hits(world, qa, qb) -> str | None:

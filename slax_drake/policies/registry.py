@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from slax_drake.config import Scenario
 from slax_drake.errors import UserError
 from slax_drake.policies.actions import ActionModel, ToolConfig
@@ -19,9 +21,7 @@ class UnknownPolicyError(UserError):
 def parse_tool_rules(items) -> dict:
     """``["max_suction_moment=0.4", "tube_approach_check=false"]`` -> typed ToolConfig overrides; UserError for an
     unknown field or a value of the wrong type."""
-    import dataclasses
-
-    fields = {f.name: f for f in dataclasses.fields(ToolConfig)}
+    fields = [f.name for f in dataclasses.fields(ToolConfig)]
     defaults = ToolConfig()
     rules = {}
     for item in items or ():

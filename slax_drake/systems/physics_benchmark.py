@@ -23,6 +23,7 @@ resumes); when all are in, ``physics.json`` and ``physics.md`` are (re)written f
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import multiprocessing
@@ -74,17 +75,16 @@ def _run_scene(job) -> tuple[str, dict]:
     from slax_drake.systems.trial import TrialOptions, run_trial
 
     scenario = load_scenario(config)
-    target_size = tuple(float(v) for v in scenario.target.sizes[0])
-    horizon = scenario.protocol.horizon_per_object * density
-    scene = sample_scene(scenario, density, seed, target_size=target_size)
-    policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=horizon, tool_overrides=tool_rules)
-    shelf = run_shelf_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
+    opts = protocol_trial(TrialOptions(config=config, station=station, policy=policy_name, out=None, sleep=sleep,
+                                       tool_rules=tool_rules), scenario, density, seed)
+    scene = sample_scene(scenario, density, seed, target_size=opts.target_size)
+    policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=opts.horizon,
+                         tool_overrides=tool_rules)
+    shelf = run_shelf_trial(scene, policy, opts.horizon, threshold=scenario.target.visibility_threshold,
                             suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
     t0 = time.perf_counter()
     try:
-        d = run_trial(TrialOptions(config=config, station=station, objects=density, seed=seed, policy=policy_name,
-                                   out=None, target_size=target_size, horizon=horizon, sleep=sleep,
-                                   tool_rules=tool_rules)).data
+        d = run_trial(opts).data
     except RuntimeError as e:
         if "non-finite" not in str(e):
             raise
@@ -113,6 +113,17 @@ def _run_scene(job) -> tuple[str, dict]:
     path = trial_path(Path(out), policy_name, density, index)
     write_text_atomic(path, json.dumps(result, indent=1, sort_keys=True))
     return str(path), result
+
+
+def protocol_trial(opts, scenario, density: int, seed: int):
+    """``opts`` (TrialOptions) set to the protocol scene of ``density`` objects and scene seed ``seed`` of
+    ``scenario`` (loaded from ``opts.config``): the protocol's first target size, H = horizon_per_object * density
+    and, unless ``opts`` names a station, :func:`default_station`. The one definition of a protocol scene's Drake
+    trial, shared by this benchmark and ``slax-drake trial --benchmark-scene``."""
+    return dataclasses.replace(opts, objects=density, seed=seed,
+                               target_size=tuple(float(v) for v in scenario.target.sizes[0]),
+                               horizon=scenario.protocol.horizon_per_object * density,
+                               station=opts.station or default_station(opts.config))
 
 
 def default_station(config: str) -> str:
@@ -164,6 +175,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
         raise PhysicsBenchmarkError(f"station file not found: {station}")
     out = Path(out)
     tool_rules = dict(tool_rules or {})
+    _check_rules(out, policies, densities, scenes_per_density, tool_rules)
     jobs = [(config, station, p, n, i, scene_seed(seed, n, i), str(out), sleep, tool_rules)
             for p in policies for n in densities for i in range(scenes_per_density)
             if not trial_path(out, p, n, i).is_file()]
@@ -186,10 +198,6 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
         bar.close()
     elapsed = time.perf_counter() - start
     trials = load_results(out, policies, densities, scenes_per_density)
-    for r in trials:
-        if (r.get("tool_rules") or {}) != tool_rules:
-            raise PhysicsBenchmarkError(f"{trial_path(out, r['policy'], r['density'], r['index'])} was made with tool "
-                                        f"rules {r.get('tool_rules') or {}}, not {tool_rules}: use another --out")
     summary = summarise(trials, policies, densities)
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
                        "seed": seed, "densities": densities, "sleep": sleep, "workers": workers,
@@ -199,6 +207,23 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     write_text_atomic(out / "physics.json", json.dumps(summary, indent=1, sort_keys=True))
     write_text_atomic(out / "physics.md", markdown_table(summary))
     return summary
+
+
+def _check_rules(out: Path, policies, densities, scenes_per_density, tool_rules: dict) -> None:
+    """Refuses, before any scene runs, an output folder holding scene files made under other tool rules."""
+    for p in policies:
+        for n in densities:
+            for i in range(scenes_per_density):
+                path = trial_path(out, p, n, i)
+                if not path.is_file():
+                    continue
+                try:
+                    made_with = json.loads(path.read_text()).get("tool_rules") or {}
+                except (OSError, json.JSONDecodeError, AttributeError) as e:
+                    raise PhysicsBenchmarkError(f"{path}: unreadable result file ({e}); delete it to rerun that scene")
+                if made_with != tool_rules:
+                    raise PhysicsBenchmarkError(f"{path} was made with tool rules {made_with}, not {tool_rules}: "
+                                                f"use another --out")
 
 
 def load_results(out: Path, policies, densities, scenes_per_density) -> list[dict]:
@@ -278,7 +303,7 @@ def markdown_table(summary: dict) -> str:
     def num(v):
         return "-" if v is None else f"{v:.1f}"
 
-    def _seconds(v):
+    def secs(v):
         return "-" if v is None else f"{v:.2f}"
 
     lines = ["| Policy | Objects | Scenes | Success (shelf sim) | Success (Drake) | Median steps (shelf sim) | "
@@ -293,7 +318,7 @@ def markdown_table(summary: dict) -> str:
                          f"{pct(e['drake_success_rate'])} | {num(e['shelf_median_steps'])} | "
                          f"{num(e['drake_median_steps'])} | {pct(e['same_outcome_rate'])} | {match} | "
                          f"{e['toppled']} | {e['dropped']} | {num(e['median_real_time_factor'])} | "
-                         f"{_seconds(e.get('planning_median_s'))} / {_seconds(e.get('planning_p90_s'))} |")
+                         f"{secs(e.get('planning_median_s'))} / {secs(e.get('planning_p90_s'))} |")
     meta = summary.get("meta", {})
     lines += ["", f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
               f"ground-truth distributions, the same scenes in both simulators. Steps over successful trials. "

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 
 from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialError, TrialOptions
 
@@ -42,7 +41,7 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
     a station is given, the physics benchmark's default station: the very trial the physics benchmark runs."""
     from slax_drake.config import load_scenario
     from slax_drake.policies.benchmark import scene_seed
-    from slax_drake.systems.physics_benchmark import default_station
+    from slax_drake.systems.physics_benchmark import protocol_trial
 
     try:
         density, index = (int(v) for v in spec.split(":"))
@@ -51,11 +50,7 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
     if density < 1 or index < 0:
         raise TrialError(f"--benchmark-scene needs N >= 1 objects and INDEX >= 0 (got {spec!r})")
     scenario = load_scenario(opts.config)
-    protocol = scenario.protocol
-    target_size = tuple(float(v) for v in scenario.target.sizes[0])
-    return dataclasses.replace(opts, objects=density, seed=scene_seed(protocol.seed, density, index),
-                               target_size=target_size, horizon=protocol.horizon_per_object * density,
-                               station=opts.station or default_station(opts.config))
+    return protocol_trial(opts, scenario, density, scene_seed(scenario.protocol.seed, density, index))
 
 
 def run(args: argparse.Namespace) -> int:
