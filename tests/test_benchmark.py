@@ -46,3 +46,20 @@ def test_ray_backend_tiny_run(sim_scenario, tmp_path):
     table = run_benchmark(sim_scenario, ["oracle-p"], 1, 0, tmp_path, densities=[4], workers=1, backend="ray",
                           progress=False)
     assert table["policies"]["oracle-p"]["4"]["trials"] == 1
+
+
+def test_tool_rules_are_recorded_and_a_folder_of_other_rules_is_refused(sim_scenario, tmp_path, capsys):
+    from slax_drake.policies.benchmark import BenchmarkError
+
+    rules = {"max_suction_moment": 0.4}
+    table = run_benchmark(sim_scenario, ["bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False,
+                          tool_rules=rules)
+    assert table["meta"]["tool_rules"] == rules
+    trial = json.loads((tmp_path / "trials" / "bluction-dar" / "04_0000.json").read_text())
+    assert trial["tool_rules"] == rules
+    assert "max_suction_moment = 0.4" in (tmp_path / "table1.md").read_text()
+    with pytest.raises(BenchmarkError, match="made with tool rules"):
+        run_benchmark(sim_scenario, ["bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False)
+    assert main(["benchmark", "--policies", "dar", "--tool-rule", "max_suction_moment=heavy",
+                 "--out", str(tmp_path / "x")]) == 2
+    assert "needs a float" in capsys.readouterr().err

@@ -40,34 +40,45 @@ def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
 
 def _run_one(job):
     """Runs one trial in a worker; returns (path, trial dict)."""
-    scenario, policy_name, density, index, seed, perception, out = job
+    scenario, policy_name, density, index, seed, perception, out, tool_rules = job
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial
     from slax_drake.scene.sampling import sample_scene
 
     scene = sample_scene(scenario, density, seed, target_size=tuple(scenario.target.sizes[0]))
     horizon = scenario.protocol.horizon_per_object * density
-    policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon)
+    policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules)
     result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                        suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
     result["index"] = index
+    if tool_rules:
+        result["tool_rules"] = tool_rules
     path = _trial_path(Path(out), policy_name, density, index)
     write_text_atomic(path, json.dumps(result, sort_keys=True))
     return str(path), result
 
 
 def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: int, out: Path, workers: int = 1,
-                  backend: str = "local", perception: str = "ground-truth", densities=None, progress=True) -> dict:
-    """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``)."""
+                  backend: str = "local", perception: str = "ground-truth", densities=None, progress=True,
+                  tool_rules: dict | None = None) -> dict:
+    """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``).
+    ``tool_rules``: ToolConfig overrides (action-model rule variants), recorded in each trial file; a folder
+    holding trials made under other rules is refused before anything runs."""
+    from slax_drake.policies.registry import refuse_other_rules
+
     out = Path(out)
     densities = list(densities or scenario.protocol.densities)
+    tool_rules = dict(tool_rules or {})
     jobs = []
     for policy in policies:
         for density in densities:
             for index in range(scenes_per_density):
-                if not _trial_path(out, policy, density, index).is_file():
+                path = _trial_path(out, policy, density, index)
+                if not path.is_file():
                     jobs.append((scenario, policy, density, index, scene_seed(seed, density, index), perception,
-                                 str(out)))
+                                 str(out), tool_rules))
+                else:
+                    refuse_other_rules(path, tool_rules, BenchmarkError, kind="trial file")
     # Heavy policies first, interleaved, so the pool stays busy to the end.
     jobs.sort(key=lambda j: (-j[2], j[3], j[1]))
     start = time.perf_counter()
@@ -101,7 +112,7 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     table = summarise(trials, policies, densities)
     table["meta"] = {"scenes_per_density": scenes_per_density, "seed": seed, "perception": perception,
                      "densities": densities, "wall_seconds_this_run": round(elapsed, 1), "workers": workers,
-                     "backend": backend}
+                     "backend": backend, "tool_rules": tool_rules}
     write_tables(table, out)
     return table
 
@@ -172,7 +183,9 @@ def markdown_table(table: dict) -> str:
     meta = table.get("meta", {})
     lines.append("")
     lines.append(f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
-                 f"{meta.get('perception', '?')} distributions; steps over successful trials.")
+                 f"{meta.get('perception', '?')} distributions; steps over successful trials."
+                 + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
+                    if meta.get("tool_rules") else ""))
     return "\n".join(lines) + "\n"
 
 

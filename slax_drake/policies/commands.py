@@ -34,15 +34,19 @@ def register(subparsers) -> None:
                    help="run the protocol through full Drake trials beside the shelf simulator on the same scenes "
                    "(non-oracle policies only; writes OUT/physics.md and OUT/physics.json; slow)")
     p.add_argument("--sleep", action="store_true", help="with --physics: object sleep in the Drake trials")
+    p.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
+                   help="an action-model rule variant (a ToolConfig field of slax_drake/policies/actions.py, e.g. "
+                   "max_suction_moment=0.4); repeatable; recorded in the trial files")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from slax_drake.config import load_scenario
     from slax_drake.policies.benchmark import run_benchmark
-    from slax_drake.policies.registry import POLICY_NAMES
+    from slax_drake.policies.registry import POLICY_NAMES, parse_tool_rules
 
     scenario = load_scenario(args.config)
+    tool_rules = parse_tool_rules(args.tool_rule)
     policies = [p.strip() for p in args.policies.split(",") if p.strip()]
     for p in policies:
         if p not in POLICY_NAMES:
@@ -56,9 +60,9 @@ def run(args: argparse.Namespace) -> int:
         raise UserError("--workers must be at least 1")
     seed = args.seed if args.seed is not None else scenario.protocol.seed
     if args.physics:
-        return _run_physics(args, policies, n, seed)
+        return _run_physics(args, policies, n, seed, tool_rules)
     table = run_benchmark(scenario, policies, n, seed, args.out, workers=args.workers, backend=args.backend,
-                          perception=args.perception, progress=not args.no_progress)
+                          perception=args.perception, progress=not args.no_progress, tool_rules=tool_rules)
     for p in policies:
         e = table["policies"][p]["all"]
         print(f"{p:>18}: success {100 * e['success_rate']:.0f} % over {e['trials']} trials, median steps "
@@ -67,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: int) -> int:
+def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: int, tool_rules: dict) -> int:
     """``--physics``: the same protocol through full Drake trials. The runner lives in ``slax_drake.systems``
     (the only stage that builds diagrams); this command only dispatches to it."""
     from slax_drake.systems.physics_benchmark import run_physics_benchmark
@@ -76,7 +80,7 @@ def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: in
     if not drake_policies:
         raise UserError("--physics runs non-oracle policies only: name at least one in --policies")
     summary = run_physics_benchmark(args.config, drake_policies, n, seed=seed, out=args.out, workers=args.workers,
-                                    sleep=args.sleep, progress=not args.no_progress)
+                                    sleep=args.sleep, progress=not args.no_progress, tool_rules=tool_rules)
     for p in drake_policies:
         e = summary["policies"][p]["all"]
         print(f"{p:>18}: success shelf {100 * e['shelf_success_rate']:.0f} %, Drake "

@@ -211,19 +211,14 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
 
 def _check_rules(out: Path, policies, densities, scenes_per_density, tool_rules: dict) -> None:
     """Refuses, before any scene runs, an output folder holding scene files made under other tool rules."""
+    from slax_drake.policies.registry import refuse_other_rules
+
     for p in policies:
         for n in densities:
             for i in range(scenes_per_density):
                 path = trial_path(out, p, n, i)
-                if not path.is_file():
-                    continue
-                try:
-                    made_with = json.loads(path.read_text()).get("tool_rules") or {}
-                except (OSError, json.JSONDecodeError, AttributeError) as e:
-                    raise PhysicsBenchmarkError(f"{path}: unreadable result file ({e}); delete it to rerun that scene")
-                if made_with != tool_rules:
-                    raise PhysicsBenchmarkError(f"{path} was made with tool rules {made_with}, not {tool_rules}: "
-                                                f"use another --out")
+                if path.is_file():
+                    refuse_other_rules(path, tool_rules, PhysicsBenchmarkError)
 
 
 def load_results(out: Path, policies, densities, scenes_per_density) -> list[dict]:
