@@ -1,6 +1,8 @@
 """The full station: point contact, the scene's objects at rest where the JSON puts them, the tool camera equal
 to the scene camera, the exported ports, and bad station files."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -8,6 +10,8 @@ from slax_drake.errors import ConfigError
 from slax_drake.scene.sampling import sample_scene
 from slax_drake.systems import robot as robot_model
 from slax_drake.systems.station import MakeStation, load_station_scenario, observation_positions
+
+DEFAULT_STATION_PATH = Path(__file__).resolve().parents[1] / "sim_configs" / "station_sim_shelf.yaml"
 
 
 @pytest.fixture(scope="module")
@@ -99,6 +103,26 @@ def test_bad_station_file(tmp_path):
         load_station_scenario(bad)
     with pytest.raises(ConfigError, match="no such station file"):
         load_station_scenario(tmp_path / "missing.yaml")
+    text = Path(DEFAULT_STATION_PATH).read_text().replace("max_held_moment: 0.4", "max_held_moment: 0.0")
+    bad.write_text(text)
+    with pytest.raises(ConfigError, match="suction.max_held_moment"):
+        load_station_scenario(bad)
+
+
+def test_the_station_cup_limit_is_a_planning_rule_that_overrides_replace():
+    """A trial plans with the station cup's holding limit unless a tool rule says otherwise; .inf lifts it."""
+    import dataclasses
+    import math
+
+    from slax_drake.systems.trial import station_tool_rules
+
+    station = load_station_scenario(DEFAULT_STATION_PATH)
+    assert station.suction.max_held_moment == pytest.approx(0.4)
+    assert station_tool_rules(station) == {"max_suction_moment": 0.4}
+    assert station_tool_rules(station, {"max_suction_moment": math.inf, "blade_gap": 0.05}) == {
+        "max_suction_moment": math.inf, "blade_gap": 0.05}
+    unlimited = dataclasses.replace(station, suction=dataclasses.replace(station.suction, max_held_moment=math.inf))
+    assert station_tool_rules(unlimited) == {}
 
 
 def test_resting_objects_fall_asleep_where_the_json_puts_them(sim_scenario):

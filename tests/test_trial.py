@@ -36,6 +36,7 @@ def test_short_trial_reveals_the_target(short_trial):
         assert a["outcome"] is not None and a["predicted"]["object"] == a["object"]
     assert set(d["final_objects"]) == {"object_0", "object_1"}
     assert (out / "step_00.png").stat().st_size > 1000
+    assert d["tool_rules"] == {"max_suction_moment": 0.4}  # the station cup's holding limit
 
 
 def test_executed_trajectory_in_trial_json(short_trial):
@@ -58,6 +59,8 @@ def test_trial_cli_rejects_bad_input(capsys):
     assert "--objects must be at least 1" in capsys.readouterr().err
     assert main(["trial", "--config", "no/such.yaml"]) == 2
     assert main(["trial", "--policy", "oracle-p"]) == 2
+    assert main(["trial", "--tool-rule", "max_suction_moment=heavy"]) == 2
+    assert "needs a float" in capsys.readouterr().err
 
 
 @pytest.mark.slow

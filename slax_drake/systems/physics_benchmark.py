@@ -148,12 +148,15 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
 
     ``config``: the protocol scenario YAML (e.g. sim_configs/table1.yaml); ``seed``: protocol seed (default the
     protocol's); ``densities``: default the protocol's; ``station``: default :func:`default_station`;
-    ``tool_rules``: ToolConfig overrides (rule variants) for both simulators, recorded in every scene file (a
-    resumed run refuses scene files made under other rules).
+    ``tool_rules``: ToolConfig overrides (rule variants) for both simulators, on top of the station's cup limit
+    (``trial.station_tool_rules``); the rules in force are recorded in every scene file (a resumed run refuses
+    scene files made under other rules).
     """
     from slax_drake.config import load_scenario
     from slax_drake.policies.benchmark import scene_seed
     from slax_drake.policies.registry import POLICY_NAMES
+    from slax_drake.systems.station import load_station_scenario
+    from slax_drake.systems.trial import station_tool_rules
 
     scenario = load_scenario(config)
     policies = list(policies)
@@ -174,7 +177,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     if not Path(station).is_file():
         raise PhysicsBenchmarkError(f"station file not found: {station}")
     out = Path(out)
-    tool_rules = dict(tool_rules or {})
+    tool_rules = station_tool_rules(load_station_scenario(station), tool_rules)
     _check_rules(out, policies, densities, scenes_per_density, tool_rules)
     jobs = [(config, station, p, n, i, scene_seed(seed, n, i), str(out), sleep, tool_rules)
             for p in policies for n in densities for i in range(scenes_per_density)
@@ -343,7 +346,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--sleep", action="store_true", help="object sleep in the Drake trials")
     p.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
                    help="an action-model rule variant for both simulators (a ToolConfig field of "
-                   "slax_drake/policies/actions.py, e.g. max_suction_moment=0.4); repeatable")
+                   "slax_drake/policies/actions.py, e.g. max_suction_moment=inf to lift the station cup's "
+                   "holding limit); repeatable")
     p.add_argument("--out", default="results/physics", help="output folder (default: results/physics)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p

@@ -120,6 +120,9 @@ def _validate(scenario: StationScenario, source: str) -> None:
     for name in ("vacuum_pressure", "cup_radius", "max_distance", "max_angle_deg"):
         if not getattr(p, name) > 0:
             raise ConfigError(f"{source}: key 'suction.{name}' = {getattr(p, name)!r}: must be positive")
+    if not p.max_held_moment > 0:
+        raise ConfigError(f"{source}: key 'suction.max_held_moment' = {p.max_held_moment!r}: must be positive "
+                          "(.inf for no limit)")
 
 
 def observation_positions(scenario: StationScenario) -> np.ndarray:

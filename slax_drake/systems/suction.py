@@ -41,6 +41,9 @@ class SuctionParameters:
     cup_radius: float = 0.015
     max_distance: float = 0.005
     max_angle_deg: float = 30.0
+    # The planning limit of this cup, not a force-element parameter: the planner suctions no object whose weight
+    # times the horizontal distance from the cup's contact to its centre exceeds this (N m). inf: no limit.
+    max_held_moment: float = math.inf
 
     @property
     def max_force(self) -> float:

@@ -44,7 +44,8 @@ class TrialOptions:
     sleep: bool = False  # lock resting objects out of the physics step (slax_drake.systems.sleep.ObjectSleep)
     target_size: tuple | None = None  # (x, y, z) m; default: drawn from the scenario's target sizes
     horizon: int | None = None  # actions at most; default: 2 per object
-    tool_rules: dict | None = None  # ToolConfig overrides (rule variants) for the policy and the planner
+    tool_rules: dict | None = None  # ToolConfig overrides (rule variants) for the policy and the planner; they
+    # take precedence over the station's own limits (see station_tool_rules)
 
 
 @dataclasses.dataclass
@@ -66,6 +67,16 @@ def station_for(config: str) -> str:
     raise TrialError(f"no station file for {config} (expected {candidate}); pass --station")
 
 
+def station_tool_rules(station, overrides: dict | None = None) -> dict:
+    """The action-model rules (ToolConfig overrides) a trial on ``station`` plans with: the station cup's holding
+    limit (``suction.max_held_moment`` as ``max_suction_moment``, when finite), then ``overrides`` on top."""
+    rules = {}
+    if math.isfinite(station.suction.max_held_moment):
+        rules["max_suction_moment"] = float(station.suction.max_held_moment)
+    rules.update(overrides or {})
+    return rules
+
+
 def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     from pydrake.systems.analysis import Simulator
     from pydrake.systems.framework import DiagramBuilder
@@ -82,16 +93,17 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     scenario = load_scenario(opts.config)
     station_path = opts.station or station_for(opts.config)
     station = load_station_scenario(station_path)
+    tool_rules = station_tool_rules(station, opts.tool_rules)
     t0 = time.perf_counter()
     target_size = None if opts.target_size is None else tuple(float(v) for v in opts.target_size)
     scene = sample_scene(scenario, opts.objects, seed=opts.seed, target_size=target_size)
     horizon = opts.horizon if opts.horizon is not None else 2 * opts.objects
     policy = make_policy(opts.policy, scenario, perception=opts.perception, horizon=horizon,
-                         tool_overrides=opts.tool_rules)
+                         tool_overrides=tool_rules)
     if not hasattr(policy, "decide") or not hasattr(policy, "distribution"):
         raise TrialError(f"policy '{opts.policy}' cannot run in a Drake trial (it needs the true scene: an oracle)")
     policy.reset(scene)
-    planner = MotionPlanner(station, tool_config(scenario, **(opts.tool_rules or {})))
+    planner = MotionPlanner(station, tool_config(scenario, **tool_rules))
 
     builder = DiagramBuilder()
     station_diagram = builder.AddNamedSystem("station", MakeStation(station, scene, meshcat=meshcat))
@@ -174,6 +186,7 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         "cost": round(n_push + scenario.protocol.suction_cost * n_suction, 6),
         "config": opts.config, "station": station_path, "objects": opts.objects, "seed": opts.seed,
         "policy": opts.policy, "perception": opts.perception, "horizon": horizon, "sleep": opts.sleep,
+        "tool_rules": tool_rules,
         "visible_fraction": round(planner_system.visible_fraction, 4),
         "sim_time_s": round(sim_time, 3), "wall_s": round(wall, 3), "setup_s": round(setup_s, 3),
         "real_time_factor": round(sim_time / wall, 4) if wall > 0 else None,

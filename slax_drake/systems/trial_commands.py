@@ -28,6 +28,11 @@ def register(subparsers) -> None:
     p.add_argument("--meshcat", action="store_true", help="serve the live view on localhost and print its URL")
     p.add_argument("--html", default=None, help="write a self-contained Meshcat replay (e.g. out/trial.html)")
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
+    p.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
+                   help="action-model rule variant for the policy and the planner (a ToolConfig field of "
+                        "slax_drake/policies/actions.py); repeatable. The station's cup limit "
+                        "(suction.max_held_moment) applies unless max_suction_moment is given, e.g. "
+                        "max_suction_moment=inf for the paper's weightless rule")
     p.add_argument("--max-sim-time", type=float, default=None, help="simulated seconds at most")
     p.add_argument("--sleep", action="store_true",
                    help="lock resting objects out of the physics step until something comes near (faster; "
@@ -54,12 +59,14 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
 
 
 def run(args: argparse.Namespace) -> int:
+    from slax_drake.policies.registry import parse_tool_rules
     from slax_drake.systems.trial import run_trial, write_trial
 
     opts = TrialOptions(config=args.config, objects=DEFAULT_OBJECTS if args.objects is None else args.objects,
                         seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy,
                         perception=args.perception, station=args.station, meshcat=args.meshcat, html=args.html,
-                        out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep)
+                        out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep,
+                        tool_rules=parse_tool_rules(args.tool_rule))
     if args.benchmark_scene is not None:
         if args.objects is not None or args.seed is not None:
             raise TrialError("--benchmark-scene replaces --objects and --seed: give one or the other")
