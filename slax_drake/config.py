@@ -54,6 +54,7 @@ class ObjectsConfig:
     min_size: float = 0.06
     max_size: float = 0.20
     box_probability: float = 0.5
+    box_yaw: str = "random"  # "random": uniform in [0, pi); "aligned": sides parallel to the shelf's walls
     clearance: float = 0.002
     count_range: list[int] = dataclasses.field(default_factory=lambda: [2, 12])
     density: float = 400.0
@@ -194,6 +195,8 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         fail("objects.max_size", objects.max_size, "must be at least objects.min_size")
     if not 0.0 <= objects.box_probability <= 1.0:
         fail("objects.box_probability", objects.box_probability, "must lie in [0, 1]")
+    if objects.box_yaw not in ("random", "aligned"):
+        fail("objects.box_yaw", objects.box_yaw, "must be 'random' or 'aligned'")
     if objects.clearance < 0:
         fail("objects.clearance", objects.clearance, "must not be negative")
     bay_min = min(shelf.width, shelf.depth)

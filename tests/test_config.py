@@ -55,6 +55,7 @@ def _write(tmp_path, body: str) -> Path:
         ("camera:\n  position: [0.0, 0.0, 0.2]\n", "key 'camera.position'"),
         ("protocol:\n  densities: [4, 400]\n", "key 'protocol.densities' = 400"),
         ("camera:\n  horizontal_fov_deg: 200\n", "key 'camera.horizontal_fov_deg' = 200"),
+        ("objects:\n  box_yaw: diagonal\n", "key 'objects.box_yaw' = 'diagonal': must be 'random' or 'aligned'"),
     ],
 )
 def test_bad_config_names_file_key_and_value(tmp_path, body, expected):

@@ -56,6 +56,18 @@ def test_golden_scene_is_reproduced(sim_scenario):
 GOLDEN_SHA256_PREFIX = "e744c576ca6a4fce"  # recorded on 2026-11-22; changes only with the sampler
 
 
+def test_aligned_boxes_are_square_to_the_walls(sim_scenario):
+    """objects.box_yaw "aligned" turns every box square to the walls; "random" (the default) does not."""
+    import dataclasses
+
+    aligned = dataclasses.replace(sim_scenario, objects=dataclasses.replace(sim_scenario.objects, box_yaw="aligned"))
+    for seed in range(5):
+        a, r = sample_scene(aligned, 6, seed), sample_scene(sim_scenario, 6, seed)
+        assert all(o.yaw == 0.0 for o in a.objects)
+        assert any(o.shape == "box" and o.yaw != 0.0 for o in r.objects)
+        assert len(a.objects) == 6 and target_visible_fraction(a) == 0.0
+
+
 def test_target_sizes_are_drawn_from_config(physical_scenario):
     scene = sample_scene(physical_scenario, 8, 0)
     assert scene.target.size == (0.06, 0.06, 0.03)

@@ -2,8 +2,9 @@
 
 Objects: a box (probability ``objects.box_probability``) or an upright cylinder, every dimension uniform in
 [min_size, max_size]. A box rests on one of its three face pairs (its stable poses), chosen uniformly, with a
-yaw uniform in [0, pi); a cylinder stands on its flat face. Positions are uniform over the bay and rejected
-when the exact footprint (rectangle or disc) comes within ``objects.clearance`` of a wall or a placed object.
+yaw uniform in [0, pi) (``objects.box_yaw`` "random", the default) or square to the walls ("aligned"); a
+cylinder stands on its flat face. Positions are uniform over the bay and rejected when the exact footprint
+(rectangle or disc) comes within ``objects.clearance`` of a wall or a placed object.
 Positions are tried in batches of 32; an object that finds no free position in its batch is redrawn (shape,
 size, pose), so dense scenes lean toward smaller objects, as any sequential placement must.
 
@@ -101,8 +102,8 @@ def _random_object(scenario: Scenario, rng: np.random.Generator) -> tuple[str, t
         up = int(rng.integers(3))  # which of the box's three axes points up: its stable pose
         lateral = [dims[a] for a in range(3) if a != up]
         size = (float(lateral[0]), float(lateral[1]), float(dims[up]))
-        yaw = float(rng.uniform(0.0, math.pi))
-        return "box", size, yaw
+        yaw = float(rng.uniform(0.0, math.pi))  # drawn either way: "aligned" keeps the random stream
+        return "box", size, yaw if cfg.box_yaw == "random" else 0.0
     return "cylinder", (float(dims[0]), float(dims[0]), float(dims[2])), 0.0
 
 
