@@ -301,3 +301,22 @@ def test_an_object_hanging_too_much_weight_off_the_cup_is_not_suctioned():
         "long's weight hangs 0.63 N m off the cup > 0.40 N m"]
     assert [a for a in held.enumerate((short,), pushes=False).feasible if a.name == "short"]
     assert [a for a in model().enumerate((long,), pushes=False).feasible if a.name == "long"]
+
+
+@pytest.mark.parametrize("yaw_deg, angle_deg", [(0.0, 0.0), (8.0, 8.0), (25.0, 25.0), (70.0, 20.0), (135.0, 45.0)])
+def test_a_box_face_turned_too_far_from_the_tube_is_not_sealed(yaw_deg, angle_deg):
+    """The seal angle is the front face's turn from the tube's axis (the shelf's y); the cup refuses more than
+    max_seal_angle_deg, and the first-order default (90) refuses nothing."""
+    import math
+
+    turned = box("turned", 0.0, 0.0, sx=0.10, sy=0.10, sz=0.10, yaw=math.radians(yaw_deg))
+    assert ActionModel.seal_angle_deg(turned) == pytest.approx(angle_deg, abs=1e-6)
+    assert ActionModel.seal_angle_deg(cyl("round", 0.0, 0.0)) == 0.0
+    sealed = model(max_seal_angle_deg=10.0).enumerate((turned,), pushes=False)
+    if angle_deg > 10.0:
+        assert not sealed.feasible
+        assert reasons(sealed, "suction turned") == [
+            f"turned's camera-facing side is turned {angle_deg:.0f} deg from the tube > 10 deg"]
+    else:
+        assert sealed.feasible
+    assert model().enumerate((turned,), pushes=False).feasible

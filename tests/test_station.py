@@ -107,10 +107,13 @@ def test_bad_station_file(tmp_path):
     bad.write_text(text)
     with pytest.raises(ConfigError, match="suction.max_held_moment"):
         load_station_scenario(bad)
+    bad.write_text(Path(DEFAULT_STATION_PATH).read_text().replace("max_seal_angle_deg: 10.0", "max_seal_angle_deg: 120"))
+    with pytest.raises(ConfigError, match="suction.max_seal_angle_deg"):
+        load_station_scenario(bad)
 
 
-def test_the_station_cup_limit_is_a_planning_rule_that_overrides_replace():
-    """A trial plans with the station cup's holding limit unless a tool rule says otherwise; .inf lifts it."""
+def test_the_station_cup_limits_are_planning_rules_that_overrides_replace():
+    """A trial plans with the station cup's limits unless a tool rule says otherwise; .inf / 90 lift them."""
     import dataclasses
     import math
 
@@ -118,10 +121,12 @@ def test_the_station_cup_limit_is_a_planning_rule_that_overrides_replace():
 
     station = load_station_scenario(DEFAULT_STATION_PATH)
     assert station.suction.max_held_moment == pytest.approx(0.4)
-    assert station_tool_rules(station) == {"max_suction_moment": 0.4}
+    assert station.suction.max_seal_angle_deg == pytest.approx(10.0)
+    assert station_tool_rules(station) == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0}
     assert station_tool_rules(station, {"max_suction_moment": math.inf, "blade_gap": 0.05}) == {
-        "max_suction_moment": math.inf, "blade_gap": 0.05}
-    unlimited = dataclasses.replace(station, suction=dataclasses.replace(station.suction, max_held_moment=math.inf))
+        "max_suction_moment": math.inf, "max_seal_angle_deg": 10.0, "blade_gap": 0.05}
+    unlimited = dataclasses.replace(station, suction=dataclasses.replace(
+        station.suction, max_held_moment=math.inf, max_seal_angle_deg=90.0))
     assert station_tool_rules(unlimited) == {}
 
 

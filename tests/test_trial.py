@@ -36,7 +36,7 @@ def test_short_trial_reveals_the_target(short_trial):
         assert a["outcome"] is not None and a["predicted"]["object"] == a["object"]
     assert set(d["final_objects"]) == {"object_0", "object_1"}
     assert (out / "step_00.png").stat().st_size > 1000
-    assert d["tool_rules"] == {"max_suction_moment": 0.4}  # the station cup's holding limit
+    assert d["tool_rules"] == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0}  # the station cup's limits
 
 
 def test_executed_trajectory_in_trial_json(short_trial):

@@ -123,6 +123,9 @@ def _validate(scenario: StationScenario, source: str) -> None:
     if not p.max_held_moment > 0:
         raise ConfigError(f"{source}: key 'suction.max_held_moment' = {p.max_held_moment!r}: must be positive "
                           "(.inf for no limit)")
+    if not 0 <= p.max_seal_angle_deg <= 90:
+        raise ConfigError(f"{source}: key 'suction.max_seal_angle_deg' = {p.max_seal_angle_deg!r}: must lie in "
+                          "[0, 90] (90 for no limit)")
 
 
 def observation_positions(scenario: StationScenario) -> np.ndarray:

@@ -44,6 +44,8 @@ class SuctionParameters:
     # The planning limit of this cup, not a force-element parameter: the planner suctions no object whose weight
     # times the horizontal distance from the cup's contact to its centre exceeds this (N m). inf: no limit.
     max_held_moment: float = math.inf
+    # Likewise: the planner seals on no box face turned more than this (deg) from the tube's axis. 90: no limit.
+    max_seal_angle_deg: float = 90.0
 
     @property
     def max_force(self) -> float:

@@ -68,11 +68,14 @@ def station_for(config: str) -> str:
 
 
 def station_tool_rules(station, overrides: dict | None = None) -> dict:
-    """The action-model rules (ToolConfig overrides) a trial on ``station`` plans with: the station cup's holding
-    limit (``suction.max_held_moment`` as ``max_suction_moment``, when finite), then ``overrides`` on top."""
+    """The action-model rules (ToolConfig overrides) a trial on ``station`` plans with: the station cup's limits
+    (``suction.max_held_moment`` as ``max_suction_moment`` when finite, ``suction.max_seal_angle_deg`` when under
+    90), then ``overrides`` on top."""
     rules = {}
     if math.isfinite(station.suction.max_held_moment):
         rules["max_suction_moment"] = float(station.suction.max_held_moment)
+    if station.suction.max_seal_angle_deg < 90.0:
+        rules["max_seal_angle_deg"] = float(station.suction.max_seal_angle_deg)
     rules.update(overrides or {})
     return rules
 
