@@ -35,6 +35,9 @@ def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
     (row,) = on_disk["trials"]
     assert row["seed"] == scene_seed(3, 2, 0)
     assert on_disk["meta"]["densities"] == [2] and on_disk["meta"]["scenes_per_density"] == 1
+    assert e["drake_clean_success_rate"] <= e["drake_success_rate"]
+    assert sum(e["drake_endings"].values()) == e["trials"]
+    assert (out / "physics.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     md = (out / "physics.md").read_text()
     assert md.startswith("| Policy | Objects |") and "| bluction-dar | 2 | 1 |" in md
 
@@ -135,6 +138,15 @@ def test_tool_rules_are_typed_and_bad_ones_exit_with_code_2(capsys, tmp_path):
                      *[a for rule in bad for a in ("--tool-rule", rule)]]) == 2
         err = capsys.readouterr().err
         assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_rules_equal_to_the_first_order_defaults_are_no_variant():
+    import math
+
+    from slax_drake.policies.registry import without_defaults
+
+    assert without_defaults({"max_suction_moment": math.inf, "max_seal_angle_deg": 90.0}) == {}
+    assert without_defaults({"max_suction_moment": 0.4, "blade_gap": 0.035}) == {"max_suction_moment": 0.4}
 
 
 def test_a_resumed_run_refuses_scene_files_made_under_other_rules(tiny):

@@ -64,11 +64,11 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``).
     ``tool_rules``: ToolConfig overrides (action-model rule variants), recorded in each trial file; a folder
     holding trials made under other rules is refused before anything runs."""
-    from slax_drake.policies.registry import refuse_other_rules
+    from slax_drake.policies.registry import refuse_other_rules, without_defaults
 
     out = Path(out)
     densities = list(densities or scenario.protocol.densities)
-    tool_rules = dict(tool_rules or {})
+    tool_rules = without_defaults(dict(tool_rules or {}))
     jobs = []
     for policy in policies:
         for density in densities:

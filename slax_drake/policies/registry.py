@@ -44,6 +44,13 @@ def parse_tool_rules(items) -> dict:
     return rules
 
 
+def without_defaults(rules: dict) -> dict:
+    """``rules`` less the entries equal to ToolConfig's first-order defaults, so that one set of rules has one
+    record (``max_suction_moment=inf`` is the default rule, recorded as no variant)."""
+    defaults = ToolConfig()
+    return {k: v for k, v in rules.items() if getattr(defaults, k) != v}
+
+
 def refuse_other_rules(path, tool_rules: dict, error=UserError, kind: str = "result file") -> None:
     """Raises ``error`` when the result file at ``path`` (a benchmark's per-trial JSON, which records its rule
     variants under "tool_rules") is unreadable or was made under rules other than ``tool_rules``."""

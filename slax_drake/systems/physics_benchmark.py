@@ -23,6 +23,7 @@ resumes); when all are in, ``physics.json`` and ``physics.md`` are (re)written f
 from __future__ import annotations
 
 import argparse
+import collections
 import dataclasses
 import json
 import math
@@ -34,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.errors import UserError
-from slax_drake.scene.io import write_text_atomic
+from slax_drake.scene.io import write_bytes_atomic, write_text_atomic
 
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
@@ -209,6 +210,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
                        "match_yaw_deg": math.degrees(MATCH_YAW)}
     write_text_atomic(out / "physics.json", json.dumps(summary, indent=1, sort_keys=True))
     write_text_atomic(out / "physics.md", markdown_table(summary))
+    write_bytes_atomic(out / "physics.png", bar_chart_png(summary))
     return summary
 
 
@@ -254,6 +256,7 @@ def summarise(results: list[dict], policies, densities) -> dict:
             "policy": r["policy"], "density": r["density"], "index": r["index"], "seed": r["seed"],
             "shelf_success": r["shelf"]["success"], "shelf_steps": r["shelf"]["steps"],
             "drake_success": d["success"], "drake_result": d["result"], "drake_steps": d["steps"],
+            "drake_clean_success": d["success"] and not d["toppled"] and not d["dropped"],
             "matched_actions": sum(1 for a in d["actions"] if a["matched"]),
             "actions_with_outcome": sum(1 for a in d["actions"] if a["matched"] is not None),
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],
@@ -270,6 +273,9 @@ def summarise(results: list[dict], policies, densities) -> dict:
                 "trials": len(sel),
                 "shelf_success_rate": round(sum(t["shelf_success"] for t in sel) / len(sel), 4) if sel else None,
                 "drake_success_rate": round(sum(t["drake_success"] for t in sel) / len(sel), 4) if sel else None,
+                "drake_clean_success_rate": round(sum(t["drake_clean_success"] for t in sel) / len(sel), 4)
+                if sel else None,
+                "drake_endings": dict(sorted(collections.Counter(_ending(t["drake_result"]) for t in sel).items())),
                 "shelf_median_steps": _median([t["shelf_steps"] for t in sel if t["shelf_success"]]),
                 "drake_median_steps": _median([t["drake_steps"] for t in sel if t["drake_success"]]),
                 "same_outcome_rate": round(sum(t["shelf_success"] == t["drake_success"] for t in sel) / len(sel), 4)
@@ -283,6 +289,11 @@ def summarise(results: list[dict], policies, densities) -> dict:
             }
         summary["policies"][p] = per
     return summary
+
+
+def _ending(result: str) -> str:
+    """A Drake trial's result without its details ("simulation diverged: ..." -> "simulation diverged")."""
+    return result.split(":")[0]
 
 
 def _planning_stats(seconds: list[float]) -> dict:
@@ -304,16 +315,17 @@ def markdown_table(summary: dict) -> str:
     def secs(v):
         return "-" if v is None else f"{v:.2f}"
 
-    lines = ["| Policy | Objects | Scenes | Success (shelf sim) | Success (Drake) | Median steps (shelf sim) | "
+    lines = ["| Policy | Objects | Scenes | Success (shelf sim) | Success (Drake) | Drake, nothing lost | Median steps (shelf sim) | "
              "Median steps (Drake) | Same outcome | Actions matching prediction | Toppled | Dropped | "
              "Real-time factor | Planning per action, median / p90 (s) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for p, per in summary["policies"].items():
         for key, e in per.items():
             match = "-" if e["match_rate"] is None else \
                 f"{100 * e['match_rate']:.0f} % ({e['actions_matched']}/{e['actions_judged']})"
             lines.append(f"| {p} | {'All' if key == 'all' else key} | {e['trials']} | {pct(e['shelf_success_rate'])} | "
-                         f"{pct(e['drake_success_rate'])} | {num(e['shelf_median_steps'])} | "
+                         f"{pct(e['drake_success_rate'])} | {pct(e.get('drake_clean_success_rate'))} | "
+                         f"{num(e['shelf_median_steps'])} | "
                          f"{num(e['drake_median_steps'])} | {pct(e['same_outcome_rate'])} | {match} | "
                          f"{e['toppled']} | {e['dropped']} | {num(e['median_real_time_factor'])} | "
                          f"{secs(e.get('planning_median_s'))} / {secs(e.get('planning_p90_s'))} |")
@@ -322,13 +334,57 @@ def markdown_table(summary: dict) -> str:
               f"ground-truth distributions, the same scenes in both simulators. Steps over successful trials. "
               f"An action matches when the object's physical pose at the next decision is within "
               f"{100 * MATCH_DISTANCE:.0f} cm and {math.degrees(MATCH_YAW):.0f} deg of the first-order prediction. "
-              f"Toppled/dropped: objects tilted > 20 deg / outside the bay at the end of the Drake trial. "
+              f"Toppled/dropped: objects tilted > 20 deg / outside the bay at the end of the Drake trial; "
+              f"nothing lost: a Drake success with no object toppled or dropped. "
               f"Planning per executed action: every candidate motion planned for that decision (rejected ones "
               f"included), one worker process each. "
               f"Object sleep {'on' if meta.get('sleep') else 'off'}."
               + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
                  if meta.get("tool_rules") else "")]
+    for p, per in summary["policies"].items():
+        endings = per.get("all", {}).get("drake_endings")
+        if endings:
+            lines += ["", f"{p}, Drake trial endings: " + ", ".join(f"{k} {v}" for k, v in endings.items()) + "."]
     return "\n".join(lines) + "\n"
+
+
+def bar_chart_png(summary: dict) -> bytes:
+    """One row per policy: success per density in both simulators (Drake: every success, and those that lost no
+    object), and the fraction of Drake actions that matched the first-order prediction."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    policies = list(summary["policies"])
+    fig, axes = plt.subplots(len(policies), 2, figsize=(11, 4 * len(policies)), squeeze=False,
+                             gridspec_kw={"width_ratios": [3, 2]})
+    series = (("shelf simulator", "shelf_success_rate", "#4c72b0"), ("Drake", "drake_success_rate", "#dd8452"),
+              ("Drake, nothing lost", "drake_clean_success_rate", "#c44e52"))
+    for (left, right), p in zip(axes, policies):
+        per = summary["policies"][p]
+        keys = list(per)
+        x = np.arange(len(keys))
+        labels = ["All" if k == "all" else f"{k} objects" for k in keys]
+        for i, (name, field, color) in enumerate(series):
+            left.bar(x + (i - 1) * 0.27, [100 * (per[k].get(field) or 0) for k in keys], 0.27, label=name, color=color)
+        right.bar(x, [100 * (per[k]["match_rate"] or 0) for k in keys], 0.6, color="#55a868")
+        for ax in (left, right):
+            ax.set_xticks(x)
+            ax.set_xticklabels(labels)
+            ax.set_ylim(0, 105)
+        left.set_title(f"{p}: success on the same scenes ({per['all']['trials']} scenes)")
+        left.set_ylabel("success rate (%)")
+        left.legend(fontsize=8)
+        right.set_title("Drake actions matching the prediction")
+        right.set_ylabel("within 2 cm and 10 deg (%)")
+    buf = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    return buf.getvalue()
 
 
 def build_parser() -> argparse.ArgumentParser:

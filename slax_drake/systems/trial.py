@@ -70,14 +70,16 @@ def station_for(config: str) -> str:
 def station_tool_rules(station, overrides: dict | None = None) -> dict:
     """The action-model rules (ToolConfig overrides) a trial on ``station`` plans with: the station cup's limits
     (``suction.max_held_moment`` as ``max_suction_moment`` when finite, ``suction.max_seal_angle_deg`` when under
-    90), then ``overrides`` on top."""
+    90), then ``overrides`` on top; entries equal to the first-order defaults are left out."""
+    from slax_drake.policies.registry import without_defaults
+
     rules = {}
     if math.isfinite(station.suction.max_held_moment):
         rules["max_suction_moment"] = float(station.suction.max_held_moment)
     if station.suction.max_seal_angle_deg < 90.0:
         rules["max_seal_angle_deg"] = float(station.suction.max_seal_angle_deg)
     rules.update(overrides or {})
-    return rules
+    return without_defaults(rules)
 
 
 def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
