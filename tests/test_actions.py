@@ -45,6 +45,17 @@ def test_blade_needs_a_gap_as_wide_as_the_blade():
     assert pushes_of(c2, "b", +1)
 
 
+def test_the_tube_end_past_the_blade_needs_room_behind_the_gap():
+    """The cup at the tube's end reaches tube_past_blade (2 cm) beyond the blade's tip: an object standing just
+    behind the blade's lane blocks the push; 2.5 cm further back it does not."""
+    a = box("a", -0.10, -0.10)  # pushed +x: the blade's lane is left of it, the tip at y = -0.11
+    behind = box("c", -0.19, -0.06)  # its front at y = -0.10, 1 cm behind the blade's tip, across the lane
+    assert reasons(model().enumerate((a, behind), suctions=False), "push a +x") == ["blade gap left of a blocked by c"]
+    assert pushes_of(model(tube_past_blade=0.0).enumerate((a, behind), suctions=False), "a", +1)
+    further = box("c", -0.19, -0.035)  # its front at y = -0.075
+    assert pushes_of(model().enumerate((a, further), suctions=False), "a", +1)
+
+
 def test_blade_does_not_fit_against_a_wall():
     a = box("a", -0.30 + 0.04 + 0.03, -0.10)  # 3 cm from the left wall
     c = model().enumerate((a,), suctions=False)

@@ -91,6 +91,9 @@ class ToolConfig:
     suction_resolution: float = 0.05
     min_push: float = 0.01
     push_contact_depth: float = 0.03  # the blade's tip goes at least this far past the object's front extreme
+    tube_past_blade: float = 0.02  # the tube's end (the cup) reaches this far past the blade's tip (0.42 - 0.40 m
+    # in the tool model), so the gap must be free that much deeper: the Drake planner found the cup inside an
+    # object standing just behind the blade's lane
     cell: float = 0.005  # the path step and the hidden-space raster's cell
     # Rules of the first-order model (see the module docstring; the defaults follow the paper's FOSS):
     shaft_lane_check: bool = False  # strict: the shaft's way in from outside the shelf touches no object
@@ -421,11 +424,13 @@ class ActionModel:
 
     def push_swept_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
         """The parts of :meth:`push_tool_rects` the model requires to be free (and drags along the push):
-        the blade in the gap, plus the shaft's way in when ``shaft_lane_check`` is on."""
+        the blade in the gap, with the tube's end ``tube_past_blade`` beyond its tip, plus the shaft's way in
+        when ``shaft_lane_check`` is on."""
         t = self.tool
         blade, shaft = self.push_tool_rects(fp, sign)
         edge = blade[0] + sign * t.blade_width / 2
-        gap = (edge - sign * t.blade_gap / 2, blade[1], t.blade_gap / 2, blade[3])
+        y_face, y_end = blade[1] - blade[3], blade[1] + blade[3] + t.tube_past_blade
+        gap = (edge - sign * t.blade_gap / 2, (y_face + y_end) / 2, t.blade_gap / 2, (y_end - y_face) / 2)
         return [gap, shaft] if t.shaft_lane_check else [gap]
 
     def passes_over(self, lifted: SceneObject, obstacle_height: float) -> bool:
