@@ -229,3 +229,41 @@ def test_timed_segment_stays_on_its_straight_line():
         assert np.abs(q - (qa + s[:, None] * d)).max() < 1e-9
         assert s.min() >= -1e-12 and s.max() <= 1 + 1e-12
         assert np.all(np.abs(v) <= lim.velocity * (1 + 1e-9)) and np.all(np.abs(a) <= lim.acceleration * (1 + 1e-9))
+
+
+def test_a_segment_is_checked_once_per_checker_state(setup):
+    """PlanningWorld.edge_free answers a segment checked before in the same checker state from memory, and checks
+    again when the state differs (tool contact allowed, an object carried)."""
+    station, _, scene, _ = setup
+    world = PlanningWorld(station, scene)
+    calls = []
+
+    class CountingChecker:
+        def __init__(self, checker):
+            self._checker = checker
+
+        def __getattr__(self, name):
+            return getattr(self._checker, name)
+
+        def CheckEdgeCollisionFree(self, a, b):
+            calls.append(1)
+            return self._checker.CheckEdgeCollisionFree(a, b)
+
+    world.checker = CountingChecker(world.checker)
+    q0 = observation_positions(station)
+    q1 = q0 + 0.05
+    first = world.edge_free(q0, q1)
+    assert world.edge_free(q0, q1) == first and len(calls) == 1
+    name = scene.objects[0].name
+    world.allow_tool_contact(name, True)
+    world.edge_free(q0, q1)
+    assert len(calls) == 2  # another state: checked again
+    world.allow_tool_contact(name, False)
+    world.edge_free(q0, q1)
+    assert len(calls) == 2  # back to the first state
+    world.carry(scene.objects[0], q0)
+    world.edge_free(q0, q1)
+    assert len(calls) == 3
+    world.drop()
+    world.edge_free(q0, q1)
+    assert len(calls) == 3

@@ -110,6 +110,11 @@ class PlanningWorld:
         self._ik_filter = None
         self.carried = None
         self.carried_trim = 0.0
+        # Dense edge checks already made, by the checker's state (tool contact allowed with which objects, what
+        # is carried and how): a motion re-checks its free-space moves, which the free-path search has checked.
+        self._allowed: set[str] = set()
+        self._carried_key = None
+        self._edge_memo: dict = {}
         self._tool_rigid_index = {n: int(self.plant.GetBodyByName(n, robot).index()) for n in TOOL_RIGID_BODIES
                                   if self.plant.HasBodyNamed(n, robot)}
         self.frames = {name: self.plant.GetFrameByName(name, robot) for name in
@@ -137,6 +142,7 @@ class PlanningWorld:
         if name is None or name not in self.object_bodies:
             return
         self.checker.SetCollisionFilteredBetween(self.tool_body, self.object_bodies[name], allowed)
+        (self._allowed.add if allowed else self._allowed.discard)(name)
 
     def ik_tool_contact(self, name: str | None, allowed: bool) -> None:
         """The same as :meth:`allow_tool_contact` for IK's distance constraint (a transient collision filter in
@@ -178,12 +184,14 @@ class PlanningWorld:
         self.carried = obj
         self.carried_trim = trim_bottom
         self._X_TO = X_TO
+        self._carried_key = (obj.name, obj.X_SO.tobytes(), trim_bottom, X_TO.GetAsMatrix4().tobytes())
 
     def drop(self) -> None:
         """Detaches the carried object (no-op when none)."""
         if self.carried is not None:
             self.checker.RemoveAllAddedCollisionShapes(CARRIED_GROUP)
             self.carried = None
+            self._carried_key = None
 
     def carried_pose_S(self, q_planned) -> np.ndarray:
         """X_SO (4x4) of the carried object at the planned joint values."""
@@ -204,7 +212,7 @@ class PlanningWorld:
         shapes = self.checker.GetAllAddedCollisionShapes()[CARRIED_GROUP]
         self.checker.RemoveAllAddedCollisionShapes(CARRIED_GROUP)
         try:
-            return self.edge_free(q0, q1)
+            return bool(self.checker.CheckEdgeCollisionFree(self.full_q(q0), self.full_q(q1)))
         finally:
             for d in shapes:
                 self.checker.AddCollisionShapeToBody(CARRIED_GROUP, self.tool_body, d.shape(), d.pose_in_body())
@@ -213,7 +221,15 @@ class PlanningWorld:
         return bool(self.checker.CheckConfigCollisionFree(self.full_q(q_planned)))
 
     def edge_free(self, q0, q1) -> bool:
-        return bool(self.checker.CheckEdgeCollisionFree(self.full_q(q0), self.full_q(q1)))
+        """The dense check of the joint-space segment q0 -> q1 (``edge_step`` apart) in the checker's present
+        state; a segment already checked in the same state is answered from memory."""
+        key = (np.asarray(q0, float).tobytes(), np.asarray(q1, float).tobytes(), frozenset(self._allowed),
+               self._carried_key)
+        free = self._edge_memo.get(key)
+        if free is None:
+            free = bool(self.checker.CheckEdgeCollisionFree(self.full_q(q0), self.full_q(q1)))
+            self._edge_memo[key] = free
+        return free
 
     def edge_free_coarse(self, q0, q1, step: float) -> bool:
         """Configurations ``step`` apart (largest joint change) along the segment, both ends included, are free:
