@@ -88,5 +88,8 @@ def run(args: argparse.Namespace) -> int:
         params = f"d={a['d']:+.3f}" if a["type"] == "push" else f"dx={a['dx']:+.3f} dz={a['dz']:+.3f}"
         print(f"  {a['type']} {a['object']} {params}: motion {a['motion']['duration_s']:.1f} s, planned in "
               f"{a['planning_s']:.2f} s, {len(a['rejected_before'])} candidates rejected first")
+    if d["tool_rules"]:
+        print("action-model rules: " + ", ".join(f"{k}={v}" for k, v in d["tool_rules"].items())
+              + " (the station's cup limits and --tool-rule)")
     print(f"wrote {written[0].parent} ({len(written)} files)")
     return 0
