@@ -153,3 +153,18 @@ def test_a_resumed_run_refuses_scene_files_made_under_other_rules(tiny):
     _, out = tiny
     with pytest.raises(PhysicsBenchmarkError, match="tool rules"):
         run_physics_benchmark(CONFIG, out=out, tool_rules={"max_suction_moment": 0.3}, **TINY)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["trial", "--tool-rule", "hidden_space=foo"], "hidden_space = 'foo': must be one of"),
+    (["trial", "--tool-rule", "blade_gap=-1"], "blade_gap = -1.0: must be non-negative"),
+    (["benchmark", "--config", CONFIG, "--policies", "dar", "--tool-rule", "cell=0.003"],
+     "push_resolution = 0.05: must be a multiple of cell"),
+])
+def test_unusable_tool_rule_values_exit_with_code_2_before_anything_runs(capsys, tmp_path, argv, message):
+    from slax_drake.cli import main as cli_main
+
+    assert cli_main([*argv, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()

@@ -109,6 +109,29 @@ class ToolConfig:
     # final placement only (pushes always sweep their whole path, so for them the two are the same)
 
 
+RULE_CHOICES = {"hidden_space": ("overhead", "3d"), "suction_hidden_rule": ("path", "placement"),
+                "suction_lift": ("slight", "over-lower")}
+POSITIVE_FIELDS = ("blade_width", "blade_height", "cup_diameter", "tube_diameter", "push_resolution",
+                   "suction_resolution", "cell")
+
+
+def tool_config_problem(tool: ToolConfig) -> str | None:
+    """What makes ``tool`` unusable, in one line, or None: an unknown rule variant, a negative (or, for sizes and
+    resolutions, zero) number, resolutions that are not multiples of ``cell``."""
+    for name, choices in RULE_CHOICES.items():
+        if getattr(tool, name) not in choices:
+            return f"{name} = {getattr(tool, name)!r}: must be one of {', '.join(map(repr, choices))}"
+    for f in dataclasses.fields(tool):
+        value = getattr(tool, f.name)
+        if isinstance(value, float) and not value >= (1e-12 if f.name in POSITIVE_FIELDS else 0.0):
+            return f"{f.name} = {value!r}: must be {'positive' if f.name in POSITIVE_FIELDS else 'non-negative'}"
+    for name in ("push_resolution", "suction_resolution"):
+        ratio = getattr(tool, name) / tool.cell
+        if abs(ratio - round(ratio)) > 1e-9:
+            return f"{name} = {getattr(tool, name)!r}: must be a multiple of cell = {tool.cell!r}"
+    return None
+
+
 STRICT_RULES = dict(min_hidden_width=0.0, blade_gap=0.065, shaft_lane_check=True, tube_approach_check=True, hidden_space="overhead",
                     suction_lift="slight", suction_hidden_rule="path", max_suction_mass=2.0, min_seal_radius=0.04)
 
@@ -180,17 +203,13 @@ class ActionModel:
     """Enumerates feasible pushes and suctions for a set of known objects (plus known immovable obstacles)."""
 
     def __init__(self, shelf: Shelf, eye_xy, tool: ToolConfig = ToolConfig()):
-        if abs(tool.push_resolution / tool.cell - round(tool.push_resolution / tool.cell)) > 1e-9 or abs(
-            tool.suction_resolution / tool.cell - round(tool.suction_resolution / tool.cell)
-        ) > 1e-9:
-            raise ValueError("push_resolution and suction_resolution must be multiples of cell")
+        problem = tool_config_problem(tool)
+        if problem:
+            raise ValueError(problem)
         self.shelf = shelf
         eye = np.asarray(eye_xy, dtype=float)
         self.eye_xy = eye[:2]
         self.eye_z = float(eye[2]) if len(eye) > 2 else None  # needed by hidden_space="3d"
-        if tool.hidden_space not in ("overhead", "3d") or tool.suction_hidden_rule not in ("path", "placement") \
-                or tool.suction_lift not in ("slight", "over-lower"):
-            raise ValueError(f"unknown rule variant in {tool}")
         self.tool = tool
         self.grid = FloorGrid(shelf, tool.cell)
         self.y_front = -shelf.depth / 2 - FRONT_MARGIN

@@ -6,7 +6,7 @@ import dataclasses
 
 from slax_drake.config import Scenario
 from slax_drake.errors import UserError
-from slax_drake.policies.actions import ActionModel, ToolConfig
+from slax_drake.policies.actions import ActionModel, ToolConfig, tool_config_problem
 from slax_drake.policies.distribution import make_distribution_model
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.sampling import shelf_of
@@ -41,6 +41,9 @@ def parse_tool_rules(items) -> dict:
         except ValueError:
             raise UserError(f"--tool-rule {key} needs a {kind.__name__} (got {text!r})") from None
         rules[key] = value
+    problem = tool_config_problem(ToolConfig(**rules))
+    if problem:
+        raise UserError(f"--tool-rule {problem}")
     return rules
 
 
