@@ -1,17 +1,16 @@
 """The full station: point contact, the scene's objects at rest where the JSON puts them, the tool camera equal
 to the scene camera, the exported ports, and bad station files."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from slax_drake.config import REPO_ROOT
 from slax_drake.errors import ConfigError
 from slax_drake.scene.sampling import sample_scene
 from slax_drake.systems import robot as robot_model
-from slax_drake.systems.station import MakeStation, load_station_scenario, observation_positions
+from slax_drake.systems.station import DEFAULT_STATION, MakeStation, load_station_scenario, observation_positions
 
-DEFAULT_STATION_PATH = Path(__file__).resolve().parents[1] / "sim_configs" / "station_sim_shelf.yaml"
+DEFAULT_STATION_PATH = REPO_ROOT / DEFAULT_STATION
 
 
 @pytest.fixture(scope="module")
@@ -103,11 +102,11 @@ def test_bad_station_file(tmp_path):
         load_station_scenario(bad)
     with pytest.raises(ConfigError, match="no such station file"):
         load_station_scenario(tmp_path / "missing.yaml")
-    text = Path(DEFAULT_STATION_PATH).read_text().replace("max_held_moment: 0.4", "max_held_moment: 0.0")
+    text = DEFAULT_STATION_PATH.read_text().replace("max_held_moment: 0.4", "max_held_moment: 0.0")
     bad.write_text(text)
     with pytest.raises(ConfigError, match="suction.max_held_moment"):
         load_station_scenario(bad)
-    bad.write_text(Path(DEFAULT_STATION_PATH).read_text().replace("max_seal_angle_deg: 10.0", "max_seal_angle_deg: 120"))
+    bad.write_text(DEFAULT_STATION_PATH.read_text().replace("max_seal_angle_deg: 10.0", "max_seal_angle_deg: 120"))
     with pytest.raises(ConfigError, match="suction.max_seal_angle_deg"):
         load_station_scenario(bad)
 

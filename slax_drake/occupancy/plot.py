@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,7 @@ def save_occupancy_png(scene: Scene, occ: Occupancy, path: str | Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from slax_drake.scene.io import write_bytes_atomic
+    from slax_drake.scene.io import figure_png, write_bytes_atomic
     from slax_drake.scene.plot import draw_top_down
 
     camera = scene.camera.with_resolution(occ.p2d.shape[1], occ.p2d.shape[0])
@@ -44,7 +43,4 @@ def save_occupancy_png(scene: Scene, occ: Occupancy, path: str | Path) -> None:
         ax_top.legend(loc="lower right", fontsize=7)
     ax_top.set_title(f"top down, grid {occ.grid_step} m")
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    plt.close(fig)
-    write_bytes_atomic(Path(path), buf.getvalue())
+    write_bytes_atomic(Path(path), figure_png(fig, 100))

@@ -300,7 +300,7 @@ class ActionModel:
             rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is too small or curved for the cup"))
             return
         cx, cy, cz = contact
-        angle = self.seal_angle_deg(obj)
+        angle = self.seal_angle_deg(obj) if t.max_seal_angle_deg < 45.0 else 0.0  # a front face turns 45 at most
         if angle > t.max_seal_angle_deg:
             rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
                                            f"tube > {t.max_seal_angle_deg:.0f} deg"))
@@ -494,7 +494,6 @@ class ActionModel:
             return None
         p = np.array([cx, cy]) + normal * dist
         return float(p[0]), float(p[1]), z
-
 
     @staticmethod
     def seal_angle_deg(obj: SceneObject) -> float:

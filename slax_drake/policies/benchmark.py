@@ -17,7 +17,7 @@ import numpy as np
 
 from slax_drake.config import Scenario
 from slax_drake.errors import UserError
-from slax_drake.scene.io import write_bytes_atomic, write_text_atomic
+from slax_drake.scene.io import figure_png, write_bytes_atomic, write_text_atomic
 
 PAPER_TABLE1 = {  # success % for 4/6/8/10/All (paper Table I)
     "oracle-p": [100, 100, 99, 94, 98], "oracle-p+s": [100, 100, 100, 100, 100], "dar": [77, 68, 45, 24, 54],
@@ -190,8 +190,6 @@ def markdown_table(table: dict) -> str:
 
 
 def bar_chart_png(table: dict) -> bytes:
-    import io
-
     import matplotlib
 
     matplotlib.use("Agg")
@@ -210,8 +208,5 @@ def bar_chart_png(table: dict) -> bytes:
     ax.set_ylim(0, 105)
     ax.legend(fontsize=8, ncol=3)
     ax.set_title("Table I protocol (fast first-order shelf simulator)")
-    buf = io.BytesIO()
     fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=120)
-    plt.close(fig)
-    return buf.getvalue()
+    return figure_png(fig, 120)

@@ -8,7 +8,7 @@ from slax_drake.errors import UserError
 
 
 def register(subparsers) -> None:
-    from slax_drake.policies.registry import POLICY_NAMES
+    from slax_drake.policies.registry import POLICY_NAMES, add_tool_rule_argument
 
     p = subparsers.add_parser(
         "benchmark",
@@ -34,9 +34,7 @@ def register(subparsers) -> None:
                    help="run the protocol through full Drake trials beside the shelf simulator on the same scenes "
                    "(non-oracle policies only; writes OUT/physics.md and OUT/physics.json; slow)")
     p.add_argument("--sleep", action="store_true", help="with --physics: object sleep in the Drake trials")
-    p.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
-                   help="an action-model rule variant (a ToolConfig field of slax_drake/policies/actions.py, e.g. "
-                   "max_suction_moment=0.4); repeatable; recorded in the trial files")
+    add_tool_rule_argument(p, "recorded in the trial files")
     p.set_defaults(func=run)
 
 

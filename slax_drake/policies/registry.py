@@ -18,6 +18,14 @@ class UnknownPolicyError(UserError):
     """A policy name that does not exist."""
 
 
+def add_tool_rule_argument(parser, note: str) -> None:
+    """The repeatable ``--tool-rule FIELD=VALUE`` option of the commands that run the action model (read it with
+    :func:`parse_tool_rules`); ``note`` says what the rules apply to."""
+    parser.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
+                        help="an action-model rule variant, a ToolConfig field of slax_drake/policies/actions.py "
+                        f"(e.g. max_suction_moment=0.4); repeatable; {note}")
+
+
 def parse_tool_rules(items) -> dict:
     """``["max_suction_moment=0.4", "tube_approach_check=false"]`` -> typed ToolConfig overrides; UserError for an
     unknown field or a value of the wrong type."""

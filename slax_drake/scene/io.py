@@ -132,6 +132,18 @@ def write_text_atomic(path: Path, text: str) -> None:
     write_bytes_atomic(path, text.encode())
 
 
+def figure_png(fig, dpi: int) -> bytes:
+    """The matplotlib figure ``fig`` as PNG bytes at ``dpi``; the figure is closed."""
+    import io
+
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    plt.close(fig)
+    return buf.getvalue()
+
+
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Writes ``data`` to ``path`` through a temporary file in the same folder and an atomic rename,
     so a reader never sees a half-written file and an interrupted write leaves the old file intact."""

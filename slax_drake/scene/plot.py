@@ -3,7 +3,6 @@ camera's depth view (ray cast with Embree, the same geometry the visibility test
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
@@ -71,9 +70,6 @@ def save_scene_png(scene: Scene, path: str | Path, resolution: tuple[int, int] =
     ax1.set_title("camera view (depth)")
     ax1.set_axis_off()
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    from slax_drake.scene.io import write_bytes_atomic
+    from slax_drake.scene.io import figure_png, write_bytes_atomic
 
-    write_bytes_atomic(Path(path), buf.getvalue())
+    write_bytes_atomic(Path(path), figure_png(fig, 110))

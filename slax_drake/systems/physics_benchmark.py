@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.errors import UserError
-from slax_drake.scene.io import write_bytes_atomic, write_text_atomic
+from slax_drake.scene.io import figure_png, write_bytes_atomic, write_text_atomic
 
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
@@ -351,8 +351,6 @@ def markdown_table(summary: dict) -> str:
 def bar_chart_png(summary: dict) -> bytes:
     """One row per policy: success per density in both simulators (Drake: every success, and those that lost no
     object), and the fraction of Drake actions that matched the first-order prediction."""
-    import io
-
     import matplotlib
 
     matplotlib.use("Agg")
@@ -380,14 +378,13 @@ def bar_chart_png(summary: dict) -> bytes:
         left.legend(fontsize=8)
         right.set_title("Drake actions matching the prediction")
         right.set_ylabel("within 2 cm and 10 deg (%)")
-    buf = io.BytesIO()
     fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
+    return figure_png(fig, 110)
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from slax_drake.policies.registry import add_tool_rule_argument
+
     p = argparse.ArgumentParser(prog="python -m slax_drake.systems.physics_benchmark",
                                 description="The Table I protocol through full Drake trials beside the shelf "
                                 "simulator on the same scenes; writes OUT/physics.md and OUT/physics.json.")
@@ -400,10 +397,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=None, help="protocol seed (default: the protocol's)")
     p.add_argument("--workers", type=int, default=1, help="parallel worker processes (default: 1)")
     p.add_argument("--sleep", action="store_true", help="object sleep in the Drake trials")
-    p.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
-                   help="an action-model rule variant for both simulators (a ToolConfig field of "
-                   "slax_drake/policies/actions.py, e.g. max_suction_moment=inf to lift the station cup's "
-                   "holding limit); repeatable")
+    add_tool_rule_argument(p, "for both simulators, over the station cup's limits (max_suction_moment=inf and "
+                           "max_seal_angle_deg=90 lift them)")
     p.add_argument("--out", default="results/physics", help="output folder (default: results/physics)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p

@@ -249,9 +249,9 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
 
 
 def _step_png(step, depth, labels, history, p1d) -> bytes:
-    import io
-
     import matplotlib
+
+    from slax_drake.scene.io import figure_png
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -271,7 +271,4 @@ def _step_png(step, depth, labels, history, p1d) -> bytes:
     for ax in axes[:2]:
         ax.axis("off")
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=80)
-    plt.close(fig)
-    return buf.getvalue()
+    return figure_png(fig, 80)

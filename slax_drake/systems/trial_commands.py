@@ -8,6 +8,8 @@ from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialError, 
 
 
 def register(subparsers) -> None:
+    from slax_drake.policies.registry import add_tool_rule_argument
+
     p = subparsers.add_parser(
         "trial",
         help="run one full trial in Drake: station, policy, motion planner (writes trial.json, PNGs, HTML replay)",
@@ -28,11 +30,8 @@ def register(subparsers) -> None:
     p.add_argument("--meshcat", action="store_true", help="serve the live view on localhost and print its URL")
     p.add_argument("--html", default=None, help="write a self-contained Meshcat replay (e.g. out/trial.html)")
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
-    p.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
-                   help="action-model rule variant for the policy and the planner (a ToolConfig field of "
-                        "slax_drake/policies/actions.py); repeatable. The station's cup limit "
-                        "(suction.max_held_moment) applies unless max_suction_moment is given, e.g. "
-                        "max_suction_moment=inf for the paper's weightless rule")
+    add_tool_rule_argument(p, "for the policy and the planner, over the station cup's limits "
+                           "(max_suction_moment=inf and max_seal_angle_deg=90 give the paper's weightless rules)")
     p.add_argument("--max-sim-time", type=float, default=None, help="simulated seconds at most")
     p.add_argument("--sleep", action="store_true",
                    help="lock resting objects out of the physics step until something comes near (faster; "
