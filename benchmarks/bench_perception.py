@@ -69,7 +69,7 @@ def policy_gap(model_path: str, scenes: int, out: str, config: str = "sim_config
     import slax_drake.policies.registry as registry
     from slax_drake.config import load_scenario
     from slax_drake.perception.distribution_model import LearnedDistribution
-    from slax_drake.policies.benchmark import run_benchmark
+    from slax_drake.evaluation.table1 import run_benchmark
 
     ground_truth = registry.make_distribution_model
 

@@ -26,7 +26,7 @@ def main():
     from slax_drake.policies.actions import ActionModel
     from slax_drake.policies.registry import tool_config
     from slax_drake.scene.sampling import sample_scene, shelf_of
-    from slax_drake.systems.station import load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario
 
     station = load_station_scenario()
     scenario = load_scenario(station.scene_config)

@@ -16,7 +16,7 @@ import numpy as np
 
 from slax_drake.config import load_scenario
 from slax_drake.policies.actions import STRICT_RULES, ActionModel, Push, apply_action
-from slax_drake.policies.benchmark import scene_seed
+from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.policies.registry import tool_config
 from slax_drake.policies.visibility import TargetOcclusion
 from slax_drake.scene import sample_scene

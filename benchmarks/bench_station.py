@@ -59,7 +59,8 @@ def main() -> None:
 
     from slax_drake.config import load_scenario
     from slax_drake.scene.sampling import sample_scene
-    from slax_drake.systems.station import MakeStation, load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.station import MakeStation
 
     scenario = load_station_scenario(args.station)
     if args.time_step is not None:

@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from slax_drake.systems import robot as robot_model
-from slax_drake.systems.station import SHELF_BODY, observation_positions
+from slax_drake.station import robot as robot_model
+from slax_drake.station.scenario import SHELF_BODY, observation_positions
 
 BLADE_HALF_HEIGHT = 0.0375  # m, blade is 0.075 m high; blade_face_frame is at its centre
 BLADE_LIFT = 0.008  # m, gap between the blade's lower edge and the support board
@@ -103,7 +103,8 @@ def reach_map(path=None, xs=(-0.25, -0.23, -0.2, -0.1, 0.0, 0.1, 0.2, 0.23, 0.25
     """Prints which blade centres (shelf x across, y deep) the sim station reaches collision-free in pushing pose:
     'Y' with the shaft at 0 (camera left of the tube), 'F' only with the wrist rolled over (shaft at pi), '-' with
     neither (from the seeds of ``reach_seeds``; a local solver, so '-' means not found, not proven impossible)."""
-    from slax_drake.systems.station import MakeStation, load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.station import MakeStation
 
     scenario = load_station_scenario(path) if path else load_station_scenario()
     ik = BladeIk(MakeStation(scenario, None, camera=False))

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from slax_drake.cli import main
-from slax_drake.policies.benchmark import run_benchmark, scene_seed
+from slax_drake.evaluation.table1 import run_benchmark, scene_seed
 
 
 def test_tiny_benchmark_writes_tables_and_resumes(sim_scenario, tmp_path):
@@ -28,7 +28,7 @@ def test_tiny_benchmark_writes_tables_and_resumes(sim_scenario, tmp_path):
 def test_corrupt_trial_file_is_a_user_error(sim_scenario, tmp_path, capsys):
     run_benchmark(sim_scenario, ["oracle-p"], 1, 0, tmp_path, densities=[4], progress=False)
     (tmp_path / "trials" / "oracle-p" / "04_0000.json").write_text("{not json")
-    from slax_drake.policies.benchmark import BenchmarkError
+    from slax_drake.evaluation.table1 import BenchmarkError
 
     with pytest.raises(BenchmarkError, match="unreadable trial file"):
         run_benchmark(sim_scenario, ["oracle-p"], 1, 0, tmp_path, densities=[4], progress=False)
@@ -49,7 +49,7 @@ def test_ray_backend_tiny_run(sim_scenario, tmp_path):
 
 
 def test_tool_rules_are_recorded_and_a_folder_of_other_rules_is_refused(sim_scenario, tmp_path, capsys):
-    from slax_drake.policies.benchmark import BenchmarkError
+    from slax_drake.evaluation.table1 import BenchmarkError
 
     rules = {"max_suction_moment": 0.4}
     table = run_benchmark(sim_scenario, ["bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False,

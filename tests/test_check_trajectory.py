@@ -23,7 +23,7 @@ def traj():
 def world(traj):
     from slax_drake.config import load_scenario
     from slax_drake.scene.sampling import sample_scene
-    from slax_drake.systems.station import load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario
 
     scene = sample_scene(load_scenario("sim_configs/sim_shelf.yaml"), 2, seed=3)
     return CollisionWorld(load_station_scenario("sim_configs/station_sim_shelf.yaml"), scene,

@@ -11,8 +11,8 @@ import numpy as np
 
 from slax_drake.planning.timing import time_waypoints
 from slax_drake.planning.trajectory import JointTrajectory
-from slax_drake.systems.robot import PLANNED_JOINTS, joint_limits
-from slax_drake.systems.station import load_station_scenario, observation_positions
+from slax_drake.station.robot import PLANNED_JOINTS, joint_limits
+from slax_drake.station.scenario import load_station_scenario, observation_positions
 
 # The arm swung right (pan at its limit) and folded back at the elbow: the forearm, wrist and tool lie inside the
 # torso column (models/fetch_bluction.urdf's torso_lift_link: column + shoulder mount) by 35 to 127 mm. (The pose

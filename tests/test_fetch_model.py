@@ -9,8 +9,8 @@ import pytest
 
 from slax_drake.config import load_scenario
 from slax_drake.scene.sampling import shelf_of
-from slax_drake.systems import robot as robot_model
-from slax_drake.systems.scene_world import shelf_sdf
+from slax_drake.station import robot as robot_model
+from slax_drake.station.scene_world import shelf_sdf
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from slax_drake.policies.benchmark import scene_seed
-from slax_drake.systems.physics_benchmark import (
+from slax_drake.evaluation.table1 import scene_seed
+from slax_drake.evaluation.physics import (
     PhysicsBenchmarkError, action_matches, main, run_physics_benchmark, trial_path,
 )
 

@@ -9,8 +9,8 @@ from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import ActionModel, Push, Suction
 from slax_drake.policies.registry import tool_config
 from slax_drake.scene.sampling import sample_scene, shelf_of
-from slax_drake.systems.robot import joint_limits
-from slax_drake.systems.station import load_station_scenario, observation_positions
+from slax_drake.station.robot import joint_limits
+from slax_drake.station.scenario import load_station_scenario, observation_positions
 
 TOL = 1e-9
 

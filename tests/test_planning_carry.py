@@ -11,7 +11,7 @@ from slax_drake.policies.actions import ActionModel, Suction
 from slax_drake.policies.registry import tool_config
 from slax_drake.scene.model import SceneObject, planar_pose
 from slax_drake.scene.sampling import sample_scene, shelf_of
-from slax_drake.systems.station import load_station_scenario
+from slax_drake.station.scenario import load_station_scenario
 
 
 def _box(name, x, y, size):

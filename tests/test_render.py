@@ -19,13 +19,13 @@ def scenes(sim_scenario):
 
 @pytest.fixture(scope="module")
 def renderer(scenes):
-    from slax_drake.systems.scene_renderer import SceneRenderer
+    from slax_drake.station.renderer import SceneRenderer
 
     return SceneRenderer(scenes[0].camera.with_resolution(256, 192))
 
 
 def test_known_box_depth_is_analytic(sim_scenario):
-    from slax_drake.systems.scene_renderer import SceneRenderer
+    from slax_drake.station.renderer import SceneRenderer
 
     base = sample_scene(sim_scenario, 2, 0)
     camera = dataclasses.replace(base.camera.with_resolution(160, 120), X_SC=camera_pose([0.0, -0.75, 0.10], 0.0))
@@ -85,7 +85,7 @@ def test_target_pixels_inside_projected_support(renderer, scenes):
 def test_shelf_change_and_object_count_changes_match_a_fresh_renderer(renderer, scenes, physical_scenario):
     """The renderer keeps the shelf's panels registered between scenes and swaps only objects and target:
     after scenes with another shelf and other object counts, each image equals that of a new renderer."""
-    from slax_drake.systems.scene_renderer import SceneRenderer
+    from slax_drake.station.renderer import SceneRenderer
 
     other_shelf = dataclasses.replace(sample_scene(physical_scenario, 5, 3), camera=scenes[0].camera)
     assert other_shelf.shelf != scenes[0].shelf

@@ -103,7 +103,7 @@ def test_save_is_atomic_and_keeps_old_file_on_failure(tmp_path, sim_scenario, mo
     save_scene(scene, path)
     before = path.read_text()
 
-    import slax_drake.scene.io as io_module
+    import slax_drake.io as io_module
 
     def boom(*args, **kwargs):
         raise RuntimeError("disk full")

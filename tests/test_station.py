@@ -7,8 +7,9 @@ import pytest
 from slax_drake.config import REPO_ROOT
 from slax_drake.errors import ConfigError
 from slax_drake.scene.sampling import sample_scene
-from slax_drake.systems import robot as robot_model
-from slax_drake.systems.station import DEFAULT_STATION, MakeStation, load_station_scenario, observation_positions
+from slax_drake.station import robot as robot_model
+from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario, observation_positions
+from slax_drake.systems.station import MakeStation
 
 DEFAULT_STATION_PATH = REPO_ROOT / DEFAULT_STATION
 

@@ -14,8 +14,9 @@ import pytest
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene, SceneObject, planar_pose
 from slax_drake.scene.sampling import shelf_of
-from slax_drake.systems import robot as robot_model
-from slax_drake.systems.station import MakeStation, load_station_scenario
+from slax_drake.station import robot as robot_model
+from slax_drake.station.scenario import load_station_scenario
+from slax_drake.systems.station import MakeStation
 
 from station_ik import BladeIk, blade_centre_height, reach_seeds
 
@@ -196,7 +197,7 @@ REACH_Y = {"front": -0.2, "middle": 0.0, "back": 0.1}
 
 @pytest.mark.parametrize("region", list(REACH_Y))
 def test_blade_reaches_across_the_bay_collision_free(station_scenario, blade_ik, region):
-    from slax_drake.systems.robot import BLADE_FACE_FRAME
+    from slax_drake.station.robot import BLADE_FACE_FRAME
 
     z = blade_centre_height()
     plant, context = blade_ik.plant, blade_ik.plant_context

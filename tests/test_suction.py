@@ -12,8 +12,9 @@ from pydrake.multibody.tree import FixedOffsetFrame, SpatialInertia, UnitInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-from slax_drake.systems.station import load_station_scenario
-from slax_drake.systems.suction import SuctionCup, SuctionParameters
+from slax_drake.station.scenario import load_station_scenario
+from slax_drake.station.scenario import SuctionParameters
+from slax_drake.systems.suction import SuctionCup
 
 BOX = 0.10  # m, cube
 STATION_TIME_STEP = load_station_scenario().plant_config.time_step  # s, the fixture steps like the station (5 ms)

@@ -4,7 +4,7 @@ scene (no simulation here), and one clear message with exit code 2 for a bad req
 import pytest
 
 from slax_drake.cli import main
-from slax_drake.policies.benchmark import scene_seed
+from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
 from slax_drake.systems.trial_commands import benchmark_scene_options
 

@@ -63,7 +63,7 @@ class SampleMaker:
     def __init__(self, spec: DatasetSpec):
         from slax_drake.config import load_scenario
         from slax_drake.scene.camera import Camera
-        from slax_drake.systems.scene_renderer import SceneRenderer
+        from slax_drake.station.renderer import SceneRenderer
 
         self.spec = spec
         self.scenario = load_scenario(spec.config)
@@ -118,7 +118,7 @@ def spec_from_dict(d: dict) -> DatasetSpec:
 def prepare_output(spec: DatasetSpec, out: Path) -> list[int]:
     """Creates or checks the output folder; returns the shards still to make. Stale temporary files of an
     interrupted run are removed; a folder made with other arguments is refused."""
-    from slax_drake.scene.io import write_text_atomic
+    from slax_drake.io import write_text_atomic
 
     out.mkdir(parents=True, exist_ok=True)
     params_path = out / PARAMS
@@ -144,7 +144,7 @@ def write_manifest(spec: DatasetSpec, out: Path) -> dict:
 
     from slax_drake import __version__
     from slax_drake.config import load_scenario
-    from slax_drake.scene.io import write_text_atomic
+    from slax_drake.io import write_text_atomic
 
     shards, counts = [], np.zeros(len(TARGET_SIZES), dtype=int)
     objects = {}

@@ -40,8 +40,8 @@ class CollisionWorld:
         from slax_drake.config import load_scenario
         from slax_drake.hardware.fetch_limits import FETCH_JOINTS
         from slax_drake.scene.camera import Camera
-        from slax_drake.systems import robot as robot_model
-        from slax_drake.systems.station import SHELF_BODY, shelf_pose
+        from slax_drake.station import robot as robot_model
+        from slax_drake.station.scenario import SHELF_BODY, shelf_pose
 
         self.tolerance = tolerance
         builder = DiagramBuilder()

@@ -54,7 +54,7 @@ def register(subparsers) -> None:
 def _scene_and_station(traj, scene_path, station_path):
     from slax_drake.hardware.trajectory_file import TrajectoryFileError
     from slax_drake.scene.io import load_scene, scene_from_dict
-    from slax_drake.systems.station import load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.trial import station_for
 
     if scene_path:
@@ -95,7 +95,7 @@ def run_check(args: argparse.Namespace) -> int:
     from slax_drake.hardware.check import check_trajectory
     from slax_drake.hardware.collision import CollisionWorld
     from slax_drake.hardware.trajectory_file import load_trajectory
-    from slax_drake.scene.io import write_text_atomic
+    from slax_drake.io import write_text_atomic
 
     traj = load_trajectory(args.trajectory)
     world = None
@@ -116,7 +116,7 @@ def run_check(args: argparse.Namespace) -> int:
 def run_replay(args: argparse.Namespace) -> int:
     from slax_drake.hardware.replay import compare_final_objects, replay
     from slax_drake.hardware.trajectory_file import TrajectoryFileError, load_trajectory
-    from slax_drake.scene.io import write_text_atomic
+    from slax_drake.io import write_text_atomic
 
     traj = load_trajectory(args.trajectory)
     scene, station = _scene_and_station(traj, args.scene, args.station)

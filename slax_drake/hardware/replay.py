@@ -85,8 +85,9 @@ def replay(traj: ExportedTrajectory, station, scene, meshcat=None, log_period: f
     from pydrake.systems.framework import DiagramBuilder
     from pydrake.systems.primitives import VectorLogSink
 
-    from slax_drake.systems import robot as robot_model
-    from slax_drake.systems.station import MakeStation, shelf_pose
+    from slax_drake.station import robot as robot_model
+    from slax_drake.station.scenario import shelf_pose
+    from slax_drake.systems.station import MakeStation
 
     builder = DiagramBuilder()
     station_diagram = builder.AddNamedSystem("station", MakeStation(station, scene, meshcat=meshcat, camera=False))

@@ -186,7 +186,7 @@ def dumps(traj: ExportedTrajectory, fmt: str) -> str:
 
 def save_trajectory(traj: ExportedTrajectory, path: str | Path, fmt: str | None = None) -> None:
     """Writes ``traj`` atomically; the format follows the extension unless ``fmt`` is given."""
-    from slax_drake.scene.io import write_text_atomic
+    from slax_drake.io import write_text_atomic
 
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(Path(path), dumps(traj, fmt or format_of(path)))

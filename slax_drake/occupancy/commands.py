@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from slax_drake.errors import SceneFileError, UserError
     from slax_drake.occupancy import compute_occupancy
     from slax_drake.scene import load_scene
-    from slax_drake.scene.io import write_bytes_atomic
+    from slax_drake.io import write_bytes_atomic
 
     scene = load_scene(args.scene)
     if scene.target is None:

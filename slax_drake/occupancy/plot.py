@@ -17,7 +17,7 @@ def save_occupancy_png(scene: Scene, occ: Occupancy, path: str | Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from slax_drake.scene.io import figure_png, write_bytes_atomic
+    from slax_drake.io import figure_png, write_bytes_atomic
     from slax_drake.scene.plot import draw_top_down
 
     camera = scene.camera.with_resolution(occ.p2d.shape[1], occ.p2d.shape[0])

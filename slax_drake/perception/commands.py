@@ -92,7 +92,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
     from slax_drake.perception.data import load_dataset
     from slax_drake.perception.evaluation import evaluate_model, save_example_grid, segmentation_mean_iou
     from slax_drake.perception.weights import load_weights
-    from slax_drake.scene.io import write_text_atomic
+    from slax_drake.io import write_text_atomic
 
     _positive(args.limit, "--limit")
     _positive(args.examples, "--examples")

@@ -17,7 +17,7 @@ import torch
 from slax_drake.perception.data import TrainingData
 from slax_drake.perception.metrics import MetricsAccumulator
 from slax_drake.perception.weights import LoadedModel
-from slax_drake.scene.io import write_bytes_atomic
+from slax_drake.io import write_bytes_atomic
 
 
 def evaluate_model(model: LoadedModel, data: TrainingData, batch_size: int = 32, num_threads: int | None = None,

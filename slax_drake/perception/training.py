@@ -31,7 +31,7 @@ from slax_drake.perception.loss import masked_kl_loss, own_head_mask
 from slax_drake.perception.metrics import MetricsAccumulator
 from slax_drake.perception.network import NetworkConfig, OccupancyUNet
 from slax_drake.perception.weights import make_header, save_weights
-from slax_drake.scene.io import write_bytes_atomic, write_text_atomic
+from slax_drake.io import write_bytes_atomic, write_text_atomic
 
 CHECKPOINT_VERSION = 1
 

@@ -25,7 +25,7 @@ from slax_drake.config import REPO_ROOT
 from slax_drake.perception.errors import ImageSizeError, WeightFileError
 from slax_drake.perception.network import NetworkConfig, OccupancyUNet
 from slax_drake.perception.targets import TARGET_SIZES
-from slax_drake.scene.io import write_bytes_atomic
+from slax_drake.io import write_bytes_atomic
 
 FORMAT = "slax-drake-perception"
 VERSION = 1

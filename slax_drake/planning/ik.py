@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from slax_drake.systems import robot as robot_model
+from slax_drake.station import robot as robot_model
 
 POSITION_TOLERANCE = 5e-4  # m
 # Joint-limit margin: every planned configuration keeps this far inside the position limits of the limited

@@ -50,8 +50,8 @@ from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, 
 from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import Suction, ToolConfig
 from slax_drake.scene.model import Scene, state_key
-from slax_drake.systems import robot as robot_model
-from slax_drake.systems.station import StationScenario, observation_positions
+from slax_drake.station import robot as robot_model
+from slax_drake.station.scenario import StationScenario, observation_positions
 
 DEVIATION_TOLERANCE = 0.004  # m; the requirement is < 5 mm, 1 mm is left for the 1 ms sampling and IK tolerance
 CARRIED_DEVIATION_TOLERANCE = 0.001  # m, on segments carrying an object, which may slide along a wall it touches

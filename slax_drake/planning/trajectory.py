@@ -1,7 +1,7 @@
 """A timed joint trajectory of the planned joints, sampled on a uniform clock (1 ms by default).
 
 Positions in metres (torso) and radians, velocities per second, accelerations per second squared, in the order
-of ``names`` (``slax_drake.systems.robot.PLANNED_JOINTS``). The samples are exact samples of the Ruckig profiles
+of ``names`` (``slax_drake.station.robot.PLANNED_JOINTS``). The samples are exact samples of the Ruckig profiles
 (see :mod:`slax_drake.planning.timing`); between samples :meth:`JointTrajectory.value` interpolates linearly.
 """
 

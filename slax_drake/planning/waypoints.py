@@ -34,7 +34,7 @@ import numpy as np
 from slax_drake.policies.actions import Push, Suction, ToolConfig
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf
-from slax_drake.systems import robot as robot_model
+from slax_drake.station import robot as robot_model
 
 APPROACH_MARGIN = 0.05  # the tool's tip this far in front of the opening before entering (m)
 # The planner's margins to try in turn: the nominal one, then with the tip just outside the opening, which keeps

@@ -27,8 +27,8 @@ from __future__ import annotations
 import numpy as np
 
 from slax_drake.scene.model import Scene
-from slax_drake.systems import robot as robot_model
-from slax_drake.systems.station import SHELF_BODY, StationScenario, _base_weld, shelf_pose
+from slax_drake.station import robot as robot_model
+from slax_drake.station.scenario import SHELF_BODY, StationScenario, _base_weld, shelf_pose
 
 PADDING = 0.002  # m, robot-environment margin of the collision checker
 SELF_PADDING = 0.003  # m, margin between non-adjacent robot links

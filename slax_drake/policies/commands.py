@@ -40,7 +40,7 @@ def register(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from slax_drake.config import load_scenario
-    from slax_drake.policies.benchmark import run_benchmark
+    from slax_drake.evaluation.table1 import run_benchmark
     from slax_drake.policies.registry import POLICY_NAMES, parse_tool_rules
 
     scenario = load_scenario(args.config)
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
 def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: int, tool_rules: dict) -> int:
     """``--physics``: the same protocol through full Drake trials. The runner lives in ``slax_drake.systems``
     (the only stage that builds diagrams); this command only dispatches to it."""
-    from slax_drake.systems.physics_benchmark import run_physics_benchmark
+    from slax_drake.evaluation.physics import run_physics_benchmark
 
     drake_policies = [p for p in policies if not p.startswith("oracle")]
     if not drake_policies:

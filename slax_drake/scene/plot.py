@@ -70,6 +70,6 @@ def save_scene_png(scene: Scene, path: str | Path, resolution: tuple[int, int] =
     ax1.set_title("camera view (depth)")
     ax1.set_axis_off()
     fig.tight_layout()
-    from slax_drake.scene.io import figure_png, write_bytes_atomic
+    from slax_drake.io import figure_png, write_bytes_atomic
 
     write_bytes_atomic(Path(path), figure_png(fig, 110))

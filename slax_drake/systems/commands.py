@@ -32,8 +32,9 @@ def register(subparsers) -> None:
 
 def write_diagram(station_path: str, out: Path, depth: int = 1) -> tuple[Path, Path | None]:
     """Writes ``out/station.dot`` and, when ``dot`` exists, ``out/station.svg``; returns their paths."""
-    from slax_drake.scene.io import write_bytes_atomic, write_text_atomic
-    from slax_drake.systems.station import MakeStation, load_station_scenario
+    from slax_drake.io import write_bytes_atomic, write_text_atomic
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.station import MakeStation
 
     diagram = MakeStation(load_station_scenario(station_path))
     out.mkdir(parents=True, exist_ok=True)

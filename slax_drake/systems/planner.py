@@ -35,7 +35,7 @@ from slax_drake.policies.actions import Push, Suction
 from slax_drake.policies.distribution import history_min, support
 from slax_drake.policies.simulator import Observation
 from slax_drake.scene.model import Scene, planar_pose
-from slax_drake.systems import robot as robot_model
+from slax_drake.station import robot as robot_model
 
 TOPPLE_ANGLE = math.radians(20.0)
 MAX_PLAN_ATTEMPTS = 25

@@ -4,11 +4,7 @@
 hardware_sim.py (plant config -> directives -> scene objects -> Finalize -> controllers -> suction -> camera ->
 visualization) from a typed ``StationScenario`` whose model directives live in ``sim_configs/station_*.yaml``.
 
-Shelf placement. The paper keeps camera and shelf static relative to each other in one observation
-configuration of the arm. The scenario's ``observation_configuration`` is that configuration; the shelf frame S
-is welded to the world at X_WS = X_WC(q_obs) * inv(X_SC), with X_SC the scene camera's pose, so that at q_obs
-the tool camera's frame is exactly the scene's X_SC. The station rejects (ConfigError) a configuration whose
-camera is not level (the shelf would tilt by more than 1 mrad).
+Shelf placement: ``slax_drake.station.scenario`` (the tool camera at q_obs is exactly the scene's X_SC).
 
 Ports of the station (all lower_snake_case):
 
@@ -32,157 +28,24 @@ objects out of the step until something comes near (about 1.4x faster with 10 ob
 benchmarks/bench_station.py documents the measurements and trade-offs).
 """
 
-# No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
-import dataclasses
-import math
-import typing
-from pathlib import Path
+from __future__ import annotations
 
 import numpy as np
-from pydrake.multibody.parsing import ModelDirective
-from pydrake.multibody.plant import MultibodyPlantConfig
 
-from slax_drake.config import REPO_ROOT, load_scenario
-from slax_drake.errors import ConfigError, UserError
+from slax_drake.config import load_scenario
+from slax_drake.errors import ConfigError
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene
 from slax_drake.scene.sampling import shelf_of
-from slax_drake.systems import robot as robot_model
-from slax_drake.systems.suction import SuctionParameters
-
-DEFAULT_STATION = "sim_configs/station_sim_shelf.yaml"
-SHELF_BODY = "shelf_body"
-
-
-class SceneMismatchError(UserError):
-    """A scene does not belong to the station's shelf (different bay)."""
-
-
-def _default_plant_config():
-    return MultibodyPlantConfig(time_step=0.005, contact_model="point", discrete_contact_approximation="lagged")
-
-
-@dataclasses.dataclass
-class StationScenario:
-    """A station: the scene scenario it serves, the model directives and the plant, control and camera settings.
-
-    ``directives`` must add the robot as model ``robot_model`` (welded to the world by an ``add_weld`` from
-    ``world``) and the shelf as model ``shelf_model`` (not welded: the station places it from the camera).
-    ``observation_configuration`` maps every name of ``PLANNED_JOINTS`` to its value at the observation pose.
-    """
-
-    scene_config: str = "sim_configs/sim_shelf.yaml"
-    directives: typing.List[ModelDirective] = dataclasses.field(default_factory=list)
-    plant_config: MultibodyPlantConfig = dataclasses.field(default_factory=_default_plant_config)
-    robot_model: str = "fetch"
-    shelf_model: str = "shelf"
-    observation_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
-    head_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
-    suction: SuctionParameters = dataclasses.field(default_factory=SuctionParameters)
-    camera: bool = True
-
-
-def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:
-    """Reads a station YAML; raises ConfigError naming the file on a missing file or a bad key/value."""
-    from pydrake.common.yaml import yaml_load_typed
-
-    path = Path(path)
-    if not path.is_file() and not path.is_absolute() and (REPO_ROOT / path).is_file():
-        path = REPO_ROOT / path
-    if not path.is_file():
-        raise ConfigError(f"{path}: no such station file")
-    try:
-        scenario = yaml_load_typed(schema=StationScenario, filename=str(path), defaults=StationScenario())
-    except Exception as e:
-        raise ConfigError(f"{path}: {' '.join(str(e).split())}") from None
-    _validate(scenario, str(path))
-    return scenario
-
-
-def _validate(scenario: StationScenario, source: str) -> None:
-    missing = [n for n in robot_model.PLANNED_JOINTS if n not in scenario.observation_configuration]
-    unknown = [n for n in scenario.observation_configuration if n not in robot_model.PLANNED_JOINTS]
-    if missing or unknown:
-        raise ConfigError(
-            f"{source}: key 'observation_configuration' must give exactly the joints {list(robot_model.PLANNED_JOINTS)}"
-            f" (missing {missing}, unknown {unknown})"
-        )
-    if scenario.plant_config.contact_model != "point":
-        raise ConfigError(f"{source}: key 'plant_config.contact_model' = {scenario.plant_config.contact_model!r}: must be 'point'")
-    if not scenario.plant_config.time_step > 0:
-        raise ConfigError(f"{source}: key 'plant_config.time_step' must be positive (a discrete plant)")
-    if scenario.plant_config.discrete_contact_approximation not in ("sap", "similar", "lagged"):
-        raise ConfigError(
-            f"{source}: key 'plant_config.discrete_contact_approximation' = "
-            f"{scenario.plant_config.discrete_contact_approximation!r}: PD-controlled actuators need 'sap', 'similar' or 'lagged'"
-        )
-    p = scenario.suction
-    for name in ("vacuum_pressure", "cup_radius", "max_distance", "max_angle_deg"):
-        if not getattr(p, name) > 0:
-            raise ConfigError(f"{source}: key 'suction.{name}' = {getattr(p, name)!r}: must be positive")
-    if not p.max_held_moment > 0:
-        raise ConfigError(f"{source}: key 'suction.max_held_moment' = {p.max_held_moment!r}: must be positive "
-                          "(.inf for no limit)")
-    if not 0 <= p.max_seal_angle_deg <= 90:
-        raise ConfigError(f"{source}: key 'suction.max_seal_angle_deg' = {p.max_seal_angle_deg!r}: must lie in "
-                          "[0, 90] (90 for no limit)")
-
-
-def observation_positions(scenario: StationScenario) -> np.ndarray:
-    """q_obs of ``PLANNED_JOINTS`` (9)."""
-    return np.array([scenario.observation_configuration[n] for n in robot_model.PLANNED_JOINTS])
-
-
-def _base_weld(scenario: StationScenario):
-    """X_WB of the robot's base from the directives' add_weld (identity when no X_PC is given)."""
-    from pydrake.math import RigidTransform
-
-    child = f"{scenario.robot_model}::{robot_model.BASE_BODY}"
-    for directive in scenario.directives:
-        weld = directive.add_weld
-        if weld is not None and weld.child == child:
-            if weld.parent != "world":
-                raise ConfigError(f"the robot's base must be welded to 'world', not {weld.parent!r}")
-            return weld.X_PC.GetDeterministicValue() if weld.X_PC is not None else RigidTransform()
-    raise ConfigError(f"the directives do not weld {child} to the world")
-
-
-def camera_pose_at(scenario: StationScenario, q_planned: np.ndarray):
-    """X_WC of the tool camera at the given planned joint positions (head at head_configuration)."""
-    plant = robot_model.robot_only_plant()
-    context = plant.CreateDefaultContext()
-    q = np.zeros(plant.num_positions())
-    q[robot_model.planned_joint_indices(plant)] = q_planned
-    for name, value in scenario.head_configuration.items():
-        q[plant.GetJointByName(name).position_start()] = value
-    plant.SetPositions(context, q)
-    X_BC = plant.GetFrameByName(robot_model.CAMERA_FRAME).CalcPoseInWorld(context)
-    return _base_weld(scenario) @ X_BC
-
-
-def shelf_pose(scenario: StationScenario, camera: Camera):
-    """X_WS = X_WC(q_obs) * inv(X_SC); ConfigError when the shelf would not stand level (> 1 mrad)."""
-    from pydrake.math import RigidTransform
-
-    X_WS = camera_pose_at(scenario, observation_positions(scenario)) @ RigidTransform(camera.X_SC).inverse()
-    tilt = math.acos(min(1.0, max(-1.0, X_WS.rotation().matrix()[2, 2])))
-    if tilt > 1e-3:
-        raise ConfigError(
-            f"the observation configuration tilts the shelf by {tilt:.4f} rad: at q_obs the camera's roll and pitch "
-            "must equal the scene camera's (level roll, pitch_deg down)"
-        )
-    return X_WS
-
-
-def camera_render_cameras(camera: Camera, renderer_name: str):
-    """Drake ColorRenderCamera and DepthRenderCamera with exactly the intrinsics of ``camera``."""
-    from pydrake.geometry import ClippingRange, ColorRenderCamera, DepthRange, DepthRenderCamera, RenderCameraCore
-    from pydrake.math import RigidTransform
-    from slax_drake.systems.scene_renderer import drake_camera_info
-
-    info = drake_camera_info(camera)
-    core = RenderCameraCore(renderer_name, info, ClippingRange(camera.near, camera.far), RigidTransform())
-    return ColorRenderCamera(core, False), DepthRenderCamera(core, DepthRange(camera.near, camera.far))
+from slax_drake.station import robot as robot_model
+from slax_drake.station.scenario import (
+    SHELF_BODY,
+    SceneMismatchError,
+    StationScenario,
+    camera_render_cameras,
+    observation_positions,
+    shelf_pose,
+)
 
 
 def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=None, camera: bool | None = None):
@@ -199,7 +62,7 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
     from pydrake.systems.primitives import Adder, ConstantVectorSource, MatrixGain
     from pydrake.systems.sensors import RgbdSensor
 
-    from slax_drake.systems.scene_world import add_scene_objects, assign_render_labels, set_default_object_poses
+    from slax_drake.station.scene_world import add_scene_objects, assign_render_labels, set_default_object_poses
     from slax_drake.systems.suction import SuctionCup
 
     config = load_scenario(scenario.scene_config)
@@ -232,7 +95,7 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
     # The robot never collides with itself in this model (its boxes overlap at the joints).
     robot_geometries = [g for b in plant.GetBodyIndices(robot) for g in plant.GetCollisionGeometriesForBody(plant.get_body(b))]
     scene_graph.collision_filter_manager().Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(robot_geometries)))
-    from slax_drake.systems.scene_world import SceneBodies, support_by_corner_spheres_only
+    from slax_drake.station.scene_world import SceneBodies, support_by_corner_spheres_only
 
     if bodies is not None:
         support_by_corner_spheres_only(scene_graph, plant, shelf_instance, bodies)

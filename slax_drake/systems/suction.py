@@ -21,8 +21,6 @@ Output: ``spatial_forces`` (a list of ExternallyAppliedSpatialForce for the plan
 ``applied_spatial_force`` input) and ``suction_state`` (1-vector: the present pull in newtons, 0 when off).
 """
 
-# No `from __future__ import annotations`: yaml_load_typed reads SuctionParameters' field types.
-
 import dataclasses
 import math
 
@@ -32,25 +30,7 @@ from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 from pydrake.systems.framework import LeafSystem
 
-
-@dataclasses.dataclass
-class SuctionParameters:
-    """Suction cup parameters (SI units). Defaults: a 0.03 m cup, 60 kPa vacuum, 5 mm reach, 30 deg cone."""
-
-    vacuum_pressure: float = 60000.0
-    cup_radius: float = 0.015
-    max_distance: float = 0.005
-    max_angle_deg: float = 30.0
-    # The planning limit of this cup, not a force-element parameter: the planner suctions no object whose weight
-    # times the horizontal distance from the cup's contact to its centre exceeds this (N m). inf: no limit.
-    max_held_moment: float = math.inf
-    # Likewise: the planner seals on no box face turned more than this (deg) from the tube's axis. 90: no limit.
-    max_seal_angle_deg: float = 90.0
-
-    @property
-    def max_force(self) -> float:
-        """The largest pull (N): vacuum pressure times cup area."""
-        return self.vacuum_pressure * math.pi * self.cup_radius**2
+from slax_drake.station.scenario import SuctionParameters
 
 
 class SuctionCup(LeafSystem):

@@ -91,7 +91,8 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     from slax_drake.policies.registry import make_policy, tool_config
     from slax_drake.scene.sampling import sample_scene
     from slax_drake.systems.planner import PlannerSystem
-    from slax_drake.systems.station import MakeStation, load_station_scenario, shelf_pose
+    from slax_drake.station.scenario import load_station_scenario, shelf_pose
+    from slax_drake.systems.station import MakeStation
 
     if opts.objects < 1:
         raise TrialError(f"--objects must be at least 1 (got {opts.objects})")
@@ -228,7 +229,8 @@ def _executed_trajectory(planner_system, t_end: float):
 
 def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -> list[Path]:
     """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, and the HTML replay."""
-    from slax_drake.scene.io import save_scene, write_bytes_atomic, write_text_atomic
+    from slax_drake.io import write_bytes_atomic, write_text_atomic
+    from slax_drake.scene.io import save_scene
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -251,7 +253,7 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
 def _step_png(step, depth, labels, history, p1d) -> bytes:
     import matplotlib
 
-    from slax_drake.scene.io import figure_png
+    from slax_drake.io import figure_png
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

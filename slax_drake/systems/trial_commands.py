@@ -44,8 +44,8 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
     ``scene_seed(protocol seed, N, INDEX)``, the protocol's first target size, H = horizon_per_object * N and, unless
     a station is given, the physics benchmark's default station: the very trial the physics benchmark runs."""
     from slax_drake.config import load_scenario
-    from slax_drake.policies.benchmark import scene_seed
-    from slax_drake.systems.physics_benchmark import protocol_trial
+    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.evaluation.physics import protocol_trial
 
     try:
         density, index = (int(v) for v in spec.split(":"))

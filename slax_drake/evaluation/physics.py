@@ -1,7 +1,7 @@
 """The Table I protocol through full Drake trials, beside the fast first-order shelf simulator on the same scenes.
 
 For every policy, density n and scene index, the scene seed is the shelf benchmark's
-(``slax_drake.policies.benchmark.scene_seed(protocol_seed, n, index)``) and the target is the protocol's first
+(``slax_drake.evaluation.table1.scene_seed(protocol_seed, n, index)``) and the target is the protocol's first
 target size, so both simulators start from the very scene that ``slax-drake benchmark`` uses. Each scene runs
 
 - in the shelf simulator (``slax_drake.policies.simulator.run_trial``, H = horizon_per_object * n), and
@@ -16,7 +16,7 @@ planar position is within ``MATCH_DISTANCE`` (2 cm) and the yaw within ``MATCH_Y
 Each finished scene is written atomically as ``<out>/physics_trials/<policy>/<n>_<index>.json`` (so a stopped run
 resumes); when all are in, ``physics.json`` and ``physics.md`` are (re)written from those files.
 
-    python -m slax_drake.systems.physics_benchmark --config sim_configs/table1.yaml --scenes-per-density 2 \\
+    python -m slax_drake.evaluation.physics --config sim_configs/table1.yaml --scenes-per-density 2 \\
         --policies bluction-dar --out results/physics_tiny
 """
 
@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.errors import UserError
-from slax_drake.scene.io import figure_png, write_bytes_atomic, write_text_atomic
+from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
 
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
@@ -130,7 +130,7 @@ def protocol_trial(opts, scenario, density: int, seed: int):
 def default_station(config: str) -> str:
     """The station made for ``config`` (``station_<stem>.yaml``), else the sim-shelf station; MakeStation refuses
     a scene whose shelf differs from the station's."""
-    from slax_drake.systems.station import DEFAULT_STATION
+    from slax_drake.station.scenario import DEFAULT_STATION
     from slax_drake.systems.trial import TrialError, station_for
 
     try:
@@ -154,9 +154,9 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     scene files made under other rules).
     """
     from slax_drake.config import load_scenario
-    from slax_drake.policies.benchmark import scene_seed
+    from slax_drake.evaluation.table1 import scene_seed
     from slax_drake.policies.registry import POLICY_NAMES
-    from slax_drake.systems.station import load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.trial import station_tool_rules
 
     scenario = load_scenario(config)
@@ -385,7 +385,7 @@ def bar_chart_png(summary: dict) -> bytes:
 def build_parser() -> argparse.ArgumentParser:
     from slax_drake.policies.registry import add_tool_rule_argument
 
-    p = argparse.ArgumentParser(prog="python -m slax_drake.systems.physics_benchmark",
+    p = argparse.ArgumentParser(prog="python -m slax_drake.evaluation.physics",
                                 description="The Table I protocol through full Drake trials beside the shelf "
                                 "simulator on the same scenes; writes OUT/physics.md and OUT/physics.json.")
     p.add_argument("--config", default="sim_configs/table1.yaml", help="protocol scenario YAML")

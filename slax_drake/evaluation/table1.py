@@ -17,7 +17,7 @@ import numpy as np
 
 from slax_drake.config import Scenario
 from slax_drake.errors import UserError
-from slax_drake.scene.io import figure_png, write_bytes_atomic, write_text_atomic
+from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
 
 PAPER_TABLE1 = {  # success % for 4/6/8/10/All (paper Table I)
     "oracle-p": [100, 100, 99, 94, 98], "oracle-p+s": [100, 100, 100, 100, 100], "dar": [77, 68, 45, 24, 54],

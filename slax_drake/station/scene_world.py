@@ -82,7 +82,7 @@ def shelf_sdf(shelf: Shelf) -> str:
     panels = "\n".join(links)
     return f"""<?xml version="1.0"?>
 <!-- Shelf bay {shelf.width:g} m wide x {shelf.height:g} m high x {shelf.depth:g} m deep, panels {shelf.wall_thickness:g} m thick,
-     written by slax_drake.systems.scene_world.shelf_sdf (regenerate with it; a test checks the shipped copy).
+     written by slax_drake.station.scene_world.shelf_sdf (regenerate with it; a test checks the shipped copy).
      Body frame = shelf frame S: origin at the centre of the support surface, x right seen from the camera,
      y into the shelf (the front at y = -depth/2 is open), z up. Weld shelf_body to place the shelf. -->
 <sdf version="1.9" xmlns:drake="http://drake.mit.edu">

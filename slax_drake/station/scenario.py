@@ -1,0 +1,179 @@
+"""The station scenario: a typed dataclass (loaded with ``yaml_load_typed``) holding the model directives, the
+plant configuration, the observation configuration of the arm, the head's pose and the suction cup's parameters
+and limits; and the geometry it implies (the robot's base weld, the camera's pose, where the shelf goes).
+
+Shelf placement. The paper keeps camera and shelf static relative to each other in one observation
+configuration of the arm. The scenario's ``observation_configuration`` is that configuration; the shelf frame S
+is welded to the world at X_WS = X_WC(q_obs) * inv(X_SC), with X_SC the scene camera's pose, so that at q_obs
+the tool camera's frame is exactly the scene's X_SC. ``shelf_pose`` rejects (ConfigError) a configuration whose
+camera is not level (the shelf would tilt by more than 1 mrad).
+"""
+
+# No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
+import dataclasses
+import math
+import typing
+from pathlib import Path
+
+import numpy as np
+from pydrake.multibody.parsing import ModelDirective
+from pydrake.multibody.plant import MultibodyPlantConfig
+
+from slax_drake.config import REPO_ROOT
+from slax_drake.errors import ConfigError, UserError
+from slax_drake.scene.camera import Camera
+from slax_drake.station import robot as robot_model
+
+@dataclasses.dataclass
+class SuctionParameters:
+    """Suction cup parameters (SI units). Defaults: a 0.03 m cup, 60 kPa vacuum, 5 mm reach, 30 deg cone."""
+
+    vacuum_pressure: float = 60000.0
+    cup_radius: float = 0.015
+    max_distance: float = 0.005
+    max_angle_deg: float = 30.0
+    # The planning limit of this cup, not a force-element parameter: the planner suctions no object whose weight
+    # times the horizontal distance from the cup's contact to its centre exceeds this (N m). inf: no limit.
+    max_held_moment: float = math.inf
+    # Likewise: the planner seals on no box face turned more than this (deg) from the tube's axis. 90: no limit.
+    max_seal_angle_deg: float = 90.0
+
+    @property
+    def max_force(self) -> float:
+        """The largest pull (N): vacuum pressure times cup area."""
+        return self.vacuum_pressure * math.pi * self.cup_radius**2
+
+
+DEFAULT_STATION = "sim_configs/station_sim_shelf.yaml"
+SHELF_BODY = "shelf_body"
+
+
+class SceneMismatchError(UserError):
+    """A scene does not belong to the station's shelf (different bay)."""
+
+
+def _default_plant_config():
+    return MultibodyPlantConfig(time_step=0.005, contact_model="point", discrete_contact_approximation="lagged")
+
+
+@dataclasses.dataclass
+class StationScenario:
+    """A station: the scene scenario it serves, the model directives and the plant, control and camera settings.
+
+    ``directives`` must add the robot as model ``robot_model`` (welded to the world by an ``add_weld`` from
+    ``world``) and the shelf as model ``shelf_model`` (not welded: the station places it from the camera).
+    ``observation_configuration`` maps every name of ``PLANNED_JOINTS`` to its value at the observation pose.
+    """
+
+    scene_config: str = "sim_configs/sim_shelf.yaml"
+    directives: typing.List[ModelDirective] = dataclasses.field(default_factory=list)
+    plant_config: MultibodyPlantConfig = dataclasses.field(default_factory=_default_plant_config)
+    robot_model: str = "fetch"
+    shelf_model: str = "shelf"
+    observation_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
+    head_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
+    suction: SuctionParameters = dataclasses.field(default_factory=SuctionParameters)
+    camera: bool = True
+
+
+def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:
+    """Reads a station YAML; raises ConfigError naming the file on a missing file or a bad key/value."""
+    from pydrake.common.yaml import yaml_load_typed
+
+    path = Path(path)
+    if not path.is_file() and not path.is_absolute() and (REPO_ROOT / path).is_file():
+        path = REPO_ROOT / path
+    if not path.is_file():
+        raise ConfigError(f"{path}: no such station file")
+    try:
+        scenario = yaml_load_typed(schema=StationScenario, filename=str(path), defaults=StationScenario())
+    except Exception as e:
+        raise ConfigError(f"{path}: {' '.join(str(e).split())}") from None
+    _validate(scenario, str(path))
+    return scenario
+
+
+def _validate(scenario: StationScenario, source: str) -> None:
+    missing = [n for n in robot_model.PLANNED_JOINTS if n not in scenario.observation_configuration]
+    unknown = [n for n in scenario.observation_configuration if n not in robot_model.PLANNED_JOINTS]
+    if missing or unknown:
+        raise ConfigError(
+            f"{source}: key 'observation_configuration' must give exactly the joints {list(robot_model.PLANNED_JOINTS)}"
+            f" (missing {missing}, unknown {unknown})"
+        )
+    if scenario.plant_config.contact_model != "point":
+        raise ConfigError(f"{source}: key 'plant_config.contact_model' = {scenario.plant_config.contact_model!r}: must be 'point'")
+    if not scenario.plant_config.time_step > 0:
+        raise ConfigError(f"{source}: key 'plant_config.time_step' must be positive (a discrete plant)")
+    if scenario.plant_config.discrete_contact_approximation not in ("sap", "similar", "lagged"):
+        raise ConfigError(
+            f"{source}: key 'plant_config.discrete_contact_approximation' = "
+            f"{scenario.plant_config.discrete_contact_approximation!r}: PD-controlled actuators need 'sap', 'similar' or 'lagged'"
+        )
+    p = scenario.suction
+    for name in ("vacuum_pressure", "cup_radius", "max_distance", "max_angle_deg"):
+        if not getattr(p, name) > 0:
+            raise ConfigError(f"{source}: key 'suction.{name}' = {getattr(p, name)!r}: must be positive")
+    if not p.max_held_moment > 0:
+        raise ConfigError(f"{source}: key 'suction.max_held_moment' = {p.max_held_moment!r}: must be positive "
+                          "(.inf for no limit)")
+    if not 0 <= p.max_seal_angle_deg <= 90:
+        raise ConfigError(f"{source}: key 'suction.max_seal_angle_deg' = {p.max_seal_angle_deg!r}: must lie in "
+                          "[0, 90] (90 for no limit)")
+
+
+def observation_positions(scenario: StationScenario) -> np.ndarray:
+    """q_obs of ``PLANNED_JOINTS`` (9)."""
+    return np.array([scenario.observation_configuration[n] for n in robot_model.PLANNED_JOINTS])
+
+
+def _base_weld(scenario: StationScenario):
+    """X_WB of the robot's base from the directives' add_weld (identity when no X_PC is given)."""
+    from pydrake.math import RigidTransform
+
+    child = f"{scenario.robot_model}::{robot_model.BASE_BODY}"
+    for directive in scenario.directives:
+        weld = directive.add_weld
+        if weld is not None and weld.child == child:
+            if weld.parent != "world":
+                raise ConfigError(f"the robot's base must be welded to 'world', not {weld.parent!r}")
+            return weld.X_PC.GetDeterministicValue() if weld.X_PC is not None else RigidTransform()
+    raise ConfigError(f"the directives do not weld {child} to the world")
+
+
+def camera_pose_at(scenario: StationScenario, q_planned: np.ndarray):
+    """X_WC of the tool camera at the given planned joint positions (head at head_configuration)."""
+    plant = robot_model.robot_only_plant()
+    context = plant.CreateDefaultContext()
+    q = np.zeros(plant.num_positions())
+    q[robot_model.planned_joint_indices(plant)] = q_planned
+    for name, value in scenario.head_configuration.items():
+        q[plant.GetJointByName(name).position_start()] = value
+    plant.SetPositions(context, q)
+    X_BC = plant.GetFrameByName(robot_model.CAMERA_FRAME).CalcPoseInWorld(context)
+    return _base_weld(scenario) @ X_BC
+
+
+def shelf_pose(scenario: StationScenario, camera: Camera):
+    """X_WS = X_WC(q_obs) * inv(X_SC); ConfigError when the shelf would not stand level (> 1 mrad)."""
+    from pydrake.math import RigidTransform
+
+    X_WS = camera_pose_at(scenario, observation_positions(scenario)) @ RigidTransform(camera.X_SC).inverse()
+    tilt = math.acos(min(1.0, max(-1.0, X_WS.rotation().matrix()[2, 2])))
+    if tilt > 1e-3:
+        raise ConfigError(
+            f"the observation configuration tilts the shelf by {tilt:.4f} rad: at q_obs the camera's roll and pitch "
+            "must equal the scene camera's (level roll, pitch_deg down)"
+        )
+    return X_WS
+
+
+def camera_render_cameras(camera: Camera, renderer_name: str):
+    """Drake ColorRenderCamera and DepthRenderCamera with exactly the intrinsics of ``camera``."""
+    from pydrake.geometry import ClippingRange, ColorRenderCamera, DepthRange, DepthRenderCamera, RenderCameraCore
+    from pydrake.math import RigidTransform
+    from slax_drake.station.renderer import drake_camera_info
+
+    info = drake_camera_info(camera)
+    core = RenderCameraCore(renderer_name, info, ClippingRange(camera.near, camera.far), RigidTransform())
+    return ColorRenderCamera(core, False), DepthRenderCamera(core, DepthRange(camera.near, camera.far))
