@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from slax_drake.cli import main
-from slax_drake.station.robot import joint_limits
+from slax_drake.station.plant import station_joint_limits
+from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario
 from slax_drake.systems.trial import TrialOptions, run_trial, write_trial
 
 SHORT = dict(objects=2, seed=7)  # the shelf simulator reveals this scene with one push
@@ -43,7 +44,7 @@ def test_executed_trajectory_in_trial_json(short_trial):
     record, out = short_trial
     d = json.loads((out / "trial.json").read_text())
     traj = d["executed_trajectory"]
-    lim = joint_limits()
+    lim = station_joint_limits(load_station_scenario(DEFAULT_STATION))
     assert traj["joint_names"] == list(lim.names)
     q = np.array(traj["positions"])
     v = np.array(traj["velocities"])
