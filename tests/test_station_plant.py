@@ -11,8 +11,9 @@ from slax_drake.planning.planner import MotionPlanner
 from slax_drake.planning.world import PlanningWorld
 from slax_drake.scene.sampling import sample_scene
 from slax_drake.station.plant import PlantPurpose, controller_plant, make_station_plant, station_joint_limits
+from slax_drake.station import robot as robot_model
 from slax_drake.station.robot import PLANNED_JOINTS
-from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario
+from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario, observation_positions
 from slax_drake.systems.station import MakeStation
 
 SHIPPED_URL = "package://slax_drake_models/fetch_bluction.urdf"
@@ -63,12 +64,18 @@ def test_simulator_planner_checker_and_controller_load_the_scenarios_robot(chang
     world = PlanningWorld(scenario, scene)
     checker = CollisionWorld(scenario, scene)
     planner = MotionPlanner(scenario)
-    held = [s.get() for s in station.GetSystems() if type(s).__name__ == "SharedPointerSystem"]
 
     assert _elbow_upper(simulated) == pytest.approx(expected)
     assert _elbow_upper(world.plant) == pytest.approx(expected)
     assert _elbow_upper(checker.plant) == pytest.approx(expected)
-    assert len(held) == 1 and _elbow_upper(held[0]) == pytest.approx(expected)  # gravity compensation's plant
+    # Gravity compensation runs on the controller plant of the same robot: -tau_g(q) of that robot.
+    context = station.CreateDefaultContext()
+    gravity = station.GetSubsystemByName("gravity_compensation")
+    tau = gravity.get_output_port_generalized_force().Eval(gravity.GetMyContextFromRoot(context))
+    robot_alone = controller_plant(scenario)
+    robot_context = robot_alone.CreateDefaultContext()
+    robot_alone.SetPositionsAndVelocities(robot_context, station.GetOutputPort("robot_state").Eval(context))
+    assert np.allclose(tau, -robot_alone.CalcGravityGeneralizedForces(robot_context), rtol=1e-12, atol=1e-12)
     assert planner.limits.position_upper[PLANNED_JOINTS.index(ELBOW)] == pytest.approx(expected)
     # The shelf is placed from the camera of this robot at q_obs: the same X_WS in all three worlds.
     X_WS = _shelf_in_world(simulated)
@@ -82,6 +89,17 @@ def test_the_longer_forearm_moves_the_camera_and_so_the_shelf(changed_station, s
     moved = np.linalg.norm(changed.translation() - shipped.translation())
     assert moved == pytest.approx(FOREARM_LONGER, abs=1e-9)  # the forearm is straight in line with the wrist
     assert np.allclose(changed.rotation().matrix(), shipped.rotation().matrix(), atol=1e-9)
+    # ... and weighs on the shoulder differently (the controller plant's gravity torques at q_obs).
+    torques = []
+    for scenario in (load_station_scenario(DEFAULT_STATION), changed_station):
+        plant = controller_plant(scenario)
+        context = plant.CreateDefaultContext()
+        q = plant.GetPositions(context)
+        q[robot_model.planned_joint_indices(plant)] = observation_positions(scenario)
+        plant.SetPositions(context, q)
+        torques.append(plant.CalcGravityGeneralizedForces(context))
+    shoulder_lift = controller_plant(changed_station).GetJointByName("shoulder_lift_joint").velocity_start()
+    assert abs(torques[1][shoulder_lift] - torques[0][shoulder_lift]) > 0.1  # N m
 
 
 def test_purposes_hold_what_the_table_says(scene):

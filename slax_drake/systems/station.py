@@ -109,8 +109,8 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
     # Gravity compensation (feed-forward) from the controller plant: the robot of the same directives, alone. That
     # plant is not a subsystem of the diagram (as one, its 22 continuous states would be integrated every step for
     # nothing, about 17 % of the step time); a SharedPointerSystem owns it (InverseDynamics only keeps a pointer).
-    controller_plant = SharedPointerSystem.AddToBuilder(
-        builder, make_station_plant(scenario, purpose=PlantPurpose.CONTROLLER).plant)
+    controller_plant = make_station_plant(scenario, purpose=PlantPurpose.CONTROLLER).plant
+    builder.AddNamedSystem("controller_plant_owner", SharedPointerSystem(controller_plant))
     gravity = builder.AddNamedSystem(
         "gravity_compensation", InverseDynamics(controller_plant, InverseDynamics.InverseDynamicsMode.kGravityCompensation)
     )
