@@ -8,6 +8,7 @@ functions and under ``if TYPE_CHECKING``: a deferred import is still a dependenc
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parents[1] / "slax_drake"
@@ -65,7 +66,9 @@ def _is_module(name: str, package_dir: Path) -> bool:
     return path.with_suffix(".py").is_file() or (path / "__init__.py").is_file()
 
 
+@functools.lru_cache(maxsize=1)
 def import_graph() -> dict[str, set[str]]:
+    """{module: the slax_drake modules it imports} for every module of the package (read once per session)."""
     return {module_name(p): imports_of(p) for p in sorted(PACKAGE_DIR.rglob("*.py"))}
 
 
@@ -123,8 +126,7 @@ def test_no_stage_imports_a_later_stage():
 
 
 def test_no_package_cycle():
-    graph = import_graph()
-    graph = {m: {t for t in targets if (m, t) not in KNOWN_VIOLATIONS} for m, targets in graph.items()}
+    graph = {m: {t for t in targets if (m, t) not in KNOWN_VIOLATIONS} for m, targets in import_graph().items()}
     assert package_cycles(graph) == []
 
 
