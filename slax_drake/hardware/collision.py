@@ -19,8 +19,6 @@ pose is not planar), and an object carried by suction is checked at its pose bef
 
 from __future__ import annotations
 
-import numpy as np
-
 TOLERANCE = 0.001  # m of penetration depth before a contact counts as a collision
 
 

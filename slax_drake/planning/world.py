@@ -178,8 +178,6 @@ class PlanningWorld:
 
     def carried_pose_S(self, q_planned) -> np.ndarray:
         """X_SO (4x4) of the carried object at the planned joint values."""
-        from pydrake.math import RigidTransform
-
         if self.carried is None:
             raise ValueError("no object is carried")
         self.plant.SetPositions(self.plant_context, self.full_q(q_planned))
@@ -188,8 +186,6 @@ class PlanningWorld:
 
     def edge_free_uncarried(self, q0, q1) -> bool:
         """:meth:`edge_free` with the carried object detached for this one check (the robot alone)."""
-        from pydrake.geometry import Box, Cylinder
-
         if self.carried is None:
             return self.edge_free(q0, q1)
         shapes = self.checker.GetAllAddedCollisionShapes()[CARRIED_GROUP]
