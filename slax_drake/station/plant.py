@@ -149,7 +149,7 @@ def make_station_plant(scenario: StationScenario, scene: Scene | None = None,
     robot_model.add_package(parser)
     ProcessModelDirectives(ModelDirectives(directives=scenario.directives), plant, parser)
     if not plant.HasModelInstanceNamed(scenario.shelf_model):
-        raise ConfigError(f"the directives must add models named {scenario.robot_model!r} and {scenario.shelf_model!r}")
+        raise ConfigError(f"the directives must add the shelf as a model named {scenario.shelf_model!r}")
     robot = plant.GetModelInstanceByName(scenario.robot_model)
     shelf = plant.GetModelInstanceByName(scenario.shelf_model)
     plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(SHELF_BODY, shelf), X_WS)
@@ -158,19 +158,18 @@ def make_station_plant(scenario: StationScenario, scene: Scene | None = None,
     items = [] if scene is None else list(scene.objects) + (
         [scene.target.as_object()] if with_target and scene.target is not None else [])
     scene_bodies = None
-    if purpose is PlantPurpose.SIMULATION:
+    if purpose is not PlantPurpose.SIMULATION:
+        objects = _add_primitive_objects(plant, items, X_WS if purpose is PlantPurpose.PLANNING else None)
+    elif scene is None:
+        objects = {}
+    else:
         from slax_drake.config import load_scenario
         from slax_drake.station.scene_world import add_scene_objects
 
-        if scene is not None:
-            density = load_scenario(scenario.scene_config).objects.density
-            scene_bodies = add_scene_objects(plant, scene, density, include_target=with_target)
-        objects = {obj.name: None for obj in items}  # filled after Finalize (bodies by index)
-    else:
-        objects = _add_primitive_objects(plant, items, X_WS if purpose is PlantPurpose.PLANNING else None)
-    plant.Finalize()
-    if scene_bodies is not None:
+        density = load_scenario(scenario.scene_config).objects.density
+        scene_bodies = add_scene_objects(plant, scene, density, include_target=with_target)
         objects = {name: plant.get_body(index) for name, index in zip(scene_bodies.names, scene_bodies.all())}
+    plant.Finalize()
     return StationPlant(purpose, plant, scene_graph, builder, robot, shelf, X_WS, objects, camera, scene_bodies)
 
 
