@@ -43,8 +43,12 @@ def test_cli_rejects_bad_requests(capsys):
 
 @pytest.mark.slow
 def test_ray_backend_tiny_run(sim_scenario, tmp_path):
-    table = run_benchmark(sim_scenario, ["oracle-p"], 1, 0, tmp_path, densities=[4], workers=1, backend="ray",
-                          progress=False)
+    ray = pytest.importorskip("ray")
+    try:
+        table = run_benchmark(sim_scenario, ["oracle-p"], 1, 0, tmp_path, densities=[4], workers=1, backend="ray",
+                              progress=False)
+    finally:  # run_benchmark leaves the Ray it started running; the next test's ray.init needs none
+        ray.shutdown()
     assert table["policies"]["oracle-p"]["4"]["trials"] == 1
 
 

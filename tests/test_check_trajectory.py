@@ -4,7 +4,7 @@ import copy
 
 import numpy as np
 import pytest
-from test_export_helpers import FOLDED_INTO_TORSO, fake_trial
+from trial_records import FOLDED_INTO_TORSO, fake_trial
 
 from slax_drake.cli import main
 from slax_drake.hardware.check import check_trajectory

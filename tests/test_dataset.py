@@ -62,6 +62,7 @@ def test_samples_content(reference):
         assert f["depth"].dtype == np.float16 and f["depth"].compression == "gzip"
 
 
+@pytest.mark.slow
 def test_resume_after_kill_mid_shard(reference, tmp_path):
     out = tmp_path / "ds"
     proc = subprocess.Popen(_cli(out), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -93,6 +94,7 @@ def test_other_arguments_refused(reference):
         generate(spec, reference, progress=False)
 
 
+@pytest.mark.slow
 def test_bad_resolution_is_a_user_error(tmp_path):
     r = subprocess.run([sys.executable, "-m", "slax_drake.cli", "dataset", "--scenes", "2", "--out",
                         str(tmp_path / "x"), "--resolution", "big"], capture_output=True, text=True)
@@ -110,6 +112,7 @@ def test_corrupt_shard_is_a_user_error(reference, tmp_path):
         reader[2]
 
 
+@pytest.mark.slow
 def test_ray_backend_equals_local(reference, tmp_path):
     ray = pytest.importorskip("ray")
     ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False)

@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 import pytest
-from test_export_helpers import fake_trial
+from trial_records import fake_trial
 
 from slax_drake.cli import main
 from slax_drake.hardware.export import export_trial

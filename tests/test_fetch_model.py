@@ -10,6 +10,8 @@ import pytest
 from slax_drake.config import load_scenario
 from slax_drake.scene.sampling import shelf_of
 from slax_drake.station import robot as robot_model
+from slax_drake.station.plant import controller_plant
+from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario
 from slax_drake.station.scene_world import shelf_sdf
 
 REPO = Path(__file__).resolve().parents[1]
@@ -51,7 +53,7 @@ def _fk(plant, q9, body):
 
 @pytest.fixture(scope="module")
 def plant():
-    return robot_model.robot_only_plant()
+    return controller_plant(load_station_scenario(DEFAULT_STATION))
 
 
 def test_fk_all_zero_matches_facts(plant):
@@ -93,7 +95,7 @@ def test_tool_dimensions(plant):
 
 
 def test_limits_as_data():
-    limits = robot_model.joint_limits()
+    limits = robot_model.joint_limits(controller_plant(load_station_scenario(DEFAULT_STATION)))
     assert limits.names == robot_model.PLANNED_JOINTS
     assert limits.velocity[2] == pytest.approx(1.454) and limits.effort[2] == pytest.approx(131.76)
     assert limits.acceleration.tolist()[:8] == [0.5, 1.5, 1.0, 1.5, 1.5, 1.5, 2.5, 2.5]

@@ -21,6 +21,7 @@ def tiny(tmp_path_factory):
     return run_physics_benchmark(CONFIG, out=out, **TINY), out
 
 
+@pytest.mark.slow
 def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
     summary, out = tiny
     on_disk = json.loads((out / "physics.json").read_text())
@@ -57,6 +58,7 @@ def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
     assert set(drake["final_objects"]) == {"object_0", "object_1"}
 
 
+@pytest.mark.slow
 def test_shelf_side_is_the_shelf_benchmarks_scene(tiny):
     """The shelf simulator result in the file is the one of the shelf benchmark's scene for that seed."""
     from slax_drake.config import load_scenario
@@ -76,6 +78,7 @@ def test_shelf_side_is_the_shelf_benchmarks_scene(tiny):
     assert (shelf["success"], shelf["steps"], shelf["actions"]) == (expected.success, expected.steps, expected.actions)
 
 
+@pytest.mark.slow
 def test_rerun_resumes_from_the_scene_file(tiny):
     summary, out = tiny
     again = run_physics_benchmark(CONFIG, out=out, **TINY)
@@ -83,6 +86,7 @@ def test_rerun_resumes_from_the_scene_file(tiny):
     assert again["meta"]["wall_seconds_this_run"] < 1.0  # nothing was rerun: the file was read
 
 
+@pytest.mark.slow
 def test_corrupt_scene_file_is_refused(tiny, tmp_path):
     _, out = tiny
     path = trial_path(tmp_path, "bluction-dar", 2, 0)
@@ -149,6 +153,7 @@ def test_rules_equal_to_the_first_order_defaults_are_no_variant():
     assert without_defaults({"max_suction_moment": 0.4, "blade_gap": 0.035}) == {"max_suction_moment": 0.4}
 
 
+@pytest.mark.slow
 def test_a_resumed_run_refuses_scene_files_made_under_other_rules(tiny):
     _, out = tiny
     with pytest.raises(PhysicsBenchmarkError, match="tool rules"):

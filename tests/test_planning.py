@@ -9,8 +9,8 @@ from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import ActionModel, Push, Suction
 from slax_drake.policies.registry import tool_config
 from slax_drake.scene.sampling import sample_scene, shelf_of
-from slax_drake.station.robot import joint_limits
-from slax_drake.station.scenario import load_station_scenario, observation_positions
+from slax_drake.station.plant import station_joint_limits
+from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario, observation_positions
 
 TOL = 1e-9
 
@@ -44,7 +44,7 @@ def motions(setup):
 
 
 def _check_limits(traj):
-    lim = joint_limits()
+    lim = station_joint_limits(load_station_scenario(DEFAULT_STATION))
     assert traj.names == lim.names
     assert traj.dt == pytest.approx(0.001)
     assert np.allclose(np.diff(traj.times), 0.001, atol=1e-9)
@@ -64,7 +64,7 @@ def test_trajectory_respects_limits_at_1ms(motions, kind):
 
 
 def test_ruckig_timing_limits_random_waypoints():
-    lim = joint_limits()
+    lim = station_joint_limits(load_station_scenario(DEFAULT_STATION))
     rng = np.random.default_rng(3)
     lo = np.where(np.isfinite(lim.position_lower), lim.position_lower, -3.0)
     hi = np.where(np.isfinite(lim.position_upper), lim.position_upper, 3.0)
@@ -175,7 +175,7 @@ def test_trajectory_keeps_the_joint_limit_margin(motions, kind):
 
     assert LIMIT_MARGIN >= 0.01
     traj = motions[1][kind].trajectory
-    lim = joint_limits()
+    lim = station_joint_limits(load_station_scenario(DEFAULT_STATION))
     limited = np.isfinite(lim.position_lower)
     q = traj.q[:, limited]
     assert np.all(q >= lim.position_lower[limited] + LIMIT_MARGIN - 1e-6)
@@ -188,7 +188,7 @@ def test_trajectory_keeps_the_joint_limit_margin(motions, kind):
 def test_self_collision_is_checked_and_avoided(setup):
     """A configuration with the forearm in the torso column collides in the planning world (self-collision);
     the straight joint line from the observation pose through it is refused and free_path finds a way around."""
-    from test_export_helpers import FOLDED_INTO_TORSO
+    from trial_records import FOLDED_INTO_TORSO
 
     from slax_drake.planning.free_path import free_path
     from slax_drake.planning.ik import LIMIT_MARGIN
@@ -206,10 +206,10 @@ def test_self_collision_is_checked_and_avoided(setup):
     for joint in (1, 4, 6):
         goal[joint] = -q_obs[joint]
     assert world.config_free(goal) and not world.edge_free(q_obs, goal)
-    path = free_path(world, q_obs, goal, joint_limits(), LIMIT_MARGIN, seed=0)
+    path = free_path(world, q_obs, goal, station_joint_limits(load_station_scenario(DEFAULT_STATION)), LIMIT_MARGIN, seed=0)
     assert path is not None and np.array_equal(path[0], q_obs) and np.array_equal(path[-1], goal)
     assert all(world.edge_free(a, b) for a, b in zip(path[:-1], path[1:]))
-    again = free_path(world, q_obs, goal, joint_limits(), LIMIT_MARGIN, seed=0)
+    again = free_path(world, q_obs, goal, station_joint_limits(load_station_scenario(DEFAULT_STATION)), LIMIT_MARGIN, seed=0)
     assert len(again) == len(path) and all(np.array_equal(a, b) for a, b in zip(again, path))
 
 
@@ -218,7 +218,7 @@ def test_timed_segment_stays_on_its_straight_line():
     still timed on the straight line, within every joint's limits."""
     from slax_drake.planning.timing import time_segment
 
-    lim = joint_limits()
+    lim = station_joint_limits(load_station_scenario(DEFAULT_STATION))
     rng = np.random.default_rng(5)
     for _ in range(5):
         qa = rng.uniform(-1.0, 1.0, len(lim.names)) * np.array([0.1, 1, 1, 3, 1, 3, 1, 3, 1]) + np.array([0.15] + [0.0] * 8)

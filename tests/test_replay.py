@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from test_export_helpers import fake_trial
+from trial_records import fake_trial
 
 from slax_drake.hardware.export import export_trial
 from slax_drake.hardware.replay import ReplaySource

@@ -155,6 +155,7 @@ def test_blade_push_moves_a_box_along_x_without_toppling_it(sim_scenario, statio
         assert "tube" in touching, touching
 
 
+@pytest.mark.slow
 def test_a_sleeping_box_wakes_for_the_push_and_moves_as_an_awake_one(sim_scenario, station_scenario, blade_ik):
     case = "low box, blade alone"
     _, awake, _, _ = _simulate_push(sim_scenario, station_scenario, blade_ik, case)

@@ -1,5 +1,5 @@
-"""Full Drake trials: a short default-suite trial that reveals the target, CLI errors; slow: reproducibility and
-the HTML replay drawn by headless Chromium."""
+"""Full Drake trials (slow): a short trial that reveals the target, its executed trajectory, reproducibility and
+the HTML replay drawn by headless Chromium; in the default suite: the command's errors."""
 
 import json
 import shutil
@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from slax_drake.cli import main
-from slax_drake.station.robot import joint_limits
+from slax_drake.station.plant import station_joint_limits
+from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario
 from slax_drake.systems.trial import TrialOptions, run_trial, write_trial
 
 SHORT = dict(objects=2, seed=7)  # the shelf simulator reveals this scene with one push
@@ -23,6 +24,7 @@ def short_trial(tmp_path_factory):
     return record, out
 
 
+@pytest.mark.slow
 def test_short_trial_reveals_the_target(short_trial):
     record, out = short_trial
     d = json.loads((out / "trial.json").read_text())
@@ -39,11 +41,12 @@ def test_short_trial_reveals_the_target(short_trial):
     assert d["tool_rules"] == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0}  # the station cup's limits
 
 
+@pytest.mark.slow
 def test_executed_trajectory_in_trial_json(short_trial):
     record, out = short_trial
     d = json.loads((out / "trial.json").read_text())
     traj = d["executed_trajectory"]
-    lim = joint_limits()
+    lim = station_joint_limits(load_station_scenario(DEFAULT_STATION))
     assert traj["joint_names"] == list(lim.names)
     q = np.array(traj["positions"])
     v = np.array(traj["velocities"])
@@ -99,6 +102,7 @@ def test_html_replay_draws_the_robot(tmp_path):
     assert (unsaturated & dark).mean() > 0.002
 
 
+@pytest.mark.slow
 def test_scene_json_and_motion_starts_are_written(short_trial):
     """scene.json next to trial.json is the sampled scene; each motion's first commanded sample is recorded."""
     from slax_drake.config import load_scenario

@@ -1,9 +1,9 @@
 """Collision queries for the trajectory checker: the robot model's collision geometry, the shelf and a scene.
 
-:class:`CollisionWorld` builds its own Drake plant (no planner code): the station's model directives (the robot
-from ``models/fetch_bluction.urdf`` welded to the world, the shelf model) with the shelf welded at the station's
-X_WS, and each scene object as a free body with its primitive box or cylinder, placed per motion from the
-objects' planar poses (shelf frame S; z = half the height, standing). Object-object and object-shelf contacts are
+:class:`CollisionWorld` builds its own Drake plant (no planner code) with the station's plant builder
+(``make_station_plant(..., PlantPurpose.CHECKING)``): the station's model directives (the robot welded to the
+world, the shelf model) with the shelf welded at the station's X_WS, and each scene object as a free body with
+its primitive box or cylinder, placed per motion from the objects' planar poses (shelf frame S; z = half the height, standing). Object-object and object-shelf contacts are
 filtered out (they rest on each other); what is reported are penetrations deeper than ``tolerance``:
 
 - robot vs shelf and robot vs objects. The action's own object may be touched by the tool (``tool_shaft_link``:
@@ -19,10 +19,7 @@ pose is not planar), and an object carried by suction is checked at its pose bef
 
 from __future__ import annotations
 
-import numpy as np
-
 TOLERANCE = 0.001  # m of penetration depth before a contact counts as a collision
-TOOL_BODY = "tool_shaft_link"
 
 
 class CollisionWorld:
@@ -30,39 +27,17 @@ class CollisionWorld:
     (shapes, sizes, initial poses) are checked, or None for self-collision only."""
 
     def __init__(self, station, scene=None, q_reference=None, tolerance: float = TOLERANCE):
-        from pydrake.geometry import Box, CollisionFilterDeclaration, Cylinder, GeometrySet, ProximityProperties
-        from pydrake.math import RigidTransform
-        from pydrake.multibody.parsing import ModelDirectives, Parser, ProcessModelDirectives
-        from pydrake.multibody.plant import AddMultibodyPlantSceneGraph
-        from pydrake.multibody.tree import SpatialInertia
-        from pydrake.systems.framework import DiagramBuilder
+        from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
 
-        from slax_drake.config import load_scenario
         from slax_drake.hardware.fetch_limits import FETCH_JOINTS
-        from slax_drake.scene.camera import Camera
         from slax_drake.station import robot as robot_model
-        from slax_drake.station.scenario import SHELF_BODY, shelf_pose
+        from slax_drake.station.plant import PlantPurpose, make_station_plant
 
         self.tolerance = tolerance
-        builder = DiagramBuilder()
-        plant, scene_graph = AddMultibodyPlantSceneGraph(builder, 0.0)
-        parser = Parser(plant)
-        robot_model.add_package(parser)
-        ProcessModelDirectives(ModelDirectives(directives=station.directives), plant, parser)
-        robot = plant.GetModelInstanceByName(station.robot_model)
-        shelf = plant.GetModelInstanceByName(station.shelf_model)
-        camera = scene.camera if scene is not None else Camera.from_config(load_scenario(station.scene_config).camera)
-        self.X_WS = shelf_pose(station, camera)
-        plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(SHELF_BODY, shelf), self.X_WS)
-        self.objects = {}
-        for obj in (scene.objects if scene is not None else ()):
-            instance = plant.AddModelInstance(f"check_{obj.name}")
-            body = plant.AddRigidBody(obj.name, instance, SpatialInertia.SolidBoxWithMass(1.0, 0.1, 0.1, 0.1))
-            sx, sy, sz = obj.size
-            shape = Box(sx, sy, sz) if obj.shape == "box" else Cylinder(sx / 2.0, sz)
-            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"{obj.name}_collision", ProximityProperties())
-            self.objects[obj.name] = (obj, body)
-        plant.Finalize()
+        station_plant = make_station_plant(station, scene, PlantPurpose.CHECKING)
+        builder, plant, scene_graph = station_plant.builder, station_plant.plant, station_plant.scene_graph
+        robot, shelf, self.X_WS = station_plant.robot, station_plant.shelf, station_plant.X_WS
+        self.objects = {obj.name: (obj, station_plant.objects[obj.name]) for obj in (scene.objects if scene else ())}
         self.plant, self.scene_graph = plant, scene_graph
         self.diagram = builder.Build()
         self.context = self.diagram.CreateDefaultContext()
@@ -78,7 +53,7 @@ class CollisionWorld:
         scene_graph.collision_filter_manager(self.sg_context).Apply(
             CollisionFilterDeclaration().ExcludeWithin(GeometrySet(env)))
         self.robot_geometries = set(geometries(robot_bodies))
-        self.tool_geometries = set(geometries([plant.GetBodyByName(TOOL_BODY, robot)]))
+        self.tool_geometries = set(geometries([plant.GetBodyByName(robot_model.TOOL_BODY, robot)]))
         self.object_of_geometry = {g: name for name, (_, b) in self.objects.items() for g in plant.GetCollisionGeometriesForBody(b)}
         self.shelf_geometries = set(geometries([plant.get_body(b) for b in plant.GetBodyIndices(shelf)]))
         inspector = scene_graph.model_inspector()

@@ -40,7 +40,13 @@ FETCH_JOINTS = tuple(_TABLE)
 
 @dataclasses.dataclass(frozen=True)
 class FetchLimits:
-    """Limits per joint of ``names`` (arrays of the same length), SI units."""
+    """Limits per joint of ``names`` (arrays of the same length), SI units: the real Fetch's, for the hardware
+    checker.
+
+    Independent of ``slax_drake.station.robot.JointLimits`` (the limits of the robot model the station loads, which
+    the planner plans within) by design: this table is typed in from the robot's published sources, never read from
+    ``models/`` nor from the station's scenario, so that a trajectory planned against a model whose limits drifted
+    from the real robot's is caught before it is sent to the robot. It adds the mechanical hard stops."""
 
     names: tuple[str, ...]
     position_lower: np.ndarray

@@ -86,7 +86,7 @@ def replay(traj: ExportedTrajectory, station, scene, meshcat=None, log_period: f
     from pydrake.systems.primitives import VectorLogSink
 
     from slax_drake.station import robot as robot_model
-    from slax_drake.station.scenario import shelf_pose
+    from slax_drake.station.plant import shelf_pose
     from slax_drake.systems.station import MakeStation
 
     builder = DiagramBuilder()

@@ -50,7 +50,7 @@ from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, 
 from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import Suction, ToolConfig
 from slax_drake.scene.model import Scene, state_key
-from slax_drake.station import robot as robot_model
+from slax_drake.station.plant import station_joint_limits
 from slax_drake.station.scenario import StationScenario, observation_positions
 
 DEVIATION_TOLERANCE = 0.004  # m; the requirement is < 5 mm, 1 mm is left for the 1 ms sampling and IK tolerance
@@ -126,7 +126,7 @@ class MotionPlanner:
         self.tool = tool
         self.deviation_tolerance = deviation_tolerance
         self.q_observation = observation_positions(scenario)
-        self.limits = robot_model.joint_limits()
+        self.limits = station_joint_limits(scenario)
         self._world_key = None
         self._world = None
         # Results of IK solves and free paths in the current world (both deterministic), keyed by their inputs:

@@ -1,9 +1,10 @@
 """The planning world: the robot, the shelf and a scene's objects frozen where they stand, for IK and checks.
 
-``PlanningWorld(station_scenario, scene)`` builds a Drake RobotDiagram (RobotDiagramBuilder) holding the robot
-(base welded as in the station's directives), the shelf welded at the station's X_WS and every object of the
-scene (and, optionally, the target) as a body welded at X_WS * X_SO, with its primitive box or cylinder as the
-collision shape. The plant's positions are the robot's alone (planned joints and the head).
+``PlanningWorld(station_scenario, scene)`` builds a Drake RobotDiagram with the station's plant builder
+(``make_station_plant(..., PlantPurpose.PLANNING)``: the robot and the shelf of the station's directives, the
+shelf welded at the station's X_WS, every object of the scene (and, optionally, the target) welded at
+X_WS * X_SO with its primitive box or cylinder as the collision shape). The plant's positions are the robot's
+alone (planned joints and the head).
 
 Collision semantics (the same for IK and for the checker):
 - robot vs environment (shelf panels and objects) is checked with ``padding`` metres of margin;
@@ -28,7 +29,8 @@ import numpy as np
 
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
-from slax_drake.station.scenario import SHELF_BODY, StationScenario, _base_weld, shelf_pose
+from slax_drake.station.plant import PlantPurpose, make_station_plant
+from slax_drake.station.scenario import StationScenario
 
 PADDING = 0.002  # m, robot-environment margin of the collision checker
 SELF_PADDING = 0.003  # m, margin between non-adjacent robot links
@@ -52,34 +54,15 @@ class PlanningWorld:
 
     def __init__(self, scenario: StationScenario, scene: Scene, include_target: bool = False,
                  padding: float = PADDING, edge_step: float = EDGE_STEP, self_padding: float = SELF_PADDING):
-        from pydrake.geometry import Box, CollisionFilterDeclaration, Cylinder, GeometrySet, ProximityProperties
-        from pydrake.math import RigidTransform
-        from pydrake.multibody.tree import SpatialInertia
-        from pydrake.planning import RobotDiagramBuilder, SceneGraphCollisionChecker
+        from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
+        from pydrake.planning import SceneGraphCollisionChecker
 
         self.scenario = scenario
         self.scene = scene
-        self.X_WS = shelf_pose(scenario, scene.camera)
-        builder = RobotDiagramBuilder(time_step=0.0)
-        plant = builder.plant()
-        parser = builder.parser()
-        robot_model.add_package(parser)
-        (robot,) = parser.AddModels(url=robot_model.ROBOT_URL)
-        plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(robot_model.BASE_BODY, robot), _base_weld(scenario))
-        shelf_file = _shelf_file(scenario)
-        (shelf,) = parser.AddModels(url=shelf_file)
-        plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(SHELF_BODY, shelf), self.X_WS)
-        items = list(scene.objects) + ([scene.target.as_object()] if include_target and scene.target else [])
-        self.object_bodies = {}
-        for obj in items:
-            instance = plant.AddModelInstance(f"planning_{obj.name}")
-            body = plant.AddRigidBody(obj.name, instance, SpatialInertia.SolidBoxWithMass(1.0, 0.1, 0.1, 0.1))
-            sx, sy, sz = obj.size
-            shape = Box(sx, sy, sz) if obj.shape == "box" else Cylinder(sx / 2.0, sz)
-            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"{obj.name}_collision", ProximityProperties())
-            plant.WeldFrames(plant.world_frame(), body.body_frame(), self.X_WS @ RigidTransform(obj.X_SO))
-            self.object_bodies[obj.name] = body
-        plant.Finalize()
+        station_plant = make_station_plant(scenario, scene, PlantPurpose.PLANNING, include_target=include_target)
+        self.X_WS = station_plant.X_WS
+        self.object_bodies = station_plant.objects
+        builder, plant, robot = station_plant.builder, station_plant.plant, station_plant.robot
         scene_graph = builder.scene_graph()
         # Self-collision: the plant already filters bodies joined by a joint (adjacent links) and bodies welded
         # together; the pairs that nest by design (the telescoping torso) are filtered here.
@@ -195,8 +178,6 @@ class PlanningWorld:
 
     def carried_pose_S(self, q_planned) -> np.ndarray:
         """X_SO (4x4) of the carried object at the planned joint values."""
-        from pydrake.math import RigidTransform
-
         if self.carried is None:
             raise ValueError("no object is carried")
         self.plant.SetPositions(self.plant_context, self.full_q(q_planned))
@@ -205,8 +186,6 @@ class PlanningWorld:
 
     def edge_free_uncarried(self, q0, q1) -> bool:
         """:meth:`edge_free` with the carried object detached for this one check (the robot alone)."""
-        from pydrake.geometry import Box, Cylinder
-
         if self.carried is None:
             return self.edge_free(q0, q1)
         shapes = self.checker.GetAllAddedCollisionShapes()[CARRIED_GROUP]
@@ -283,10 +262,3 @@ def _body_index(i: int):
     from pydrake.multibody.tree import BodyIndex
 
     return BodyIndex(i)
-
-
-def _shelf_file(scenario: StationScenario) -> str:
-    for directive in scenario.directives:
-        if directive.add_model is not None and directive.add_model.name == scenario.shelf_model:
-            return directive.add_model.file
-    raise ValueError(f"the station's directives add no model {scenario.shelf_model!r}")

@@ -1,7 +1,9 @@
 """The Fetch + bluction tool model as data: file locations, the planned joints in order, tool frames and limits.
 
-The model is ``models/fetch_bluction.urdf`` (package ``slax_drake_models``, see ``models/package.xml``). The
-planner drives nine joints, in this order (``PLANNED_JOINTS``): the torso lift (metres), the seven arm joints and
+The shipped model is ``models/fetch_bluction.urdf`` (package ``slax_drake_models``, see ``models/package.xml``);
+which file a station loads is named only by its scenario's model directives (``sim_configs/station_*.yaml``),
+and every plant of the robot is built from them by ``slax_drake.station.plant.make_station_plant``. A robot file
+must have the joints and frames named here. The planner drives nine joints, in this order (``PLANNED_JOINTS``): the torso lift (metres), the seven arm joints and
 the tool shaft (radians). The head's pan and tilt are actuated too but held still by the station.
 
 Tool frames (all on the model, names of ``plant.GetFrameByName``):
@@ -11,14 +13,13 @@ Tool frames (all on the model, names of ``plant.GetFrameByName``):
 - ``blade_face_frame``: centre of the 0.065 x 0.075 m blade, which lies in its x-z plane (faces normal to +-y).
   At ``tool_shaft_joint`` = 0 the blade hangs below the tube (pushing); at pi it stands above it (suction).
 
-Limits: position, velocity and effort from the URDF, acceleration and jerk from
-``models/fetch_bluction_limits.yaml`` (jerk is our documented choice; none is published for Fetch).
+Limits: position, velocity, acceleration and effort from the loaded robot model, jerk from
+``models/fetch_bluction_limits.yaml`` (our documented choice; none is published for Fetch).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +29,6 @@ from slax_drake.config import REPO_ROOT
 MODELS_DIR = REPO_ROOT / "models"
 PACKAGE_XML = MODELS_DIR / "package.xml"
 PACKAGE_NAME = "slax_drake_models"
-ROBOT_URL = f"package://{PACKAGE_NAME}/fetch_bluction.urdf"
 LIMITS_YAML = MODELS_DIR / "fetch_bluction_limits.yaml"
 
 PLANNED_JOINTS = (
@@ -60,7 +60,12 @@ TUCK_CONFIGURATION = (0.05, 1.32, 1.40, -0.2, 1.72, 0.0, 1.66, 0.0, 0.0)
 
 @dataclasses.dataclass(frozen=True)
 class JointLimits:
-    """Per-joint limits of ``PLANNED_JOINTS`` as arrays of 9 (SI units; continuous joints: +-inf position)."""
+    """Per-joint limits of ``PLANNED_JOINTS`` as arrays of 9 (SI units; continuous joints: +-inf position): the
+    limits of the robot model the station loads, which the planner plans and times within.
+
+    Not to be merged with ``slax_drake.hardware.fetch_limits.FetchLimits``: that table is the real Fetch's, typed in
+    independently on purpose, so that the hardware checker catches a model whose limits drifted from the robot's.
+    """
 
     names: tuple[str, ...]
     position_lower: np.ndarray
@@ -77,20 +82,6 @@ def add_package(parser) -> None:
         parser.package_map().AddPackageXml(str(PACKAGE_XML))
 
 
-def robot_only_plant(time_step: float = 0.0):
-    """A finalized MultibodyPlant holding just the robot, its base welded to the world (for kinematics)."""
-    from pydrake.multibody.parsing import Parser
-    from pydrake.multibody.plant import MultibodyPlant
-
-    plant = MultibodyPlant(time_step)
-    parser = Parser(plant)
-    add_package(parser)
-    (robot,) = parser.AddModels(url=ROBOT_URL)
-    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(BASE_BODY, robot))
-    plant.Finalize()
-    return plant
-
-
 def planned_joint_indices(plant, model_instance=None) -> np.ndarray:
     """Positions of ``PLANNED_JOINTS`` in the plant's generalized position vector q."""
     if model_instance is None:
@@ -98,18 +89,19 @@ def planned_joint_indices(plant, model_instance=None) -> np.ndarray:
     return np.array([plant.GetJointByName(n, model_instance).position_start() for n in PLANNED_JOINTS])
 
 
-@functools.lru_cache(maxsize=1)
-def joint_limits() -> JointLimits:
-    """Limits of ``PLANNED_JOINTS`` read from the URDF (via Drake's parser) and the limits YAML."""
+def joint_limits(plant) -> JointLimits:
+    """Limits of ``PLANNED_JOINTS`` of the robot in ``plant`` (a finalized plant holding the robot once, e.g. the
+    station's controller plant, ``slax_drake.station.plant.station_joint_limits``): position, velocity,
+    acceleration (``drake:acceleration``) and effort from the parsed model, jerk from the limits YAML."""
     from pydrake.common.yaml import yaml_load
 
-    plant = robot_only_plant()
-    lower, upper, vel, eff = [], [], [], []
+    lower, upper, vel, acc, eff = [], [], [], [], []
     for name in PLANNED_JOINTS:
         joint = plant.GetJointByName(name)
         lower.append(joint.position_lower_limits()[0])
         upper.append(joint.position_upper_limits()[0])
         vel.append(joint.velocity_upper_limits()[0])
+        acc.append(joint.acceleration_upper_limits()[0])
         actuator = next(
             plant.get_joint_actuator(i) for i in plant.GetJointActuatorIndices() if plant.get_joint_actuator(i).joint().name() == name
         )
@@ -120,7 +112,7 @@ def joint_limits() -> JointLimits:
         position_lower=np.array(lower),
         position_upper=np.array(upper),
         velocity=np.array(vel),
-        acceleration=np.array([float(data["acceleration"][n]) for n in PLANNED_JOINTS]),
+        acceleration=np.array(acc),
         jerk=np.array([float(data["jerk"][n]) for n in PLANNED_JOINTS]),
         effort=np.array(eff),
     )

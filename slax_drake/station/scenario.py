@@ -1,12 +1,12 @@
 """The station scenario: a typed dataclass (loaded with ``yaml_load_typed``) holding the model directives, the
 plant configuration, the observation configuration of the arm, the head's pose and the suction cup's parameters
-and limits; and the geometry it implies (the robot's base weld, the camera's pose, where the shelf goes).
+and limits.
 
 Shelf placement. The paper keeps camera and shelf static relative to each other in one observation
 configuration of the arm. The scenario's ``observation_configuration`` is that configuration; the shelf frame S
 is welded to the world at X_WS = X_WC(q_obs) * inv(X_SC), with X_SC the scene camera's pose, so that at q_obs
-the tool camera's frame is exactly the scene's X_SC. ``shelf_pose`` rejects (ConfigError) a configuration whose
-camera is not level (the shelf would tilt by more than 1 mrad).
+the tool camera's frame is exactly the scene's X_SC (``slax_drake.station.plant.shelf_pose``, computed on the
+robot of the directives; it rejects with ConfigError a configuration whose camera is not level).
 """
 
 # No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
@@ -125,47 +125,6 @@ def _validate(scenario: StationScenario, source: str) -> None:
 def observation_positions(scenario: StationScenario) -> np.ndarray:
     """q_obs of ``PLANNED_JOINTS`` (9)."""
     return np.array([scenario.observation_configuration[n] for n in robot_model.PLANNED_JOINTS])
-
-
-def _base_weld(scenario: StationScenario):
-    """X_WB of the robot's base from the directives' add_weld (identity when no X_PC is given)."""
-    from pydrake.math import RigidTransform
-
-    child = f"{scenario.robot_model}::{robot_model.BASE_BODY}"
-    for directive in scenario.directives:
-        weld = directive.add_weld
-        if weld is not None and weld.child == child:
-            if weld.parent != "world":
-                raise ConfigError(f"the robot's base must be welded to 'world', not {weld.parent!r}")
-            return weld.X_PC.GetDeterministicValue() if weld.X_PC is not None else RigidTransform()
-    raise ConfigError(f"the directives do not weld {child} to the world")
-
-
-def camera_pose_at(scenario: StationScenario, q_planned: np.ndarray):
-    """X_WC of the tool camera at the given planned joint positions (head at head_configuration)."""
-    plant = robot_model.robot_only_plant()
-    context = plant.CreateDefaultContext()
-    q = np.zeros(plant.num_positions())
-    q[robot_model.planned_joint_indices(plant)] = q_planned
-    for name, value in scenario.head_configuration.items():
-        q[plant.GetJointByName(name).position_start()] = value
-    plant.SetPositions(context, q)
-    X_BC = plant.GetFrameByName(robot_model.CAMERA_FRAME).CalcPoseInWorld(context)
-    return _base_weld(scenario) @ X_BC
-
-
-def shelf_pose(scenario: StationScenario, camera: Camera):
-    """X_WS = X_WC(q_obs) * inv(X_SC); ConfigError when the shelf would not stand level (> 1 mrad)."""
-    from pydrake.math import RigidTransform
-
-    X_WS = camera_pose_at(scenario, observation_positions(scenario)) @ RigidTransform(camera.X_SC).inverse()
-    tilt = math.acos(min(1.0, max(-1.0, X_WS.rotation().matrix()[2, 2])))
-    if tilt > 1e-3:
-        raise ConfigError(
-            f"the observation configuration tilts the shelf by {tilt:.4f} rad: at q_obs the camera's roll and pitch "
-            "must equal the scene camera's (level roll, pitch_deg down)"
-        )
-    return X_WS
 
 
 def camera_render_cameras(camera: Camera, renderer_name: str):

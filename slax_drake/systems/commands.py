@@ -8,9 +8,7 @@ import subprocess
 from pathlib import Path
 
 from slax_drake.errors import UserError
-
-
-DEFAULT_STATION = "sim_configs/station_sim_shelf.yaml"  # the same as slax_drake.systems.station.DEFAULT_STATION
+from slax_drake.station.scenario import DEFAULT_STATION
 
 
 class GraphvizMissingError(UserError):

@@ -1,8 +1,10 @@
 """The station: Fetch with the bluction tool, the shelf with a scene's objects, suction and the tool camera.
 
 ``MakeStation(scenario, scene=None, meshcat=None)`` builds one Drake Diagram in the order of Drake's
-hardware_sim.py (plant config -> directives -> scene objects -> Finalize -> controllers -> suction -> camera ->
-visualization) from a typed ``StationScenario`` whose model directives live in ``sim_configs/station_*.yaml``.
+hardware_sim.py (plant -> controllers -> suction -> camera -> visualization) from a typed ``StationScenario``
+whose model directives live in ``sim_configs/station_*.yaml``. The plant (directives, shelf, the scene's objects)
+comes from ``slax_drake.station.plant.make_station_plant(..., PlantPurpose.SIMULATION)``, the same builder that
+makes the planner's and the checker's worlds and the gravity-compensation controller plant.
 
 Shelf placement: ``slax_drake.station.scenario`` (the tool camera at q_obs is exactly the scene's X_SC).
 
@@ -32,20 +34,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from slax_drake.config import load_scenario
-from slax_drake.errors import ConfigError
-from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene
-from slax_drake.scene.sampling import shelf_of
 from slax_drake.station import robot as robot_model
-from slax_drake.station.scenario import (
-    SHELF_BODY,
-    SceneMismatchError,
-    StationScenario,
-    camera_render_cameras,
-    observation_positions,
-    shelf_pose,
-)
+from slax_drake.station.plant import PlantPurpose, make_station_plant
+from slax_drake.station.scenario import StationScenario, camera_render_cameras, observation_positions
 
 
 def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=None, camera: bool | None = None):
@@ -54,49 +46,31 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
     ``camera`` overrides ``scenario.camera`` (False leaves out the RgbdSensor and its renderer).
     """
     from pydrake.geometry import CollisionFilterDeclaration, GeometrySet, MakeRenderEngineVtk, RenderEngineVtkParams
-    from pydrake.math import RigidTransform
-    from pydrake.multibody.parsing import ModelDirectives, Parser, ProcessModelDirectives
-    from pydrake.multibody.plant import AddMultibodyPlant
     from pydrake.systems.controllers import InverseDynamics
     from pydrake.systems.framework import DiagramBuilder
-    from pydrake.systems.primitives import Adder, ConstantVectorSource, MatrixGain
+    from pydrake.systems.primitives import Adder, ConstantVectorSource, MatrixGain, SharedPointerSystem
     from pydrake.systems.sensors import RgbdSensor
 
-    from slax_drake.station.scene_world import add_scene_objects, assign_render_labels, set_default_object_poses
+    from slax_drake.station.scene_world import (
+        SceneBodies,
+        assign_render_labels,
+        set_default_object_poses,
+        support_by_corner_spheres_only,
+    )
     from slax_drake.systems.suction import SuctionCup
 
-    config = load_scenario(scenario.scene_config)
-    shelf = shelf_of(config)
-    if scene is not None and scene.shelf != shelf:
-        raise SceneMismatchError(
-            f"the scene's shelf {scene.shelf} differs from the station's ({scenario.scene_config}: {shelf}); "
-            "use the station file made for that shelf"
-        )
-    cam = scene.camera if scene is not None else Camera.from_config(config.camera)
     use_camera = scenario.camera if camera is None else camera
-
     builder = DiagramBuilder()
-    plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
-    parser = Parser(plant)
-    robot_model.add_package(parser)
-    ProcessModelDirectives(ModelDirectives(directives=scenario.directives), plant, parser)
-    if not plant.HasModelInstanceNamed(scenario.robot_model) or not plant.HasModelInstanceNamed(scenario.shelf_model):
-        raise ConfigError(f"the directives must add models named {scenario.robot_model!r} and {scenario.shelf_model!r}")
-    robot = plant.GetModelInstanceByName(scenario.robot_model)
-    shelf_instance = plant.GetModelInstanceByName(scenario.shelf_model)
-    bodies = None
-    if scene is not None:
-        bodies = add_scene_objects(plant, scene, config.objects.density)
-    X_WS = shelf_pose(scenario, cam)
-    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(SHELF_BODY, shelf_instance), X_WS)
-    plant.Finalize()
+    station_plant = make_station_plant(scenario, scene, PlantPurpose.SIMULATION, builder)
+    cam = station_plant.camera
+    plant, scene_graph = station_plant.plant, station_plant.scene_graph
+    robot, shelf_instance, X_WS = station_plant.robot, station_plant.shelf, station_plant.X_WS
+    bodies = station_plant.scene_bodies
     plant.set_name("plant")
 
     # The robot never collides with itself in this model (its boxes overlap at the joints).
     robot_geometries = [g for b in plant.GetBodyIndices(robot) for g in plant.GetCollisionGeometriesForBody(plant.get_body(b))]
     scene_graph.collision_filter_manager().Apply(CollisionFilterDeclaration().ExcludeWithin(GeometrySet(robot_geometries)))
-    from slax_drake.station.scene_world import SceneBodies, support_by_corner_spheres_only
-
     if bodies is not None:
         support_by_corner_spheres_only(scene_graph, plant, shelf_instance, bodies)
     assign_render_labels(scene_graph, plant, shelf_instance, robot, bodies or SceneBodies((), None, ()))
@@ -132,10 +106,11 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
     builder.Connect(desired.get_output_port(), plant.get_desired_state_input_port(robot))
     builder.ExportInput(select.get_input_port(), "desired_state")
 
-    # Gravity compensation (feed-forward) from a plant of the robot alone. That plant is not a subsystem of the
-    # diagram (as one, its 22 continuous states would be integrated every step for nothing, about 17 % of the
-    # step time); the diagram's Python object holds it alive instead (InverseDynamics only keeps a pointer).
-    controller_plant = robot_model.robot_only_plant()
+    # Gravity compensation (feed-forward) from the controller plant: the robot of the same directives, alone. That
+    # plant is not a subsystem of the diagram (as one, its 22 continuous states would be integrated every step for
+    # nothing, about 17 % of the step time); a SharedPointerSystem owns it (InverseDynamics only keeps a pointer).
+    controller_plant = make_station_plant(scenario, purpose=PlantPurpose.CONTROLLER).plant
+    builder.AddNamedSystem("controller_plant_owner", SharedPointerSystem(controller_plant))
     gravity = builder.AddNamedSystem(
         "gravity_compensation", InverseDynamics(controller_plant, InverseDynamics.InverseDynamicsMode.kGravityCompensation)
     )
@@ -199,7 +174,6 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
 
     diagram = builder.Build()
     diagram.set_name("station")
-    diagram._controller_plant = controller_plant  # lifetime: InverseDynamics refers to it
     return diagram
 
 

@@ -91,7 +91,8 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     from slax_drake.policies.registry import make_policy, tool_config
     from slax_drake.scene.sampling import sample_scene
     from slax_drake.systems.planner import PlannerSystem
-    from slax_drake.station.scenario import load_station_scenario, shelf_pose
+    from slax_drake.station.plant import shelf_pose
+    from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.station import MakeStation
 
     if opts.objects < 1:

@@ -11,8 +11,9 @@ import numpy as np
 
 from slax_drake.planning.timing import time_waypoints
 from slax_drake.planning.trajectory import JointTrajectory
-from slax_drake.station.robot import PLANNED_JOINTS, joint_limits
-from slax_drake.station.scenario import load_station_scenario, observation_positions
+from slax_drake.station.plant import station_joint_limits
+from slax_drake.station.robot import PLANNED_JOINTS
+from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario, observation_positions
 
 # The arm swung right (pan at its limit) and folded back at the elbow: the forearm, wrist and tool lie inside the
 # torso column (models/fetch_bluction.urdf's torso_lift_link: column + shoulder mount) by 35 to 127 mm. (The pose
@@ -26,7 +27,7 @@ def q_observation() -> np.ndarray:
 
 
 def fake_trial(objects: int = 2, seed: int = 3) -> dict:
-    lim = joint_limits()
+    lim = station_joint_limits(load_station_scenario(DEFAULT_STATION))
     q0 = q_observation()
     q0[PLANNED_JOINTS.index("torso_lift_joint")] = 0.0107  # the suction motion dips 7 mm: 3.7 mm above the limit
     delta = np.array([0.01, 0.05, -0.04, 0.05, 0.06, -0.05, 0.04, 0.1, 0.3])
