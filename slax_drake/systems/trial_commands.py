@@ -28,7 +28,7 @@ def register(subparsers) -> None:
                    "that 'slax-drake benchmark' and the physics benchmark use; replaces --objects and --seed")
     p.add_argument("--policy", default="bluction-dar", help="policy name (default bluction-dar)")
     p.add_argument("--perception", default="ground-truth", choices=("ground-truth", "learned"))
-    p.add_argument("--meshcat", action="store_true", help="serve the live view on localhost and print its URL")
+    p.add_argument("--meshcat", action="store_true", help="serve a live view on localhost and print its URL (it lasts while the command runs)")
     p.add_argument("--html", default=None, help="write a self-contained Meshcat replay (e.g. out/trial.html)")
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
     add_tool_rule_argument(p, "for the policy and the planner, over the station cup's limits "

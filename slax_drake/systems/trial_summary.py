@@ -59,14 +59,14 @@ def trial_summary(data: dict, written: list[Path], html: str | Path | None = Non
     lines = ["", "== trial summary ==",
              f"outcome: {outcome_line(data)}",
              f"steps:   {_plural(data['steps'], 'action')} ({_plural(pushes, 'push')}, "
-             f"{_plural(len(actions) - pushes, 'suction')}) of at most {data['horizon']}",
-             f"cost:    {_cost(data['cost'], pushes, len(actions) - pushes)}"]
+             f"{_plural(len(actions) - pushes, 'suction')}) of at most {data['horizon']}"]
     for k, a in enumerate(actions, start=1):
         params = f"d={a['d']:+.3f} m" if a["type"] == "push" else f"dx={a['dx']:+.3f} m, to y={a['dz']:+.3f} m"
         rejected = len(a["rejected_before"])
         lines.append(f"  {k}. {a['type']} {a['object']} ({params}): motion {a['motion']['duration_s']:.1f} s, "
                      f"planned in {a['planning_s']:.2f} s"
                      + (f" after {_plural(rejected, 'rejected candidate')}" if rejected else ""))
+    lines.append(f"cost:    {_cost(data['cost'], pushes, len(actions) - pushes)}")
     rtf = data.get("real_time_factor")
     lines.append(f"time:    simulated {data['sim_time_s']:.1f} s in {data['wall_s']:.1f} s of wall time"
                  + (f" (real-time factor {rtf:.1f})" if rtf else ""))
@@ -94,7 +94,7 @@ def trial_summary(data: dict, written: list[Path], html: str | Path | None = Non
     lines.append("view:")
     if html_path is not None and html_path in written:
         lines.append(f"  open {html_path} in a web browser ({html_path.resolve().as_uri()}); it needs no server "
-                     "and plays the trial (Open Controls > Animations to replay)")
+                     "and plays the trial once (Open Controls > Animations: play, pause, time)")
     else:
         lines.append("  add --html out/trial.html to write a replay that opens in any web browser")
     if pngs:
