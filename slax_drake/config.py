@@ -12,8 +12,6 @@ from pathlib import Path
 
 import typing
 
-from pydrake.common.yaml import yaml_load, yaml_load_typed
-
 from slax_drake.errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -105,6 +103,8 @@ class Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Loads and validates a scenario YAML file; raises ConfigError naming the file, key and value."""
+    from pydrake.common.yaml import yaml_load, yaml_load_typed  # here, not at the top: the CLI parser imports us
+
     path = Path(path)
     if not path.is_file() and not path.is_absolute() and (REPO_ROOT / path).is_file():
         path = REPO_ROOT / path  # the shipped sim_configs/ when run from another folder

@@ -9,7 +9,7 @@ import sys
 
 
 def register(subparsers) -> None:
-    from slax_drake.perception.weights import DEFAULT_MODEL
+    from slax_drake.perception.shipped_model import DEFAULT_MODEL
 
     p = subparsers.add_parser(
         "train",

@@ -24,13 +24,13 @@ import torch
 from slax_drake.config import REPO_ROOT
 from slax_drake.perception.errors import ImageSizeError, WeightFileError
 from slax_drake.perception.network import NetworkConfig, OccupancyUNet
+from slax_drake.perception.shipped_model import DEFAULT_MODEL
 from slax_drake.perception.targets import TARGET_SIZES
 from slax_drake.io import write_bytes_atomic
 
 FORMAT = "slax-drake-perception"
 VERSION = 1
 ARCHITECTURE = "OccupancyUNet"
-DEFAULT_MODEL = "models/perception/unet128/model.pt"
 
 
 @dataclasses.dataclass

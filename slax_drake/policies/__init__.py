@@ -1,13 +1,17 @@
 """Search policies in a fast first-order shelf simulator: the bluction tool's action model, the simulator,
-DAR, DER-k, Bluction-DAR, the oracles, and the Table I benchmark runner."""
+DAR, DER-k, Bluction-DAR, the oracles, and the Table I benchmark runner.
 
-from slax_drake.policies.actions import ActionModel, Push, Rejected, Suction, ToolConfig, apply_action
-from slax_drake.policies.distribution import DistributionModel, GroundTruthDistribution
-from slax_drake.policies.registry import POLICY_NAMES, make_policy
-from slax_drake.policies.simulator import Observation, TrialResult, execute, observe, run_trial
+The names below are imported from their submodule on first use (:mod:`slax_drake.lazy_exports`)."""
 
-__all__ = [
-    "ActionModel", "DistributionModel", "GroundTruthDistribution", "Observation", "POLICY_NAMES", "Push",
-    "Rejected", "Suction", "ToolConfig", "TrialResult", "apply_action", "execute", "make_policy", "observe",
-    "run_trial",
-]
+from slax_drake.lazy_exports import lazy_exports
+
+_EXPORTS = {
+    "ActionModel": "actions", "Push": "actions", "Rejected": "actions", "Suction": "actions", "ToolConfig": "actions",
+    "apply_action": "actions",
+    "DistributionModel": "distribution", "GroundTruthDistribution": "distribution",
+    "POLICY_NAMES": "registry", "make_policy": "registry",
+    "Observation": "simulator", "TrialResult": "simulator", "execute": "simulator", "observe": "simulator",
+    "run_trial": "simulator",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import dataclasses
+import typing
 
-from slax_drake.config import Scenario
 from slax_drake.errors import UserError
-from slax_drake.policies.actions import ActionModel, ToolConfig, tool_config_problem
-from slax_drake.policies.distribution import make_distribution_model
-from slax_drake.scene.camera import Camera
-from slax_drake.scene.sampling import shelf_of
+
+# The action model, the distributions and the scene sampler (OpenCV, shapely, trimesh, torch) are imported where
+# used: the command-line parser imports this module for add_tool_rule_argument and POLICY_NAMES.
+if typing.TYPE_CHECKING:
+    from slax_drake.config import Scenario
+    from slax_drake.policies.actions import ToolConfig
 
 POLICY_NAMES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar", "bluction-dar-cost", "bluction-la2")
 
@@ -29,6 +31,8 @@ def add_tool_rule_argument(parser, note: str) -> None:
 def parse_tool_rules(items) -> dict:
     """``["max_suction_moment=0.4", "tube_approach_check=false"]`` -> typed ToolConfig overrides; UserError for an
     unknown field or a value of the wrong type."""
+    from slax_drake.policies.actions import ToolConfig, tool_config_problem
+
     fields = [f.name for f in dataclasses.fields(ToolConfig)]
     defaults = ToolConfig()
     rules = {}
@@ -58,6 +62,8 @@ def parse_tool_rules(items) -> dict:
 def without_defaults(rules: dict) -> dict:
     """``rules`` less the entries equal to ToolConfig's first-order defaults, so that one set of rules has one
     record (``max_suction_moment=inf`` is the default rule, recorded as no variant)."""
+    from slax_drake.policies.actions import ToolConfig
+
     defaults = ToolConfig()
     return {k: v for k, v in rules.items() if getattr(defaults, k) != v}
 
@@ -77,14 +83,20 @@ def refuse_other_rules(path, tool_rules: dict, error=UserError, kind: str = "res
 
 
 def tool_config(scenario: Scenario, **overrides) -> ToolConfig:
+    from slax_drake.policies.actions import ToolConfig
+
     return ToolConfig(object_density=scenario.objects.density, clearance=scenario.objects.clearance, **overrides)
 
 
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,
                 target_size=None, tool_overrides: dict | None = None, oracle_options: dict | None = None):
     """A fresh policy object named ``name`` (see POLICY_NAMES) for ``scenario``'s shelf and camera."""
+    from slax_drake.policies.actions import ActionModel
+    from slax_drake.policies.distribution import make_distribution_model
     from slax_drake.policies.oracle import Oracle
     from slax_drake.policies.policies import DAR, DER, BluctionDAR, BluctionLookahead
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.sampling import shelf_of
 
     if name not in POLICY_NAMES:
         raise UnknownPolicyError(f"unknown policy '{name}' (known: {', '.join(POLICY_NAMES)})")

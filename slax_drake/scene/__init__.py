@@ -1,11 +1,14 @@
-"""Shelf, objects, target and camera model; random scene sampling; scene JSON I/O."""
+"""Shelf, objects, target and camera model; random scene sampling; scene JSON I/O.
 
-from slax_drake.scene.camera import Camera
-from slax_drake.scene.io import load_scene, save_scene, scene_from_dict, scene_to_dict, scene_to_json
-from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
-from slax_drake.scene.sampling import sample_scene, shelf_of, target_visible_fraction
+The names below are imported from their submodule on first use (:mod:`slax_drake.lazy_exports`)."""
 
-__all__ = [
-    "Camera", "Scene", "SceneObject", "Shelf", "Target", "load_scene", "planar_pose", "sample_scene",
-    "save_scene", "scene_from_dict", "scene_to_dict", "scene_to_json", "shelf_of", "target_visible_fraction",
-]
+from slax_drake.lazy_exports import lazy_exports
+
+_EXPORTS = {
+    "Camera": "camera",
+    "load_scene": "io", "save_scene": "io", "scene_from_dict": "io", "scene_to_dict": "io", "scene_to_json": "io",
+    "Scene": "model", "SceneObject": "model", "Shelf": "model", "Target": "model", "planar_pose": "model",
+    "sample_scene": "sampling", "shelf_of": "sampling", "target_visible_fraction": "sampling",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -139,6 +139,9 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         ObjectSleep(station_diagram).install(simulator)
     setup_s = time.perf_counter() - t0
     if meshcat is not None:
+        from slax_drake.systems.replay_view import set_replay_camera
+
+        set_replay_camera(meshcat, X_WS, scene.shelf)  # the live view and the HTML replay open looking into the bay
         meshcat.StartRecording(frames_per_second=30.0)
     max_time = opts.max_sim_time or (40.0 * horizon + 5.0)
     t_wall = time.perf_counter()
@@ -232,6 +235,7 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
     """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, and the HTML replay."""
     from slax_drake.io import write_bytes_atomic, write_text_atomic
     from slax_drake.scene.io import save_scene
+    from slax_drake.systems.step_figure import step_png_of_record
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -242,36 +246,10 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
         written.append(out / "scene.json")
     for step, depth, labels, history, p1d in record.step_images:
         path = out / f"step_{step:02d}.png"
-        write_bytes_atomic(path, _step_png(step, depth, labels, history, p1d))
+        write_bytes_atomic(path, step_png_of_record(record, step, depth, labels, history, p1d))
         written.append(path)
     if html and record.html:
         Path(html).parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(Path(html), record.html)
         written.append(Path(html))
     return written
-
-
-def _step_png(step, depth, labels, history, p1d) -> bytes:
-    import matplotlib
-
-    from slax_drake.io import figure_png
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.4))
-    d = np.where(np.isfinite(depth), depth, np.nan)
-    axes[0].imshow(d, cmap="viridis")
-    axes[0].set_title(f"step {step}: depth (m)")
-    axes[1].imshow(labels, cmap="tab20", interpolation="nearest")
-    axes[1].set_title("labels (target last)")
-    if history is not None:
-        if p1d is not None:
-            axes[2].plot(p1d, label="P_t")
-        axes[2].plot(history, label="P'_t (history min)")
-        axes[2].legend()
-    axes[2].set_title("1D target distribution")
-    for ax in axes[:2]:
-        ax.axis("off")
-    fig.tight_layout()
-    return figure_png(fig, 80)

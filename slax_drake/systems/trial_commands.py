@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 
 from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialError, TrialOptions
 
@@ -27,7 +28,7 @@ def register(subparsers) -> None:
                    "that 'slax-drake benchmark' and the physics benchmark use; replaces --objects and --seed")
     p.add_argument("--policy", default="bluction-dar", help="policy name (default bluction-dar)")
     p.add_argument("--perception", default="ground-truth", choices=("ground-truth", "learned"))
-    p.add_argument("--meshcat", action="store_true", help="serve the live view on localhost and print its URL")
+    p.add_argument("--meshcat", action="store_true", help="serve a live view on localhost and print its URL (it lasts while the command runs)")
     p.add_argument("--html", default=None, help="write a self-contained Meshcat replay (e.g. out/trial.html)")
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
     add_tool_rule_argument(p, "for the policy and the planner, over the station cup's limits "
@@ -60,6 +61,7 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
 def run(args: argparse.Namespace) -> int:
     from slax_drake.policies.registry import parse_tool_rules
     from slax_drake.systems.trial import run_trial, write_trial
+    from slax_drake.systems.trial_summary import trial_summary
 
     opts = TrialOptions(config=args.config, objects=DEFAULT_OBJECTS if args.objects is None else args.objects,
                         seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy,
@@ -70,25 +72,32 @@ def run(args: argparse.Namespace) -> int:
         if args.objects is not None or args.seed is not None:
             raise TrialError("--benchmark-scene replaces --objects and --seed: give one or the other")
         opts = benchmark_scene_options(opts, args.benchmark_scene)
-    meshcat = None
-    if args.meshcat or args.html:
-        from pydrake.geometry import Meshcat
+    previous_level = quiet_drake_info()
+    try:
+        meshcat = None
+        if args.meshcat or args.html:
+            from pydrake.geometry import Meshcat
 
-        meshcat = Meshcat()
-        if args.meshcat:
-            print(f"meshcat: {meshcat.web_url()}", flush=True)
-    record = run_trial(opts, meshcat=meshcat)
+            meshcat = Meshcat()
+            if args.meshcat:
+                print(f"meshcat: {meshcat.web_url()} (a live view while this command runs)", flush=True)
+        record = run_trial(opts, meshcat=meshcat)
+    finally:
+        logging.getLogger("drake").setLevel(previous_level)
     written = write_trial(record, args.out, html=args.html)
-    d = record.data
-    print(f"{'revealed' if d['success'] else 'not revealed'} ({d['result']}): {d['steps']} actions, cost {d['cost']}, "
-          f"target {d['visible_fraction'] * 100:.0f}% visible; simulated {d['sim_time_s']:.1f} s in {d['wall_s']:.1f} s "
-          f"(real-time factor {d['real_time_factor']})")
-    for a in d["actions"]:
-        params = f"d={a['d']:+.3f}" if a["type"] == "push" else f"dx={a['dx']:+.3f} dz={a['dz']:+.3f}"
-        print(f"  {a['type']} {a['object']} {params}: motion {a['motion']['duration_s']:.1f} s, planned in "
-              f"{a['planning_s']:.2f} s, {len(a['rejected_before'])} candidates rejected first")
-    if d["tool_rules"]:
-        print("action-model rules: " + ", ".join(f"{k}={v}" for k, v in d["tool_rules"].items())
-              + " (the station's cup limits and --tool-rule)")
-    print(f"wrote {written[0].parent} ({len(written)} files)")
+    print(trial_summary(record.data, written, html=args.html,
+                        meshcat_url=meshcat.web_url() if args.meshcat else None))
     return 0
+
+
+def quiet_drake_info() -> int:
+    """Sets Drake's log (pydrake logs through Python's ``logging.getLogger("drake")``) to warnings and above and
+    returns the level it had. Its INFO lines ("Meshcat listening for connections at ...", a localhost address that
+    dies with the process; "Allocating contexts to support implicit context parallelism", once per planned action,
+    from each new collision checker) say nothing a user of the trial can act on."""
+    import pydrake.common  # noqa: F401  (pydrake ties its C++ log level to this logger's level)
+
+    logger = logging.getLogger("drake")
+    previous = logger.level
+    logger.setLevel(logging.WARNING)
+    return previous

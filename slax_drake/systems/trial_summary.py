@@ -1,0 +1,104 @@
+"""The block ``slax-drake trial`` prints at its end: outcome, steps, cost, the files written and how to view them.
+
+A pure function of the trial record (``TrialRecord.data``, the content of ``trial.json``) and the paths written,
+so that what a user reads is tested without running Drake.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+# What the trial's ``result`` means, as a user reads it.
+OUTCOMES = {
+    "revealed": "target revealed",
+    "horizon": "target not revealed: the horizon of {horizon} actions was spent",
+    "no feasible action": "target not revealed: the policy had no feasible action left",
+    "no feasible motion": "target not revealed: no candidate action had a collision-free motion",
+    "time limit": "target not revealed: the simulated-time limit (--max-sim-time) ran out",
+}
+
+
+def outcome_line(data: dict) -> str:
+    """One phrase for how the trial ended, with the target's visible share, e.g. "target revealed (93% of it
+    visible)"."""
+    template = OUTCOMES.get(data["result"], "target not revealed: {result}")
+    return (template.format(horizon=data.get("horizon"), result=data["result"])
+            + f" ({data['visible_fraction'] * 100:.0f}% of it visible at the end)")
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def _size(path: Path) -> str:
+    try:
+        size = path.stat().st_size
+    except OSError:
+        return "?"
+    return f"{size / 2**20:.1f} MB" if size >= 2**20 else f"{size / 2**10:.0f} kB"
+
+
+def _cost(cost: float, pushes: int, suctions: int) -> str:
+    """The cost with its make-up: 1 per push, the protocol's suction_cost per suction."""
+    if not suctions:
+        return f"{cost:g}" + (" (1 per push)" if pushes else "")
+    psi = (cost - pushes) / suctions
+    return f"{cost:g} (1 per push, {psi:g} per suction)"
+
+
+def trial_summary(data: dict, written: list[Path], html: str | Path | None = None,
+                  meshcat_url: str | None = None) -> str:
+    """The trial's closing block (lines without a trailing newline).
+
+    ``data``: the trial record; ``written``: the files :func:`slax_drake.systems.trial.write_trial` wrote;
+    ``html``: the HTML replay's path when one was asked for; ``meshcat_url``: the live view's address when
+    ``--meshcat`` served one (it closes with the process, and the block says so).
+    """
+    actions = data["actions"]
+    pushes = sum(1 for a in actions if a["type"] == "push")
+    lines = ["", "== trial summary ==",
+             f"outcome: {outcome_line(data)}",
+             f"steps:   {_plural(data['steps'], 'action')} ({_plural(pushes, 'push')}, "
+             f"{_plural(len(actions) - pushes, 'suction')}) of at most {data['horizon']}"]
+    for k, a in enumerate(actions, start=1):
+        params = f"d={a['d']:+.3f} m" if a["type"] == "push" else f"dx={a['dx']:+.3f} m, to y={a['dz']:+.3f} m"
+        rejected = len(a["rejected_before"])
+        lines.append(f"  {k}. {a['type']} {a['object']} ({params}): motion {a['motion']['duration_s']:.1f} s, "
+                     f"planned in {a['planning_s']:.2f} s"
+                     + (f" after {_plural(rejected, 'rejected candidate')}" if rejected else ""))
+    lines.append(f"cost:    {_cost(data['cost'], pushes, len(actions) - pushes)}")
+    rtf = data.get("real_time_factor")
+    lines.append(f"time:    simulated {data['sim_time_s']:.1f} s in {data['wall_s']:.1f} s of wall time"
+                 + (f" (real-time factor {rtf:.1f})" if rtf else ""))
+    if data.get("tool_rules"):
+        lines.append("rules:   " + ", ".join(f"{k}={v}" for k, v in data["tool_rules"].items())
+                     + " (the station cup's limits and --tool-rule)")
+
+    written = [Path(p) for p in written]
+    html_path = Path(html) if html else None
+    pngs = sorted(p for p in written if p.suffix == ".png")
+    lines.append("files:")
+    for p in written:
+        if p.name == "trial.json":
+            lines.append(f"  {p}  the record: actions, 1D support per step, executed joint trajectory, "
+                         "final object poses")
+        elif p.name == "scene.json":
+            lines.append(f"  {p}  the initial scene")
+    if pngs:
+        span = str(pngs[0]) if len(pngs) == 1 else f"{pngs[0]} .. {pngs[-1].name}"
+        lines.append(f"  {span}  per decision: depth, labels with the chosen action, target distribution "
+                     f"({_plural(len(pngs), 'image')})")
+    if html_path is not None and html_path in written:
+        lines.append(f"  {html_path}  the Meshcat replay ({_size(html_path)}, self-contained)")
+
+    lines.append("view:")
+    if html_path is not None and html_path in written:
+        lines.append(f"  open {html_path} in a web browser ({html_path.resolve().as_uri()}); it needs no server "
+                     "and plays the trial once (Open Controls > Animations: play, pause, time)")
+    else:
+        lines.append("  add --html out/trial.html to write a replay that opens in any web browser")
+    if pngs:
+        lines.append(f"  the step images in any image viewer, e.g. {pngs[0]}")
+    if meshcat_url:
+        lines.append(f"  the live view at {meshcat_url} closes when this command ends (--html writes a replay that lasts)")
+    return "\n".join(lines)
