@@ -7,17 +7,13 @@ import math
 import numpy as np
 import pytest
 
-pytest.importorskip("rosbags")
+from rosbags.rosbag2 import Reader
+from rosbags.typesys import Stores, get_typestore
+from test_export_helpers import fake_trial
 
-from rosbags.rosbag2 import Reader  # noqa: E402
-from rosbags.typesys import Stores, get_typestore  # noqa: E402
-
-from slax_drake.cli import main  # noqa: E402
-from slax_drake.hardware.fetch_limits import FETCH_JOINTS  # noqa: E402
-from slax_drake.hardware.rosbag_export import (  # noqa: E402
-    STEP_DEPTH_FILE, StepDepth, write_trial_bag,
-)
-from test_export_helpers import fake_trial  # noqa: E402
+from slax_drake.cli import main
+from slax_drake.hardware.fetch_limits import FETCH_JOINTS
+from slax_drake.hardware.rosbag_export import STEP_DEPTH_FILE, StepDepth, write_trial_bag
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 
@@ -232,6 +228,14 @@ def test_cli_writes_the_bag_and_refuses_bad_input(trial_files, tmp_path, capsys)
     refused([str(folder / "trial.json"), "--format", "mcap", "--scene", str(folder / "scene.json"),
              "--out", str(tmp_path / "b5.mcap")], ["folder"])
     assert not any((tmp_path / n).exists() for n in ("b2", "b3", "b4", "b5.mcap"))
+    # a trial written before step_depth.npz existed: the bag without images, and the command says so
+    (tmp_path / "old").mkdir()
+    (tmp_path / "old" / "trial.json").write_text((folder / "trial.json").read_text())
+    assert main(["export", str(tmp_path / "old" / "trial.json"), "--format", "mcap", "--scene",
+                 str(folder / "scene.json"), "--out", str(tmp_path / "b6")]) == 0
+    assert "no depth images" in capsys.readouterr().out
+    msgs, _ = _read(tmp_path / "b6")
+    assert "/camera/depth/image" not in msgs and len(msgs["/tf"]) == 4
 
 
 def test_an_interrupted_write_leaves_nothing(trial_files, tmp_path, monkeypatch):
