@@ -38,6 +38,9 @@ def test_short_trial_reveals_the_target(short_trial):
         assert a["outcome"] is not None and a["predicted"]["object"] == a["object"]
     assert set(d["final_objects"]) == {"object_0", "object_1"}
     assert (out / "step_00.png").stat().st_size > 1000
+    with np.load(out / "step_depth.npz") as z:  # each decision's depth image, for export --format mcap
+        assert z["times"].tolist() == [e["time"] for e in d["steps_log"]]
+        assert z["depth"].shape == (len(d["steps_log"]), 480, 640) and z["depth"].dtype == np.float32
     assert d["tool_rules"] == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0}  # the station cup's limits
 
 

@@ -11,15 +11,19 @@ from slax_drake.hardware.trajectory_file import FORMATS
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "export", help="export a trial's executed motions as ROS JointTrajectory messages (JSON, YAML goals, CSV)",
+        "export", help="export a trial's executed motions as ROS JointTrajectory messages (JSON, YAML goals, CSV) "
+        "or the whole trial as a ROS 2 bag (MCAP)",
         description="Cut trial.json's executed trajectory into one JointTrajectory-shaped message per motion (joint "
         "names as on the real Fetch plus tool_shaft_joint) with timed suction events. Without --rate the points "
-        "are the trial's own records; with --rate they are resampled (quintic positions, linear accelerations).")
+        "are the trial's own records; with --rate they are resampled (quintic positions, linear accelerations). "
+        "--format mcap writes a ROS 2 bag folder (MCAP storage) with /joint_states, /planned_trajectory, "
+        "/suction_command, /tf, /tf_static and the depth camera per decision, stamped in simulation time.")
     p.add_argument("trial", help="trial.json written by 'slax-drake trial'")
-    p.add_argument("--format", choices=tuple(FORMATS), default=None,
-                   help="ros-json, ros-yaml (FollowJointTrajectory goals) or csv (default: from --out's extension)")
+    p.add_argument("--format", choices=tuple(FORMATS) + ("mcap",), default=None,
+                   help="ros-json, ros-yaml (FollowJointTrajectory goals), csv (default: from --out's extension), "
+                   "or mcap (a ROS 2 bag folder)")
     p.add_argument("--rate", type=float, default=None, help="resample at this rate in Hz (default: the trial's records)")
-    p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv)")
+    p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv), or the bag folder for mcap")
     p.add_argument("--scene", default=None, help="scene JSON to embed (default: sampled again from the trial's config and seed)")
     p.add_argument("--write-scene", default=None, help="also write the trial's initial scene as a scene JSON here")
     p.set_defaults(func=run_export)
@@ -78,6 +82,8 @@ def run_export(args: argparse.Namespace) -> int:
     from slax_drake.scene.io import load_scene, save_scene
 
     data = read_trial(args.trial)
+    if args.format == "mcap":
+        return _export_bag(args, data)
     fmt = args.format or format_of(args.out)
     scene = load_scene(args.scene) if args.scene else trial_scene(data)
     traj = export_trial(data, rate=args.rate, source=str(args.trial), scene=scene)
@@ -89,6 +95,39 @@ def run_export(args: argparse.Namespace) -> int:
     print(f"wrote {args.out} ({fmt}): {len(traj.motions)} motions, {points} points, {events} suction events, "
           f"{'trial records' if args.rate is None else f'{args.rate:g} Hz'}")
     return 0
+
+
+def _export_bag(args: argparse.Namespace, data: dict) -> int:
+    from slax_drake.hardware.export import TrialFileError, trial_scene
+    from slax_drake.hardware.rosbag_export import STEP_DEPTH_FILE, read_step_depth, write_trial_bag
+    from slax_drake.scene.io import load_scene, save_scene
+
+    out = Path(args.out)
+    if out.exists() or out.is_symlink():  # before any slow work
+        raise TrialFileError(f"{out} exists: a bag is never overwritten (remove it or choose another --out)")
+    scene = load_scene(args.scene) if args.scene else trial_scene(data)
+    depth = read_step_depth(Path(args.trial).parent / STEP_DEPTH_FILE)
+    X_WS, X_WB = _station_frames(data, scene)
+    summary = write_trial_bag(data, out, scene=scene, depth=depth, X_WS=X_WS, X_WB=X_WB, rate=args.rate,
+                              source=str(args.trial))
+    if args.write_scene:
+        save_scene(scene, args.write_scene)
+    counts = ", ".join(f"{topic} {n}" for topic, n in summary.counts.items())
+    print(f"wrote {out}/ (ROS 2 bag, MCAP storage; {summary.start_s:g} to {summary.end_s:g} s simulation time): {counts}")
+    if depth is None:
+        print(f"  no depth images: {Path(args.trial).parent / STEP_DEPTH_FILE} is missing (trials record it since "
+              "this version; run the trial again)")
+    print(f"  view: open {out / (out.name + '.mcap')} in Foxglove, or 'ros2 bag play {out}'")
+    return 0
+
+
+def _station_frames(data: dict, scene):
+    """X_WS (the shelf in the world) and X_WB (the robot's base weld) as 4x4 from the trial's station file."""
+    from slax_drake.station.scenario import _base_weld, load_station_scenario, shelf_pose
+    from slax_drake.systems.trial import station_for
+
+    station = load_station_scenario(data.get("station") or station_for(data.get("config") or "sim_configs/sim_shelf.yaml"))
+    return shelf_pose(station, scene.camera).GetAsMatrix4(), _base_weld(station).GetAsMatrix4()
 
 
 def run_check(args: argparse.Namespace) -> int:

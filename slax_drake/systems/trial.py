@@ -5,12 +5,14 @@ the shelf simulator for the same config, object count and seed), builds the diag
 ``desired_state`` and ``suction_command`` from the planner; the planner reads ``measured_state``,
 ``depth_image``, ``label_image`` and ``body_poses``), simulates until the planner is done, and returns a
 :class:`TrialRecord` (success, steps, cost, actions with outcome and timings, supports, the executed joint
-trajectory, final object poses). :func:`write_trial` writes ``trial.json``, ``scene.json`` (the initial scene), per-step PNGs and the HTML replay.
+trajectory, final object poses). :func:`write_trial` writes ``trial.json``, ``scene.json`` (the initial scene),
+per-step PNGs, ``step_depth.npz`` (each decision's depth image) and the HTML replay.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import math
 import time
@@ -232,7 +234,8 @@ def _executed_trajectory(planner_system, t_end: float):
 
 
 def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -> list[Path]:
-    """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, and the HTML replay."""
+    """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, step_depth.npz (the depth image
+    of every decision), and the HTML replay."""
     from slax_drake.io import write_bytes_atomic, write_text_atomic
     from slax_drake.scene.io import save_scene
     from slax_drake.systems.step_figure import step_png_of_record
@@ -248,6 +251,13 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
         path = out / f"step_{step:02d}.png"
         write_bytes_atomic(path, step_png_of_record(record, step, depth, labels, history, p1d))
         written.append(path)
+    if record.step_images and len(record.step_images) == len(record.data.get("steps_log", ())):
+        # the depth image of each decision, for 'slax-drake export --format mcap': times (K,) s, depth (K, H, W) m
+        buf = io.BytesIO()
+        np.savez_compressed(buf, times=np.array([e["time"] for e in record.data["steps_log"]], float),
+                            depth=np.stack([np.asarray(d, np.float32) for _, d, _, _, _ in record.step_images]))
+        write_bytes_atomic(out / "step_depth.npz", buf.getvalue())
+        written.append(out / "step_depth.npz")
     if html and record.html:
         Path(html).parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(Path(html), record.html)
