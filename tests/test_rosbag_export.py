@@ -1,4 +1,4 @@
-"""``slax-drake export --format mcap``: a hand-made trial (tests/test_export_helpers.py, two Ruckig-timed motions,
+"""``slax-drake export --format mcap``: a hand-made trial (tests/trial_records.py, two Ruckig-timed motions,
 no Drake simulation) written as a ROS 2 bag and read back with rosbags; slow: a real trial end to end."""
 
 import json
@@ -9,7 +9,7 @@ import pytest
 
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
-from test_export_helpers import fake_trial
+from trial_records import fake_trial
 
 from slax_drake.cli import main
 from slax_drake.hardware.fetch_limits import FETCH_JOINTS
@@ -197,7 +197,8 @@ def test_cli_writes_the_bag_and_refuses_bad_input(trial_files, tmp_path, capsys)
     assert "/joint_states" in printed and "Foxglove" in printed and "ros2 bag play" in printed
     msgs, _ = _read(out)
     (_, static), = msgs["/tf_static"]
-    from slax_drake.station.scenario import load_station_scenario, shelf_pose
+    from slax_drake.station.plant import shelf_pose
+    from slax_drake.station.scenario import load_station_scenario
 
     X_WS = shelf_pose(load_station_scenario(data["station"]), scene.camera).GetAsMatrix4()
     world_shelf = next(x for x in static.transforms if x.child_frame_id == "shelf").transform

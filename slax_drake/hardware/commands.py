@@ -123,11 +123,12 @@ def _export_bag(args: argparse.Namespace, data: dict) -> int:
 
 def _station_frames(data: dict, scene):
     """X_WS (the shelf in the world) and X_WB (the robot's base weld) as 4x4 from the trial's station file."""
-    from slax_drake.station.scenario import _base_weld, load_station_scenario, shelf_pose
+    from slax_drake.station.plant import base_pose, shelf_pose
+    from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.trial import station_for
 
     station = load_station_scenario(data.get("station") or station_for(data.get("config") or "sim_configs/sim_shelf.yaml"))
-    return shelf_pose(station, scene.camera).GetAsMatrix4(), _base_weld(station).GetAsMatrix4()
+    return shelf_pose(station, scene.camera).GetAsMatrix4(), base_pose(station).GetAsMatrix4()
 
 
 def run_check(args: argparse.Namespace) -> int:

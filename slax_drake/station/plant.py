@@ -216,6 +216,12 @@ def camera_pose_at(scenario: StationScenario, q_planned: np.ndarray, plant=None)
     return plant.GetFrameByName(robot_model.CAMERA_FRAME).CalcPoseInWorld(context)
 
 
+def base_pose(scenario: StationScenario):
+    """X_WB (RigidTransform) of the robot's base_link in the world, from the directives' weld."""
+    plant = controller_plant(scenario)
+    return plant.GetFrameByName(robot_model.BASE_BODY).CalcPoseInWorld(plant.CreateDefaultContext())
+
+
 def shelf_pose(scenario: StationScenario, camera: Camera):
     """X_WS = X_WC(q_obs) * inv(X_SC); ConfigError when the shelf would not stand level (> 1 mrad)."""
     from pydrake.math import RigidTransform

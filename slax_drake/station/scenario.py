@@ -22,7 +22,7 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from slax_drake.config import REPO_ROOT
 from slax_drake.errors import ConfigError, UserError
 from slax_drake.scene.camera import Camera
-from slax_drake.station import robot as robot_model
+from slax_drake.station import DEFAULT_STATION, robot as robot_model  # noqa: F401  (DEFAULT_STATION re-exported)
 
 @dataclasses.dataclass
 class SuctionParameters:
@@ -44,7 +44,6 @@ class SuctionParameters:
         return self.vacuum_pressure * math.pi * self.cup_radius**2
 
 
-DEFAULT_STATION = "sim_configs/station_sim_shelf.yaml"
 SHELF_BODY = "shelf_body"
 
 

@@ -8,7 +8,7 @@ import subprocess
 from pathlib import Path
 
 from slax_drake.errors import UserError
-from slax_drake.station.scenario import DEFAULT_STATION
+from slax_drake.station import DEFAULT_STATION
 
 
 class GraphvizMissingError(UserError):
