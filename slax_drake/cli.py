@@ -20,7 +20,7 @@ COMMAND_MODULES = (
     "slax_drake.occupancy.commands",
     "slax_drake.dataset.commands",
     "slax_drake.systems.commands",
-    "slax_drake.systems.trial_commands",
+    "slax_drake.evaluation.trial_commands",
     "slax_drake.hardware.commands",
 )
 

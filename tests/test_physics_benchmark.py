@@ -113,7 +113,7 @@ def test_action_matches_within_2_cm_and_10_deg():
 def test_a_diverged_simulation_is_a_failed_trial_not_a_crash(tmp_path, monkeypatch):
     """Drake raises on a non-finite pose when a contact blows up; the benchmark records that scene as a Drake
     failure with the reason and goes on (one unstable scene stopped a 40-scene run)."""
-    import slax_drake.systems.trial as trial
+    import slax_drake.evaluation.trial as trial
 
     def blow_up(*args, **kwargs):
         raise RuntimeError("SceneGraph encountered a non-finite value (e.g., NaN or infinity) on a pose input port.")

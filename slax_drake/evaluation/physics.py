@@ -73,7 +73,7 @@ def _run_scene(job) -> tuple[str, dict]:
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial as run_shelf_trial
     from slax_drake.scene.sampling import sample_scene
-    from slax_drake.systems.trial import TrialOptions, run_trial
+    from slax_drake.evaluation.trial import TrialOptions, run_trial
 
     scenario = load_scenario(config)
     opts = protocol_trial(TrialOptions(config=config, station=station, policy=policy_name, out=None, sleep=sleep,
