@@ -7,9 +7,9 @@ import math
 import pytest
 
 from slax_drake.evaluation.table1 import scene_seed
-from slax_drake.evaluation.physics import (
-    PhysicsBenchmarkError, action_matches, main, run_physics_benchmark, trial_path,
-)
+from slax_drake.cli import main as cli_main
+from slax_drake.errors import UserError
+from slax_drake.evaluation.physics import PhysicsBenchmarkError, action_matches, run_physics_benchmark, trial_path
 
 CONFIG = "sim_configs/sim_shelf.yaml"
 TINY = dict(policies=["bluction-dar"], scenes_per_density=1, seed=3, densities=[2], progress=False)
@@ -92,6 +92,11 @@ def test_corrupt_scene_file_is_refused(tiny, tmp_path):
         run_physics_benchmark(CONFIG, out=tmp_path, **TINY)
 
 
+def main(argv):
+    """``slax-drake benchmark --physics`` with ``argv``."""
+    return cli_main(["benchmark", "--physics", *argv])
+
+
 def test_bad_requests_exit_with_code_2(capsys, tmp_path):
     assert main(["--config", CONFIG, "--policies", "oracle-p", "--out", str(tmp_path)]) == 2
     assert "cannot run in a Drake trial" in capsys.readouterr().err
@@ -99,6 +104,8 @@ def test_bad_requests_exit_with_code_2(capsys, tmp_path):
     assert "unknown policy 'nonsense'" in capsys.readouterr().err
     assert main(["--config", CONFIG, "--scenes-per-density", "0", "--out", str(tmp_path)]) == 2
     assert main(["--config", CONFIG, "--densities", "2,x", "--out", str(tmp_path)]) == 2
+    assert main(["--config", CONFIG, "--backend", "local", "--ray-address", "auto", "--out", str(tmp_path)]) == 2
+    assert "--ray-address needs --backend ray" in capsys.readouterr().err
     assert main(["--config", "no/such.yaml", "--out", str(tmp_path)]) == 2
 
 
@@ -151,8 +158,10 @@ def test_rules_equal_to_the_first_order_defaults_are_no_variant():
 
 def test_a_resumed_run_refuses_scene_files_made_under_other_rules(tiny):
     _, out = tiny
-    with pytest.raises(PhysicsBenchmarkError, match="tool rules"):
+    with pytest.raises(UserError, match="made with another --tool-rule"):
         run_physics_benchmark(CONFIG, out=out, tool_rules={"max_suction_moment": 0.3}, **TINY)
+    with pytest.raises(UserError, match="made with another --sleep"):
+        run_physics_benchmark(CONFIG, out=out, **{**TINY, "sleep": True})
 
 
 @pytest.mark.parametrize("argv, message", [

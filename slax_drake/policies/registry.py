@@ -98,20 +98,6 @@ def without_defaults(rules: dict) -> dict:
     return {k: v for k, v in rules.items() if getattr(defaults, k) != v}
 
 
-def refuse_other_rules(path, tool_rules: dict, error=UserError, kind: str = "result file") -> None:
-    """Raises ``error`` when the result file at ``path`` (a benchmark's per-trial JSON, which records its rule
-    variants under "tool_rules") is unreadable or was made under rules other than ``tool_rules``."""
-    import json
-    from pathlib import Path
-
-    try:
-        made_with = json.loads(Path(path).read_text()).get("tool_rules") or {}
-    except (OSError, json.JSONDecodeError, AttributeError) as e:
-        raise error(f"{path}: unreadable {kind} ({e}); delete it to rerun that trial") from None
-    if made_with != tool_rules:
-        raise error(f"{path} was made with tool rules {made_with}, not {tool_rules}: use another --out")
-
-
 def tool_config(scenario: Scenario, **overrides) -> ToolConfig:
     return ToolConfig(object_density=scenario.objects.density, clearance=scenario.objects.clearance, **overrides)
 

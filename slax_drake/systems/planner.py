@@ -106,11 +106,9 @@ class PlannerSystem(LeafSystem):
         self.DeclareVectorOutputPort("suction_command", BasicVector(1), self._calc_suction,
                                      prerequisites_of_calc={self.abstract_state_ticket(self._state)} | {self.time_ticket()})
 
-    def trial_state(self, context) -> TrialState:
-        """The trial so far in ``context`` (this system's context or the root diagram's)."""
-        if context.get_system_id() != self.get_system_id():
-            context = self.GetMyContextFromRoot(context)
-        return context.get_abstract_state(self._state).get_value()
+    def trial_state(self, root_context) -> TrialState:
+        """The trial so far in ``root_context`` (the root diagram's context)."""
+        return self.GetMyContextFromRoot(root_context).get_abstract_state(self._state).get_value()
 
     def _initialize(self, context, state):
         self.policy.reset(self.scene)
