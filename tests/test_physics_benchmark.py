@@ -84,12 +84,14 @@ def test_rerun_resumes_from_the_scene_file(tiny):
 
 
 def test_corrupt_scene_file_is_refused(tiny, tmp_path):
+    import shutil
+
     _, out = tiny
-    path = trial_path(tmp_path, "bluction-dar", 2, 0)
-    path.parent.mkdir(parents=True)
-    path.write_text('{"shelf": ')
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    trial_path(copy, "bluction-dar", 2, 0).write_text('{"shelf": ')
     with pytest.raises(PhysicsBenchmarkError, match="unreadable result file"):
-        run_physics_benchmark(CONFIG, out=tmp_path, **TINY)
+        run_physics_benchmark(CONFIG, out=copy, **TINY)
 
 
 def main(argv):
