@@ -14,7 +14,7 @@ import numpy as np
 
 
 def main():
-    from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions, run_trial
+    from slax_drake.evaluation.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions, run_trial
 
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--objects", type=int, default=DEFAULT_OBJECTS)

@@ -11,16 +11,17 @@ import argparse
 import importlib
 import sys
 
+from slax_drake import __version__
 from slax_drake.errors import UserError
 
 COMMAND_MODULES = (
     "slax_drake.scene.commands",
-    "slax_drake.policies.commands",
     "slax_drake.perception.commands",
     "slax_drake.occupancy.commands",
     "slax_drake.dataset.commands",
     "slax_drake.systems.commands",
-    "slax_drake.systems.trial_commands",
+    "slax_drake.evaluation.commands",
+    "slax_drake.evaluation.trial_commands",
     "slax_drake.hardware.commands",
 )
 
@@ -30,6 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="slax-drake",
         description="Lateral-access mechanical search on shelves with the bluction tool (SLAX-RAY), on Drake.",
     )
+    parser.add_argument("--version", action="version", version=f"slax-drake {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)

@@ -19,14 +19,7 @@ STAGES = ("errors", "lazy_exports", "io", "config", "scene", "occupancy", "stati
 
 # Known violations, each (importing module, imported module) with the issue that removes it. An entry that no
 # longer occurs fails test_known_violations_still_occur, so the list only shrinks.
-_MOVE_BENCHMARK = "issue 18 item 4: the 'benchmark' command moves from policies/commands.py to slax_drake/evaluation"
-_MOVE_TRIAL = "issue 18 item 4: the trial runner and its command (--benchmark-scene) move to slax_drake/evaluation"
-KNOWN_VIOLATIONS = {
-    ("slax_drake.policies.commands", "slax_drake.evaluation.table1"): _MOVE_BENCHMARK,
-    ("slax_drake.policies.commands", "slax_drake.evaluation.physics"): _MOVE_BENCHMARK,
-    ("slax_drake.systems.trial_commands", "slax_drake.evaluation.table1"): _MOVE_TRIAL,
-    ("slax_drake.systems.trial_commands", "slax_drake.evaluation.physics"): _MOVE_TRIAL,
-}
+KNOWN_VIOLATIONS: dict[tuple[str, str], str] = {}
 
 
 def module_name(path: Path, package_dir: Path = PACKAGE_DIR) -> str:

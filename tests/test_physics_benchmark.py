@@ -7,9 +7,9 @@ import math
 import pytest
 
 from slax_drake.evaluation.table1 import scene_seed
-from slax_drake.evaluation.physics import (
-    PhysicsBenchmarkError, action_matches, main, run_physics_benchmark, trial_path,
-)
+from slax_drake.cli import main as cli_main
+from slax_drake.errors import UserError
+from slax_drake.evaluation.physics import PhysicsBenchmarkError, action_matches, run_physics_benchmark, trial_path
 
 CONFIG = "sim_configs/sim_shelf.yaml"
 TINY = dict(policies=["bluction-dar"], scenes_per_density=1, seed=3, densities=[2], progress=False)
@@ -88,12 +88,19 @@ def test_rerun_resumes_from_the_scene_file(tiny):
 
 @pytest.mark.slow
 def test_corrupt_scene_file_is_refused(tiny, tmp_path):
+    import shutil
+
     _, out = tiny
-    path = trial_path(tmp_path, "bluction-dar", 2, 0)
-    path.parent.mkdir(parents=True)
-    path.write_text('{"shelf": ')
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    trial_path(copy, "bluction-dar", 2, 0).write_text('{"shelf": ')
     with pytest.raises(PhysicsBenchmarkError, match="unreadable result file"):
-        run_physics_benchmark(CONFIG, out=tmp_path, **TINY)
+        run_physics_benchmark(CONFIG, out=copy, **TINY)
+
+
+def main(argv):
+    """``slax-drake benchmark --physics`` with ``argv``."""
+    return cli_main(["benchmark", "--physics", *argv])
 
 
 def test_bad_requests_exit_with_code_2(capsys, tmp_path):
@@ -103,6 +110,8 @@ def test_bad_requests_exit_with_code_2(capsys, tmp_path):
     assert "unknown policy 'nonsense'" in capsys.readouterr().err
     assert main(["--config", CONFIG, "--scenes-per-density", "0", "--out", str(tmp_path)]) == 2
     assert main(["--config", CONFIG, "--densities", "2,x", "--out", str(tmp_path)]) == 2
+    assert main(["--config", CONFIG, "--backend", "local", "--ray-address", "auto", "--out", str(tmp_path)]) == 2
+    assert "--ray-address needs --backend ray" in capsys.readouterr().err
     assert main(["--config", "no/such.yaml", "--out", str(tmp_path)]) == 2
 
 
@@ -117,7 +126,7 @@ def test_action_matches_within_2_cm_and_10_deg():
 def test_a_diverged_simulation_is_a_failed_trial_not_a_crash(tmp_path, monkeypatch):
     """Drake raises on a non-finite pose when a contact blows up; the benchmark records that scene as a Drake
     failure with the reason and goes on (one unstable scene stopped a 40-scene run)."""
-    import slax_drake.systems.trial as trial
+    import slax_drake.evaluation.trial as trial
 
     def blow_up(*args, **kwargs):
         raise RuntimeError("SceneGraph encountered a non-finite value (e.g., NaN or infinity) on a pose input port.")
@@ -156,8 +165,10 @@ def test_rules_equal_to_the_first_order_defaults_are_no_variant():
 @pytest.mark.slow
 def test_a_resumed_run_refuses_scene_files_made_under_other_rules(tiny):
     _, out = tiny
-    with pytest.raises(PhysicsBenchmarkError, match="tool rules"):
+    with pytest.raises(UserError, match="made with another --tool-rule"):
         run_physics_benchmark(CONFIG, out=out, tool_rules={"max_suction_moment": 0.3}, **TINY)
+    with pytest.raises(UserError, match="made with another --sleep"):
+        run_physics_benchmark(CONFIG, out=out, **{**TINY, "sleep": True})
 
 
 @pytest.mark.parametrize("argv, message", [

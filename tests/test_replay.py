@@ -35,7 +35,7 @@ def test_trial_export_replay_round_trip(tmp_path):
     from slax_drake.hardware.replay import compare_final_objects, replay
     from slax_drake.hardware.trajectory_file import load_trajectory, save_trajectory
     from slax_drake.station.scenario import load_station_scenario
-    from slax_drake.systems.trial import TrialOptions, run_trial
+    from slax_drake.evaluation.trial import TrialOptions, run_trial
 
     record = run_trial(TrialOptions(objects=2, seed=7, out=None))
     data = record.data

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from slax_drake.cli import main
+from slax_drake.evaluation.trial import TrialOptions, run_trial, write_trial
 from slax_drake.station.plant import station_joint_limits
 from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario
-from slax_drake.systems.trial import TrialOptions, run_trial, write_trial
 
 SHORT = dict(objects=2, seed=7)  # the shelf simulator reveals this scene with one push
 

@@ -202,12 +202,7 @@ def generate(spec: DatasetSpec, out: str | Path, workers: int = 1, backend: str 
     bar = _progress(spec.scenes, done_scenes, progress)
     t0 = time.perf_counter()
     try:
-        if backend == "local":
-            _run_local(spec, out, todo, workers, bar)
-        elif backend == "ray":
-            _run_ray(spec, out, todo, workers, bar)
-        else:
-            raise DatasetError(f"unknown backend {backend!r}: use 'local' or 'ray'")
+        _run(spec, out, todo, workers, backend, bar)
     finally:
         bar.close()
     manifest = write_manifest(spec, out)
@@ -222,44 +217,15 @@ def _progress(total: int, initial: int, enabled: bool):
                 desc="dataset", dynamic_ncols=True)
 
 
-def _run_local(spec: DatasetSpec, out: Path, todo: list[int], workers: int, bar) -> None:
-    if not todo:
-        return
-    d = spec.to_dict()
-    if workers <= 1:
-        for k in todo:
-            _, n = make_shard(d, str(out), k)
-            bar.update(n)
-        return
-    import multiprocessing as mp
+def _run(spec: DatasetSpec, out: Path, todo: list[int], workers: int, backend: str, bar) -> None:
+    """Makes shards ``todo`` as tasks of ``backend`` (slax_drake.backends); shards are written by the tasks."""
+    from slax_drake.backends import run_tasks
 
-    with mp.get_context("spawn").Pool(workers, maxtasksperchild=None) as pool:
-        for _, n in pool.imap_unordered(_make_shard_star, [(d, str(out), k) for k in todo]):
-            bar.update(n)
+    d = spec.to_dict()
+    for _, (_, n) in run_tasks(_make_shard_star, [(d, str(out.resolve()), k) for k in todo], workers=workers,
+                               backend=backend):
+        bar.update(n)
 
 
 def _make_shard_star(args):
     return make_shard(*args)
-
-
-def _run_ray(spec: DatasetSpec, out: Path, todo: list[int], workers: int, bar) -> None:
-    try:
-        import ray
-    except ImportError:
-        raise DatasetError("--backend ray needs Ray: pip install 'slax-drake[cluster]'") from None
-    if not todo:
-        return
-    started_here = not ray.is_initialized()
-    if started_here:
-        ray.init(num_cpus=max(1, workers), include_dashboard=False, log_to_driver=False)
-    try:
-        task = ray.remote(num_cpus=1)(make_shard)
-        d = spec.to_dict()
-        pending = [task.remote(d, str(out.resolve()), k) for k in todo]
-        while pending:
-            ready, pending = ray.wait(pending, num_returns=1)
-            for _, n in ray.get(ready):
-                bar.update(n)
-    finally:
-        if started_here:
-            ray.shutdown()

@@ -14,21 +14,20 @@ planar position is within ``MATCH_DISTANCE`` (2 cm) and the yaw within ``MATCH_Y
 (z axis tilted more than 20 deg at the end) and dropped ones (centre outside the bay at the end) are counted.
 
 Each finished scene is written atomically as ``<out>/physics_trials/<policy>/<n>_<index>.json`` (so a stopped run
-resumes); when all are in, ``physics.json`` and ``physics.md`` are (re)written from those files.
+resumes; the settings are recorded in ``<out>/physics_settings.json`` and a run with other settings is refused);
+when all are in, ``physics.json`` and ``physics.md`` are (re)written from those files. Scenes run as local
+processes or Ray tasks (:mod:`slax_drake.backends`). The command line is ``slax-drake benchmark --physics``:
 
-    python -m slax_drake.evaluation.physics --config sim_configs/table1.yaml --scenes-per-density 2 \\
+    slax-drake benchmark --physics --config sim_configs/table1.yaml --scenes-per-density 2 \\
         --policies bluction-dar --out results/physics_tiny
 """
 
 from __future__ import annotations
 
-import argparse
 import collections
 import dataclasses
 import json
 import math
-import multiprocessing
-import sys
 import time
 from pathlib import Path
 
@@ -66,14 +65,15 @@ def _diverged_trial(message: str, wall_s: float) -> dict:
             "real_time_factor": None, "actions": [], "final_objects": {}, "initial_objects": {}}
 
 
-def _run_scene(job) -> tuple[str, dict]:
-    """Runs one scene in both simulators (in a worker process) and writes its result file."""
-    config, station, policy_name, density, index, seed, out, sleep, tool_rules = job
+def _run_scene(job) -> dict:
+    """Runs one scene in both simulators (in whichever process the backend chose); returns its result file's
+    content."""
+    config, station, policy_name, density, index, seed, sleep, tool_rules = job
     from slax_drake.config import load_scenario
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial as run_shelf_trial
     from slax_drake.scene.sampling import sample_scene
-    from slax_drake.systems.trial import TrialOptions, run_trial
+    from slax_drake.evaluation.trial import TrialOptions, run_trial
 
     scenario = load_scenario(config)
     opts = protocol_trial(TrialOptions(config=config, station=station, policy=policy_name, out=None, sleep=sleep,
@@ -109,11 +109,8 @@ def _run_scene(job) -> tuple[str, dict]:
         "initial_objects": d["initial_objects"], "final_objects": final, "sleep": d.get("sleep", False),
     }
     shelf_keep = {k: shelf[k] for k in ("success", "steps", "cost", "reason", "actions", "notes", "visible_fraction")}
-    result = {"policy": policy_name, "density": density, "index": index, "seed": seed, "shelf": shelf_keep,
-              "drake": drake, "tool_rules": tool_rules}
-    path = trial_path(Path(out), policy_name, density, index)
-    write_text_atomic(path, json.dumps(result, indent=1, sort_keys=True))
-    return str(path), result
+    return {"policy": policy_name, "density": density, "index": index, "seed": seed, "shelf": shelf_keep,
+            "drake": drake, "tool_rules": tool_rules}
 
 
 def protocol_trial(opts, scenario, density: int, seed: int):
@@ -144,18 +141,27 @@ def default_station(config: str) -> str:
 def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: int | None = None,
                           out: str | Path = "results/physics", workers: int = 1, densities=None,
                           station: str | None = None, sleep: bool = False, progress: bool = True,
-                          tool_rules: dict | None = None) -> dict:
-    """Runs the missing scenes (both simulators) and writes physics.json and physics.md; returns the summary.
+                          tool_rules: dict | None = None, backend: str = "local",
+                          ray_address: str | None = None) -> dict:
+    """Runs the missing scenes (both simulators) and writes physics.json and physics.md; returns the summary, whose
+    ``meta`` says how many scenes were kept from the folder and how many ran.
 
     ``config``: the protocol scenario YAML (e.g. sim_configs/table1.yaml); ``seed``: protocol seed (default the
     protocol's); ``densities``: default the protocol's; ``station``: default :func:`default_station`;
     ``tool_rules``: ToolConfig overrides (rule variants) for both simulators, on top of the station's cup limit
-    (``trial.station_tool_rules``); the rules in force are recorded in every scene file (a resumed run refuses
-    scene files made under other rules).
+    (``trial.station_tool_rules``); ``backend``, ``workers``, ``ray_address``: where the scenes run
+    (:func:`slax_drake.backends.run_tasks`). The settings are recorded in the folder; a resumed run with other
+    settings is refused before anything runs.
     """
+    from tqdm import tqdm
+
+    from slax_drake.backends import check_backend, run_tasks
     from slax_drake.config import load_scenario
+    from slax_drake.evaluation.settings import (
+        PHYSICS_SETTINGS_FILE, file_digest, protocol_settings, record_or_refuse,
+    )
     from slax_drake.evaluation.table1 import scene_seed
-    from slax_drake.policies.registry import POLICY_NAMES
+    from slax_drake.policies.registry import POLICY_TABLE
     from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.trial import station_tool_rules
 
@@ -164,66 +170,50 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     if not policies:
         raise PhysicsBenchmarkError("no policies given")
     for p in policies:
-        if p not in POLICY_NAMES:
-            raise PhysicsBenchmarkError(f"unknown policy '{p}' (known: {', '.join(POLICY_NAMES)})")
-        if p.startswith("oracle"):
+        if p not in POLICY_TABLE:
+            raise PhysicsBenchmarkError(f"unknown policy '{p}' (known: {', '.join(POLICY_TABLE)})")
+        if POLICY_TABLE[p].load().needs_true_scene:
             raise PhysicsBenchmarkError(f"policy '{p}' cannot run in a Drake trial (an oracle needs the true scene)")
     if scenes_per_density < 1:
         raise PhysicsBenchmarkError("--scenes-per-density must be at least 1")
-    if workers < 1:
-        raise PhysicsBenchmarkError("--workers must be at least 1")
+    check_backend(backend, workers, ray_address)
     seed = scenario.protocol.seed if seed is None else int(seed)
     densities = [int(n) for n in (densities or scenario.protocol.densities)]
+    if any(n < 1 for n in densities):
+        raise PhysicsBenchmarkError(f"--densities must be object counts of at least 1 (got {densities})")
     station = station or default_station(config)
     if not Path(station).is_file():
         raise PhysicsBenchmarkError(f"station file not found: {station}")
     out = Path(out)
     tool_rules = station_tool_rules(load_station_scenario(station), tool_rules)
-    _check_rules(out, policies, densities, scenes_per_density, tool_rules)
-    jobs = [(config, station, p, n, i, scene_seed(seed, n, i), str(out), sleep, tool_rules)
-            for p in policies for n in densities for i in range(scenes_per_density)
-            if not trial_path(out, p, n, i).is_file()]
+    settings = {**protocol_settings(scenario, config, seed, "ground-truth", tool_rules, policies),
+                "station": str(station), "station_sha256": file_digest(station), "sleep": bool(sleep)}
+    record_or_refuse(out, settings, has_results=any((out / "physics_trials").glob("*/*.json")),
+                     name=PHYSICS_SETTINGS_FILE)
+    all_jobs = [(config, station, p, n, i, scene_seed(seed, n, i), sleep, tool_rules)
+                for p in policies for n in densities for i in range(scenes_per_density)]
+    jobs = [j for j in all_jobs if not trial_path(out, j[2], j[3], j[4]).is_file()]
     # Scene index by scene index, densest first within each: a run stopped early holds the same number of scenes
     # of every density (and the long dense trials are spread over the run).
     jobs.sort(key=lambda j: (j[4], -j[3], j[2]))
     start = time.perf_counter()
     if jobs:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(jobs), desc="physics trials", unit="scene", disable=not progress)
-        if workers == 1:
-            for j in jobs:
-                _run_scene(j)
+        with tqdm(total=len(jobs), desc="physics trials", unit="scene", disable=not progress) as bar:
+            for job, result in run_tasks(_run_scene, jobs, workers=workers, backend=backend, ray_address=ray_address):
+                write_text_atomic(trial_path(out, job[2], job[3], job[4]), json.dumps(result, indent=1, sort_keys=True))
                 bar.update(1)
-        else:
-            with multiprocessing.get_context("spawn").Pool(workers) as pool:
-                for _ in pool.imap_unordered(_run_scene, jobs, chunksize=1):
-                    bar.update(1)
-        bar.close()
     elapsed = time.perf_counter() - start
     trials = load_results(out, policies, densities, scenes_per_density)
     summary = summarise(trials, policies, densities)
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
-                       "seed": seed, "densities": densities, "sleep": sleep, "workers": workers,
-                       "tool_rules": tool_rules,
+                       "seed": seed, "densities": densities, "sleep": sleep, "workers": workers, "backend": backend,
+                       "tool_rules": tool_rules, "scenes_kept": len(all_jobs) - len(jobs), "scenes_run": len(jobs),
                        "wall_seconds_this_run": round(elapsed, 1), "match_distance_m": MATCH_DISTANCE,
                        "match_yaw_deg": math.degrees(MATCH_YAW)}
     write_text_atomic(out / "physics.json", json.dumps(summary, indent=1, sort_keys=True))
     write_text_atomic(out / "physics.md", markdown_table(summary))
     write_bytes_atomic(out / "physics.png", bar_chart_png(summary))
     return summary
-
-
-def _check_rules(out: Path, policies, densities, scenes_per_density, tool_rules: dict) -> None:
-    """Refuses, before any scene runs, an output folder holding scene files made under other tool rules."""
-    from slax_drake.policies.registry import refuse_other_rules
-
-    for p in policies:
-        for n in densities:
-            for i in range(scenes_per_density):
-                path = trial_path(out, p, n, i)
-                if path.is_file():
-                    refuse_other_rules(path, tool_rules, PhysicsBenchmarkError)
 
 
 def load_results(out: Path, policies, densities, scenes_per_density) -> list[dict]:
@@ -380,62 +370,3 @@ def bar_chart_png(summary: dict) -> bytes:
         right.set_ylabel("within 2 cm and 10 deg (%)")
     fig.tight_layout()
     return figure_png(fig, 110)
-
-
-def build_parser() -> argparse.ArgumentParser:
-    from slax_drake.policies.registry import add_tool_rule_argument
-
-    p = argparse.ArgumentParser(prog="python -m slax_drake.evaluation.physics",
-                                description="The Table I protocol through full Drake trials beside the shelf "
-                                "simulator on the same scenes; writes OUT/physics.md and OUT/physics.json.")
-    p.add_argument("--config", default="sim_configs/table1.yaml", help="protocol scenario YAML")
-    p.add_argument("--station", default=None, help="station YAML (default: station_<config stem>.yaml, else the "
-                   "sim-shelf station)")
-    p.add_argument("--policies", default="bluction-dar", help="comma-separated non-oracle policy names")
-    p.add_argument("--scenes-per-density", type=int, default=None, help="default: the protocol's")
-    p.add_argument("--densities", default=None, help="comma-separated object counts (default: the protocol's)")
-    p.add_argument("--seed", type=int, default=None, help="protocol seed (default: the protocol's)")
-    p.add_argument("--workers", type=int, default=1, help="parallel worker processes (default: 1)")
-    p.add_argument("--sleep", action="store_true", help="object sleep in the Drake trials")
-    add_tool_rule_argument(p, "for both simulators, over the station cup's limits (max_suction_moment=inf and "
-                           "max_seal_angle_deg=90 lift them)")
-    p.add_argument("--out", default="results/physics", help="output folder (default: results/physics)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    return p
-
-
-def run_from_args(args: argparse.Namespace) -> int:
-    from slax_drake.config import load_scenario
-    from slax_drake.policies.registry import parse_tool_rules
-
-    scenario = load_scenario(args.config)
-    n = args.scenes_per_density if args.scenes_per_density is not None else scenario.protocol.scenes_per_density
-    try:
-        densities = None if args.densities is None else [int(v) for v in args.densities.split(",") if v.strip()]
-    except ValueError:
-        raise PhysicsBenchmarkError(f"--densities must be comma-separated integers (got '{args.densities}')")
-    summary = run_physics_benchmark(args.config, [p.strip() for p in args.policies.split(",") if p.strip()], n,
-                                    seed=args.seed, out=args.out, workers=args.workers, densities=densities,
-                                    station=args.station, sleep=args.sleep, progress=not args.no_progress,
-                                    tool_rules=parse_tool_rules(args.tool_rule))
-    for p, per in summary["policies"].items():
-        e = per["all"]
-        match = "-" if e["match_rate"] is None else f"{100 * e['match_rate']:.0f} %"
-        print(f"{p}: success shelf {100 * e['shelf_success_rate']:.0f} %, Drake {100 * e['drake_success_rate']:.0f} % "
-              f"over {e['trials']} scenes; actions matching prediction {match}; "
-              f"toppled {e['toppled']}, dropped {e['dropped']}")
-    print(f"wrote {Path(args.out) / 'physics.md'}, {Path(args.out) / 'physics.json'}")
-    return 0
-
-
-def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        return run_from_args(args)
-    except UserError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

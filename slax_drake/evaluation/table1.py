@@ -2,14 +2,16 @@
 
 Scene seeds: ``scene_seed(protocol_seed, density, index)``, identical for every policy. Each finished trial is
 written as its own JSON file under ``<out>/trials/<policy>/<density>_<index>.json`` (atomically), so a run
-that is stopped resumes where it was. When all trials are in, ``table1.json``, ``table1.md`` and
-``table1.png`` are (re)written from the trial files.
+that is stopped resumes where it was; the settings the trials are made with are recorded in
+``<out>/settings.json`` and a run with other settings is refused (:mod:`slax_drake.evaluation.settings`). Trials
+run as local processes or Ray tasks (:mod:`slax_drake.backends`); the files are written here, as results come.
+When all trials are in, ``table1.json``, ``table1.md`` and ``table1.png`` are (re)written from the trial files of
+every policy in the folder, not only those of this run.
 """
 
 from __future__ import annotations
 
 import json
-import multiprocessing
 import time
 from pathlib import Path
 
@@ -38,9 +40,9 @@ def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return out / "trials" / policy / f"{density:02d}_{index:04d}.json"
 
 
-def _run_one(job):
-    """Runs one trial in a worker; returns (path, trial dict)."""
-    scenario, policy_name, density, index, seed, perception, out, tool_rules = job
+def _run_one(job) -> dict:
+    """Runs one trial (in whichever process the backend chose); returns the trial file's content."""
+    scenario, policy_name, density, index, seed, perception, tool_rules = job
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial
     from slax_drake.scene.sampling import sample_scene
@@ -53,81 +55,93 @@ def _run_one(job):
     result["index"] = index
     if tool_rules:
         result["tool_rules"] = tool_rules
-    path = _trial_path(Path(out), policy_name, density, index)
-    write_text_atomic(path, json.dumps(result, sort_keys=True))
-    return str(path), result
+    return result
 
 
 def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: int, out: Path, workers: int = 1,
                   backend: str = "local", perception: str = "ground-truth", densities=None, progress=True,
-                  tool_rules: dict | None = None) -> dict:
-    """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``).
-    ``tool_rules``: ToolConfig overrides (action-model rule variants), recorded in each trial file; a folder
-    holding trials made under other rules is refused before anything runs."""
-    from slax_drake.policies.registry import refuse_other_rules, without_defaults
+                  tool_rules: dict | None = None, config: str | None = None, ray_address: str | None = None) -> dict:
+    """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``), whose ``meta``
+    says how many trials were kept from the folder and how many ran.
+
+    ``tool_rules``: ToolConfig overrides (action-model rule variants), recorded in each trial file; ``config``: the
+    scenario's path, recorded beside its content's digest. A folder recorded with other settings is refused before
+    anything runs (:func:`slax_drake.evaluation.settings.record_or_refuse`)."""
+    from slax_drake.backends import check_backend, run_tasks
+    from slax_drake.evaluation.settings import protocol_settings, record_or_refuse
+    from slax_drake.policies.registry import without_defaults
 
     out = Path(out)
     densities = list(densities or scenario.protocol.densities)
     tool_rules = without_defaults(dict(tool_rules or {}))
-    jobs = []
+    check_backend(backend, workers, ray_address)
+    settings = protocol_settings(scenario, config or "?", seed, perception, tool_rules, policies)
+    record_or_refuse(out, settings, has_results=bool(present_policies(out)))
+    jobs, kept = [], 0
     for policy in policies:
         for density in densities:
             for index in range(scenes_per_density):
-                path = _trial_path(out, policy, density, index)
-                if not path.is_file():
-                    jobs.append((scenario, policy, density, index, scene_seed(seed, density, index), perception,
-                                 str(out), tool_rules))
+                if _trial_path(out, policy, density, index).is_file():
+                    kept += 1
                 else:
-                    refuse_other_rules(path, tool_rules, BenchmarkError, kind="trial file")
+                    jobs.append((scenario, policy, density, index, scene_seed(seed, density, index), perception,
+                                 tool_rules))
     # Heavy policies first, interleaved, so the pool stays busy to the end.
     jobs.sort(key=lambda j: (-j[2], j[3], j[1]))
     start = time.perf_counter()
     if jobs:
         from tqdm import tqdm
 
-        bar = tqdm(total=len(jobs), desc="trials", disable=not progress, unit="trial")
-        if backend == "ray":
-            import ray
-
-            if not ray.is_initialized():
-                ray.init(num_cpus=max(1, workers), include_dashboard=False, log_to_driver=False)
-            remote = ray.remote(_run_one)
-            pending = [remote.remote(j) for j in jobs]
-            while pending:
-                done, pending = ray.wait(pending, num_returns=1)
-                ray.get(done)
-                bar.update(len(done))
-        elif workers <= 1:
-            for j in jobs:
-                _run_one(j)
+        with tqdm(total=len(jobs), desc="trials", disable=not progress, unit="trial") as bar:
+            for job, result in run_tasks(_run_one, jobs, workers=workers, backend=backend, ray_address=ray_address):
+                write_text_atomic(_trial_path(out, job[1], job[2], job[3]), json.dumps(result, sort_keys=True))
                 bar.update(1)
-        else:
-            ctx = multiprocessing.get_context("spawn")
-            with ctx.Pool(workers) as pool:
-                for _ in pool.imap_unordered(_run_one, jobs, chunksize=1):
-                    bar.update(1)
-        bar.close()
     elapsed = time.perf_counter() - start
-    trials = load_trials(out, policies, densities, scenes_per_density)
-    table = summarise(trials, policies, densities)
+    in_table = table_policies(out, policies)
+    trials, missing = load_trials(out, in_table, densities, scenes_per_density)
+    table = summarise(trials, in_table, densities)
     table["meta"] = {"scenes_per_density": scenes_per_density, "seed": seed, "perception": perception,
                      "densities": densities, "wall_seconds_this_run": round(elapsed, 1), "workers": workers,
-                     "backend": backend, "tool_rules": tool_rules}
+                     "backend": backend, "tool_rules": tool_rules, "trials_kept": kept, "trials_run": len(jobs),
+                     "missing_trials": missing}
     write_tables(table, out)
     return table
 
 
-def load_trials(out: Path, policies, densities, scenes_per_density) -> list[dict]:
-    trials = []
+def present_policies(out: Path) -> list[str]:
+    """The policies with at least one trial file in ``out``."""
+    root = Path(out) / "trials"
+    if not root.is_dir():
+        return []
+    return sorted(d.name for d in root.iterdir() if d.is_dir() and any(d.glob("*.json")))
+
+
+def table_policies(out: Path, policies) -> list[str]:
+    """The policies of the table: this run's and every other one with trial files in ``out``, in the registry's
+    order (then by name)."""
+    from slax_drake.policies.registry import POLICY_NAMES
+
+    names = set(policies) | set(present_policies(out))
+    order = {n: i for i, n in enumerate(POLICY_NAMES)}
+    return sorted(names, key=lambda n: (order.get(n, len(order)), n))
+
+
+def load_trials(out: Path, policies, densities, scenes_per_density) -> tuple[list[dict], dict]:
+    """The trial files of scenes 0 .. scenes_per_density - 1 of every density for ``policies``; and per policy the
+    number of those that are not in the folder (a policy that an earlier run ran on fewer scenes)."""
+    trials, missing = [], {}
     for policy in policies:
         for density in densities:
             for index in range(scenes_per_density):
                 path = _trial_path(out, policy, density, index)
+                if not path.is_file():
+                    missing[policy] = missing.get(policy, 0) + 1
+                    continue
                 try:
                     trials.append(json.loads(path.read_text()))
                 except (OSError, json.JSONDecodeError) as e:
                     raise BenchmarkError(f"{path}: unreadable trial file ({e}); delete it to rerun that trial")
-    return trials
+    return trials, missing
 
 
 def summarise(trials: list[dict], policies, densities) -> dict:
@@ -186,6 +200,9 @@ def markdown_table(table: dict) -> str:
                  f"{meta.get('perception', '?')} distributions; steps over successful trials."
                  + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
                     if meta.get("tool_rules") else ""))
+    for policy, count in (meta.get("missing_trials") or {}).items():
+        lines.append(f"{policy}: {count} of these trials are not in the folder (run it with --policies {policy} to "
+                     "complete them); its figures are over the trials present.")
     return "\n".join(lines) + "\n"
 
 

@@ -30,12 +30,22 @@ import itertools
 from shapely.geometry import Polygon
 
 from slax_drake.policies.actions import ActionModel, Push, apply_action
+from slax_drake.policies.protocol import Decision, Exclusions
 from slax_drake.scene.model import state_key
 from slax_drake.policies.visibility import TargetOcclusion
 from slax_drake.scene.footprint import Footprint
 
 
 class Oracle:
+    """Oracle-P (pushes) or Oracle-P+S (pushes and suctions); implements
+    :class:`~slax_drake.policies.protocol.Policy` on the true scene (``needs_true_scene``). ``decide`` returns the
+    next action of the current plan as a one-candidate Decision, searching again when the scene is not the one the
+    plan expected or when the last candidate was excluded."""
+
+    needs_true_scene = True
+    distribution = None  # reads the true scene, not a distribution
+    history = None  # keeps no distribution history
+
     def __init__(self, action_model: ActionModel, suctions: bool, psi: float = 1.3, horizon: int | None = None,
                  max_expansions: int = 60, overlap_tolerance: float = 1e-6, goal: str = "visibility",
                  threshold: float = 0.80):
@@ -43,7 +53,7 @@ class Oracle:
             raise ValueError("goal must be 'visibility' or 'triangle'")
         self.goal = goal
         self.threshold = threshold
-        self.action_model = action_model
+        self._action_model = action_model
         self.suctions = suctions
         self.psi = psi
         self.horizon = horizon
@@ -55,22 +65,42 @@ class Oracle:
         self.steps_taken = 0
         self.stop_reason = None
         self.expansions = 0
+        self._exclusions = Exclusions()
+        self._asked_again = False
+        self._objects = ()
+
+    @property
+    def action_model(self) -> ActionModel:
+        return self._action_model
+
+    @property
+    def exclusions(self) -> tuple:
+        return self._exclusions.records
 
     def reset(self, scene) -> None:
         self.plan, self.next_expected, self.steps_taken, self.stop_reason = [], None, 0, None
         self.horizon_total = self.horizon if self.horizon is not None else 2 * len(scene.objects)
+        self._exclusions, self._asked_again, self._objects = Exclusions(), False, ()
 
-    def act(self, scene):
+    def exclude(self, action, reason: str, whole_group: bool = False) -> None:
+        self._exclusions.add(action, reason, whole_group, self._objects)
+        self._asked_again = True
+
+    def decide(self, scene) -> Decision:
+        if self._asked_again:  # the same step again, without the excluded candidate: search anew
+            self._asked_again, self.plan = False, []
+            self.steps_taken -= 1
+        self._objects = tuple(scene.objects)
         if not self.plan or state_key(scene.objects) != self.next_expected:
             self.plan = self.search(scene, self.horizon_total - self.steps_taken)
             if self.plan == []:
                 self.stop_reason = "triangle clear but target not revealed"
             if not self.plan:
-                return None
+                return Decision.stop(self.stop_reason or "no plan")
         action = self.plan.pop(0)
         self.next_expected = state_key(apply_action(tuple(scene.objects), action))
         self.steps_taken += 1
-        return action
+        return Decision((action,))
 
     # ----------------------------------------------------------------------------------------------------
     def triangle(self, scene) -> Polygon:
@@ -129,7 +159,7 @@ class Oracle:
                 return None
             cands = self.action_model.enumerate(objects, fixed=target, pushes=True, suctions=self.suctions)
             by_name = {o.name: o for o in objects}
-            for a in cands.feasible:
+            for a in self._exclusions.allowed(cands.feasible, objects):
                 after = apply_action(objects, a)
                 old = by_name[a.name]
                 new = next(o for o in after if o.name == a.name)

@@ -28,37 +28,58 @@ import numpy as np
 
 from slax_drake.policies.actions import ActionModel, Push, Suction, apply_action
 from slax_drake.policies.distribution import DistributionModel, entropy, history_min, support
-from slax_drake.policies.simulator import observe
+from slax_drake.policies.protocol import Decision, Exclusions, read_only
 
 
 class DistributionPolicy:
-    """Common machinery: observe, keep P'_t, predict candidates' distributions."""
+    """Common machinery of the :class:`~slax_drake.policies.protocol.Policy` protocol for the policies that read an
+    Observation: keep P'_t (``history``), record exclusions, predict candidates' distributions. A subclass
+    implements ``rank(obs) -> Decision`` with ``self.history`` already updated for ``obs``."""
 
     name = "abstract"
+    needs_true_scene = False
     use_pushes = True
     use_suctions = False
 
     def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
                  observation_width: int = 160, max_placements: int = 4):
-        self.action_model = action_model
+        self._action_model = action_model
         self.distribution = distribution
         self.psi = psi
         self.observation_width = observation_width
         self.max_placements = max_placements
-        self.history = None
-        self.stop_reason = None
-        self.last_rejected = []
+        self._history = None
+        self._exclusions = Exclusions()
+        self._objects = ()
 
-    def reset(self, scene) -> None:
-        self.history = None
-        self.stop_reason = None
+    @property
+    def action_model(self) -> ActionModel:
+        return self._action_model
 
-    def act(self, scene):
-        obs = observe(scene, self.distribution, self.observation_width)
-        self.history = history_min(obs.p1d, self.history)
-        return self.decide(obs)
+    @property
+    def history(self):
+        """P'_t, the history-encoded distribution after the last observation (read-only; None before it)."""
+        return read_only(self._history)
 
-    def decide(self, obs):  # pragma: no cover - interface
+    @property
+    def exclusions(self) -> tuple:
+        """(action, reason) for every candidate excluded this trial, in order."""
+        return self._exclusions.records
+
+    def reset(self, scene_or_observation=None) -> None:
+        self._history = None
+        self._exclusions = Exclusions()
+        self._objects = ()
+
+    def decide(self, obs) -> Decision:
+        self._history = history_min(obs.p1d, self._history)
+        self._objects = obs.known
+        return self.rank(obs)
+
+    def exclude(self, action, reason: str, whole_group: bool = False) -> None:
+        self._exclusions.add(action, reason, whole_group, self._objects)
+
+    def rank(self, obs) -> Decision:  # pragma: no cover - interface
         raise NotImplementedError
 
     # helpers ---------------------------------------------------------------------------------------------
@@ -66,12 +87,12 @@ class DistributionPolicy:
         return self.distribution.distribution(obs.scene_template.with_objects(objects))
 
     def candidates(self, objects, pushes=None, suctions=None):
-        c = self.action_model.enumerate(
+        """The feasible actions on ``objects`` that have not been excluded, in enumeration order."""
+        c = self._action_model.enumerate(
             objects, pushes=self.use_pushes if pushes is None else pushes,
             suctions=self.use_suctions if suctions is None else suctions,
         )
-        self.last_rejected = c.rejected
-        return c.feasible
+        return self._exclusions.allowed(c.feasible, objects)
 
     def action_cost(self, action) -> float:
         return 1.0 if isinstance(action, Push) else self.psi
@@ -116,15 +137,15 @@ class DAR(DistributionPolicy):
     def suction_weight(self) -> float:
         return 1.0
 
-    def decide(self, obs):
-        h = self.history
+    def rank(self, obs) -> Decision:
+        h = self._history
         r_t = support(h)
         cands = self.candidates(obs.known)
         if not cands:
-            self.stop_reason = "no feasible action"
-            return None
+            return Decision.stop("no feasible action")
         best, best_key = None, None
         order = 0
+        ranked = []
 
         def consider(a, p):
             nonlocal best, best_key, order
@@ -133,6 +154,7 @@ class DAR(DistributionPolicy):
             disp = abs(a.d) if isinstance(a, Push) else abs(a.dx) + abs(a.dz)
             key = (-weighted, support(p), self.action_cost(a), disp, order)
             order += 1
+            ranked.append((key, a))
             if best_key is None or key < best_key:
                 best, best_key = a, key
             return dr
@@ -151,7 +173,8 @@ class DAR(DistributionPolicy):
                     dr = consider(a, self.predict(obs, apply_action(obs.known, a)))
                     if dr >= dr_removed:
                         break
-        return best
+        ranked.sort(key=lambda r: r[0])
+        return Decision(tuple(a for _, a in ranked))
 
 
 class BluctionDAR(DAR):
@@ -182,16 +205,18 @@ class DER(DistributionPolicy):
         self.beam = beam
         self.name = f"der-{depth}"
 
-    def decide(self, obs):
-        level = [(None, obs.known, self.history)]
+    def rank(self, obs) -> Decision:
+        """First actions ranked by the best leaf reached from each (the chosen one first), then the first actions
+        that left the beam, by their one-step key."""
+        level = [(None, obs.known, self._history)]
         best_leaf = None
+        first_level, last_level = [], []
         for depth in range(self.depth):
             children = []
             for first, objects, hist in level:
                 cands = self.candidates(objects)
                 if depth == 0 and not cands:
-                    self.stop_reason = "no feasible action"
-                    return None
+                    return Decision.stop("no feasible action")
                 for a in cands:
                     after = apply_action(objects, a)
                     p = self.predict(obs, after)
@@ -203,8 +228,17 @@ class DER(DistributionPolicy):
                 break
             children.sort(key=lambda c: c[0])
             best_leaf = children[0]
+            if depth == 0:
+                first_level = children
+            last_level = children
             level = [(c[1], c[2], c[3]) for c in children[: self.beam]]
-        return best_leaf[1] if best_leaf else None
+        if best_leaf is None:
+            return Decision.stop("no feasible action")
+        ranked = [best_leaf[1]]
+        for c in last_level + first_level:
+            if c[1] not in ranked:
+                ranked.append(c[1])
+        return Decision(tuple(ranked))
 
 
 
@@ -227,6 +261,7 @@ class BluctionLookahead(DistributionPolicy):
         kwargs.setdefault("max_placements", 6)
         super().__init__(*args, **kwargs)
         self.top_k = top_k
+        self.visited = set()
 
     def _scored(self, obs, objects, h):
         """[(key, weighted reduction, action, predicted p, objects after)] for every candidate evaluated."""
@@ -254,23 +289,24 @@ class BluctionLookahead(DistributionPolicy):
         out.sort(key=lambda e: e[0])
         return out
 
-    def reset(self, scene) -> None:
-        super().reset(scene)
+    def reset(self, scene_or_observation=None) -> None:
+        super().reset(scene_or_observation)
         self.visited = set()
 
-    def decide(self, obs):
+    def rank(self, obs) -> Decision:
+        """The chosen action first, then the other candidates evaluated at this step in their one-step order."""
         from slax_drake.scene.model import state_key
 
-        h = self.history
+        h = self._history
         self.visited.add(state_key(obs.known))
         scored = self._scored(obs, obs.known, h)
         fresh = [e for e in scored if state_key(e[4]) not in self.visited]  # never undo a step: no cycles
         scored = fresh or scored
         if not scored:
-            self.stop_reason = "no feasible action"
-            return None
+            return Decision.stop("no feasible action")
+        rest = [e[2] for e in scored]
         if scored[0][1] > 0:
-            return scored[0][2]
+            return Decision(tuple(rest))
         r_t = support(h)
         firsts = sorted(scored, key=lambda e: (e[0][1], e[0][2], e[0][3], e[0][4]))[: self.top_k]
         best, best_key = None, None
@@ -282,4 +318,6 @@ class BluctionLookahead(DistributionPolicy):
                 k = (-dr / cost, cost, rank)
                 if dr > 0 and (best_key is None or k < best_key):
                     best, best_key = a1, k
-        return best if best is not None else scored[0][2]
+        if best is None:
+            return Decision(tuple(rest))
+        return Decision((best, *(a for a in rest if a != best)))

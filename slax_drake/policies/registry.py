@@ -1,8 +1,16 @@
-"""Policies by name, built for a scenario: the one place that maps a command-line name to a policy object."""
+"""Policies by name, built for a scenario: the one place that maps a command-line name to a policy object.
+
+:data:`POLICY_TABLE` is the table: name -> (class, options). A distribution policy's class is called as
+``cls(action_model, distribution_model, psi=psi, **options)``, an oracle's (``needs_true_scene``) as
+``cls(action_model, psi=psi, horizon=horizon, threshold=v, **options)``. Every class implements
+:class:`slax_drake.policies.protocol.Policy`. Classes are named by import path so that listing the names imports
+nothing heavy. A new policy is one class and one line here.
+"""
 
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import typing
 
 from slax_drake.errors import UserError
@@ -13,7 +21,35 @@ if typing.TYPE_CHECKING:
     from slax_drake.config import Scenario
     from slax_drake.policies.actions import ToolConfig
 
-POLICY_NAMES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar", "bluction-dar-cost", "bluction-la2")
+
+
+@dataclasses.dataclass(frozen=True)
+class PolicyEntry:
+    """One row of the policy table: ``cls`` as "module:Class" and the options its constructor gets."""
+
+    cls: str
+    options: dict = dataclasses.field(default_factory=dict)
+
+    def load(self) -> type:
+        module, _, name = self.cls.partition(":")
+        return getattr(importlib.import_module(module), name)
+
+
+_POLICIES = "slax_drake.policies.policies"
+POLICY_TABLE: dict[str, PolicyEntry] = {
+    "oracle-p": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": False}),
+    "oracle-p+s": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": True}),
+    "dar": PolicyEntry(f"{_POLICIES}:DAR"),
+    "der-3": PolicyEntry(f"{_POLICIES}:DER", {"depth": 3}),
+    "bluction-dar": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "paper"}),
+    "bluction-dar-cost": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "cost"}),
+    "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
+}
+POLICY_NAMES = tuple(POLICY_TABLE)
+PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
+OUR_POLICIES = ("bluction-la2",)  # the project's own
+DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
+
 
 
 class UnknownPolicyError(UserError):
@@ -68,20 +104,6 @@ def without_defaults(rules: dict) -> dict:
     return {k: v for k, v in rules.items() if getattr(defaults, k) != v}
 
 
-def refuse_other_rules(path, tool_rules: dict, error=UserError, kind: str = "result file") -> None:
-    """Raises ``error`` when the result file at ``path`` (a benchmark's per-trial JSON, which records its rule
-    variants under "tool_rules") is unreadable or was made under rules other than ``tool_rules``."""
-    import json
-    from pathlib import Path
-
-    try:
-        made_with = json.loads(Path(path).read_text()).get("tool_rules") or {}
-    except (OSError, json.JSONDecodeError, AttributeError) as e:
-        raise error(f"{path}: unreadable {kind} ({e}); delete it to rerun that trial") from None
-    if made_with != tool_rules:
-        raise error(f"{path} was made with tool rules {made_with}, not {tool_rules}: use another --out")
-
-
 def tool_config(scenario: Scenario, **overrides) -> ToolConfig:
     from slax_drake.policies.actions import ToolConfig
 
@@ -90,32 +112,22 @@ def tool_config(scenario: Scenario, **overrides) -> ToolConfig:
 
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,
                 target_size=None, tool_overrides: dict | None = None, oracle_options: dict | None = None):
-    """A fresh policy object named ``name`` (see POLICY_NAMES) for ``scenario``'s shelf and camera."""
+    """A fresh policy object named ``name`` (a key of :data:`POLICY_TABLE`) for ``scenario``'s shelf and camera.
+    ``oracle_options``: extra constructor options of the oracles (e.g. ``max_expansions``)."""
     from slax_drake.policies.actions import ActionModel
     from slax_drake.policies.distribution import make_distribution_model
-    from slax_drake.policies.oracle import Oracle
-    from slax_drake.policies.policies import DAR, DER, BluctionDAR, BluctionLookahead
     from slax_drake.scene.camera import Camera
     from slax_drake.scene.sampling import shelf_of
 
-    if name not in POLICY_NAMES:
+    entry = POLICY_TABLE.get(name)
+    if entry is None:
         raise UnknownPolicyError(f"unknown policy '{name}' (known: {', '.join(POLICY_NAMES)})")
+    cls = entry.load()
     psi = scenario.protocol.suction_cost
     model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position,
                         tool_config(scenario, **(tool_overrides or {})))
-    if name.startswith("oracle"):
-        return Oracle(model, suctions=name == "oracle-p+s", psi=psi, horizon=horizon,
-                      threshold=scenario.target.visibility_threshold, **(oracle_options or {}))
+    if cls.needs_true_scene:
+        return cls(model, psi=psi, horizon=horizon, threshold=scenario.target.visibility_threshold,
+                   **entry.options, **(oracle_options or {}))
     size = target_size or tuple(scenario.target.sizes[0])
-    dist = make_distribution_model(perception, size)
-    if name == "dar":
-        return DAR(model, dist, psi=psi)
-    if name == "der-3":
-        return DER(model, dist, psi=psi, depth=3)
-    if name == "bluction-dar":
-        return BluctionDAR(model, dist, psi=psi, suction_weighting="paper")
-    if name == "bluction-dar-cost":
-        return BluctionDAR(model, dist, psi=psi, suction_weighting="cost")
-    if name == "bluction-la2":
-        return BluctionLookahead(model, dist, psi=psi)
-    raise AssertionError(name)
+    return cls(model, make_distribution_model(perception, size), psi=psi, **entry.options)

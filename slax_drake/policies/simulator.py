@@ -53,6 +53,14 @@ def observe(scene: Scene, distribution_model, observation_width: int = 160) -> O
     return Observation(depth, labels, known, p1d, template)
 
 
+def observation_for(policy, scene: Scene):
+    """What ``policy`` decides on in the shelf simulator: the true scene for a policy that declares
+    ``needs_true_scene`` (an oracle), else the Observation from its own distribution model."""
+    if policy.needs_true_scene:
+        return scene
+    return observe(scene, policy.distribution, policy.observation_width)
+
+
 def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
     """Applies ``action`` to the true scene; returns the new scene and a note ("" when it went as planned)."""
     t = model.tool
@@ -157,8 +165,9 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
               density: int | None = None, max_seconds: float | None = None) -> TrialResult:
     """Rolls ``policy`` out on ``scene`` until the target is revealed, H actions are spent or no action is left.
 
-    ``policy`` has ``reset(scene)`` and ``act(scene) -> action | None``; non-oracle policies read only
-    ``observe(scene, ...)`` inside ``act`` (they are given the simulator's scene object solely to observe it)."""
+    ``policy`` implements :class:`~slax_drake.policies.protocol.Policy`: it decides on
+    :func:`observation_for` the scene (the Observation, or the true scene for an oracle) and its best candidate is
+    executed with its own action model."""
     policy.reset(scene)
     seconds, actions, notes = [], [], []
     pushes = suctions = 0
@@ -169,10 +178,11 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
         if fraction >= threshold:
             break
         t0 = time.perf_counter()
-        action = policy.act(scene)
+        decision = policy.decide(observation_for(policy, scene))
+        action = decision.best
         seconds.append(time.perf_counter() - t0)
         if action is None:
-            reason = getattr(policy, "stop_reason", None) or "no action"
+            reason = decision.stop_reason or "no action"
             break
         scene, note = execute(scene, action, policy.action_model)
         actions.append(action.describe())
@@ -213,4 +223,5 @@ def objects_overlap(scene: Scene, clearance: float = 0.0) -> list[tuple[str, str
     return bad
 
 
-__all__ = ["Observation", "TrialResult", "apply_action", "execute", "objects_overlap", "observe", "run_trial"]
+__all__ = ["Observation", "TrialResult", "apply_action", "execute", "objects_overlap", "observation_for", "observe",
+           "run_trial"]

@@ -10,13 +10,20 @@ ended ``settle_time`` ago). When it is, the system observes through its input po
 3. the observation for the policy: ``depth_image``; the objects seen (any pixel in ``label_image``, the
    idealised segmentation of the shelf simulator) with their poses; P_t from the policy's distribution model on
    the current objects (ground truth; the PerceptionSystem's ``occupancy_1d`` is not wired in yet);
-4. the policy's own ``decide`` (``slax_drake.policies``, the very code the shelf simulator runs) ranks the
-   candidates; the best one is planned (:class:`slax_drake.planning.planner.MotionPlanner`); an infeasible
-   motion is logged with its reason and excluded, and the policy decides again (its next candidate).
+4. the policy (any :class:`~slax_drake.policies.protocol.Policy` that reads an Observation; the very code the shelf
+   simulator runs) ranks the candidates with ``decide``; the best one is planned
+   (:class:`slax_drake.planning.planner.MotionPlanner`); an infeasible motion is logged with its reason and
+   handed back with ``policy.exclude`` (the whole group when the tool could not reach the object), and the policy
+   decides again (its next candidate). The planner touches the policy through the protocol only.
 
 Outputs: ``desired_state`` (18: q and v of ``PLANNED_JOINTS``, sampled from the running motion, else holding
-the last pose) and ``suction_command`` (1). The decisions are kept in ``log`` (a list of dicts) for the trial
-record; the executed motions in ``motions`` (start time, PlannedMotion).
+the last pose) and ``suction_command`` (1).
+
+State: everything the trial accumulates lives in the context, in one abstract state value (:class:`TrialState`):
+the running motion, the step count, the decision log (a tuple of dicts, for the trial record), the executed motions
+(start time, PlannedMotion), the result ("revealed", "horizon", "no feasible action", ...), the last visible
+fraction and the cost. An initialization event resets it and the policy (``policy.reset``), so
+``Simulator.Initialize`` on a reset context replays the same trial. Read it with :meth:`PlannerSystem.trial_state`.
 """
 
 from __future__ import annotations
@@ -31,8 +38,8 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I
 
 from slax_drake.planning.planner import MotionPlanner
-from slax_drake.policies.actions import Push, Suction
-from slax_drake.policies.distribution import history_min, support
+from slax_drake.policies.actions import Push
+from slax_drake.policies.distribution import support
 from slax_drake.policies.simulator import Observation
 from slax_drake.scene.model import Scene, planar_pose
 from slax_drake.station import robot as robot_model
@@ -42,22 +49,36 @@ MAX_PLAN_ATTEMPTS = 25
 
 
 @dataclasses.dataclass(frozen=True)
-class _PlanState:
+class TrialState:
+    """The planner system's abstract state (see the module docstring). Immutable: an update makes a new one, so
+    copying it (Drake clones abstract state around every event) shares it instead of deep-copying the log."""
+
     motion: object = None  # PlannedMotion or None
-    t_start: float = 0.0
-    t_idle: float = 0.0  # when the robot became idle
-    steps: int = 0
+    t_start: float = 0.0  # s, simulated time when ``motion`` started
+    steps: int = 0  # actions started
     done: bool = False
+    log: tuple = ()  # one dict per decision (the last one final), never mutated once appended
+    motions: tuple = ()  # (start time s, PlannedMotion) per executed action
+    result: str | None = None  # None while running
+    visible_fraction: float = 0.0  # at the last decision
+    cost: float = 0.0  # pushes 1, suctions ``suction_cost``
+
+    def __deepcopy__(self, memo):
+        return self
 
 
 class PlannerSystem(LeafSystem):
-    """See the module docstring. ``scene``: the trial's initial scene (its objects' names and shapes, the
-    camera); ``body_indices``: the plant's BodyIndex of each scene object (scene order) and of the target."""
+    """See the module docstring. ``policy``: a :class:`~slax_drake.policies.protocol.Policy` reading an
+    Observation, built with its action model; ``scene``: the trial's initial scene (its objects' names and
+    shapes, the camera); ``body_indices``: the plant's BodyIndex of each scene object (scene order) and of the
+    target; ``suction_cost``: psi, the cost of a suction (a push costs 1)."""
 
     def __init__(self, policy, planner: MotionPlanner, scene: Scene, body_indices, target_body, X_WS,
                  horizon: int, threshold: float = 0.80, decision_period: float = 0.1, settle_time: float = 0.5,
-                 image_size=(640, 480), on_step=None):
+                 image_size=(640, 480), on_step=None, suction_cost: float = 1.3):
         LeafSystem.__init__(self)
+        if policy.needs_true_scene:
+            raise ValueError(f"policy '{policy.name}' needs the true scene (an oracle): it cannot run on a station")
         self.policy = policy
         self.planner = planner
         self.scene = scene
@@ -67,29 +88,34 @@ class PlannerSystem(LeafSystem):
         self.horizon = horizon
         self.threshold = threshold
         self.settle_time = settle_time
+        self.suction_cost = suction_cost
         self.on_step = on_step
-        self.log: list[dict] = []
-        self.motions: list = []
-        self.result = None  # "revealed", "horizon", "no feasible action", ...
-        self.visible_fraction = 0.0
-        self.cost = 0.0
         self._q_obs = planner.q_observation.copy()
-        self._target_pixels = None
+        self._target_pixels = None  # a cache of a pure function of the scene and image size, not trial state
         n = len(robot_model.PLANNED_JOINTS)
         w, h = image_size
         self._measured = self.DeclareVectorInputPort("measured_state", 2 * n)
         self._depth = self.DeclareAbstractInputPort("depth_image", AbstractValue.Make(ImageDepth32F(w, h)))
         self._labels = self.DeclareAbstractInputPort("label_image", AbstractValue.Make(ImageLabel16I(w, h)))
         self._poses = self.DeclareAbstractInputPort("body_poses", AbstractValue.Make([X_WS]))
-        self._state = self.DeclareAbstractState(AbstractValue.Make(_PlanState()))
+        self._state = self.DeclareAbstractState(AbstractValue.Make(TrialState()))
+        self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(decision_period, 0.0, self._update)
         self.DeclareVectorOutputPort("desired_state", BasicVector(2 * n), self._calc_desired,
                                      prerequisites_of_calc={self.abstract_state_ticket(self._state)} | {self.time_ticket()})
         self.DeclareVectorOutputPort("suction_command", BasicVector(1), self._calc_suction,
                                      prerequisites_of_calc={self.abstract_state_ticket(self._state)} | {self.time_ticket()})
 
+    def trial_state(self, root_context) -> TrialState:
+        """The trial so far in ``root_context`` (the root diagram's context)."""
+        return self.GetMyContextFromRoot(root_context).get_abstract_state(self._state).get_value()
+
+    def _initialize(self, context, state):
+        self.policy.reset(self.scene)
+        state.get_mutable_abstract_state(0).set_value(TrialState())
+
     # outputs ---------------------------------------------------------------------------------------------
-    def _plan_state(self, context) -> _PlanState:
+    def _plan_state(self, context) -> TrialState:
         return context.get_abstract_state(self._state).get_value()
 
     def _calc_desired(self, context, output):
@@ -117,8 +143,7 @@ class PlannerSystem(LeafSystem):
                 return
         elif now < self.settle_time:
             return
-        new = self._decide(context, s, now)
-        state.get_mutable_abstract_state(0).set_value(new)
+        state.get_mutable_abstract_state(0).set_value(self._decide(context, s, now))
 
     def current_scene(self, context) -> tuple[Scene, list[str]]:
         """The objects as they stand now (planar poses in S) and the names of toppled or dropped objects."""
@@ -149,117 +174,79 @@ class PlannerSystem(LeafSystem):
             self._target_pixels = max(1, int(np.count_nonzero(lab == 1)))
         return float(np.count_nonzero(labels == target_label)) / self._target_pixels
 
-    def _decide(self, context, s: _PlanState, now: float) -> _PlanState:
+    def _decide(self, context, s: TrialState, now: float) -> TrialState:
         depth = np.array(self._depth.Eval(context).data[:, :, 0], dtype=np.float32)
         raw = np.array(self._labels.Eval(context).data[:, :, 0], dtype=np.int32)
         n_obj = len(self.scene.objects)
         labels = np.where((raw >= 0) & (raw <= n_obj + 1), raw, -1)
         fraction = self.target_visible_fraction(labels)
-        self.visible_fraction = fraction
+        s = dataclasses.replace(s, visible_fraction=fraction)
         measured = self._measured.Eval(context)[: len(self._q_obs)]
         scene_now, lost = self.current_scene(context)
         entry = {"step": s.steps, "time": round(now, 4), "visible_fraction": round(fraction, 4), "lost": lost,
                  "poses_before": {o.name: {"x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                            "yaw": round(float(o.yaw), 5)} for o in scene_now.objects}}
         if fraction >= self.threshold:
-            self.result = "revealed"
-            self._finish(entry, depth, labels, None)
-            return dataclasses.replace(s, done=True, motion=None if s.motion is None else s.motion)
+            return self._finish(s, "revealed", entry, depth, labels)
         if s.steps >= self.horizon:
-            self.result = "horizon"
-            self._finish(entry, depth, labels, None)
-            return dataclasses.replace(s, done=True)
+            return self._finish(s, "horizon", entry, depth, labels)
         seen = set(int(v) - 1 for v in np.unique(labels) if 0 < v <= n_obj)
         known = tuple(o for i, o in enumerate(scene_now.objects) if i in seen and o.name not in lost)
         policy = self.policy
         p1d = policy.distribution.distribution(scene_now.with_objects(tuple(o for o in scene_now.objects if o.name not in lost)))
         template = dataclasses.replace(scene_now, objects=known, target=None)
         obs = Observation(depth, labels, known, p1d, template)
-        policy.history = history_min(obs.p1d, policy.history)
-        entry["support"] = support(policy.history)
-        entry["p1d"] = np.round(obs.p1d, 6).tolist()
-        entry["history"] = np.round(policy.history, 6).tolist()
         rejected = []
-        base_model = policy.action_model
-        excluder = _Excluding(base_model)
-        policy.action_model = excluder
         t0 = time.perf_counter()
         motion, action, decide_s = None, None, 0.0
-        try:
-            for _ in range(MAX_PLAN_ATTEMPTS):
-                td = time.perf_counter()
-                action = policy.decide(obs)
-                decide_s += time.perf_counter() - td
-                if action is None:
-                    break
-                result = self.planner.plan(action, scene_now, q_start=measured)
-                if result.feasible:
-                    motion = result
-                    break
-                rejected.append({"action": action.describe(), "reason": result.reason,
-                                 "planning_s": result.timings.get("total_s")})
-                excluder.exclude(action, result.reason)
-                action = None
-        finally:
-            policy.action_model = base_model
+        for _ in range(MAX_PLAN_ATTEMPTS):
+            td = time.perf_counter()
+            action = policy.decide(obs).best
+            decide_s += time.perf_counter() - td
+            if action is None:
+                break
+            result = self.planner.plan(action, scene_now, q_start=measured)
+            if result.feasible:
+                motion = result
+                break
+            rejected.append({"action": action.describe(), "reason": result.reason,
+                             "planning_s": result.timings.get("total_s")})
+            policy.exclude(action, result.reason, whole_group=result.reason.startswith(EARLY_FAILURES))
+            action = None
+        history = policy.history
+        entry["support"] = support(history)
+        entry["p1d"] = np.round(obs.p1d, 6).tolist()
+        entry["history"] = np.round(history, 6).tolist()
         entry["rejected"] = rejected
         entry["decision_s"] = round(decide_s, 4)
         entry["planning_s"] = round(time.perf_counter() - t0 - decide_s, 4)
         if motion is None:
-            self.result = "no feasible action" if not rejected else "no feasible motion"
-            self._finish(entry, depth, labels, None)
-            return dataclasses.replace(s, done=True, motion=None)
+            return self._finish(s, "no feasible action" if not rejected else "no feasible motion", entry, depth,
+                                labels)
         entry["action"] = _describe(action)
         entry["motion"] = {"duration_s": round(motion.trajectory.duration, 3), "timings": motion.timings,
                            "max_deviation_m": round(motion.max_deviation, 5),
                            "waypoint_times": motion.waypoint_times, "suction_intervals": motion.suction_intervals}
         entry["predicted_objects"] = _predicted(scene_now.objects, action)
-        self.cost += 1.0 if isinstance(action, Push) else policy.psi
-        self.motions.append((now, motion))
-        self.log.append(entry)
         if self.on_step is not None:
-            self.on_step(entry, depth, labels, policy.history, obs.p1d)
-        return _PlanState(motion=motion, t_start=now, steps=s.steps + 1)
+            self.on_step(entry, depth, labels, history, obs.p1d)
+        return dataclasses.replace(
+            s, motion=motion, t_start=now, steps=s.steps + 1, log=s.log + (entry,), motions=s.motions + ((now, motion),),
+            cost=s.cost + (1.0 if isinstance(action, Push) else self.suction_cost))
 
-    def _finish(self, entry, depth, labels, _):
+    def _finish(self, s: TrialState, result: str, entry: dict, depth, labels) -> TrialState:
         entry["final"] = True
-        entry["result"] = self.result
-        self.log.append(entry)
+        entry["result"] = result
         if self.on_step is not None:
             self.on_step(entry, depth, labels, self.policy.history, None)
+        motion = None if result.startswith("no feasible") else s.motion  # hold the last motion's end pose
+        return dataclasses.replace(s, done=True, motion=motion, result=result, log=s.log + (entry,))
 
 
-class _Excluding:
-    """The policy's action model with candidates removed whose motions were rejected. A rejection before the
-    tool reaches the object (pre-approach, insert, approach) excludes every push of that object in that
-    direction or every suction of that object; a later one excludes that action alone."""
-
-    EARLY = ("pre-approach", "insert", "approach", "segment to pre-approach", "segment to insert",
-             "segment to approach", "seal")
-
-    def __init__(self, base):
-        self._base = base
-        self._actions = set()
-        self._groups = set()
-
-    def __getattr__(self, name):
-        return getattr(self._base, name)
-
-    def exclude(self, action, reason: str):
-        self._actions.add(action)
-        if reason.startswith(self.EARLY):
-            self._groups.add(_group(action))
-
-    def enumerate(self, *args, **kwargs):
-        c = self._base.enumerate(*args, **kwargs)
-        c.feasible = [a for a in c.feasible if a not in self._actions and _group(a) not in self._groups]
-        return c
-
-
-def _group(action):
-    if isinstance(action, Push):
-        return ("push", action.name, action.d > 0)
-    return ("suction", action.name)
+# A planning failure before the tool reaches the object (its waypoint label leads the reason): no action of that
+# group (pushes of the object in that direction, or its suctions) can run from here.
+EARLY_FAILURES = ("pre-approach", "insert", "approach", "segment to pre-approach", "segment to insert",
+                  "segment to approach", "seal")
 
 
 def _describe(action) -> dict:

@@ -1,21 +1,17 @@
-"""A full SLAX-RAY trial in one Drake diagram: the station, the PlannerSystem, optional Meshcat recording.
+"""A full SLAX-RAY trial as one Drake diagram: the station and the PlannerSystem, optionally drawn in Meshcat.
 
-``run_trial(TrialOptions)`` samples the scene (``slax_drake.scene.sampling.sample_scene``: the same scenes as
-the shelf simulator for the same config, object count and seed), builds the diagram (station's
-``desired_state`` and ``suction_command`` from the planner; the planner reads ``measured_state``,
-``depth_image``, ``label_image`` and ``body_poses``), simulates until the planner is done, and returns a
-:class:`TrialRecord` (success, steps, cost, actions with outcome and timings, supports, the executed joint
-trajectory, final object poses). :func:`write_trial` writes ``trial.json``, ``scene.json`` (the initial scene),
-per-step PNGs, ``step_depth.npz`` (each decision's depth image) and the HTML replay.
+:class:`TrialOptions` says which trial (config, station, object count, seed, policy, rules, ...);
+:func:`build_trial` samples the scene (``slax_drake.scene.sampling.sample_scene``: the same scenes as the shelf
+simulator for the same config, object count and seed), makes the policy and the motion planner and builds the
+diagram (station's ``desired_state`` and ``suction_command`` from the planner; the planner reads
+``measured_state``, ``depth_image``, ``label_image`` and ``body_poses``). Running it and recording its outputs
+(trial.json, step PNGs, HTML replay) is ``slax_drake.evaluation.trial``.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import io
-import json
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -51,11 +47,22 @@ class TrialOptions:
 
 
 @dataclasses.dataclass
-class TrialRecord:
-    data: dict
-    step_images: list  # (step, depth, labels, history, p1d)
-    html: str | None = None
-    scene: object = None  # the trial's initial Scene (written as scene.json)
+class TrialDiagram:
+    """A built trial (see :func:`build_trial`): run ``diagram`` until ``planner_system.trial_state(context)`` is
+    done."""
+
+    diagram: object  # pydrake Diagram
+    station: object  # the station subdiagram (MakeStation)
+    plant: object  # its MultibodyPlant
+    planner_system: object  # PlannerSystem
+    scene: object  # the initial Scene
+    scenario: object  # the scene Scenario (slax_drake.config)
+    station_path: str
+    body_indices: list  # BodyIndex per scene object, scene order
+    X_WS: object  # RigidTransform, shelf frame S in world
+    horizon: int  # actions at most
+    tool_rules: dict  # the action-model rules in force (station cup limits and opts.tool_rules)
+    step_images: list  # (step, depth, labels, history, p1d), appended by the planner at every decision
 
 
 def station_for(config: str) -> str:
@@ -84,17 +91,17 @@ def station_tool_rules(station, overrides: dict | None = None) -> dict:
     return without_defaults(rules)
 
 
-def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
-    from pydrake.systems.analysis import Simulator
+def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
+    """The diagram of the trial ``opts`` describes (see the module docstring); ``meshcat``: draw it there."""
     from pydrake.systems.framework import DiagramBuilder
 
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.policies.registry import make_policy, tool_config
     from slax_drake.scene.sampling import sample_scene
-    from slax_drake.systems.planner import PlannerSystem
     from slax_drake.station.plant import shelf_pose
     from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.planner import PlannerSystem
     from slax_drake.systems.station import MakeStation
 
     if opts.objects < 1:
@@ -103,15 +110,13 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     station_path = opts.station or station_for(opts.config)
     station = load_station_scenario(station_path)
     tool_rules = station_tool_rules(station, opts.tool_rules)
-    t0 = time.perf_counter()
     target_size = None if opts.target_size is None else tuple(float(v) for v in opts.target_size)
     scene = sample_scene(scenario, opts.objects, seed=opts.seed, target_size=target_size)
     horizon = opts.horizon if opts.horizon is not None else 2 * opts.objects
     policy = make_policy(opts.policy, scenario, perception=opts.perception, horizon=horizon,
                          tool_overrides=tool_rules)
-    if not hasattr(policy, "decide") or not hasattr(policy, "distribution"):
+    if policy.needs_true_scene:
         raise TrialError(f"policy '{opts.policy}' cannot run in a Drake trial (it needs the true scene: an oracle)")
-    policy.reset(scene)
     planner = MotionPlanner(station, tool_config(scenario, **tool_rules))
 
     builder = DiagramBuilder()
@@ -123,7 +128,7 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     steps = []
     planner_system = builder.AddNamedSystem("planner", PlannerSystem(
         policy, planner, scene, bodies, target, X_WS, horizon, threshold=scenario.target.visibility_threshold,
-        image_size=(scene.camera.width, scene.camera.height),
+        image_size=(scene.camera.width, scene.camera.height), suction_cost=scenario.protocol.suction_cost,
         on_step=lambda entry, depth, labels, hist, p1d: steps.append((entry["step"], depth, labels,
                                                                        None if hist is None else np.array(hist),
                                                                        None if p1d is None else np.array(p1d))),
@@ -132,134 +137,5 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         builder.Connect(station_diagram.GetOutputPort(name), planner_system.GetInputPort(name))
     builder.Connect(planner_system.GetOutputPort("desired_state"), station_diagram.GetInputPort("desired_state"))
     builder.Connect(planner_system.GetOutputPort("suction_command"), station_diagram.GetInputPort("suction_command"))
-    diagram = builder.Build()
-    simulator = Simulator(diagram)
-    simulator.set_target_realtime_rate(0.0)
-    if opts.sleep:
-        from slax_drake.systems.sleep import ObjectSleep
-
-        ObjectSleep(station_diagram).install(simulator)
-    setup_s = time.perf_counter() - t0
-    if meshcat is not None:
-        from slax_drake.systems.replay_view import set_replay_camera
-
-        set_replay_camera(meshcat, X_WS, scene.shelf)  # the live view and the HTML replay open looking into the bay
-        meshcat.StartRecording(frames_per_second=30.0)
-    max_time = opts.max_sim_time or (40.0 * horizon + 5.0)
-    t_wall = time.perf_counter()
-    simulator.Initialize()
-    context = simulator.get_mutable_context()
-    while planner_system.result is None and context.get_time() < max_time:
-        simulator.AdvanceTo(context.get_time() + 1.0)
-    wall = time.perf_counter() - t_wall
-    html = None
-    if meshcat is not None:
-        meshcat.StopRecording()
-        meshcat.PublishRecording()
-        if opts.html:
-            html = meshcat.StaticHtml()
-    sim_time = context.get_time()
-    result = planner_system.result or "time limit"
-    plant_context = plant.GetMyContextFromRoot(context)
-    X_SW = X_WS.inverse()
-    final = {}
-    for o, b in zip(scene.objects, bodies):
-        X = (X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.get_body(b))).GetAsMatrix4()
-        final[o.name] = {"x": round(float(X[0, 3]), 5), "y": round(float(X[1, 3]), 5), "z": round(float(X[2, 3]), 5),
-                         "yaw": round(math.atan2(X[1, 0], X[0, 0]), 5),
-                         "upright": bool(abs(X[2, 2]) > math.cos(math.radians(20.0))),
-                         "inside": bool(abs(X[0, 3]) < scene.shelf.width / 2 and abs(X[1, 3]) < scene.shelf.depth / 2
-                                        and -0.02 < X[2, 3] < scene.shelf.height)}
-    actions = []
-    for entry in planner_system.log:
-        if "action" not in entry:
-            continue
-        a = dict(entry["action"])
-        pred = entry["predicted_objects"]
-        # outcome: where the object ended before the next decision (or at the end)
-        a["decision_s"] = entry["decision_s"]
-        a["planning_s"] = entry["planning_s"]
-        a["motion"] = entry["motion"]
-        a["rejected_before"] = entry["rejected"]
-        a["predicted"] = pred
-        actions.append(a)
-    # actual outcome of each action: the object's pose at the next decision
-    decisions = planner_system.log
-    for k, a in enumerate(actions):
-        after = decisions[k + 1] if k + 1 < len(decisions) else None
-        a["outcome"] = after.get("poses_before", {}).get(a["object"]) if after else None
-    trajectory = _executed_trajectory(planner_system, sim_time)
-    n_push = sum(1 for a in actions if a["type"] == "push")
-    n_suction = len(actions) - n_push
-    data = {
-        "success": result == "revealed",
-        "result": result,
-        "steps": len(actions),
-        "cost": round(n_push + scenario.protocol.suction_cost * n_suction, 6),
-        "config": opts.config, "station": station_path, "objects": opts.objects, "seed": opts.seed,
-        "policy": opts.policy, "perception": opts.perception, "horizon": horizon, "sleep": opts.sleep,
-        "tool_rules": tool_rules,
-        "visible_fraction": round(planner_system.visible_fraction, 4),
-        "sim_time_s": round(sim_time, 3), "wall_s": round(wall, 3), "setup_s": round(setup_s, 3),
-        "real_time_factor": round(sim_time / wall, 4) if wall > 0 else None,
-        "actions": actions,
-        "support_per_step": [e.get("support") for e in planner_system.log if "support" in e],
-        "steps_log": [{k: v for k, v in e.items() if k not in ("p1d", "history")} for e in planner_system.log],
-        "initial_objects": {o.name: {"x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
-                                     "yaw": round(float(o.yaw), 5)} for o in scene.objects},
-        "final_objects": final,
-        "executed_trajectory": trajectory.to_dict(stride=opts.stride,
-                                                  keep_times=[t for t, _ in planner_system.motions]),
-        "executed_trajectory_note": f"the commanded (planned) joint trajectory, every {opts.stride} ms and at the "
-                                    "first commanded sample of each motion",
-    }
-    return TrialRecord(data, steps, html, scene)
-
-
-def _executed_trajectory(planner_system, t_end: float):
-    """The commanded trajectory over the whole trial: holds between motions, each motion at its start time."""
-    from slax_drake.planning.trajectory import JointTrajectory
-
-    names = planner_system.planner.limits.names
-    q_hold = planner_system.planner.q_observation
-    traj = JointTrajectory.hold(names, q_hold, 0.0)
-    for t_start, motion in planner_system.motions:
-        gap = t_start - traj.times[-1]
-        if gap > 0.0015:
-            traj = traj.then(JointTrajectory.hold(names, traj.q[-1], gap))
-        traj = traj.then(motion.trajectory)
-    if t_end - traj.times[-1] > 0.0015:
-        traj = traj.then(JointTrajectory.hold(names, traj.q[-1], t_end - traj.times[-1]))
-    return traj
-
-
-def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -> list[Path]:
-    """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, step_depth.npz (the depth image
-    of every decision), and the HTML replay."""
-    from slax_drake.io import write_bytes_atomic, write_text_atomic
-    from slax_drake.scene.io import save_scene
-    from slax_drake.systems.step_figure import step_png_of_record
-
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    written = [out / "trial.json"]
-    write_text_atomic(out / "trial.json", json.dumps(record.data, indent=1))
-    if record.scene is not None:
-        save_scene(record.scene, out / "scene.json")
-        written.append(out / "scene.json")
-    for step, depth, labels, history, p1d in record.step_images:
-        path = out / f"step_{step:02d}.png"
-        write_bytes_atomic(path, step_png_of_record(record, step, depth, labels, history, p1d))
-        written.append(path)
-    if record.step_images and len(record.step_images) == len(record.data.get("steps_log", ())):
-        # the depth image of each decision, for 'slax-drake export --format mcap': times (K,) s, depth (K, H, W) m
-        buf = io.BytesIO()
-        np.savez_compressed(buf, times=np.array([e["time"] for e in record.data["steps_log"]], float),
-                            depth=np.stack([np.asarray(d, np.float32) for _, d, _, _, _ in record.step_images]))
-        write_bytes_atomic(out / "step_depth.npz", buf.getvalue())
-        written.append(out / "step_depth.npz")
-    if html and record.html:
-        Path(html).parent.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(Path(html), record.html)
-        written.append(Path(html))
-    return written
+    return TrialDiagram(builder.Build(), station_diagram, plant, planner_system, scene, scenario, station_path,
+                        bodies, X_WS, horizon, tool_rules, steps)

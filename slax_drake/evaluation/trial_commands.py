@@ -60,7 +60,7 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
 
 def run(args: argparse.Namespace) -> int:
     from slax_drake.policies.registry import parse_tool_rules
-    from slax_drake.systems.trial import run_trial, write_trial
+    from slax_drake.evaluation.trial import run_trial, write_trial
     from slax_drake.systems.trial_summary import trial_summary
 
     opts = TrialOptions(config=args.config, objects=DEFAULT_OBJECTS if args.objects is None else args.objects,

@@ -1,0 +1,124 @@
+"""``slax-drake benchmark``: the paper's Table I protocol in the fast first-order shelf simulator, or with
+``--physics`` through full Drake trials beside it; both on local processes or Ray tasks."""
+
+from __future__ import annotations
+
+import argparse
+
+from slax_drake.errors import UserError
+
+
+def register(subparsers) -> None:
+    from slax_drake.backends import add_backend_arguments
+    from slax_drake.policies.registry import DEFAULT_BENCHMARK_POLICIES, POLICY_NAMES, add_tool_rule_argument
+
+    p = subparsers.add_parser(
+        "benchmark",
+        help="run search policies on the Table I protocol (fast shelf simulator; --physics: full Drake trials)",
+        description="Run search policies on the same seeded scenes of every density of the protocol "
+        "(H = horizon_per_object * n actions) and write table1.md, table1.json and table1.png from every policy in "
+        "OUT. Finished trials are kept under OUT/trials and the settings in OUT/settings.json, so a stopped run "
+        "resumes; a run with other settings into the same OUT is refused. With --physics: the same scenes through "
+        "full Drake trials beside the shelf simulator (OUT/physics_trials, physics.md, physics.json; slow).",
+    )
+    p.add_argument("--config", default="sim_configs/table1.yaml", help="scenario YAML (default: sim_configs/table1.yaml)")
+    p.add_argument("--policies", default=None,
+                   help=f"comma-separated policy names from: {', '.join(POLICY_NAMES)} (default: the paper's five and "
+                   f"the project's own, {','.join(DEFAULT_BENCHMARK_POLICIES)}; with --physics their non-oracle ones)")
+    p.add_argument("--scenes-per-density", type=int, default=None, help="default: the protocol's")
+    p.add_argument("--densities", default=None, help="comma-separated object counts (default: the protocol's)")
+    p.add_argument("--seed", type=int, default=None, help="protocol seed (default: the protocol's)")
+    add_backend_arguments(p, "trials")
+    p.add_argument("--perception", choices=("ground-truth", "learned"), default="ground-truth",
+                   help="distribution model: ground-truth (compute_occupancy) or learned (the shipped network, "
+                   "models/perception/unet128); the shelf simulator only")
+    p.add_argument("--out", default="results/table1", help="output folder (default: results/table1)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--physics", action="store_true",
+                   help="run the protocol through full Drake trials beside the shelf simulator on the same scenes "
+                   "(non-oracle policies only; writes OUT/physics.md and OUT/physics.json; slow)")
+    p.add_argument("--station", default=None,
+                   help="with --physics: station YAML (default: station_<config stem>.yaml, else the sim-shelf station)")
+    p.add_argument("--sleep", action="store_true", help="with --physics: object sleep in the Drake trials")
+    add_tool_rule_argument(p, "recorded in the trial files (with --physics: for both simulators, over the station "
+                           "cup's limits; max_suction_moment=inf and max_seal_angle_deg=90 lift them)")
+    p.set_defaults(func=run)
+
+
+def _densities(text: str | None) -> list[int] | None:
+    if text is None:
+        return None
+    try:
+        densities = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise UserError(f"--densities must be comma-separated integers (got '{text}')") from None
+    if not densities or any(n < 1 for n in densities):
+        raise UserError(f"--densities must be object counts of at least 1 (got '{text}')")
+    return densities
+
+
+def run(args: argparse.Namespace) -> int:
+    from slax_drake.backends import check_backend
+    from slax_drake.config import load_scenario
+    from slax_drake.policies.registry import DEFAULT_BENCHMARK_POLICIES, POLICY_TABLE, parse_tool_rules
+
+    scenario = load_scenario(args.config)
+    tool_rules = parse_tool_rules(args.tool_rule)
+    if args.policies is None:
+        policies = list(DEFAULT_BENCHMARK_POLICIES)
+        if args.physics:
+            policies = [p for p in policies if not POLICY_TABLE[p].load().needs_true_scene]
+    else:
+        policies = [p.strip() for p in args.policies.split(",") if p.strip()]
+    for p in policies:
+        if p not in POLICY_TABLE:
+            raise UserError(f"unknown policy '{p}' (known: {', '.join(POLICY_TABLE)})")
+    if not policies:
+        raise UserError("--policies is empty")
+    n = args.scenes_per_density if args.scenes_per_density is not None else scenario.protocol.scenes_per_density
+    if n < 1:
+        raise UserError("--scenes-per-density must be at least 1")
+    check_backend(args.backend, args.workers, args.ray_address)
+    densities = _densities(args.densities)
+    seed = args.seed if args.seed is not None else scenario.protocol.seed
+    if args.physics:
+        return _run_physics(args, policies, n, seed, densities, tool_rules)
+    for flag, given in (("--station", args.station is not None), ("--sleep", args.sleep)):
+        if given:
+            raise UserError(f"{flag} applies to --physics only")
+    from slax_drake.evaluation.table1 import run_benchmark
+
+    table = run_benchmark(scenario, policies, n, seed, args.out, workers=args.workers, backend=args.backend,
+                          perception=args.perception, densities=densities, progress=not args.no_progress,
+                          tool_rules=tool_rules, config=args.config, ray_address=args.ray_address)
+    meta = table["meta"]
+    print(f"kept {meta['trials_kept']} trials already in {args.out}, ran {meta['trials_run']}")
+    for p, per in table["policies"].items():
+        e = per["all"]
+        rate = "-" if e["success_rate"] is None else f"{100 * e['success_rate']:.0f} %"
+        note = "" if p in policies else " (from an earlier run in this folder)"
+        print(f"{p:>18}: success {rate} over {e['trials']} trials, median steps {e['median_steps']}{note}")
+    print(f"wrote {args.out}/table1.md, table1.json, table1.png")
+    return 0
+
+
+def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: int, densities, tool_rules: dict) -> int:
+    """``--physics``: the same protocol through full Drake trials (slax_drake.evaluation.physics)."""
+    from slax_drake.evaluation.physics import run_physics_benchmark
+
+    if args.perception != "ground-truth":
+        raise UserError("--physics runs ground-truth distributions only: leave out --perception")
+    summary = run_physics_benchmark(args.config, policies, n, seed=seed, out=args.out, workers=args.workers,
+                                    densities=densities, station=args.station, sleep=args.sleep,
+                                    progress=not args.no_progress, tool_rules=tool_rules, backend=args.backend,
+                                    ray_address=args.ray_address)
+    meta = summary["meta"]
+    print(f"kept {meta['scenes_kept']} scenes already in {args.out}, ran {meta['scenes_run']}")
+    for p, per in summary["policies"].items():
+        e = per["all"]
+        match = "-" if e["match_rate"] is None else f"{100 * e['match_rate']:.0f} %"
+        print(f"{p:>18}: success shelf {100 * e['shelf_success_rate']:.0f} %, Drake "
+              f"{100 * e['drake_success_rate']:.0f} % over {e['trials']} scenes; actions matching prediction "
+              f"{match}; toppled {e['toppled']}, dropped {e['dropped']}")
+    print(f"wrote {args.out}/physics.md, physics.json, physics.png")
+    return 0

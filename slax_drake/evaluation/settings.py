@@ -1,0 +1,121 @@
+"""The settings a benchmark folder's trials were made with, recorded once per folder, and the check that a resumed
+run uses the same ones.
+
+Every setting that changes a trial's outcome goes into ``<out>/settings.json`` (the physics benchmark:
+``<out>/physics_settings.json``) before the first trial runs: the
+scenario's content (a SHA-256 of the parsed scenario, less the fields that only choose *which* trials run: the
+protocol's seed, densities and scenes per density), the protocol seed, the distribution model (perception), the
+target size, the horizon per object, the suction cost, the visibility threshold, the action-model rules and, per
+policy, its class and constructor options (the physics benchmark adds the station file's content and object
+sleep). A run into a folder recorded with other values is refused before anything runs, with one line naming the
+first setting that differs; a policy new to the folder is added to the record.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from pathlib import Path
+
+from slax_drake.errors import UserError
+from slax_drake.io import write_text_atomic
+
+SETTINGS_FILE = "settings.json"  # the Table I benchmark's record
+PHYSICS_SETTINGS_FILE = "physics_settings.json"  # the physics benchmark's, beside it in the same folder
+
+
+class SettingsMismatchError(UserError):
+    """A resumed benchmark whose settings differ from those its folder was made with."""
+
+
+def scenario_digest(scenario) -> str:
+    """SHA-256 of ``scenario`` (a slax_drake.config.Scenario) as canonical JSON, less the protocol fields that only
+    choose which trials run (seed, densities, scenes per density)."""
+    d = dataclasses.asdict(scenario)
+    for key in ("seed", "densities", "scenes_per_density"):
+        d["protocol"].pop(key, None)
+    return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()
+
+
+def file_digest(path) -> str:
+    """SHA-256 of a file's bytes."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def policy_settings(names) -> dict:
+    """Per policy name: its registry class and constructor options (what makes it that policy)."""
+    from slax_drake.policies.registry import POLICY_TABLE
+
+    return {n: {"class": POLICY_TABLE[n].cls, "options": dict(POLICY_TABLE[n].options)} for n in names}
+
+
+def protocol_settings(scenario, config: str, seed: int, perception: str, tool_rules: dict, policies) -> dict:
+    """The outcome-changing settings of a Table I run (see the module docstring). ``config`` (the path) is recorded
+    for the reader; its content is what is compared."""
+    return {
+        "config": str(config),
+        "scenario_sha256": scenario_digest(scenario),
+        "seed": int(seed),
+        "perception": perception,
+        "target_size": [float(v) for v in scenario.target.sizes[0]],
+        "horizon_per_object": int(scenario.protocol.horizon_per_object),
+        "suction_cost": float(scenario.protocol.suction_cost),
+        "visibility_threshold": float(scenario.target.visibility_threshold),
+        "tool_rules": dict(tool_rules),
+        "policies": policy_settings(policies),
+    }
+
+
+# What a mismatch is called in the message, in the order the check reports them (the specific settings before the
+# scenario's whole content, so the message names what was changed when it can).
+LABELS = {
+    "seed": "--seed", "perception": "--perception", "target_size": "target size (scenario target.sizes)",
+    "horizon_per_object": "horizon (scenario protocol.horizon_per_object)",
+    "suction_cost": "suction cost (scenario protocol.suction_cost)",
+    "visibility_threshold": "visibility threshold (scenario target.visibility_threshold)",
+    "tool_rules": "--tool-rule", "station_sha256": "station (the --station file's content)", "sleep": "--sleep",
+    "scenario_sha256": "scenario (the --config file's content)",
+}
+INFORMATIONAL = ("config", "station")
+
+
+def record_or_refuse(out: Path, settings: dict, has_results: bool, name: str = SETTINGS_FILE) -> dict:
+    """Checks ``settings`` against ``out``'s record and writes the record (with policies new to the folder added);
+    returns the record. ``name``: the record's file name in ``out``; ``has_results``: whether ``out`` already holds result files (a folder with results but
+    no record was made before settings were recorded, and is refused: its settings are unknown)."""
+    out = Path(out)
+    path = out / name
+    if path.is_file():
+        try:
+            recorded = json.loads(path.read_text())
+            recorded_policies = dict(recorded["policies"])
+        except (OSError, json.JSONDecodeError, KeyError, TypeError) as e:
+            raise SettingsMismatchError(f"{path}: unreadable settings record ({e}); use another --out") from None
+        for key in [k for k in LABELS if k in settings or k in recorded]:
+            if recorded.get(key) != settings.get(key):
+                raise SettingsMismatchError(
+                    f"{out} was made with another {LABELS[key]}: {_show(recorded.get(key))} there, "
+                    f"{_show(settings.get(key))} now; use another --out")
+        for name, entry in settings["policies"].items():
+            if name in recorded_policies and recorded_policies[name] != entry:
+                raise SettingsMismatchError(f"{out} was made with policy {name} built as {recorded_policies[name]}, "
+                                            f"not {entry}; use another --out")
+        merged = {**settings, "policies": {**recorded_policies, **settings["policies"]}}
+        for key in INFORMATIONAL:  # the first run's paths stay on record
+            if key in recorded:
+                merged[key] = recorded[key]
+    elif has_results:
+        raise SettingsMismatchError(f"{out} holds results but no {name} (made by an older slax-drake): its "
+                                    "settings are unknown; use another --out")
+    else:
+        merged = settings
+    out.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(path, json.dumps(merged, indent=1, sort_keys=True))
+    return merged
+
+
+def _show(value) -> str:
+    if isinstance(value, str) and len(value) == 64:
+        return value[:12]  # a digest
+    return json.dumps(value, sort_keys=True)

@@ -1,0 +1,174 @@
+"""Running one full Drake trial and recording it: the trial runner of the evaluation stage.
+
+:func:`run_trial` builds the trial's diagram (:func:`slax_drake.systems.trial.build_trial`), simulates until the
+planner system is done (or the simulated-time limit), and returns a :class:`TrialRecord`: success, steps, cost,
+actions with predicted and physical outcome and timings, supports, the executed joint trajectory, final object
+poses. :func:`write_trial` writes ``trial.json``, ``scene.json`` (the initial scene), per-step PNGs,
+``step_depth.npz`` (each decision's depth image) and the HTML replay.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialError, TrialOptions  # noqa: F401
+
+
+@dataclasses.dataclass
+class TrialRecord:
+    data: dict
+    step_images: list  # (step, depth, labels, history, p1d)
+    html: str | None = None
+    scene: object = None  # the trial's initial Scene (written as scene.json)
+
+
+def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
+    """Runs the trial ``opts`` describes (see the module docstring); ``meshcat``: record it there for the HTML
+    replay."""
+    from pydrake.systems.analysis import Simulator
+
+    from slax_drake.systems.trial import build_trial
+
+    t0 = time.perf_counter()
+    trial = build_trial(opts, meshcat=meshcat)
+    scene, scenario, plant, bodies, X_WS = trial.scene, trial.scenario, trial.plant, trial.body_indices, trial.X_WS
+    planner_system, horizon, tool_rules, station_path = (trial.planner_system, trial.horizon, trial.tool_rules,
+                                                         trial.station_path)
+    simulator = Simulator(trial.diagram)
+    simulator.set_target_realtime_rate(0.0)
+    if opts.sleep:
+        from slax_drake.systems.sleep import ObjectSleep
+
+        ObjectSleep(trial.station).install(simulator)
+    setup_s = time.perf_counter() - t0
+    if meshcat is not None:
+        from slax_drake.systems.replay_view import set_replay_camera
+
+        set_replay_camera(meshcat, X_WS, scene.shelf)  # the live view and the HTML replay open looking into the bay
+        meshcat.StartRecording(frames_per_second=30.0)
+    max_time = opts.max_sim_time or (40.0 * horizon + 5.0)
+    t_wall = time.perf_counter()
+    simulator.Initialize()
+    context = simulator.get_mutable_context()
+    while not planner_system.trial_state(context).done and context.get_time() < max_time:
+        simulator.AdvanceTo(context.get_time() + 1.0)
+    state = planner_system.trial_state(context)
+    wall = time.perf_counter() - t_wall
+    html = None
+    if meshcat is not None:
+        meshcat.StopRecording()
+        meshcat.PublishRecording()
+        if opts.html:
+            html = meshcat.StaticHtml()
+    sim_time = context.get_time()
+    result = state.result or "time limit"
+    plant_context = plant.GetMyContextFromRoot(context)
+    X_SW = X_WS.inverse()
+    final = {}
+    for o, b in zip(scene.objects, bodies):
+        X = (X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.get_body(b))).GetAsMatrix4()
+        final[o.name] = {"x": round(float(X[0, 3]), 5), "y": round(float(X[1, 3]), 5), "z": round(float(X[2, 3]), 5),
+                         "yaw": round(math.atan2(X[1, 0], X[0, 0]), 5),
+                         "upright": bool(abs(X[2, 2]) > math.cos(math.radians(20.0))),
+                         "inside": bool(abs(X[0, 3]) < scene.shelf.width / 2 and abs(X[1, 3]) < scene.shelf.depth / 2
+                                        and -0.02 < X[2, 3] < scene.shelf.height)}
+    actions = []
+    for entry in state.log:
+        if "action" not in entry:
+            continue
+        a = dict(entry["action"])
+        pred = entry["predicted_objects"]
+        # outcome: where the object ended before the next decision (or at the end)
+        a["decision_s"] = entry["decision_s"]
+        a["planning_s"] = entry["planning_s"]
+        a["motion"] = entry["motion"]
+        a["rejected_before"] = entry["rejected"]
+        a["predicted"] = pred
+        actions.append(a)
+    # actual outcome of each action: the object's pose at the next decision
+    decisions = state.log
+    for k, a in enumerate(actions):
+        after = decisions[k + 1] if k + 1 < len(decisions) else None
+        a["outcome"] = after.get("poses_before", {}).get(a["object"]) if after else None
+    trajectory = executed_trajectory(planner_system.planner, state.motions, sim_time)
+    n_push = sum(1 for a in actions if a["type"] == "push")
+    n_suction = len(actions) - n_push
+    data = {
+        "success": result == "revealed",
+        "result": result,
+        "steps": len(actions),
+        "cost": round(n_push + scenario.protocol.suction_cost * n_suction, 6),
+        "config": opts.config, "station": station_path, "objects": opts.objects, "seed": opts.seed,
+        "policy": opts.policy, "perception": opts.perception, "horizon": horizon, "sleep": opts.sleep,
+        "tool_rules": tool_rules,
+        "visible_fraction": round(state.visible_fraction, 4),
+        "sim_time_s": round(sim_time, 3), "wall_s": round(wall, 3), "setup_s": round(setup_s, 3),
+        "real_time_factor": round(sim_time / wall, 4) if wall > 0 else None,
+        "actions": actions,
+        "support_per_step": [e.get("support") for e in state.log if "support" in e],
+        "steps_log": [{k: v for k, v in e.items() if k not in ("p1d", "history")} for e in state.log],
+        "initial_objects": {o.name: {"x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
+                                     "yaw": round(float(o.yaw), 5)} for o in scene.objects},
+        "final_objects": final,
+        "executed_trajectory": trajectory.to_dict(stride=opts.stride, keep_times=[t for t, _ in state.motions]),
+        "executed_trajectory_note": f"the commanded (planned) joint trajectory, every {opts.stride} ms and at the "
+                                    "first commanded sample of each motion",
+    }
+    return TrialRecord(data, trial.step_images, html, scene)
+
+
+def executed_trajectory(planner, motions, t_end: float):
+    """The commanded trajectory over the whole trial: holds between ``motions`` ((start time s, PlannedMotion)),
+    each motion at its start time, from ``planner``'s observation pose."""
+    from slax_drake.planning.trajectory import JointTrajectory
+
+    names = planner.limits.names
+    q_hold = planner.q_observation
+    traj = JointTrajectory.hold(names, q_hold, 0.0)
+    for t_start, motion in motions:
+        gap = t_start - traj.times[-1]
+        if gap > 0.0015:
+            traj = traj.then(JointTrajectory.hold(names, traj.q[-1], gap))
+        traj = traj.then(motion.trajectory)
+    if t_end - traj.times[-1] > 0.0015:
+        traj = traj.then(JointTrajectory.hold(names, traj.q[-1], t_end - traj.times[-1]))
+    return traj
+
+
+def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -> list[Path]:
+    """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, step_depth.npz (the depth image
+    of every decision), and the HTML replay."""
+    from slax_drake.io import write_bytes_atomic, write_text_atomic
+    from slax_drake.scene.io import save_scene
+    from slax_drake.systems.step_figure import step_png_of_record
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    written = [out / "trial.json"]
+    write_text_atomic(out / "trial.json", json.dumps(record.data, indent=1))
+    if record.scene is not None:
+        save_scene(record.scene, out / "scene.json")
+        written.append(out / "scene.json")
+    for step, depth, labels, history, p1d in record.step_images:
+        path = out / f"step_{step:02d}.png"
+        write_bytes_atomic(path, step_png_of_record(record, step, depth, labels, history, p1d))
+        written.append(path)
+    if record.step_images and len(record.step_images) == len(record.data.get("steps_log", ())):
+        # the depth image of each decision, for 'slax-drake export --format mcap': times (K,) s, depth (K, H, W) m
+        buf = io.BytesIO()
+        np.savez_compressed(buf, times=np.array([e["time"] for e in record.data["steps_log"]], float),
+                            depth=np.stack([np.asarray(d, np.float32) for _, d, _, _, _ in record.step_images]))
+        write_bytes_atomic(out / "step_depth.npz", buf.getvalue())
+        written.append(out / "step_depth.npz")
+    if html and record.html:
+        Path(html).parent.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(Path(html), record.html)
+        written.append(Path(html))
+    return written

@@ -1,0 +1,131 @@
+"""The one interface every search policy implements, the oracles included: :class:`Policy`.
+
+A trial drives a policy the same way in the fast shelf simulator (:func:`slax_drake.policies.simulator.run_trial`)
+and in the Drake planner system (:class:`slax_drake.systems.planner.PlannerSystem`):
+
+1. ``reset(scene_or_observation)`` once at the start of a trial: the policy forgets everything of the last trial
+   (its history, its plan, its exclusions).
+2. Per step, ``decide(observation) -> Decision``: the candidate actions ranked best first, or none and a stop
+   reason. ``observation`` is what the policy reads: an :class:`~slax_drake.policies.simulator.Observation` for
+   the distribution policies, the true :class:`~slax_drake.scene.model.Scene` for the policies that declare
+   ``needs_true_scene`` (the oracles, which cannot run on a robot). ``decide`` is called once per step
+   (a policy may keep a plan across steps), and again on the same observation after ``exclude``.
+3. When the planner cannot execute the best candidate, ``exclude(action, reason)``, then ``decide`` again on the
+   same observation: the policy re-ranks without it. An excluded action is never proposed again in this trial;
+   with ``whole_group=True`` (the tool could not even reach the object) no action of its group (pushes of that
+   object in that direction, or suctions of that object) is proposed again while that object stands where it
+   stood. ``exclusions`` lists them with their reasons.
+
+The action model (tool, discretisation, rules) is given at construction (``action_model``, read-only); nothing
+else is swapped in while a policy decides. A new policy is one class implementing this protocol and one line in
+the table of :mod:`slax_drake.policies.registry`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from slax_drake.policies.actions import Push
+
+
+@dataclasses.dataclass(frozen=True)
+class Decision:
+    """A policy's answer for one step: ``candidates`` ranked best first (``Push``/``Suction``), and when there is
+    none, ``stop_reason`` (e.g. "no feasible action", "search budget")."""
+
+    candidates: tuple = ()
+    stop_reason: str | None = None
+
+    @property
+    def best(self):
+        """The best candidate, or None when the policy stops."""
+        return self.candidates[0] if self.candidates else None
+
+    @classmethod
+    def stop(cls, reason: str) -> "Decision":
+        return cls((), reason)
+
+
+@runtime_checkable
+class Policy(Protocol):
+    """See the module docstring. Attributes: ``name`` (the registry name), ``needs_true_scene`` (True: ``decide``
+    takes the true Scene; False: an Observation), ``action_model`` (the ActionModel it enumerates with),
+    ``distribution`` (the model of the 1D distribution P_t its observations carry; None when it reads the true
+    scene), ``observation_width`` (px of the coarse observation it reads)."""
+
+    name: str
+    needs_true_scene: bool
+
+    def reset(self, scene_or_observation) -> None: ...
+
+    def decide(self, observation) -> Decision: ...
+
+    def exclude(self, action, reason: str, whole_group: bool = False) -> None: ...
+
+    @property
+    def history(self): ...
+
+    @property
+    def exclusions(self) -> tuple: ...
+
+
+def action_group(action) -> tuple:
+    """The group an early planning failure excludes: the pushes of one object in one direction, or the suctions of
+    one object."""
+    if isinstance(action, Push):
+        return ("push", action.name, action.d > 0)
+    return ("suction", action.name)
+
+
+def _pose_key(name: str, objects) -> tuple | None:
+    """Object ``name``'s planar pose in ``objects`` as :func:`~slax_drake.scene.model.state_key` rounds it."""
+    from slax_drake.scene.model import state_key
+
+    return next((k for k in state_key(tuple(objects)) if k[0] == name), None)
+
+
+class Exclusions:
+    """The candidates a planner could not execute during one trial, with their reasons (what ``exclude`` records).
+
+    Single actions are excluded for the rest of the trial (an action names its absolute contact point, so it is
+    specific to where its object stood); a group (see :func:`action_group`) is excluded while its object stands at
+    the pose it had when the group was excluded (``objects``: the objects the policy last decided on)."""
+
+    def __init__(self):
+        self._records: list[tuple] = []
+        self._actions: set = set()
+        self._groups: set = set()
+
+    def add(self, action, reason: str, whole_group: bool, objects) -> None:
+        self._records.append((action, reason))
+        self._actions.add(action)
+        if whole_group:
+            self._groups.add((action_group(action), _pose_key(action.name, objects)))
+
+    def allowed(self, actions, objects) -> list:
+        """``actions`` less the excluded ones (``objects``: the state they were enumerated in)."""
+        if not self._actions:
+            return list(actions)
+        keep = [a for a in actions if a not in self._actions]
+        if self._groups:
+            keep = [a for a in keep if (action_group(a), _pose_key(a.name, objects)) not in self._groups]
+        return keep
+
+    @property
+    def records(self) -> tuple:
+        return tuple(self._records)
+
+    def __len__(self) -> int:
+        return len(self._records)
+
+
+def read_only(array):
+    """A read-only view of ``array`` (None stays None): what the ``history`` property hands out."""
+    if array is None:
+        return None
+    view = np.asarray(array).view()
+    view.flags.writeable = False
+    return view

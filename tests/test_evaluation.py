@@ -1,0 +1,164 @@
+"""One benchmark command over one evaluation package (issues 15.1, 15.12, 18.4): the settings a folder was made
+with are recorded and a resume with other ones is refused naming the setting; the table covers every policy in
+the folder; the default policies; resumed runs say what they kept; Ray and local give the same trial files."""
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+import slax_drake
+from slax_drake.cli import main
+
+CONFIG = "sim_configs/table1.yaml"
+TINY = ["--config", CONFIG, "--densities", "4", "--scenes-per-density", "1", "--no-progress"]
+
+
+def bench(out, *argv):
+    return main(["benchmark", *TINY, "--out", str(out), *argv])
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    """A folder made by a tiny DAR run with seed 0."""
+    out = tmp_path_factory.mktemp("table1") / "out"
+    assert bench(out, "--policies", "dar", "--seed", "0") == 0
+    return out
+
+
+def copy_of(made, tmp_path) -> Path:
+    out = tmp_path / "copy"
+    shutil.copytree(made, out)
+    return out
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["--seed", "1"], "--seed"),
+    (["--perception", "learned"], "--perception"),
+    (["--tool-rule", "max_suction_moment=0.4"], "--tool-rule"),
+])
+def test_a_resume_with_another_setting_is_refused_naming_it(made, tmp_path, capsys, argv, named):
+    out = copy_of(made, tmp_path)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert bench(out, "--policies", "dar", *([] if "--seed" in argv else ["--seed", "0"]), *argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"made with another {named}" in err
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before  # nothing rewritten
+
+
+@pytest.mark.parametrize("edit, named", [
+    (lambda y: y.replace("horizon_per_object: 2", "horizon_per_object: 3"), "horizon"),
+    (lambda y: y.replace("visibility_threshold: 0.80", "visibility_threshold: 0.70"), "visibility threshold"),
+    (lambda y: y.replace("clearance: 0.002", "clearance: 0.004"), "scenario (the --config file's content)"),
+])
+def test_another_config_content_is_refused_but_the_same_content_elsewhere_is_not(made, tmp_path, capsys, edit,
+                                                                                  named):
+    text = Path(CONFIG).read_text()
+    assert edit(text) != text, "the edit must change the config"
+    same, other = tmp_path / "same.yaml", tmp_path / "other.yaml"
+    same.write_text("# a copy\n" + text)
+    other.write_text(edit(text))
+    out = copy_of(made, tmp_path)
+    argv = ["benchmark", "--densities", "4", "--scenes-per-density", "1", "--no-progress", "--policies", "dar",
+            "--seed", "0", "--out", str(out)]
+    assert main([*argv, "--config", str(other)]) == 2
+    assert f"made with another {named}" in capsys.readouterr().err
+    assert main([*argv, "--config", str(same)]) == 0
+    assert "kept 1 trials" in capsys.readouterr().out
+
+
+def test_the_table_covers_every_policy_in_the_folder_and_resumes_say_what_they_kept(made, tmp_path, capsys):
+    out = copy_of(made, tmp_path)
+    assert bench(out, "--policies", "bluction-dar", "--seed", "0") == 0
+    printed = capsys.readouterr().out
+    assert "kept 0 trials" in printed and "ran 1" in printed
+    assert "(from an earlier run in this folder)" in printed
+    table = json.loads((out / "table1.json").read_text())
+    assert set(table["policies"]) == {"dar", "bluction-dar"}
+    header = (out / "table1.md").read_text().splitlines()[0]
+    assert header == "| No. | Metric | dar | bluction-dar |"  # the registry's order
+    settings = json.loads((out / "settings.json").read_text())
+    assert set(settings["policies"]) == {"dar", "bluction-dar"} and settings["seed"] == 0
+    assert bench(out, "--policies", "dar,bluction-dar", "--seed", "0") == 0
+    assert "kept 2 trials" in capsys.readouterr().out
+
+
+def test_a_folder_of_results_without_a_settings_record_is_refused(made, tmp_path, capsys):
+    out = copy_of(made, tmp_path)
+    (out / "settings.json").unlink()
+    assert bench(out, "--policies", "dar", "--seed", "0") == 2
+    assert "no settings.json" in capsys.readouterr().err
+
+
+def test_without_policies_the_benchmark_runs_the_papers_five_and_ours(monkeypatch, tmp_path):
+    import slax_drake.evaluation.table1 as table1
+
+    seen = {}
+
+    def fake(scenario, policies, *args, **kwargs):
+        seen["policies"] = list(policies)
+        return {"policies": {}, "meta": {"trials_kept": 0, "trials_run": 0}}
+
+    monkeypatch.setattr(table1, "run_benchmark", fake)
+    assert bench(tmp_path / "o") == 0
+    assert seen["policies"] == ["oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar", "bluction-la2"]
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and capsys.readouterr().out.strip() == f"slax-drake {slax_drake.__version__}"
+
+
+def test_physics_exposes_the_options_of_the_old_module_cli():
+    from slax_drake.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command").choices["benchmark"]
+    options = {s for a in sub._actions for s in a.option_strings}
+    assert {"--config", "--station", "--policies", "--scenes-per-density", "--densities", "--seed", "--workers",
+            "--sleep", "--tool-rule", "--out", "--no-progress", "--backend", "--ray-address"} <= options
+    import slax_drake.evaluation.physics as physics
+
+    assert not hasattr(physics, "main") and not hasattr(physics, "build_parser")
+
+
+def _trial_files(out):
+    """Trial files less their timings (wall-clock seconds differ from run to run)."""
+    files = {}
+    for p in sorted((Path(out) / "trials").glob("*/*.json")):
+        d = json.loads(p.read_text())
+        d.pop("decision_seconds")
+        files[p.relative_to(out).as_posix()] = d
+    return files
+
+
+@pytest.mark.slow
+def test_ray_and_local_give_the_same_trial_files(tmp_path, capsys):
+    pytest.importorskip("ray")
+    argv = ["--config", CONFIG, "--densities", "4,6", "--scenes-per-density", "2", "--no-progress",
+            "--policies", "oracle-p,dar,bluction-dar"]
+    assert main(["benchmark", *argv, "--out", str(tmp_path / "local"), "--workers", "2"]) == 0
+    assert main(["benchmark", *argv, "--out", str(tmp_path / "ray"), "--backend", "ray", "--workers", "2"]) == 0
+    local, ray = _trial_files(tmp_path / "local"), _trial_files(tmp_path / "ray")
+    assert len(local) == 12 and local == ray
+
+
+@pytest.mark.slow
+def test_physics_on_ray_gives_the_same_scene_files_as_local(tmp_path):
+    pytest.importorskip("ray")
+    from slax_drake.evaluation.physics import run_physics_benchmark
+
+    tiny = dict(policies=["bluction-dar"], scenes_per_density=1, seed=3, densities=[2], progress=False)
+    files = {}
+    for backend in ("local", "ray"):
+        out = tmp_path / backend
+        run_physics_benchmark("sim_configs/sim_shelf.yaml", out=out, backend=backend, **tiny)
+        (path,) = (out / "physics_trials").glob("*/*.json")
+        d = json.loads(path.read_text())
+        for key in ("wall_s", "total_s", "real_time_factor"):
+            d["drake"].pop(key)
+        for a in d["drake"]["actions"]:
+            a.pop("planning_s"), a.pop("motion_timings")
+        files[backend] = d
+    assert files["local"] == files["ray"]

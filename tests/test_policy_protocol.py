@@ -1,0 +1,135 @@
+"""The Policy protocol (issue 18.2): every registered policy implements it, the oracles included; an excluded
+candidate is not proposed again; history is read-only; the registry is a table; the planner system keeps its
+trial in the Drake context, so Simulator.Initialize on a reset context replays the same trial."""
+
+import numpy as np
+import pytest
+
+from slax_drake.policies.protocol import Decision, Policy
+from slax_drake.policies.registry import POLICY_NAMES, POLICY_TABLE, PolicyEntry, make_policy
+from slax_drake.policies.simulator import observation_for, run_trial
+from slax_drake.scene.sampling import sample_scene
+
+TARGET = (0.06, 0.06, 0.06)
+
+
+@pytest.fixture
+def scene(sim_scenario):
+    return sample_scene(sim_scenario, 6, 5, target_size=TARGET)
+
+
+@pytest.mark.parametrize("name", POLICY_NAMES)
+def test_every_registered_policy_implements_the_protocol(sim_scenario, scene, name):
+    policy = make_policy(name, sim_scenario, horizon=12)
+    assert isinstance(policy, Policy)
+    assert policy.needs_true_scene == name.startswith("oracle")
+    policy.reset(scene)
+    decision = policy.decide(observation_for(policy, scene))
+    assert isinstance(decision, Decision)
+    assert decision.candidates or decision.stop_reason
+    assert len(set(decision.candidates)) == len(decision.candidates)
+    assert policy.exclusions == ()
+
+
+@pytest.mark.parametrize("name", ["dar", "der-3", "bluction-dar", "bluction-la2", "oracle-p+s"])
+def test_an_excluded_candidate_is_not_proposed_again_and_is_recorded(sim_scenario, scene, name):
+    policy = make_policy(name, sim_scenario, horizon=12)
+    policy.reset(scene)
+    obs = observation_for(policy, scene)
+    first = policy.decide(obs).best
+    assert first is not None
+    policy.exclude(first, "approach: in collision")
+    again = policy.decide(obs)
+    assert first not in again.candidates
+    assert policy.exclusions == ((first, "approach: in collision"),)
+    policy.reset(scene)  # a new trial forgets its exclusions
+    assert policy.exclusions == () and policy.decide(observation_for(policy, scene)).best == first
+
+
+def test_a_group_exclusion_removes_the_objects_actions_in_that_direction(sim_scenario, scene):
+    from slax_drake.policies.protocol import action_group
+
+    policy = make_policy("bluction-dar", sim_scenario, horizon=12)
+    policy.reset(scene)
+    obs = observation_for(policy, scene)
+    first = policy.decide(obs).best
+    policy.exclude(first, "pre-approach: unreachable", whole_group=True)
+    assert all(action_group(a) != action_group(first) for a in policy.decide(obs).candidates)
+
+
+def test_history_is_read_only_and_follows_the_observations(sim_scenario, scene):
+    policy = make_policy("dar", sim_scenario, horizon=12)
+    policy.reset(scene)
+    assert policy.history is None
+    obs = observation_for(policy, scene)
+    policy.decide(obs)
+    h = policy.history
+    np.testing.assert_array_equal(h, obs.p1d)
+    with pytest.raises(ValueError):
+        h[0] = 1.0
+    with pytest.raises(AttributeError):
+        policy.history = None
+
+
+def readme_example_policy():
+    """The example policy of the README's "Adding a policy" section, executed from the README's text."""
+    from pathlib import Path
+
+    text = Path(__file__).resolve().parents[1].joinpath("README.md").read_text()
+    section = text[text.index("### Adding a policy"):]
+    code = section[section.index("```python") + len("```python"):section.index("```", section.index("```python") + 3)]
+    namespace = {"__name__": "readme_example"}
+    exec(compile(code, "README.md", "exec"), namespace)
+    return namespace["PushFirst"]
+
+
+def test_a_new_policy_is_one_class_and_one_table_line(sim_scenario, scene, monkeypatch):
+    """The README's example policy, registered by one table row, runs in the shelf simulator like any other."""
+    import sys
+    import types
+
+    import slax_drake.policies.registry as registry
+
+    module = types.ModuleType("readme_example")
+    module.PushFirst = readme_example_policy()
+    monkeypatch.setitem(sys.modules, "readme_example", module)
+    monkeypatch.setitem(registry.POLICY_TABLE, "push-first", PolicyEntry("readme_example:PushFirst"))
+    policy = make_policy("push-first", sim_scenario, horizon=12)
+    assert isinstance(policy, Policy) and isinstance(policy, module.PushFirst)
+    result = run_trial(scene, policy, 12)
+    assert result.policy == "push-first" and result.steps >= 1
+    assert all(a.startswith("push ") for a in result.actions)
+
+
+def test_the_registry_is_a_table():
+    assert set(POLICY_TABLE) == set(POLICY_NAMES)
+    for entry in POLICY_TABLE.values():
+        assert isinstance(entry.load(), type)
+
+
+@pytest.mark.slow
+def test_initialize_after_a_context_reset_replays_the_same_trial():
+    """The planner system's plan, log, result and cost are in the context: reset it, Initialize, and the same
+    trial runs again."""
+    from pydrake.systems.analysis import Simulator
+
+    from slax_drake.systems.trial import TrialOptions, build_trial
+
+    trial = build_trial(TrialOptions(objects=2, seed=7))
+    simulator = Simulator(trial.diagram)
+    simulator.set_target_realtime_rate(0.0)
+    default = trial.diagram.CreateDefaultContext()
+
+    def run():
+        simulator.get_mutable_context().SetTimeStateAndParametersFrom(default)
+        simulator.Initialize()
+        context = simulator.get_mutable_context()
+        while not trial.planner_system.trial_state(context).done and context.get_time() < 60.0:
+            simulator.AdvanceTo(context.get_time() + 1.0)
+        s = trial.planner_system.trial_state(context)
+        return s.result, s.steps, s.cost, [e.get("action") for e in s.log], [e["time"] for e in s.log]
+
+    first = run()
+    assert first[0] == "revealed" and first[1] >= 1
+    assert trial.planner_system.trial_state(default).log == ()  # the default context holds no trial
+    assert run() == first
