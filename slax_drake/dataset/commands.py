@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from slax_drake import arguments
 from slax_drake.config import DEFAULT_CONFIG
 
 
@@ -22,7 +23,7 @@ def register(subparsers) -> None:
     p.add_argument("--backend", choices=("local", "ray"), default="local",
                    help="local processes or Ray tasks (extra 'cluster') (default: local)")
     p.add_argument("--resolution", default="256x192", help="image size WIDTHxHEIGHT (default: 256x192)")
-    p.add_argument("--seed", type=int, default=0, help="dataset seed (default: 0)")
+    p.add_argument("--seed", type=arguments.seed, default=0, help="dataset seed (default: 0)")
     p.add_argument("--shard-size", type=int, default=256, help="scenes per shard (default: 256)")
     p.add_argument("--grid-step", type=float, default=0.005,
                    help="occupancy placement grid in metres (default: 0.005)")

@@ -9,6 +9,7 @@ import sys
 
 
 def register(subparsers) -> None:
+    from slax_drake import arguments
     from slax_drake.perception.weights import DEFAULT_MODEL
 
     p = subparsers.add_parser(
@@ -22,7 +23,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", required=True, help="output folder, e.g. models/perception/NAME")
     p.add_argument("--epochs", type=int, default=20, help="epochs (default: 20)")
     p.add_argument("--device", default="auto", choices=["auto", "cpu", "cuda"], help="default: auto")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split, initialisation and shuffles (default: 0)")
+    p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the split, initialisation and shuffles (default: 0)")
     p.add_argument("--batch-size", type=int, default=16, help="default: 16")
     p.add_argument("--lr", type=float, default=3e-3, help="peak learning rate of the one-cycle schedule (default: 3e-3)")
     p.add_argument("--channels", type=int, default=16, help="channels of the first U-Net level (default: 16)")

@@ -8,6 +8,7 @@ from slax_drake.errors import UserError
 
 
 def register(subparsers) -> None:
+    from slax_drake import arguments
     from slax_drake.policies.registry import POLICY_NAMES, add_tool_rule_argument
 
     p = subparsers.add_parser(
@@ -21,7 +22,7 @@ def register(subparsers) -> None:
     p.add_argument("--policies", default="oracle-p,oracle-p+s,dar,der-3,bluction-dar",
                    help=f"comma-separated policy names from: {', '.join(POLICY_NAMES)}")
     p.add_argument("--scenes-per-density", type=int, default=None, help="default: the protocol's")
-    p.add_argument("--seed", type=int, default=None, help="protocol seed (default: the protocol's)")
+    p.add_argument("--seed", type=arguments.seed, default=None, help="protocol seed (default: the protocol's)")
     p.add_argument("--workers", type=int, default=1, help="parallel worker processes (default: 1)")
     p.add_argument("--backend", choices=("local", "ray"), default="local",
                    help="local: multiprocessing; ray: Ray tasks on a local Ray instance")
