@@ -45,6 +45,8 @@ def parse_resolution(text: str) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     from slax_drake.dataset import DatasetSpec, generate
+    from slax_drake.dataset.generate import dataset_memory_bytes
+    from slax_drake.resources import check_memory
     from slax_drake.dataset.shards import DatasetError
 
     if args.scenes < 1:
@@ -57,6 +59,9 @@ def run(args: argparse.Namespace) -> int:
         raise DatasetError(f"--grid-step {args.grid_step}: must be positive")
     spec = DatasetSpec(config=args.config, scenes=args.scenes, resolution=parse_resolution(args.resolution),
                        seed=args.seed, shard_size=args.shard_size, grid_step=args.grid_step)
+    check_memory(dataset_memory_bytes(spec, args.workers),
+                 f"--resolution {args.resolution} with --shard-size {args.shard_size}, --grid-step {args.grid_step:g} "
+                 f"and --workers {args.workers}", "use a smaller resolution or shard, a coarser grid or fewer workers")
     manifest = generate(spec, args.out, workers=args.workers, backend=args.backend,
                         progress=not args.no_progress)
     print(f"wrote {args.out}: {manifest['num_scenes']} scenes in {len(manifest['shards'])} shards "
