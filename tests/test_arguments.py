@@ -58,3 +58,21 @@ def test_value_types_accept_their_range():
     assert arguments.seed("0") == 0 and arguments.seed(str(2**63 - 1)) == 2**63 - 1
     assert arguments.non_negative_int("0") == 0 and arguments.positive_int("7") == 7
     assert arguments.positive_float("1e-3") == 1e-3 and arguments.non_negative_float("0") == 0.0
+
+
+@pytest.mark.parametrize("argv, error", [
+    (["trial", "--max-sim-time", "-1", "--out", "out/trial"],
+     "slax-drake trial: error: argument --max-sim-time: must be a positive number, got '-1'"),
+    (["trial", "--max-sim-time", "nan", "--out", "out/trial"],
+     "slax-drake trial: error: argument --max-sim-time: must be a finite number, got 'nan'"),
+    (["check-trajectory", "traj.json", "--margin", "-1"],
+     "slax-drake check-trajectory: error: argument --margin: must be a number >= 0, got '-1'"),
+    (["check-trajectory", "traj.json", "--collision-step", "-0.1"],
+     "slax-drake check-trajectory: error: argument --collision-step: must be a number >= 0, got '-0.1'"),
+    (["export", "trial.json", "--rate", "0", "--out", "out/t.json"],
+     "slax-drake export: error: argument --rate: must be a positive number, got '0'"),
+])
+def test_negative_times_and_margins_are_refused(argv, error, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert _refused(argv, capsys) == error
+    assert list(tmp_path.iterdir()) == []

@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from slax_drake import arguments
 from slax_drake.hardware.trajectory_file import FORMATS
 
 
@@ -18,7 +19,7 @@ def register(subparsers) -> None:
     p.add_argument("trial", help="trial.json written by 'slax-drake trial'")
     p.add_argument("--format", choices=tuple(FORMATS), default=None,
                    help="ros-json, ros-yaml (FollowJointTrajectory goals) or csv (default: from --out's extension)")
-    p.add_argument("--rate", type=float, default=None, help="resample at this rate in Hz (default: the trial's records)")
+    p.add_argument("--rate", type=arguments.positive_float, default=None, help="resample at this rate in Hz (default: the trial's records)")
     p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv)")
     p.add_argument("--scene", default=None, help="scene JSON to embed (default: sampled again from the trial's config and seed)")
     p.add_argument("--write-scene", default=None, help="also write the trial's initial scene as a scene JSON here")
@@ -32,9 +33,10 @@ def register(subparsers) -> None:
     c.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv)")
     c.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export, if any)")
     c.add_argument("--station", default=None, help="station YAML (default: the trial's, or the scene's shelf's)")
-    c.add_argument("--margin", type=float, default=0.0, help="position margin inside the limits (rad, m for the torso)")
+    c.add_argument("--margin", type=arguments.non_negative_float, default=0.0, help="position margin inside the limits (rad, m for the torso)")
     c.add_argument("--no-collision", action="store_true", help="skip the collision checks")
-    c.add_argument("--collision-step", type=float, default=0.005, help="seconds between checked configurations")
+    c.add_argument("--collision-step", type=arguments.non_negative_float, default=0.005,
+                   help="seconds between checked configurations (0: the records only)")
     c.add_argument("--json", default=None, help="also write the report as JSON here")
     c.set_defaults(func=run_check)
 

@@ -33,7 +33,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
     add_tool_rule_argument(p, "for the policy and the planner, over the station cup's limits "
                            "(max_suction_moment=inf and max_seal_angle_deg=90 give the paper's weightless rules)")
-    p.add_argument("--max-sim-time", type=float, default=None, help="simulated seconds at most")
+    p.add_argument("--max-sim-time", type=arguments.positive_float, default=None, help="simulated seconds at most")
     p.add_argument("--sleep", action="store_true",
                    help="lock resting objects out of the physics step until something comes near (faster; "
                    "see slax_drake/systems/sleep.py)")
