@@ -89,3 +89,18 @@ def test_export_rate_beyond_memory_is_refused(tmp_path, eight_gb, capsys):
     assert err.startswith("slax-drake export: error: --rate 1e+09 Hz (")
     assert "points) needs about " in err and err.endswith("available; use a lower rate")
     assert not out.exists()
+
+
+def test_collision_step_beyond_memory_is_refused(tmp_path, eight_gb, capsys):
+    from test_export_helpers import fake_trial
+
+    from slax_drake.hardware.export import export_trial
+    from slax_drake.hardware.trajectory_file import save_trajectory
+
+    path = tmp_path / "traj.json"
+    save_trajectory(export_trial(fake_trial()), path)
+    assert main(["check-trajectory", str(path), "--collision-step", "1e-12"]) == 2
+    err = _error(capsys)
+    assert err.startswith("slax-drake check-trajectory: error: --collision-step 1e-12 s (")
+    assert "configurations) needs about " in err
+    assert err.endswith(" of memory, more than the 8 GB available; use a longer step")

@@ -9,6 +9,8 @@ from pathlib import Path
 from slax_drake import arguments
 from slax_drake.hardware.trajectory_file import FORMATS
 
+BYTES_PER_CONFIGURATION = 400  # one interpolated configuration to check: times, positions, index arrays
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -101,6 +103,12 @@ def run_check(args: argparse.Namespace) -> int:
 
     traj = load_trajectory(args.trajectory)
     world = None
+    if not args.no_collision and args.collision_step > 0:
+        from slax_drake.resources import check_memory
+
+        count = sum(m.duration for m in traj.motions) / args.collision_step
+        check_memory(count * BYTES_PER_CONFIGURATION, f"--collision-step {args.collision_step:g} s ({count:.3g} "
+                     "configurations)", "use a longer step")
     if not args.no_collision:
         scene, station = _scene_and_station(traj, args.scene, args.station)
         q_ref = traj.metadata.get("initial_positions") or (traj.motions[0].q[0] if traj.motions else None)
