@@ -22,7 +22,8 @@ def register(subparsers) -> None:
     p.add_argument("--workers", type=int, default=1, help="worker processes (default: 1)")
     p.add_argument("--backend", choices=("local", "ray"), default="local",
                    help="local processes or Ray tasks (extra 'cluster') (default: local)")
-    p.add_argument("--resolution", default="256x192", help="image size WIDTHxHEIGHT (default: 256x192)")
+    p.add_argument("--resolution", default="128x96",
+                   help="image size WIDTHxHEIGHT (default: 128x96, the input of the shipped model models/perception/unet128)")
     p.add_argument("--seed", type=arguments.seed, default=0, help="dataset seed (default: 0)")
     p.add_argument("--shard-size", type=int, default=256, help="scenes per shard (default: 256)")
     p.add_argument("--grid-step", type=float, default=0.005,
@@ -37,7 +38,7 @@ def parse_resolution(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise DatasetError(f"--resolution {text!r}: expected WIDTHxHEIGHT, for example 256x192") from None
+        raise DatasetError(f"--resolution {text!r}: expected WIDTHxHEIGHT, for example 128x96") from None
     if not (8 <= w <= 4096 and 8 <= h <= 4096):
         raise DatasetError(f"--resolution {text!r}: width and height must lie in [8, 4096]")
     return w, h
