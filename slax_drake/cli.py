@@ -48,8 +48,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except OSError as e:
         # An output or input path the system refuses (no such folder, permission, full disk): the user's to fix.
-        where = f"{e.filename}: " if e.filename else ""
-        print(f"slax-drake {args.command}: error: {where}{e.strerror or e}", file=sys.stderr)
+        from slax_drake.io import os_error_message
+
+        print(f"slax-drake {args.command}: error: {os_error_message(e)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"slax-drake {args.command}: interrupted", file=sys.stderr)

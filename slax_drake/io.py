@@ -3,6 +3,7 @@ write leaves the old file intact) and a matplotlib figure as PNG bytes."""
 
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
 from pathlib import Path
@@ -27,18 +28,59 @@ def figure_png(fig, dpi: int) -> bytes:
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Writes ``data`` to ``path`` through a temporary file in the same folder and an atomic rename,
-    so a reader never sees a half-written file and an interrupted write leaves the old file intact."""
+    so a reader never sees a half-written file and an interrupted write leaves the old file intact.
+
+    An OSError (no permission, full disk, a file where a folder must be) names ``path``, never the hidden
+    temporary file."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    make_parent_folder(path)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as e:
+        raise OSError(e.errno, e.strerror, str(path)) from None
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
         set_default_file_mode(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.errno is not None:
+            raise OSError(e.errno, e.strerror, str(path)) from None
         raise
+
+
+def make_parent_folder(path: Path) -> None:
+    """Creates the folders above ``path``; a file standing where one of them must be is a NotADirectoryError
+    that names it (mkdir itself would only say "File exists")."""
+    path = Path(path)
+    blocker = file_in_the_way(path)
+    if blocker is not None:
+        raise NotADirectoryError(errno.ENOTDIR, f"{blocker} is a file, not a folder", str(path))
+    path.parent.mkdir(parents=True, exist_ok=True)
+
+
+def file_in_the_way(path: Path) -> Path | None:
+    """The nearest existing folder above ``path`` that is not a folder (a file), or None."""
+    for ancestor in Path(path).parents:
+        if ancestor.exists():
+            return None if ancestor.is_dir() else ancestor
+    return None
+
+
+def os_error_message(e: OSError) -> str:
+    """One line for an OSError on a user's path: the path and the reason in words. A folder that cannot be made
+    because a file stands in the way says so (the system's words are "File exists" or "Not a directory")."""
+    if not e.filename:
+        return e.strerror or str(e)
+    path = Path(os.fsdecode(e.filename))
+    if isinstance(e, (FileExistsError, NotADirectoryError)):
+        if isinstance(e, FileExistsError) and path.exists() and not path.is_dir():  # mkdir of a folder
+            return f"{path}: is a file, not a folder"
+        blocker = file_in_the_way(path)
+        if blocker is not None:
+            return f"{path}: {blocker} is a file, not a folder"
+    return f"{path}: {e.strerror or e}"
 
 
 def set_default_file_mode(path) -> None:

@@ -14,8 +14,13 @@ from pathlib import Path
 PACKAGE_DIR = Path(__file__).resolve().parents[1] / "slax_drake"
 
 # The stages, lowest first (a module of slax_drake/<name>.py or slax_drake/<name>/ belongs to stage <name>).
-STAGES = ("errors", "lazy_exports", "io", "config", "scene", "occupancy", "station", "dataset", "perception", "policies",
-          "planning", "systems", "evaluation", "hardware", "cli")
+STAGES = (
+    # foundations shared by every stage
+    "errors", "lazy_exports", "arguments", "resources", "io", "backends", "config",
+    # the pipeline, in the order data flows
+    "scene", "occupancy", "station", "dataset", "perception", "policies", "planning", "systems", "evaluation",
+    "hardware", "cli",
+)
 
 # Known violations, each (importing module, imported module) with the issue that removes it. An entry that no
 # longer occurs fails test_known_violations_still_occur, so the list only shrinks.

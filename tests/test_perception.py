@@ -253,3 +253,32 @@ def test_training_is_deterministic_resumable_and_writes_its_outputs(tiny_data, t
 def test_training_data_checks_shapes():
     with pytest.raises(Exception, match="inconsistent shapes"):
         TrainingData(np.zeros((2, 4, 4), np.float32), np.zeros((2, 4, 5), np.float32), np.zeros(2, np.int64))
+
+
+@pytest.mark.parametrize("tensor, value", [("encoders.0.0.weight", float("nan")), ("stem.1.running_var", float("inf"))])
+def test_non_finite_weights_are_refused(tmp_path, capsys, tensor, value):
+    """A weight file holding a NaN (a diverged training) would evaluate to KL = nan with exit code 0."""
+    from slax_drake.cli import main
+
+    net = tiny_network()
+    with torch.no_grad():
+        net.state_dict()[tensor].view(-1)[0] = value
+    path = tmp_path / "nan.pt"
+    save_weights(path, net, make_header(TINY))
+    count = net.state_dict()[tensor].numel()
+    message = (f"{path}: tensor '{tensor}' holds 1 non-finite values (NaN or inf) of {count}: the weights are "
+               "unusable (did the training diverge?)")
+    with pytest.raises(WeightFileError) as info:
+        load_weights(path)
+    assert str(info.value) == message
+    assert main(["evaluate-perception", "--data", str(tmp_path / "data"), "--model", str(path),
+                 "--png", str(tmp_path / "grid.png")]) == 2
+    assert capsys.readouterr().err == f"slax-drake evaluate-perception: error: {message}\n"
+    assert not (tmp_path / "grid.png").exists()
+
+
+def test_non_finite_threshold_in_the_header_is_refused(tmp_path):
+    path = tmp_path / "t.pt"
+    save_weights(path, tiny_network(), make_header(TINY, support_threshold_2d=float("nan")))
+    with pytest.raises(WeightFileError, match="header 'support_threshold_2d' = nan must be a finite number >= 0"):
+        load_weights(path)

@@ -46,3 +46,29 @@ def test_cli_errors_are_one_line_with_exit_code_2(tiny_dataset, tmp_path, capsys
     assert main(["evaluate-perception", "--data", str(tiny_dataset), "--model", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "truncated or corrupt" in err and err.count("\n") == 1
+
+
+def test_dataset_default_resolution_is_the_shipped_models_input():
+    from slax_drake.cli import build_parser
+    from slax_drake.dataset.commands import parse_resolution
+    from slax_drake.perception.weights import load_weights
+
+    args = build_parser().parse_args(["dataset", "--scenes", "1", "--out", "unused"])
+    config = load_weights().config
+    assert parse_resolution(args.resolution) == (config.width, config.height) == (128, 96)
+
+
+def test_a_dataset_of_another_size_is_refused_with_the_resolution_to_use(tiny_dataset, capsys):
+    assert main(["evaluate-perception", "--data", str(tiny_dataset)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "32x24 images, but model " in err
+    assert err.endswith("unet128/model.pt takes 128x96 (make the dataset with --resolution 128x96)\n")
+
+
+@pytest.mark.slow
+def test_default_dataset_evaluates_with_the_default_model(tmp_path, capsys):
+    """The issue's probe: `dataset` and `evaluate-perception` with their defaults work together."""
+    data = tmp_path / "data"
+    assert main(["dataset", "--scenes", "4", "--out", str(data), "--no-progress"]) == 0
+    assert main(["evaluate-perception", "--data", str(data), "--png", str(tmp_path / "grid.png"), "--examples", "2"]) == 0
+    assert "on 4 samples" in capsys.readouterr().out

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from slax_drake import arguments
 from slax_drake.config import DEFAULT_CONFIG
 
 
@@ -21,8 +22,9 @@ def register(subparsers) -> None:
     p.add_argument("--workers", type=int, default=1, help="worker processes (default: 1)")
     p.add_argument("--backend", choices=("local", "ray"), default="local",
                    help="local processes or Ray tasks (extra 'cluster') (default: local)")
-    p.add_argument("--resolution", default="256x192", help="image size WIDTHxHEIGHT (default: 256x192)")
-    p.add_argument("--seed", type=int, default=0, help="dataset seed (default: 0)")
+    p.add_argument("--resolution", default="128x96",
+                   help="image size WIDTHxHEIGHT (default: 128x96, the input of the shipped model models/perception/unet128)")
+    p.add_argument("--seed", type=arguments.seed, default=0, help="dataset seed (default: 0)")
     p.add_argument("--shard-size", type=int, default=256, help="scenes per shard (default: 256)")
     p.add_argument("--grid-step", type=float, default=0.005,
                    help="occupancy placement grid in metres (default: 0.005)")
@@ -36,7 +38,7 @@ def parse_resolution(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise DatasetError(f"--resolution {text!r}: expected WIDTHxHEIGHT, for example 256x192") from None
+        raise DatasetError(f"--resolution {text!r}: expected WIDTHxHEIGHT, for example 128x96") from None
     if not (8 <= w <= 4096 and 8 <= h <= 4096):
         raise DatasetError(f"--resolution {text!r}: width and height must lie in [8, 4096]")
     return w, h
@@ -44,6 +46,8 @@ def parse_resolution(text: str) -> tuple[int, int]:
 
 def run(args: argparse.Namespace) -> int:
     from slax_drake.dataset import DatasetSpec, generate
+    from slax_drake.dataset.generate import dataset_memory_bytes
+    from slax_drake.resources import check_memory
     from slax_drake.dataset.shards import DatasetError
 
     if args.scenes < 1:
@@ -56,6 +60,9 @@ def run(args: argparse.Namespace) -> int:
         raise DatasetError(f"--grid-step {args.grid_step}: must be positive")
     spec = DatasetSpec(config=args.config, scenes=args.scenes, resolution=parse_resolution(args.resolution),
                        seed=args.seed, shard_size=args.shard_size, grid_step=args.grid_step)
+    check_memory(dataset_memory_bytes(spec, args.workers),
+                 f"--resolution {args.resolution} with --shard-size {args.shard_size}, --grid-step {args.grid_step:g} "
+                 f"and --workers {args.workers}", "use a smaller resolution or shard, a coarser grid or fewer workers")
     manifest = generate(spec, args.out, workers=args.workers, backend=args.backend,
                         progress=not args.no_progress)
     print(f"wrote {args.out}: {manifest['num_scenes']} scenes in {len(manifest['shards'])} shards "

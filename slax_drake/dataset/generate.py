@@ -48,6 +48,26 @@ class DatasetSpec:
         return d
 
 
+def dataset_memory_bytes(spec: DatasetSpec, workers: int) -> float:
+    """Estimated bytes of the large arrays while ``workers`` processes each make a shard: a shard's samples
+    are held until it is written (depth and label, three p2d in float32 and their converted copies: about 40
+    bytes a pixel each), beside one occupancy computation (``occupancy_memory_bytes``) and the renderer's
+    images (about 32 bytes a pixel)."""
+    from slax_drake.config import load_scenario
+    from slax_drake.occupancy.hidden import occupancy_memory_bytes
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.scene.sampling import shelf_of
+
+    scenario = load_scenario(spec.config)
+    camera = Camera.from_config(scenario.camera).with_resolution(*spec.resolution)
+    empty = Scene(shelf=shelf_of(scenario), camera=camera, objects=(), target=None)
+    pixels = spec.resolution[0] * spec.resolution[1]
+    occupancy = occupancy_memory_bytes(empty, TARGET_SIZES, spec.grid_step, scenario.target.surface_point_spacing)
+    per_worker = 40.0 * pixels * min(spec.shard_size, spec.scenes) + occupancy + 32.0 * pixels
+    return min(workers, spec.num_shards) * per_worker
+
+
 def scene_draw(spec_seed: int, index: int, count_range) -> tuple[int, int, int]:
     """(object count, target ratio index, scene seed) of scene ``index``."""
     rng = np.random.default_rng(np.random.SeedSequence([spec_seed, index]))

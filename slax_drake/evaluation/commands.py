@@ -9,6 +9,7 @@ from slax_drake.errors import UserError
 
 
 def register(subparsers) -> None:
+    from slax_drake import arguments
     from slax_drake.backends import add_backend_arguments
     from slax_drake.policies.registry import DEFAULT_BENCHMARK_POLICIES, POLICY_NAMES, add_tool_rule_argument
 
@@ -27,7 +28,7 @@ def register(subparsers) -> None:
                    f"the project's own, {','.join(DEFAULT_BENCHMARK_POLICIES)}; with --physics their non-oracle ones)")
     p.add_argument("--scenes-per-density", type=int, default=None, help="default: the protocol's")
     p.add_argument("--densities", default=None, help="comma-separated object counts (default: the protocol's)")
-    p.add_argument("--seed", type=int, default=None, help="protocol seed (default: the protocol's)")
+    p.add_argument("--seed", type=arguments.seed, default=None, help="protocol seed (default: the protocol's)")
     add_backend_arguments(p, "trials")
     p.add_argument("--perception", choices=("ground-truth", "learned"), default="ground-truth",
                    help="distribution model: ground-truth (compute_occupancy) or learned (the shipped network, "

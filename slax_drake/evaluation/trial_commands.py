@@ -9,6 +9,7 @@ from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialError, 
 
 
 def register(subparsers) -> None:
+    from slax_drake import arguments
     from slax_drake.policies.registry import add_tool_rule_argument
 
     p = subparsers.add_parser(
@@ -21,7 +22,7 @@ def register(subparsers) -> None:
     p.add_argument("--config", default="sim_configs/sim_shelf.yaml", help="scene scenario YAML")
     p.add_argument("--station", default=None, help="station YAML (default: sim_configs/station_<config stem>.yaml)")
     p.add_argument("--objects", type=int, default=None, help=f"occluding objects (default {DEFAULT_OBJECTS})")
-    p.add_argument("--seed", type=int, default=None, help=f"scene seed (default {DEFAULT_SEED})")
+    p.add_argument("--seed", type=arguments.seed, default=None, help=f"scene seed (default {DEFAULT_SEED})")
     p.add_argument("--benchmark-scene", default=None, metavar="N:INDEX",
                    help="the scene INDEX of N objects of the Table I protocol in --config (e.g. --config "
                    "sim_configs/table1.yaml --benchmark-scene 8:1): the scene seed, target size, horizon and station "
@@ -33,7 +34,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
     add_tool_rule_argument(p, "for the policy and the planner, over the station cup's limits "
                            "(max_suction_moment=inf and max_seal_angle_deg=90 give the paper's weightless rules)")
-    p.add_argument("--max-sim-time", type=float, default=None, help="simulated seconds at most")
+    p.add_argument("--max-sim-time", type=arguments.positive_float, default=None, help="simulated seconds at most")
     p.add_argument("--sleep", action="store_true",
                    help="lock resting objects out of the physics step until something comes near (faster; "
                    "see slax_drake/systems/sleep.py)")

@@ -6,7 +6,10 @@ import argparse
 import json
 from pathlib import Path
 
+from slax_drake import arguments
 from slax_drake.hardware.trajectory_file import FORMATS
+
+BYTES_PER_CONFIGURATION = 400  # one interpolated configuration to check: times, positions, index arrays
 
 
 def register(subparsers) -> None:
@@ -22,7 +25,7 @@ def register(subparsers) -> None:
     p.add_argument("--format", choices=tuple(FORMATS) + ("mcap",), default=None,
                    help="ros-json, ros-yaml (FollowJointTrajectory goals), csv (default: from --out's extension), "
                    "or mcap (a ROS 2 bag folder)")
-    p.add_argument("--rate", type=float, default=None, help="resample at this rate in Hz (default: the trial's records)")
+    p.add_argument("--rate", type=arguments.positive_float, default=None, help="resample at this rate in Hz (default: the trial's records)")
     p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv), or the bag folder for mcap")
     p.add_argument("--scene", default=None, help="scene JSON to embed (default: sampled again from the trial's config and seed)")
     p.add_argument("--write-scene", default=None, help="also write the trial's initial scene as a scene JSON here")
@@ -36,9 +39,10 @@ def register(subparsers) -> None:
     c.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv)")
     c.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export, if any)")
     c.add_argument("--station", default=None, help="station YAML (default: the trial's, or the scene's shelf's)")
-    c.add_argument("--margin", type=float, default=0.0, help="position margin inside the limits (rad, m for the torso)")
+    c.add_argument("--margin", type=arguments.non_negative_float, default=0.0, help="position margin inside the limits (rad, m for the torso)")
     c.add_argument("--no-collision", action="store_true", help="skip the collision checks")
-    c.add_argument("--collision-step", type=float, default=0.005, help="seconds between checked configurations")
+    c.add_argument("--collision-step", type=arguments.non_negative_float, default=0.005,
+                   help="seconds between checked configurations (0: the records only)")
     c.add_argument("--json", default=None, help="also write the report as JSON here")
     c.set_defaults(func=run_check)
 
@@ -139,6 +143,12 @@ def run_check(args: argparse.Namespace) -> int:
 
     traj = load_trajectory(args.trajectory)
     world = None
+    if not args.no_collision and args.collision_step > 0:
+        from slax_drake.resources import check_memory
+
+        count = sum(m.duration for m in traj.motions) / args.collision_step
+        check_memory(count * BYTES_PER_CONFIGURATION, f"--collision-step {args.collision_step:g} s ({count:.3g} "
+                     "configurations)", "use a longer step")
     if not args.no_collision:
         scene, station = _scene_and_station(traj, args.scene, args.station)
         q_ref = traj.metadata.get("initial_positions") or (traj.motions[0].q[0] if traj.motions else None)

@@ -68,6 +68,9 @@ def trial_scene(data: dict):
     return scene
 
 
+BYTES_PER_JOINT_POINT = 200  # one joint at one resampled point: q, v, a as float64, Python floats, text output
+
+
 def export_trial(data: dict, rate: float | None = None, source: str | None = None, scene=None) -> ExportedTrajectory:
     """Cuts the trial's executed trajectory into motions (module docstring); ``rate`` in Hz or None."""
     from slax_drake.scene.io import scene_to_dict
@@ -92,6 +95,12 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
     starts = [e for e in data["steps_log"] if "action" in e]
     if len(starts) != len(data["actions"]):
         raise TrialFileError(f"{source or 'trial'}: {len(data['actions'])} actions but {len(starts)} decisions with one")
+    if rate is not None:
+        from slax_drake.resources import check_memory
+
+        points = sum(float(action["motion"]["duration_s"]) for action in data["actions"]) * rate
+        check_memory(points * len(names) * BYTES_PER_JOINT_POINT, f"--rate {rate:g} Hz ({points:.3g} points)",
+                     "use a lower rate")
     motions = []
     for entry, action in zip(starts, data["actions"]):
         t0 = float(entry["time"])

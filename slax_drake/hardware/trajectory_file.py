@@ -336,17 +336,17 @@ def _motion(entry, what, times, q, v, a, events) -> Motion:
     start = _number(_get(entry, "start_time", what), f"{what}.start_time")
     times = np.asarray(times, float)
     if abs(times[0]) > 1e-9:
-        raise _Bad(f"{what}: the first point's time_from_start must be 0 (got {times[0]!r})")
+        raise _Bad(f"{what}: the first point's time_from_start must be 0 (got {float(times[0])!r} s)")
     if len(times) > 1 and not np.all(np.diff(times) > 0):
         i = int(np.argmax(~(np.diff(times) > 0)))
         raise _Bad(f"{what}: time_from_start is not strictly increasing at point {i + 1} "
-                   f"({times[i]!r} then {times[i + 1]!r})")
+                   f"({float(times[i])!r} then {float(times[i + 1])!r} s)")
     for t, _ in events:
         if not -1e-9 <= t <= times[-1] + 1e-9:
-            raise _Bad(f"{what}: suction event at {t} s lies outside the motion (0 to {times[-1]} s)")
+            raise _Bad(f"{what}: suction event at {t} s lies outside the motion (0 to {float(times[-1])!r} s)")
     expected = entry.get("duration")
     if isinstance(expected, (int, float)) and not isinstance(expected, bool) and abs(times[-1] - expected) > 1e-6:
-        raise _Bad(f"{what} ends at {times[-1]} s but its header says {expected} s (truncated?)")
+        raise _Bad(f"{what} ends at {float(times[-1])!r} s but its header says {expected} s (truncated?)")
     count = entry.get("num_points")
     if isinstance(count, int) and not isinstance(count, bool) and count != len(times):
         raise _Bad(f"{what} has {len(times)} points but its header says {count} (truncated?)")

@@ -28,6 +28,8 @@ def run(args: argparse.Namespace) -> int:
 
     from slax_drake.errors import SceneFileError, UserError
     from slax_drake.occupancy import compute_occupancy
+    from slax_drake.occupancy.hidden import occupancy_memory_bytes
+    from slax_drake.resources import check_memory
     from slax_drake.scene import load_scene
     from slax_drake.io import write_bytes_atomic
 
@@ -36,6 +38,9 @@ def run(args: argparse.Namespace) -> int:
         raise SceneFileError(f"{args.scene}: the scene has no target, so there is no target size to place")
     if not (args.grid_step > 0 and args.surface_spacing > 0):
         raise UserError("--grid-step and --surface-spacing must be positive lengths in metres")
+    check_memory(occupancy_memory_bytes(scene, [scene.target.size], args.grid_step, args.surface_spacing),
+                 f"--grid-step {args.grid_step:g} m with --surface-spacing {args.surface_spacing:g} m",
+                 "use a coarser grid or spacing (the default is 0.005 m for both)")
     occ = compute_occupancy(scene, scene.target.size, args.grid_step, None, args.surface_spacing)
     buf = io.BytesIO()
     np.savez_compressed(buf, hidden_xy=occ.hidden_xy, p2d=occ.p2d, p1d=occ.p1d,

@@ -145,6 +145,37 @@ def compute_occupancies(
     return tuple(results)
 
 
+def occupancy_memory_bytes(scene: Scene, target_sizes, grid_step: float, surface_spacing: float,
+                           camera: Camera | None = None) -> float:
+    """Estimated peak bytes of the large arrays of ``compute_occupancies`` with these arguments, from counts
+    alone (nothing is allocated): the lattice path holds a few int64 / float64 / bool arrays over the fine
+    lattice and the placement grid (64 bytes per point, generous); the direct path holds every surface sample of
+    every placement with its ray (about 100 bytes each); both hold float64 per-pixel counts."""
+    camera = scene.camera if camera is None else camera
+    pixels = camera.width * camera.height
+    worst = 0.0
+    for size in (_check_size(s) for s in target_sizes):
+        def samples(u: float) -> int:
+            return max(2, math.ceil(u / surface_spacing) + 1)
+
+        def placements(extent: float, half: float) -> int:
+            n = math.floor((extent / 2.0 - half) / grid_step + 1e-9)
+            return 2 * n + 1 if n >= 0 else 0
+
+        n_i = placements(scene.shelf.width, size[0] / 2.0)
+        n_j = placements(scene.shelf.depth, size[1] / 2.0)
+        nx, ny, nz = samples(size[0]), samples(size[1]), samples(size[2])
+        per_placement = nx * ny + 2 * nx * nz + 2 * ny * nz
+        mx, my = _multiple(grid_step, size[0] / (nx - 1)), _multiple(grid_step, size[1] / (ny - 1))
+        if mx is not None and my is not None and scene.camera.position[2] < scene.shelf.height:
+            fine = (max(n_i - 1, 0) * mx + nx) * (max(n_j - 1, 0) * my + ny)
+            need = 64.0 * (fine + n_i * n_j)
+        else:
+            need = 16.0 * n_i * n_j + 100.0 * n_i * n_j * per_placement
+        worst = max(worst, need + 32.0 * pixels)
+    return worst
+
+
 def grid_placements(scene: Scene, target_size, grid_step: float) -> np.ndarray:
     """All lattice centres (K, 2) whose yaw-0 target footprint fits in the bay (ignoring objects), x-major."""
     cx, cy = _grid_axes(scene, _check_size(target_size), grid_step)

@@ -9,6 +9,7 @@ import sys
 
 
 def register(subparsers) -> None:
+    from slax_drake import arguments
     from slax_drake.perception.shipped_model import DEFAULT_MODEL
 
     p = subparsers.add_parser(
@@ -22,7 +23,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", required=True, help="output folder, e.g. models/perception/NAME")
     p.add_argument("--epochs", type=int, default=20, help="epochs (default: 20)")
     p.add_argument("--device", default="auto", choices=["auto", "cpu", "cuda"], help="default: auto")
-    p.add_argument("--seed", type=int, default=0, help="seed of the split, initialisation and shuffles (default: 0)")
+    p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the split, initialisation and shuffles (default: 0)")
     p.add_argument("--batch-size", type=int, default=16, help="default: 16")
     p.add_argument("--lr", type=float, default=3e-3, help="peak learning rate of the one-cycle schedule (default: 3e-3)")
     p.add_argument("--channels", type=int, default=16, help="channels of the first U-Net level (default: 16)")
@@ -60,6 +61,27 @@ def _positive(value, name: str) -> None:
         raise UserError(f"{name} must be positive, got {value}")
 
 
+def _check_training_memory(args: argparse.Namespace) -> None:
+    """Refuses options whose arrays would not fit in memory, before the dataset is read. A folder without a
+    readable manifest is left to the dataset reader's own message."""
+    from slax_drake.dataset.shards import read_manifest
+    from slax_drake.errors import UserError
+    from slax_drake.perception.training import training_memory_bytes
+    from slax_drake.resources import check_memory
+
+    try:
+        manifest = read_manifest(args.data)
+        samples = int(manifest["num_scenes"])
+        w, h = (int(v) for v in manifest["params"]["resolution"])
+    except (UserError, KeyError, TypeError, ValueError):
+        return
+    if args.limit is not None:
+        samples = min(samples, args.limit)
+    check_memory(training_memory_bytes(samples, (w, h), args.batch_size, args.channels, args.levels),
+                 f"training on {samples} samples at {w}x{h} with --batch-size {args.batch_size}, --channels "
+                 f"{args.channels} and --levels {args.levels}", "use a smaller batch, fewer channels or --limit")
+
+
 def run_train(args: argparse.Namespace) -> int:
     from slax_drake.perception.data import load_dataset
     from slax_drake.perception.training import TrainOptions, train
@@ -70,6 +92,7 @@ def run_train(args: argparse.Namespace) -> int:
         from slax_drake.errors import UserError
 
         raise UserError(f"--val-fraction must lie in (0, 1), got {args.val_fraction}")
+    _check_training_memory(args)
     data = load_dataset(args.data, limit=args.limit, progress=not args.no_progress)
     w, h = data.resolution
     print(f"{len(data)} samples at {w}x{h} from {args.data}", flush=True)

@@ -31,7 +31,8 @@ def evaluate_model(model: LoadedModel, data: TrainingData, batch_size: int = 32,
         from slax_drake.perception.errors import ImageSizeError
 
         w, h = data.resolution
-        raise ImageSizeError(f"{data.source}: {w}x{h} images, but model {model.path} takes {cfg.width}x{cfg.height}")
+        raise ImageSizeError(f"{data.source}: {w}x{h} images, but model {model.path} takes {cfg.width}x{cfg.height} "
+                             f"(make the dataset with --resolution {cfg.width}x{cfg.height})")
     if num_threads:
         torch.set_num_threads(num_threads)
     acc = MetricsAccumulator(thresholds=[model.support_threshold_1d, model.support_threshold_2d])

@@ -54,6 +54,29 @@ class TrainOptions:
     flip: bool = True
 
 
+def training_memory_bytes(samples: int, resolution: tuple[int, int], batch_size: int, base_channels: int,
+                          levels: int, num_heads: int = 3) -> float:
+    """Estimated bytes of training's large arrays: the samples held in memory (depth and own p2d, float32),
+    the parameters with their gradients and two AdamW moments (16 bytes each), and one batch's activations
+    kept for the backward pass (about 16 float32 feature maps per level and channel at each level's
+    resolution, generous, plus the full-resolution input, logits and targets)."""
+    w, h = resolution
+    pixels = w * h
+    channels = [base_channels * 2**i for i in range(levels)]
+    params = 4 * base_channels * 9
+    c_prev = base_channels
+    for ch in channels:
+        params += (c_prev * ch + ch * ch) * 9
+        c_prev = ch
+    for ch in reversed(channels[:-1]):
+        params += ((c_prev + ch) * ch + ch * ch) * 9
+        c_prev = ch
+    params += c_prev * num_heads
+    feature_maps = sum(16 * ch * pixels / 4 ** (i + 1) for i, ch in enumerate(channels))  # stem halves each side
+    per_sample = 4.0 * (feature_maps + (6 + 4 * num_heads) * pixels)
+    return 8.0 * samples * pixels + 16.0 * params + batch_size * per_sample
+
+
 def seed_everything(seed: int) -> None:
     random.seed(seed)
     np.random.seed(seed % 2**32)

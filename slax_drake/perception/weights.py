@@ -9,7 +9,7 @@ File layout (``torch.save`` of a dict, read back with ``weights_only=True``, so 
                 "training": {...}, "metrics": {...}},
      "state_dict": {...}}
 
-A missing, truncated, foreign or mismatched file raises :class:`WeightFileError` with one line naming the file.
+A missing, truncated, foreign or mismatched file, or one holding a NaN or infinite weight, raises :class:`WeightFileError` with one line naming the file.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import json
+import math
 from pathlib import Path
 
 import torch
@@ -129,6 +130,15 @@ def load_weights(path: str | Path | None = None, expected_resolution: tuple[int,
     except Exception as e:
         reason = " ".join(str(e).split())[:200]
         raise WeightFileError(f"{path}: weights do not match the header's network: {reason}") from None
+    for name, tensor in blob["state_dict"].items():
+        if isinstance(tensor, torch.Tensor) and tensor.is_floating_point() and not bool(torch.isfinite(tensor).all()):
+            bad = int((~torch.isfinite(tensor)).sum())
+            raise WeightFileError(f"{path}: tensor '{name}' holds {bad} non-finite values (NaN or inf) of "
+                                  f"{tensor.numel()}: the weights are unusable (did the training diverge?)")
+    for key in ("support_threshold_1d", "support_threshold_2d"):
+        value = header.get(key, 0.1)
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value < 0:
+            raise WeightFileError(f"{path}: header '{key}' = {value!r} must be a finite number >= 0")
     if expected_resolution is not None and tuple(expected_resolution) != (config.width, config.height):
         w, h = expected_resolution
         raise WeightFileError(

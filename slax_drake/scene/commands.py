@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from slax_drake import arguments
 from slax_drake.config import DEFAULT_CONFIG
 
 
@@ -16,7 +17,7 @@ def register(subparsers) -> None:
     )
     p.add_argument("--config", default=DEFAULT_CONFIG, help=f"scenario YAML (default: {DEFAULT_CONFIG})")
     p.add_argument("--objects", type=int, default=8, help="number of occluding objects (default: 8)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    p.add_argument("--seed", type=arguments.seed, default=0, help="random seed (default: 0)")
     p.add_argument("--out", default="scene.json", help="scene JSON to write (default: scene.json)")
     p.add_argument("--png", help="also write a picture: top-down footprints and the camera's view")
     p.set_defaults(func=run)

@@ -10,6 +10,12 @@ Layout (all lengths metres, poses 4x4 row-major nested lists in the shelf frame 
 
 Camera frame C: z along the optical axis, x right and y down in the image. Object frames sit at the object's
 centre. ``wall_thickness``, ``near``, ``far`` and ``seed`` are optional on reading.
+
+Validation on reading: every field's type and range, every object and the target resting upright on the support
+surface inside the bay, and no two of them interpenetrating by more than ``OVERLAP_TOLERANCE`` (1 mm). Objects
+stand on the floor only (nothing is stacked), so two bodies interpenetrate exactly when their footprints do; the
+exact footprints of :mod:`slax_drake.scene.footprint` (oriented rectangles, discs) decide, and the penetration
+depth is the smallest overlap of their projections (the separating-axis measure). Touching is allowed.
 """
 
 from __future__ import annotations
@@ -23,11 +29,12 @@ import numpy as np
 from slax_drake.errors import SceneFileError
 from slax_drake.io import write_text_atomic
 from slax_drake.scene.camera import Camera
-from slax_drake.scene.footprint import Footprint, inside_shelf
+from slax_drake.scene.footprint import Footprint, footprints_clear, inside_shelf
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target
 
 SCHEMA_VERSION = 1
 DECIMALS = 10
+OVERLAP_TOLERANCE = 0.001  # metres: two bodies may interpenetrate this much (rounding, contact) and no more
 
 
 def scene_to_dict(scene: Scene) -> dict:
@@ -120,6 +127,7 @@ def scene_from_dict(data) -> Scene:
         X_ST = _pose(t_d, "X_ST", "target")
         _check_on_shelf(shelf, size, X_ST, "target")
         target = Target(size=size, X_ST=X_ST)
+    _check_no_interpenetration(objects, target)
     seed = data.get("seed")
     if seed is not None and not isinstance(seed, int):
         raise SceneFileError(f"field 'seed' = {seed!r}: must be an integer or null")
@@ -206,3 +214,20 @@ def _check_on_shelf(shelf: Shelf, size, X: np.ndarray, where: str) -> None:
             f"field '{where}' at ({x:.3f}, {y:.3f}) m with size {list(size)} does not fit in the "
             f"{shelf.width} x {shelf.depth} x {shelf.height} m bay"
         )
+
+
+def _check_no_interpenetration(objects: list[SceneObject], target: Target | None) -> None:
+    """No two bodies (objects and the target) overlap by more than OVERLAP_TOLERANCE; names the first pair."""
+    bodies = [(o.name, Footprint.of(o), o.radius) for o in objects]
+    if target is not None:
+        t = target.as_object()
+        bodies.append(("target", Footprint.of(t), t.radius))
+    for i, (name_a, a, radius_a) in enumerate(bodies):
+        for name_b, b, radius_b in bodies[i + 1:]:
+            if math.hypot(a.x - b.x, a.y - b.y) >= radius_a + radius_b:
+                continue  # their bounding circles are apart
+            if not footprints_clear(a, b, clearance=-OVERLAP_TOLERANCE):
+                raise SceneFileError(
+                    f"'{name_a}' at ({a.x:.3f}, {a.y:.3f}) m and '{name_b}' at ({b.x:.3f}, {b.y:.3f}) m "
+                    f"interpenetrate by more than {OVERLAP_TOLERANCE * 1000:g} mm"
+                )
