@@ -9,7 +9,7 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
    of the object. A circle fitted to them (algebraic fit) that explains them clearly better than a rectangle,
    with a plausible radius, makes a cylinder; otherwise a box whose yaw is the rectangle (L-shape) fit of those
    points: the yaw in [0, pi/2) that packs them closest to two perpendicular edges (the "closeness" criterion of
-   L-shape fitting on a 1 degree grid, then the least rms distance to the nearest edge within +-1 degree). Yaw 0 when fewer than ``min_fit_points`` points are available.
+   L-shape fitting on a 2 degree grid, then the least rms distance to the nearest edge within +-2 degrees). Yaw 0 when fewer than ``min_fit_points`` points are available.
 4. Extents along the box's two axes: the 0.5th and 99.5th percentiles of all the segment's points (side and top;
    robust to flying pixels), grown by half a pixel's footprint on the silhouette sides (pixel centres sample the
    surface, the edge lies on average half a pixel beyond the outermost centre).
@@ -48,7 +48,6 @@ import numpy as np
 
 from slax_drake.perception.errors import ObservationError
 from slax_drake.perception.observation import Observation
-from slax_drake.perception.segmentation import back_project
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
@@ -86,9 +85,9 @@ class EstimatorConfig:
     prior: DepthPrior = DepthPrior()
     min_points: int = 8  # a segment with fewer valid points yields no hypothesis
     min_fit_points: int = 12  # fewer side points: yaw 0 (no line fit)
-    max_fit_points: int = 1500  # side points used for the yaw and circle fits (evenly subsampled)
+    max_fit_points: int = 600  # side points used for the yaw and circle fits (evenly subsampled)
     edge_percentile: float = 0.5  # robust extents: this percentile and 100 minus it
-    yaw_step_deg: float = 1.0  # coarse yaw search step; refined to a tenth of it
+    yaw_step_deg: float = 2.0  # coarse yaw search step; refined to a twentieth of it
     closeness_floor: float = 0.001  # the L-shape criterion's minimum distance (m)
     cylinder_residual_ratio: float = 0.5  # circle rms below this fraction of the rectangle's rms -> cylinder
     occluded_row_fraction: float = 0.15  # a side is occluded when this fraction of its border rows is
@@ -145,14 +144,12 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
                      ) -> list[Hypothesis]:
     """One hypothesis per occluder segment with at least ``config.min_points`` valid pixels, in segment order."""
     camera = observation.camera
-    points = back_project(observation.depth, camera)
     eye = camera.position[:2]
     labels = observation.segmentation
     fits = []
     for sid in observation.segment_ids:
         mask = labels == sid
-        p = points[mask]
-        p = p[np.isfinite(p).all(axis=1)]
+        p = _segment_points(observation.depth, camera, mask)
         if len(p) < config.min_points:
             continue
         left, right = _occluded_sides(observation, mask, sid, config.occluded_row_fraction)
@@ -163,6 +160,15 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
     for sid, pixels, left, right, fit in fits:
         out.append(_hypothesis(sid, pixels, left, right, fit, eye, config))
     return out
+
+
+def _segment_points(depth: np.ndarray, camera, mask: np.ndarray) -> np.ndarray:
+    """The valid pixels of ``mask`` back-projected into S, (N, 3) (as ``segmentation.back_project``, for a few
+    pixels rather than the whole image)."""
+    v, u = np.nonzero(mask & (depth > 0))
+    z = depth[v, u].astype(np.float64)
+    p_C = np.stack([(u - camera.cx) / camera.fx * z, (v - camera.cy) / camera.fy * z, z], axis=-1)
+    return p_C @ camera.X_SC[:3, :3].T + camera.X_SC[:3, 3]
 
 
 def hypothesis_objects(hypotheses) -> tuple[SceneObject, ...]:
@@ -449,8 +455,7 @@ def predict_observation(observation: Observation, segment_id: int, dx: float, dy
     depth = observation.depth.copy()
     labels = observation.segmentation.copy()
     target = observation.target_mask.copy()
-    pts = back_project(np.where(mask, observation.depth, 0.0), camera)[mask]
-    pts = pts[np.isfinite(pts).all(axis=1)] + np.array([dx, dy, 0.0])
+    pts = _segment_points(observation.depth, camera, mask) + np.array([dx, dy, 0.0])
     depth[mask] = 0.0
     labels[mask] = 0
     h, w = depth.shape
