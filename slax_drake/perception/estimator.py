@@ -27,8 +27,8 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
    shortened until the overlap is at most ``overlap_tolerance`` (m^2).
 6. Uncertainty (:class:`Uncertainty`): intervals for the footprint's front y, its x_min and x_max (a side that
    borders a nearer segment, an unknown pixel or the image border is *occluded*: the object may extend behind
-   it, up to the largest object size, so the visible edge is then only a bound), and its depth (the prior's
-   value, the observed part, and the largest possible).
+   it until its x-extent is the diagonal of the largest object, so the visible edge is then only a bound), and
+   its depth (the observed part .. the largest possible; whether the prior extended it).
 
 The hypotheses are :class:`~slax_drake.scene.model.SceneObject` boxes and cylinders named ``segment_<id>``, so
 the action model consumes them as it consumes true objects. Everything is deterministic (no random draws).
@@ -388,7 +388,7 @@ def _hypothesis(sid: int, pixels: int, occluded_left: bool, occluded_right: bool
     x_lo, x_hi = fp.x - ex, fp.x + ex
     front = _front_y(fp)
     sigma = 2.0 * fit.front_sigma + 1e-3
-    slack = max(prior.largest - (x_hi - x_lo), 0.0)
+    slack = max(math.sqrt(2.0) * prior.largest - (x_hi - x_lo), 0.0)  # a box's widest x-extent: its diagonal
     uncertainty = Uncertainty(
         front_y=(front - sigma, front + sigma),
         x_min=(x_lo - slack - sigma if occluded_left else x_lo - sigma, x_lo + sigma),

@@ -77,17 +77,16 @@ class Observation:
 def occluder_segmentation(labels: np.ndarray, target_mask: np.ndarray, min_pixels: int = 1) -> np.ndarray:
     """Instance labels (H, W) of all objects (e.g. from ``segment_depth``, which cannot tell the target from
     an occluder) -> labels of the occluders only: target pixels become 0, and a segment left with fewer than
-    ``min_pixels`` pixels is dropped. Labels are renumbered 1..K in their original order."""
+    ``min_pixels`` pixels is dropped (0). The remaining labels keep their values."""
     labels = np.asarray(labels)
     mask = np.asarray(target_mask, dtype=bool)
     if labels.shape != mask.shape:
         raise ObservationError(f"segmentation of shape {labels.shape} and target mask of shape {mask.shape} differ")
     out = np.where(mask, 0, labels).astype(np.int32)
-    ids, counts = np.unique(out[out > 0], return_counts=True)
-    kept = ids[counts >= min_pixels]
-    relabel = np.zeros(int(out.max()) + 1 if out.size else 1, dtype=np.int32)
-    relabel[kept] = np.arange(1, len(kept) + 1, dtype=np.int32)
-    return relabel[out]
+    if min_pixels > 1:
+        ids, counts = np.unique(out[out > 0], return_counts=True)
+        out[np.isin(out, ids[counts < min_pixels])] = 0
+    return out
 
 
 def target_mask_from_labels(label_image: np.ndarray, target_label: int) -> np.ndarray:
