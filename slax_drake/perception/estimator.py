@@ -3,11 +3,15 @@
 For each segment of an :class:`~slax_drake.perception.observation.Observation`:
 
 1. Its pixels are back-projected into S (``segmentation.back_project``).
+   Points within ``floor_band`` of the support surface or ``back_wall_band`` of the back panel are left out:
+   range noise (and a range offset) moves floor and panel pixels past the segmentation's margins and into
+   object segments.
 2. Height: the 99th percentile of the points' z (the top face when the camera sees it, else the front face's
    upper edge).
-3. Outline on the support surface: the x-y of the side points (those below the top face) is the visible front
-   of the object. A circle fitted to them (algebraic fit) that explains them clearly better than a rectangle,
-   with a plausible radius, makes a cylinder; otherwise a box whose yaw is the rectangle (L-shape) fit of those
+3. Outline on the support surface: the x-y of the side points (those below the top face), one median point per
+   image column, is the visible front of the object. A circle fitted to them (algebraic fit) that explains them clearly better than a rectangle,
+   with a plausible radius, makes a cylinder (both judged by the root of the median squared residual, robust to
+   stray pixels at the silhouette); otherwise a box whose yaw is the rectangle (L-shape) fit of those
    points: the yaw in [0, pi/2) that packs them closest to two perpendicular edges (the "closeness" criterion of
    L-shape fitting on a 2 degree grid, then the least rms distance to the nearest edge within +-2 degrees). Yaw 0 when fewer than ``min_fit_points`` points are available.
 4. Extents along the box's two axes: the 0.5th and 99.5th percentiles of all the segment's points (side and top;
@@ -84,13 +88,15 @@ class EstimatorConfig:
 
     prior: DepthPrior = DepthPrior()
     min_points: int = 8  # a segment with fewer valid points yields no hypothesis
-    min_fit_points: int = 12  # fewer side points: yaw 0 (no line fit)
-    max_fit_points: int = 600  # side points used for the yaw and circle fits (evenly subsampled)
+    min_fit_points: int = 5  # fewer outline points (image columns): yaw 0 (no line fit)
+    max_fit_points: int = 600  # outline points used for the yaw and circle fits (evenly subsampled)
     edge_percentile: float = 0.5  # robust extents: this percentile and 100 minus it
     yaw_step_deg: float = 2.0  # coarse yaw search step; refined to a twentieth of it
     closeness_floor: float = 0.001  # the L-shape criterion's minimum distance (m)
-    cylinder_residual_ratio: float = 0.5  # circle rms below this fraction of the rectangle's rms -> cylinder
+    cylinder_residual_ratio: float = 0.8  # circle rms below this fraction of the rectangle's rms -> cylinder
     occluded_row_fraction: float = 0.15  # a side is occluded when this fraction of its border rows is
+    floor_band: float = 0.015  # points this close to the support surface are left out (noisy floor)
+    back_wall_band: float = 0.015  # ... and this close to the back panel (a range offset joins it to segments)
     overlap_tolerance: float = 1e-4  # m^2 of footprint overlap allowed between hypotheses
     wall_clearance: float = 0.0  # the prior keeps boxes this far inside the walls
 
@@ -106,7 +112,7 @@ class Uncertainty:
     depth_from_prior: bool  # the box was extended by the depth prior
     occluded_left: bool
     occluded_right: bool
-    residual: float  # rms distance (m) of the side points to the fitted outline
+    residual: float  # robust rms distance (m) of the outline points to the fitted outline
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,26 +155,30 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
     fits = []
     for sid in observation.segment_ids:
         mask = labels == sid
-        p = _segment_points(observation.depth, camera, mask)
+        p, columns = _segment_points(observation.depth, camera, mask)
+        inside = p[:, 1] < shelf.depth / 2 - config.back_wall_band
+        if np.count_nonzero(inside) >= config.min_points:
+            p, columns = p[inside], columns[inside]
         if len(p) < config.min_points:
             continue
         left, right = _occluded_sides(observation, mask, sid, config.occluded_row_fraction)
-        fits.append((sid, int(mask.sum()), left, right, _fit(p, eye, camera, left, right, config)))
+        fits.append((sid, int(mask.sum()), left, right, _fit(p, columns, eye, camera, left, right, config)))
     boxes = [f[4] for f in fits]
     _limit_priors(boxes, shelf, config)
+    _separate(boxes, eye, config)
     out = []
     for sid, pixels, left, right, fit in fits:
         out.append(_hypothesis(sid, pixels, left, right, fit, eye, config))
     return out
 
 
-def _segment_points(depth: np.ndarray, camera, mask: np.ndarray) -> np.ndarray:
+def _segment_points(depth: np.ndarray, camera, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The valid pixels of ``mask`` back-projected into S, (N, 3) (as ``segmentation.back_project``, for a few
-    pixels rather than the whole image)."""
+    pixels rather than the whole image), and their image columns (N,)."""
     v, u = np.nonzero(mask & (depth > 0))
     z = depth[v, u].astype(np.float64)
     p_C = np.stack([(u - camera.cx) / camera.fx * z, (v - camera.cy) / camera.fy * z, z], axis=-1)
-    return p_C @ camera.X_SC[:3, :3].T + camera.X_SC[:3, 3]
+    return p_C @ camera.X_SC[:3, :3].T + camera.X_SC[:3, 3], u
 
 
 def hypothesis_objects(hypotheses) -> tuple[SceneObject, ...]:
@@ -189,15 +199,21 @@ class _Fit:
     front_sigma: float
 
 
-def _fit(p: np.ndarray, eye: np.ndarray, camera, occluded_left: bool, occluded_right: bool,
-         config: EstimatorConfig) -> _Fit:
+def _fit(p: np.ndarray, columns: np.ndarray, eye: np.ndarray, camera, occluded_left: bool,
+         occluded_right: bool, config: EstimatorConfig) -> _Fit:
+    above = p[:, 2] > config.floor_band  # range noise lifts the floor around an object's base into its segment
+    if np.count_nonzero(above) >= config.min_points:
+        p, columns = p[above], columns[above]
     z = p[:, 2]
     height = float(max(np.percentile(z, 99.0), 0.01))
     pixel = float(np.median(camera.to_camera(p)[:, 2])) / camera.fx  # a pixel's footprint (m) at the segment
     top_band = max(0.005, 1.5 * pixel)
-    side = p[(z < height - top_band) & (z > 0.004)][:, :2]
-    if len(side) < config.min_fit_points:
-        side = p[:, :2]
+    is_side = z < height - top_band
+    if np.count_nonzero(is_side) < config.min_fit_points:
+        is_side[:] = True
+    side = _outline(p[is_side, :2], columns[is_side])
+    # One object's outline spans at most the largest object's diagonal: farther columns are strays.
+    side = side[np.hypot(*(side - np.median(side, axis=0)).T) <= math.sqrt(2.0) * config.prior.largest / 2 + 0.02]
     side = _subsample(side, config.max_fit_points)
     xy = p[:, :2]
     yaw, rect_rms = _rectangle_yaw(side, config) if len(side) >= config.min_fit_points else (0.0, math.inf)
@@ -214,6 +230,17 @@ def _fit(p: np.ndarray, eye: np.ndarray, camera, occluded_left: bool, occluded_r
                 rect_rms if math.isfinite(rect_rms) else pixel)
 
 
+def _outline(xy: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """The visible outline on the support surface: per image column, the median x-y of the side points. A
+    column cuts an upright surface along one footprint point, so the median keeps the outline and averages the
+    range noise of the column's pixels away."""
+    order = np.argsort(columns, kind="stable")
+    cols, xy = columns[order], xy[order]
+    starts = np.flatnonzero(np.r_[True, cols[1:] != cols[:-1]])
+    ends = np.r_[starts[1:], len(cols)]
+    return np.array([np.median(xy[a:b], axis=0) for a, b in zip(starts, ends)])
+
+
 def _subsample(points: np.ndarray, limit: int) -> np.ndarray:
     if len(points) <= limit:
         return points
@@ -221,8 +248,8 @@ def _subsample(points: np.ndarray, limit: int) -> np.ndarray:
 
 
 def _rectangle_yaw(xy: np.ndarray, config: EstimatorConfig) -> tuple[float, float]:
-    """The yaw in [0, pi/2) whose two perpendicular edges the points hug most closely, and the points' rms
-    distance to the nearest edge of the rectangle at that yaw."""
+    """The yaw in [0, pi/2) whose two perpendicular edges the points hug most closely, and the points' robust
+    rms distance (root of the median square) to the nearest edge of the rectangle at that yaw."""
     def scores(angles):
         c, s = np.cos(angles), np.sin(angles)
         a = xy[:, :1] * c + xy[:, 1:] * s  # (N, A)
@@ -231,7 +258,7 @@ def _rectangle_yaw(xy: np.ndarray, config: EstimatorConfig) -> tuple[float, floa
         da = np.minimum(a - np.percentile(a, q, axis=0), np.percentile(a, 100 - q, axis=0) - a)
         db = np.minimum(b - np.percentile(b, q, axis=0), np.percentile(b, 100 - q, axis=0) - b)
         d = np.clip(np.minimum(np.abs(da), np.abs(db)), config.closeness_floor, None)
-        return (1.0 / d).sum(axis=0), np.sqrt(np.mean(np.minimum(np.abs(da), np.abs(db)) ** 2, axis=0))
+        return (1.0 / d).sum(axis=0), np.sqrt(np.median(np.minimum(np.abs(da), np.abs(db)) ** 2, axis=0))
 
     step = math.radians(config.yaw_step_deg)
     coarse = np.arange(0.0, math.pi / 2, step)
@@ -243,7 +270,23 @@ def _rectangle_yaw(xy: np.ndarray, config: EstimatorConfig) -> tuple[float, floa
 
 
 def _circle_fit(xy: np.ndarray) -> tuple[float, float, float, float] | None:
-    """Algebraic (Kasa) circle fit refined by a few Gauss-Newton steps: centre, radius, rms residual."""
+    """Circle through the points: an algebraic (Kasa) fit refined by Gauss-Newton, then refitted (up to three
+    times) to the points within three robust standard deviations of it (pixels of a neighbour at the silhouette are outliers).
+    Returns centre x, y, radius and the robust rms residual (root of the median square), or None."""
+    fit = _circle_least_squares(xy)
+    if fit is None:
+        return None
+    residual = np.abs(np.hypot(xy[:, 0] - fit[0], xy[:, 1] - fit[1]) - fit[2])
+    for _ in range(3):
+        inliers = residual <= max(3.0 * 1.4826 * np.median(residual), 1e-3)
+        if not 3 <= np.count_nonzero(inliers) < len(xy):
+            break
+        fit = _circle_least_squares(xy[inliers]) or fit
+        residual = np.abs(np.hypot(xy[:, 0] - fit[0], xy[:, 1] - fit[1]) - fit[2])
+    return fit[0], fit[1], fit[2], float(np.sqrt(np.median(residual ** 2)))
+
+
+def _circle_least_squares(xy: np.ndarray) -> tuple[float, float, float] | None:
     mean = xy.mean(axis=0)
     q = xy - mean
     A = np.column_stack([2 * q, np.ones(len(q))])
@@ -260,15 +303,12 @@ def _circle_fit(xy: np.ndarray) -> tuple[float, float, float, float] | None:
         if np.any(dist < 1e-9):
             break
         J = np.column_stack([-d / dist[:, None], -np.ones(len(q))])
-        res = dist - r
-        step, *_ = np.linalg.lstsq(J, -res, rcond=None)
+        step, *_ = np.linalg.lstsq(J, -(dist - r), rcond=None)
         c = c + step[:2]
         r = r + step[2]
-    d = q - c
-    residual = float(np.sqrt(np.mean((np.hypot(d[:, 0], d[:, 1]) - r) ** 2)))
-    if not (math.isfinite(r) and r > 0):
+    if not (math.isfinite(r) and r > 0 and np.all(np.isfinite(c))):
         return None
-    return float(c[0] + mean[0]), float(c[1] + mean[1]), float(r), residual
+    return float(c[0] + mean[0]), float(c[1] + mean[1]), float(r)
 
 
 def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, config) -> _Box:
@@ -359,6 +399,70 @@ def _limit_priors(fits: list[_Fit], shelf: Shelf, config: EstimatorConfig) -> No
         lo, hi = fit.box.with_extension(fraction)
         fit.box.lo, fit.box.hi = lo, hi
         polygons[i] = _box_footprint(fit.box).polygon()
+
+
+def _separate(fits: list[_Fit], eye: np.ndarray, config: EstimatorConfig) -> None:
+    """Where two hypotheses still overlap by more than ``config.overlap_tolerance`` (their observed parts: a
+    misfit, e.g. a partly hidden cylinder taken for a box), the farther one (from the camera) gives way: a box
+    moves its edge facing the other back, a cylinder shrinks about its front point, until the overlap is
+    within the tolerance. Nearer objects are seen better, so they keep their shape."""
+    def distance(fit):
+        fp = _fit_footprint(fit)
+        return math.hypot(fp.x - eye[0], fp.y - eye[1])
+
+    for i in range(len(fits)):
+        for j in range(i + 1, len(fits)):
+            a, b = fits[i], fits[j]
+            if _fit_footprint(a).polygon().intersection(_fit_footprint(b).polygon()).area <= config.overlap_tolerance:
+                continue
+            near, far = (a, b) if distance(a) <= distance(b) else (b, a)
+            if far.shape == "cylinder" and near.shape == "box":
+                near, far = far, near  # shrink the box: a cylinder has no edge to move
+            _give_way(far, _fit_footprint(near).polygon(), eye, config.overlap_tolerance)
+
+
+def _give_way(fit: _Fit, other, eye: np.ndarray, tolerance: float) -> None:
+    """Shrinks ``fit`` (in place) away from the polygon ``other`` until they overlap by at most ``tolerance``."""
+    def overlap() -> float:
+        return _fit_footprint(fit).polygon().intersection(other).area
+
+    if fit.shape == "cylinder":
+        x, y, r = fit.circle
+        front = np.array([x, y]) - r * (np.array([x, y]) - eye) / max(math.hypot(x - eye[0], y - eye[1]), 1e-9)
+        direction = (np.array([x, y]) - front) / r
+        lo, hi = 0.1, 1.0
+        for _ in range(14):
+            mid = (lo + hi) / 2
+            fit.circle = (*(front + direction * r * mid), r * mid)
+            lo, hi = (lo, mid) if overlap() > tolerance else (mid, hi)
+        fit.circle = (*(front + direction * r * lo), r * lo)
+        return
+    box = fit.box
+    c, s = math.cos(box.yaw), math.sin(box.yaw)
+    axes = np.array([[c, s], [-s, c]])
+    centre = np.array(other.centroid.coords[0])
+    offset = axes @ (centre - np.array([_fit_footprint(fit).x, _fit_footprint(fit).y]))
+    k = int(np.argmax(np.abs(offset)))
+    side_hi = offset[k] > 0  # the other lies on the hi side of axis k: move hi down (or lo up)
+    start = box.hi[k] if side_hi else box.lo[k]
+    stop = box.lo[k] + 0.01 if side_hi else box.hi[k] - 0.01
+    lo_f, hi_f = 0.0, 1.0  # fraction of the way from start to stop
+    for _ in range(14):
+        mid = (lo_f + hi_f) / 2
+        value = start + mid * (stop - start)
+        if side_hi:
+            box.hi[k] = value
+        else:
+            box.lo[k] = value
+        lo_f, hi_f = (mid, hi_f) if overlap() > tolerance else (lo_f, mid)
+    value = start + hi_f * (stop - start)
+    if side_hi:
+        box.hi[k] = min(value, box.hi[k]) if overlap() <= tolerance else value
+        box.hi[k] = value
+        box.observed_hi[k] = min(box.observed_hi[k], value)
+    else:
+        box.lo[k] = value
+        box.observed_lo[k] = max(box.observed_lo[k], value)
 
 
 # ------------------------------------------------------------------------------------------- hypotheses
@@ -455,7 +559,7 @@ def predict_observation(observation: Observation, segment_id: int, dx: float, dy
     depth = observation.depth.copy()
     labels = observation.segmentation.copy()
     target = observation.target_mask.copy()
-    pts = _segment_points(observation.depth, camera, mask) + np.array([dx, dy, 0.0])
+    pts = _segment_points(observation.depth, camera, mask)[0] + np.array([dx, dy, 0.0])
     depth[mask] = 0.0
     labels[mask] = 0
     h, w = depth.shape

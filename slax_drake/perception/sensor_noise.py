@@ -19,7 +19,9 @@ L515 would plausibly return, in plain numpy (the shelf simulator uses it directl
    image, whose pixels span several native pixels, loses proportionally fewer edge pixels).
 4. Missing returns on grazing surfaces (too little light comes back): a pixel whose surface normal (from the depth
    image's own gradient) makes an angle theta with its ray is dropped with probability rising linearly from 0 at
-   ``grazing_start_deg`` to ``grazing_dropout`` at ``grazing_full_deg``. Dark (low-reflectivity) surfaces behave
+   ``grazing_start_deg`` to ``grazing_dropout`` at ``grazing_full_deg`` (the normal from one-sided differences,
+   the side that changes depth less, so that a pixel at an occluding edge takes its own surface's normal).
+   A pixel at an edge drops with the larger of the two probabilities. Dark (low-reflectivity) surfaces behave
    alike on the real sensor; a depth image carries no reflectivity, so they are not modelled.
 
 Effects 3-4 and the range-noise parameters beyond the datasheet's two precision points are modelling choices of
@@ -98,13 +100,26 @@ def _edges(z: np.ndarray, valid: np.ndarray, jump: float) -> np.ndarray:
     return edges & valid
 
 
+def _smoother_difference(p: np.ndarray, z: np.ndarray, axis: int) -> np.ndarray:
+    """Per pixel, the forward or the backward difference of the points p (H, W, 3) along ``axis``, whichever
+    changes depth less: at an occluding edge the side on the same surface wins, so the normal is that
+    surface's; on a grazing surface both sides agree."""
+    fwd = np.diff(p, axis=axis, append=np.take(p, [-1], axis=axis))
+    bwd = np.diff(p, axis=axis, prepend=np.take(p, [0], axis=axis))
+    dz_f = np.abs(np.diff(z, axis=axis, append=np.take(z, [-1], axis=axis)))
+    dz_b = np.abs(np.diff(z, axis=axis, prepend=np.take(z, [0], axis=axis)))
+    # At the image border one difference is zero (a copy of the pixel): use the other one.
+    use_f = ((dz_f <= dz_b) | (np.linalg.norm(bwd, axis=-1) == 0)) & (np.linalg.norm(fwd, axis=-1) > 0)
+    return np.where(use_f[..., None], fwd, bwd)
+
+
 def _grazing_probability(z: np.ndarray, valid: np.ndarray, camera: Camera, noise: L515Noise) -> np.ndarray:
     """Drop probability (H, W) from the angle between each pixel's ray and its surface normal."""
     h, w = z.shape
     u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
     p = np.stack([(u - camera.cx) / camera.fx * z, (v - camera.cy) / camera.fy * z, z], axis=-1)
-    du = np.gradient(p, axis=1)
-    dv = np.gradient(p, axis=0)
+    du = _smoother_difference(p, z, axis=1)
+    dv = _smoother_difference(p, z, axis=0)
     n = np.cross(du, dv)
     norm = np.linalg.norm(n, axis=-1) * np.linalg.norm(p, axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
