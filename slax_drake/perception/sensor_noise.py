@@ -88,9 +88,9 @@ def _edges(z: np.ndarray, valid: np.ndarray, jump: float) -> np.ndarray:
     """Valid pixels with a 4-neighbour more than ``jump`` away in depth or without a return."""
     edges = np.zeros(z.shape, dtype=bool)
     far = np.where(valid, z, np.inf)
-    dx = np.abs(np.diff(far, axis=1))
-    dy = np.abs(np.diff(far, axis=0))
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"):  # inf - inf between two pixels without a return: NaN, counted as a jump
+        dx = np.abs(np.diff(far, axis=1))
+        dy = np.abs(np.diff(far, axis=0))
         jx = ~(dx <= jump)
         jy = ~(dy <= jump)
     edges[:, 1:] |= jx
