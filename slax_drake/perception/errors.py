@@ -13,3 +13,8 @@ class ImageSizeError(UserError):
 
 class PerceptionDataError(UserError):
     """A training or evaluation data set is missing, empty or lacks what the network needs."""
+
+
+class ObservationError(UserError):
+    """A camera frame (depth, segmentation, target mask, joint state) cannot be used as an observation: wrong
+    shape for the camera, wrong data type, or too few valid depth returns."""
