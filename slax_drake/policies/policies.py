@@ -84,6 +84,11 @@ class DistributionPolicy:
 
     # helpers ---------------------------------------------------------------------------------------------
     def predict(self, obs, objects) -> np.ndarray:
+        """P(u) after the observed objects moved as ``objects`` says: in camera mode from the predicted image
+        (``obs.belief``), else from the distribution model on the believed scene."""
+        belief = getattr(obs, "belief", None)
+        if belief is not None:
+            return belief.predict(objects)
         return self.distribution.distribution(obs.scene_template.with_objects(objects))
 
     def candidates(self, objects, pushes=None, suctions=None):
