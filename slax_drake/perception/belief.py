@@ -99,11 +99,13 @@ def background_depth(shelf: Shelf, camera: Camera) -> np.ndarray:
 
 
 class ObservedBelief:
-    """See the module docstring. ``observation``'s segment ids name the hypotheses (``segment_<id>``)."""
+    """See the module docstring. ``observation``'s segment ids name the hypotheses (``segment_<id>``);
+    ``hypotheses`` (default: the estimator's on ``observation``) and ``p1d`` (default: the source on the frame) may
+    come from the PerceptionSystem."""
 
     def __init__(self, observation: Observation, shelf: Shelf, source, background: np.ndarray | None = None,
                  hypotheses: list[Hypothesis] | None = None, config: EstimatorConfig = EstimatorConfig(),
-                 cache_size: int = 4096):
+                 cache_size: int = 4096, p1d: np.ndarray | None = None):
         self.observation = observation
         self.shelf = shelf
         self.source = source
@@ -113,6 +115,10 @@ class ObservedBelief:
         self.background = background_depth(shelf, observation.camera) if background is None else background
         self.cache_size = cache_size
         self._cache: dict = {}
+        if p1d is not None:  # P_t already computed by perception (the same source on the same frame)
+            p = np.array(p1d, dtype=np.float64)
+            p.setflags(write=False)
+            self._cache[state_key(self.known)] = p
         self.p1d = self.predict(self.known)
 
     def segment_id(self, name: str) -> int:
