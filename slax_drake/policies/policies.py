@@ -79,6 +79,10 @@ class DistributionPolicy:
     def exclude(self, action, reason: str, whole_group: bool = False) -> None:
         self._exclusions.add(action, reason, whole_group, self._objects)
 
+    def resume(self, history) -> None:
+        """Continues a trial whose P'_{t-1} is ``history`` (a step planned by another process: plan-step)."""
+        self._history = None if history is None else np.asarray(history, dtype=float).copy()
+
     def rank(self, obs) -> Decision:  # pragma: no cover - interface
         raise NotImplementedError
 
