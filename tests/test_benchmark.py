@@ -77,7 +77,8 @@ def test_camera_observation_is_recorded_oracles_stay_privileged_and_modes_do_not
     with pytest.raises(SettingsMismatchError, match="camera observation"):
         run_benchmark(sim_scenario, ["bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False,
                       camera=CameraMode(segmentation="depth"))
-    assert main(["benchmark", "--policies", "dar", "--sensor-noise", "--out", str(tmp_path / "x")]) == 2
+    assert main(["benchmark", "--policies", "dar", "--observation", "privileged", "--sensor-noise",
+                 "--out", str(tmp_path / "x")]) == 2
     assert "--observation camera only" in capsys.readouterr().err
 
 

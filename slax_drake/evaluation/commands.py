@@ -33,11 +33,11 @@ def register(subparsers) -> None:
     p.add_argument("--perception", choices=("ground-truth", "learned"), default="ground-truth",
                    help="distribution model: ground-truth (compute_occupancy) or learned (the shipped network, "
                    "models/perception/unet128); the shelf simulator only")
-    p.add_argument("--observation", choices=("privileged", "camera"), default="privileged",
-                   help="what the non-oracle policies see: privileged (default: the objects seen with their true "
-                   "shapes and poses, P_t of the true scene) or camera (rendered frames -> segmentation -> estimator "
-                   "hypotheses, P_t from the frame, predictions by shifting segments in the image); the oracles read "
-                   "the true scene in both; the shelf simulator only")
+    p.add_argument("--observation", choices=("privileged", "camera"), default=None,
+                   help="what the non-oracle policies see: camera (default: rendered frames -> segmentation -> "
+                   "estimator hypotheses, P_t from the frame, predictions by shifting segments in the image) or "
+                   "privileged (the objects seen with their true shapes and poses, P_t of the true scene; the "
+                   "behaviour before camera mode); the oracles read the true scene in both; the shelf simulator only")
     p.add_argument("--segmentation", choices=("labels", "depth"), default=None,
                    help="with --observation camera: the render's object labels (default, idealised) or depth-only "
                    "segmentation")
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     from slax_drake.evaluation.table1 import CameraMode, run_benchmark
 
     camera = None
-    if args.observation == "camera":
+    if args.observation in (None, "camera"):
         camera = CameraMode(segmentation=args.segmentation or "labels", sensor_noise=args.sensor_noise)
     elif args.segmentation is not None or args.sensor_noise:
         raise UserError("--segmentation and --sensor-noise apply to --observation camera only")
@@ -125,7 +125,7 @@ def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: in
 
     if args.perception != "ground-truth":
         raise UserError("--physics runs ground-truth distributions only: leave out --perception")
-    if args.observation != "privileged" or args.segmentation is not None or args.sensor_noise:
+    if args.observation is not None or args.segmentation is not None or args.sensor_noise:
         raise UserError("--observation, --segmentation and --sensor-noise apply to the shelf simulator only "
                         "(the physics benchmark's observation is its trial diagram's)")
     summary = run_physics_benchmark(args.config, policies, n, seed=seed, out=args.out, workers=args.workers,
