@@ -56,3 +56,37 @@ def test_tool_rules_are_recorded_and_a_folder_of_other_rules_is_refused(sim_scen
     assert main(["benchmark", "--policies", "dar", "--tool-rule", "max_suction_moment=heavy",
                  "--out", str(tmp_path / "x")]) == 2
     assert "needs a float" in capsys.readouterr().err
+
+
+def test_camera_observation_is_recorded_oracles_stay_privileged_and_modes_do_not_mix(sim_scenario, tmp_path, capsys):
+    from slax_drake.evaluation.settings import SettingsMismatchError
+    from slax_drake.evaluation.table1 import CameraMode
+
+    table = run_benchmark(sim_scenario, ["oracle-p", "bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False,
+                          camera=CameraMode())
+    assert table["meta"]["observation"] == "camera"
+    settings = json.loads((tmp_path / "settings.json").read_text())
+    assert settings["observation"] == "camera" and settings["camera"] == {"segmentation": "labels",
+                                                                          "sensor_noise": False}
+    trial = json.loads((tmp_path / "trials" / "bluction-dar" / "04_0000.json").read_text())
+    oracle = json.loads((tmp_path / "trials" / "oracle-p" / "04_0000.json").read_text())
+    assert trial["observation"] == "camera" and oracle["observation"] == "privileged"
+    assert "oracles, which read the true scene" in (tmp_path / "table1.md").read_text()
+    with pytest.raises(SettingsMismatchError, match="another --observation"):
+        run_benchmark(sim_scenario, ["bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False)
+    with pytest.raises(SettingsMismatchError, match="camera observation"):
+        run_benchmark(sim_scenario, ["bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False,
+                      camera=CameraMode(segmentation="depth"))
+    assert main(["benchmark", "--policies", "dar", "--observation", "privileged", "--sensor-noise",
+                 "--out", str(tmp_path / "x")]) == 2
+    assert "--observation camera only" in capsys.readouterr().err
+
+
+def test_a_record_from_before_observation_modes_counts_as_privileged(sim_scenario, tmp_path):
+    run_benchmark(sim_scenario, ["dar"], 1, 0, tmp_path, densities=[4], progress=False)
+    path = tmp_path / "settings.json"
+    record = json.loads(path.read_text())
+    assert record["observation"] == "privileged"
+    del record["observation"], record["camera"]
+    path.write_text(json.dumps(record))
+    run_benchmark(sim_scenario, ["dar"], 1, 0, tmp_path, densities=[4], progress=False)  # resumes: not refused

@@ -40,7 +40,10 @@ def test_short_trial_reveals_the_target(short_trial):
     assert (out / "step_00.png").stat().st_size > 1000
     with np.load(out / "step_depth.npz") as z:  # each decision's depth image, for export --format mcap
         assert z["times"].tolist() == [e["time"] for e in d["steps_log"]]
-        assert z["depth"].shape == (len(d["steps_log"]), 480, 640) and z["depth"].dtype == np.float32
+        # the frame the planner read: the perception's working resolution (160 x 120)
+        assert z["depth"].shape == (len(d["steps_log"]), 120, 160) and z["depth"].dtype == np.float32
+    for a in d["actions"]:  # chosen on a hypothesis, executed on the object its segment shows
+        assert a["object"].startswith("segment_") and a["true_object"] in d["final_objects"]
     assert d["tool_rules"] == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0}  # the station cup's limits
 
 

@@ -33,6 +33,16 @@ def register(subparsers) -> None:
     p.add_argument("--perception", choices=("ground-truth", "learned"), default="ground-truth",
                    help="distribution model: ground-truth (compute_occupancy) or learned (the shipped network, "
                    "models/perception/unet128); the shelf simulator only")
+    p.add_argument("--observation", choices=("privileged", "camera"), default=None,
+                   help="what the non-oracle policies see: camera (default: rendered frames -> segmentation -> "
+                   "estimator hypotheses, P_t from the frame, predictions by shifting segments in the image) or "
+                   "privileged (the objects seen with their true shapes and poses, P_t of the true scene; the "
+                   "behaviour before camera mode); the oracles read the true scene in both; the shelf simulator only")
+    p.add_argument("--segmentation", choices=("labels", "depth"), default=None,
+                   help="with --observation camera: the render's object labels (default, idealised) or depth-only "
+                   "segmentation")
+    p.add_argument("--sensor-noise", action="store_true",
+                   help="with --observation camera: the L515 depth-noise model on every frame (seeded by the scene)")
     p.add_argument("--out", default="results/table1", help="output folder (default: results/table1)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--physics", action="store_true",
@@ -87,11 +97,17 @@ def run(args: argparse.Namespace) -> int:
     for flag, given in (("--station", args.station is not None), ("--sleep", args.sleep)):
         if given:
             raise UserError(f"{flag} applies to --physics only")
-    from slax_drake.evaluation.table1 import run_benchmark
+    from slax_drake.evaluation.table1 import CameraMode, run_benchmark
+
+    camera = None
+    if args.observation in (None, "camera"):
+        camera = CameraMode(segmentation=args.segmentation or "labels", sensor_noise=args.sensor_noise)
+    elif args.segmentation is not None or args.sensor_noise:
+        raise UserError("--segmentation and --sensor-noise apply to --observation camera only")
 
     table = run_benchmark(scenario, policies, n, seed, args.out, workers=args.workers, backend=args.backend,
                           perception=args.perception, densities=densities, progress=not args.no_progress,
-                          tool_rules=tool_rules, config=args.config, ray_address=args.ray_address)
+                          tool_rules=tool_rules, config=args.config, ray_address=args.ray_address, camera=camera)
     meta = table["meta"]
     print(f"kept {meta['trials_kept']} trials already in {args.out}, ran {meta['trials_run']}")
     for p, per in table["policies"].items():
@@ -109,6 +125,9 @@ def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: in
 
     if args.perception != "ground-truth":
         raise UserError("--physics runs ground-truth distributions only: leave out --perception")
+    if args.observation is not None or args.segmentation is not None or args.sensor_noise:
+        raise UserError("--observation, --segmentation and --sensor-noise apply to the shelf simulator only "
+                        "(the physics benchmark's observation is its trial diagram's)")
     summary = run_physics_benchmark(args.config, policies, n, seed=seed, out=args.out, workers=args.workers,
                                     densities=densities, station=args.station, sleep=args.sleep,
                                     progress=not args.no_progress, tool_rules=tool_rules, backend=args.backend,

@@ -5,7 +5,7 @@ Every setting that changes a trial's outcome goes into ``<out>/settings.json`` (
 ``<out>/physics_settings.json``) before the first trial runs: the
 scenario's content (a SHA-256 of the parsed scenario, less the fields that only choose *which* trials run: the
 protocol's seed, densities and scenes per density), the protocol seed, the distribution model (perception), the
-target size, the horizon per object, the suction cost, the visibility threshold, the action-model rules and, per
+target size, the observation mode (privileged or camera, with its segmentation and sensor noise), the horizon per object, the suction cost, the visibility threshold, the action-model rules and, per
 policy, its class and constructor options (the physics benchmark adds the station file's content and object
 sleep). A run into a folder recorded with other values is refused before anything runs, with one line naming the
 first setting that differs; a policy new to the folder is added to the record.
@@ -50,10 +50,14 @@ def policy_settings(names) -> dict:
     return {n: {"class": POLICY_TABLE[n].cls, "options": dict(POLICY_TABLE[n].options)} for n in names}
 
 
-def protocol_settings(scenario, config: str, seed: int, perception: str, tool_rules: dict, policies) -> dict:
+def protocol_settings(scenario, config: str, seed: int, perception: str, tool_rules: dict, policies,
+                      camera=None) -> dict:
     """The outcome-changing settings of a Table I run (see the module docstring). ``config`` (the path) is recorded
-    for the reader; its content is what is compared."""
+    for the reader; its content is what is compared. ``camera``: the camera observation mode
+    (slax_drake.evaluation.table1.CameraMode) or None (privileged)."""
     return {
+        "observation": "privileged" if camera is None else "camera",
+        "camera": None if camera is None else dataclasses.asdict(camera),
         "config": str(config),
         "scenario_sha256": scenario_digest(scenario),
         "seed": int(seed),
@@ -70,7 +74,8 @@ def protocol_settings(scenario, config: str, seed: int, perception: str, tool_ru
 # What a mismatch is called in the message, in the order the check reports them (the specific settings before the
 # scenario's whole content, so the message names what was changed when it can).
 LABELS = {
-    "seed": "--seed", "perception": "--perception", "target_size": "target size (scenario target.sizes)",
+    "seed": "--seed", "observation": "--observation", "camera": "camera observation (--segmentation, --sensor-noise)",
+    "perception": "--perception", "target_size": "target size (scenario target.sizes)",
     "horizon_per_object": "horizon (scenario protocol.horizon_per_object)",
     "suction_cost": "suction cost (scenario protocol.suction_cost)",
     "visibility_threshold": "visibility threshold (scenario target.visibility_threshold)",
@@ -78,6 +83,8 @@ LABELS = {
     "scenario_sha256": "scenario (the --config file's content)",
 }
 INFORMATIONAL = ("config", "station")
+# What a record made before a setting existed holds for it (folders made before --observation were privileged).
+RECORDED_DEFAULTS = {"observation": "privileged", "camera": None}
 
 
 def record_or_refuse(out: Path, settings: dict, has_results: bool, name: str = SETTINGS_FILE) -> dict:
@@ -93,9 +100,10 @@ def record_or_refuse(out: Path, settings: dict, has_results: bool, name: str = S
         except (OSError, json.JSONDecodeError, KeyError, TypeError) as e:
             raise SettingsMismatchError(f"{path}: unreadable settings record ({e}); use another --out") from None
         for key in [k for k in LABELS if k in settings or k in recorded]:
-            if recorded.get(key) != settings.get(key):
+            if recorded.get(key, RECORDED_DEFAULTS.get(key)) != settings.get(key, RECORDED_DEFAULTS.get(key)):
                 raise SettingsMismatchError(
-                    f"{out} was made with another {LABELS[key]}: {_show(recorded.get(key))} there, "
+                    f"{out} was made with another {LABELS[key]}: "
+                    f"{_show(recorded.get(key, RECORDED_DEFAULTS.get(key)))} there, "
                     f"{_show(settings.get(key))} now; use another --out")
         for name, entry in settings["policies"].items():
             if name in recorded_policies and recorded_policies[name] != entry:

@@ -11,6 +11,7 @@ every policy in the folder, not only those of this run.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -31,6 +32,16 @@ class BenchmarkError(UserError):
     """A benchmark request that cannot be run, or a corrupt trial file."""
 
 
+@dataclasses.dataclass(frozen=True)
+class CameraMode:
+    """``--observation camera``: the non-oracle policies see rendered frames (slax_drake.policies.simulator.
+    CameraObserver): ``segmentation`` "labels" (the render's object labels, idealised) or "depth"
+    (segment_depth); ``sensor_noise``: the L515 model, seeded by the scene seed."""
+
+    segmentation: str = "labels"
+    sensor_noise: bool = False
+
+
 def scene_seed(protocol_seed: int, density: int, index: int) -> int:
     """The scene seed for trial ``index`` of ``density`` objects; the same for every policy."""
     return int(protocol_seed) * 1_000_003 + int(density) * 10_007 + int(index)
@@ -42,17 +53,25 @@ def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
 
 def _run_one(job) -> dict:
     """Runs one trial (in whichever process the backend chose); returns the trial file's content."""
-    scenario, policy_name, density, index, seed, perception, tool_rules = job
+    scenario, policy_name, density, index, seed, perception, tool_rules, camera = job
     from slax_drake.policies.registry import make_policy
-    from slax_drake.policies.simulator import run_trial
+    from slax_drake.policies.simulator import CameraObserver, run_trial
     from slax_drake.scene.sampling import sample_scene
 
-    scene = sample_scene(scenario, density, seed, target_size=tuple(scenario.target.sizes[0]))
+    size = tuple(scenario.target.sizes[0])
+    scene = sample_scene(scenario, density, seed, target_size=size)
     horizon = scenario.protocol.horizon_per_object * density
     policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules)
+    observer = None
+    if camera is not None and not policy.needs_true_scene:  # the oracles always read the true scene
+        observer = CameraObserver(scene.shelf, scene.camera, size,
+                                  source="network" if perception == "learned" else "depth",
+                                  width=policy.observation_width, segmentation=camera.segmentation,
+                                  noise_seed=seed if camera.sensor_noise else None)
     result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
-                       suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
+                       suction_cost=scenario.protocol.suction_cost, density=density, observer=observer).to_dict()
     result["index"] = index
+    result["observation"] = "privileged" if observer is None else "camera"
     if tool_rules:
         result["tool_rules"] = tool_rules
     return result
@@ -60,13 +79,15 @@ def _run_one(job) -> dict:
 
 def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: int, out: Path, workers: int = 1,
                   backend: str = "local", perception: str = "ground-truth", densities=None, progress=True,
-                  tool_rules: dict | None = None, config: str | None = None, ray_address: str | None = None) -> dict:
+                  tool_rules: dict | None = None, config: str | None = None, ray_address: str | None = None,
+                  camera: CameraMode | None = None) -> dict:
     """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``), whose ``meta``
     says how many trials were kept from the folder and how many ran.
 
     ``tool_rules``: ToolConfig overrides (action-model rule variants), recorded in each trial file; ``config``: the
     scenario's path, recorded beside its content's digest. A folder recorded with other settings is refused before
-    anything runs (:func:`slax_drake.evaluation.settings.record_or_refuse`)."""
+    anything runs (:func:`slax_drake.evaluation.settings.record_or_refuse`). ``camera``: the camera observation
+    mode of the non-oracle policies (None: privileged, today's Observation; the oracles are privileged always)."""
     from slax_drake.backends import check_backend, run_tasks
     from slax_drake.evaluation.settings import protocol_settings, record_or_refuse
     from slax_drake.policies.registry import without_defaults
@@ -75,7 +96,7 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     densities = list(densities or scenario.protocol.densities)
     tool_rules = without_defaults(dict(tool_rules or {}))
     check_backend(backend, workers, ray_address)
-    settings = protocol_settings(scenario, config or "?", seed, perception, tool_rules, policies)
+    settings = protocol_settings(scenario, config or "?", seed, perception, tool_rules, policies, camera)
     record_or_refuse(out, settings, has_results=bool(present_policies(out)))
     jobs, kept = [], 0
     for policy in policies:
@@ -85,7 +106,7 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
                     kept += 1
                 else:
                     jobs.append((scenario, policy, density, index, scene_seed(seed, density, index), perception,
-                                 tool_rules))
+                                 tool_rules, camera))
     # Heavy policies first, interleaved, so the pool stays busy to the end.
     jobs.sort(key=lambda j: (-j[2], j[3], j[1]))
     start = time.perf_counter()
@@ -103,7 +124,8 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     table["meta"] = {"scenes_per_density": scenes_per_density, "seed": seed, "perception": perception,
                      "densities": densities, "wall_seconds_this_run": round(elapsed, 1), "workers": workers,
                      "backend": backend, "tool_rules": tool_rules, "trials_kept": kept, "trials_run": len(jobs),
-                     "missing_trials": missing}
+                     "missing_trials": missing, "observation": "privileged" if camera is None else "camera",
+                     "camera": None if camera is None else dataclasses.asdict(camera)}
     write_tables(table, out)
     return table
 
@@ -200,6 +222,15 @@ def markdown_table(table: dict) -> str:
                  f"{meta.get('perception', '?')} distributions; steps over successful trials."
                  + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
                     if meta.get("tool_rules") else ""))
+    if meta.get("observation") == "camera":
+        cam = meta.get("camera") or {}
+        lines.append(f"Observation: camera (rendered frames, {cam.get('segmentation', '?')} segmentation"
+                     f"{', L515 sensor noise' if cam.get('sensor_noise') else ''}, estimator hypotheses, distributions "
+                     "from the frame and its predicted successors) for every policy but the oracles, which read the "
+                     "true scene (privileged) in every mode.")
+    else:
+        lines.append("Observation: privileged (the objects seen with their true shapes and poses; P_t of the true "
+                     "scene).")
     for policy, count in (meta.get("missing_trials") or {}).items():
         lines.append(f"{policy}: {count} of these trials are not in the folder (run it with --policies {policy} to "
                      "complete them); its figures are over the trials present.")

@@ -60,6 +60,7 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
     while not planner_system.trial_state(context).done and context.get_time() < max_time:
         simulator.AdvanceTo(context.get_time() + 1.0)
     state = planner_system.trial_state(context)
+    snapshots = trial.evaluator.snapshots(context)
     wall = time.perf_counter() - t_wall
     html = None
     if meshcat is not None:
@@ -79,8 +80,9 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
                          "upright": bool(abs(X[2, 2]) > math.cos(math.radians(20.0))),
                          "inside": bool(abs(X[0, 3]) < scene.shelf.width / 2 and abs(X[1, 3]) < scene.shelf.depth / 2
                                         and -0.02 < X[2, 3] < scene.shelf.height)}
+    log = [_with_ground_truth(entry, snapshots) for entry in state.log]
     actions = []
-    for entry in state.log:
+    for entry in log:
         if "action" not in entry:
             continue
         a = dict(entry["action"])
@@ -91,12 +93,13 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         a["motion"] = entry["motion"]
         a["rejected_before"] = entry["rejected"]
         a["predicted"] = pred
+        a["true_object"] = entry.get("segments", {}).get(a["object"])  # the object the hypothesis was
         actions.append(a)
-    # actual outcome of each action: the object's pose at the next decision
-    decisions = state.log
+    # actual outcome of each action: the true object's pose at the next decision
+    decisions = log
     for k, a in enumerate(actions):
         after = decisions[k + 1] if k + 1 < len(decisions) else None
-        a["outcome"] = after.get("poses_before", {}).get(a["object"]) if after else None
+        a["outcome"] = after.get("poses_before", {}).get(a["true_object"]) if after and a["true_object"] else None
     trajectory = executed_trajectory(planner_system.planner, state.motions, sim_time)
     n_push = sum(1 for a in actions if a["type"] == "push")
     n_suction = len(actions) - n_push
@@ -108,12 +111,14 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         "config": opts.config, "station": station_path, "objects": opts.objects, "seed": opts.seed,
         "policy": opts.policy, "perception": opts.perception, "horizon": horizon, "sleep": opts.sleep,
         "tool_rules": tool_rules,
-        "visible_fraction": round(state.visible_fraction, 4),
+        "visible_fraction": round(snapshots[-1].visible_fraction, 4) if snapshots else 0.0,
+        "lost_objects": list(snapshots[-1].lost) if snapshots else [],
+        "sensor_noise": opts.sensor_noise, "segmentation": opts.segmentation,
         "sim_time_s": round(sim_time, 3), "wall_s": round(wall, 3), "setup_s": round(setup_s, 3),
         "real_time_factor": round(sim_time / wall, 4) if wall > 0 else None,
         "actions": actions,
-        "support_per_step": [e.get("support") for e in state.log if "support" in e],
-        "steps_log": [{k: v for k, v in e.items() if k not in ("p1d", "history")} for e in state.log],
+        "support_per_step": [e.get("support") for e in log if "support" in e],
+        "steps_log": [{k: v for k, v in e.items() if k not in ("p1d", "history")} for e in log],
         "initial_objects": {o.name: {"x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                      "yaw": round(float(o.yaw), 5)} for o in scene.objects},
         "final_objects": final,
@@ -122,6 +127,18 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
                                     "first commanded sample of each motion",
     }
     return TrialRecord(data, trial.step_images, html, scene)
+
+
+def _with_ground_truth(entry: dict, snapshots) -> dict:
+    """A planner decision's log entry with what the evaluator saw at that moment (matched by time): the target's
+    visible fraction, the lost objects, every object's planar pose in S and which object each segment was."""
+    snap = next((s for s in snapshots if abs(s.time - entry["time"]) < 5e-4), None)
+    if snap is None:
+        return dict(entry)
+    return {**entry, "visible_fraction": round(snap.visible_fraction, 4), "lost": list(snap.lost),
+            "poses_before": {name: {"x": round(x, 5), "y": round(y, 5), "yaw": round(yaw, 5)}
+                             for name, (x, y, yaw) in snap.poses.items()},
+            "segments": dict(snap.segments)}
 
 
 def executed_trajectory(planner, motions, t_end: float):

@@ -35,6 +35,10 @@ def register(subparsers) -> None:
     add_tool_rule_argument(p, "for the policy and the planner, over the station cup's limits "
                            "(max_suction_moment=inf and max_seal_angle_deg=90 give the paper's weightless rules)")
     p.add_argument("--max-sim-time", type=arguments.positive_float, default=None, help="simulated seconds at most")
+    p.add_argument("--sensor-noise", action="store_true",
+                   help="the L515 depth-noise model between the camera and perception (seeded by the scene seed)")
+    p.add_argument("--segmentation", choices=("labels", "depth"), default="labels",
+                   help="occluder segmentation: the render's object labels (default, idealised) or depth-only")
     p.add_argument("--sleep", action="store_true",
                    help="lock resting objects out of the physics step until something comes near (faster; "
                    "see slax_drake/systems/sleep.py)")
@@ -68,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
                         seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy,
                         perception=args.perception, station=args.station, meshcat=args.meshcat, html=args.html,
                         out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep,
+                        sensor_noise=args.sensor_noise, segmentation=args.segmentation,
                         tool_rules=parse_tool_rules(args.tool_rule))
     if args.benchmark_scene is not None:
         if args.objects is not None or args.seed is not None:

@@ -1,4 +1,5 @@
-"""``slax-drake export``, ``slax-drake check-trajectory`` and ``slax-drake replay``: a trial's motions for a real Fetch."""
+"""``slax-drake export``, ``slax-drake check-trajectory``, ``slax-drake replay`` and ``slax-drake plan-step``: a
+trial's motions for a real Fetch, and one search step planned from a real camera frame."""
 
 from __future__ import annotations
 
@@ -57,6 +58,23 @@ def register(subparsers) -> None:
     r.add_argument("--meshcat", action="store_true", help="serve the live view on localhost and print its URL")
     r.add_argument("--json", default=None, help="write the replayed final object poses as JSON here")
     r.set_defaults(func=run_replay)
+
+    s = subparsers.add_parser(
+        "plan-step", help="plan one search step for a real robot from a depth frame, a target mask and the joint state",
+        description="From one camera frame only (no object poses): validate the frame, segment it, estimate the "
+        "objects, compute the target distribution, let the policy choose an action, plan, Ruckig-time and check its "
+        "joint trajectory, and write it in the export format (check it again with 'slax-drake check-trajectory "
+        "OUT'), with the chosen action and the updated history under metadata.plan_step. An unusable frame is "
+        "refused (exit code 2).")
+    s.add_argument("--scenario", required=True, help="station YAML (e.g. sim_configs/station_sim_shelf.yaml)")
+    s.add_argument("--depth", required=True, help="depth frame: .npy (float metres) or .png (16-bit millimetres)")
+    s.add_argument("--target-mask", required=True, help="target mask: .png or .npy, non-zero where the target is seen")
+    s.add_argument("--joint-state", required=True,
+                   help='joint state JSON: {"joint_names": [...], "positions": [...]} (rad, m for torso and shaft)')
+    s.add_argument("--history", default=None, help="the previous step's OUT (carries the policy's history over)")
+    s.add_argument("--policy", default="bluction-dar", help="a non-oracle policy name (default bluction-dar)")
+    s.add_argument("--out", required=True, help="output step JSON (the export format, ros-json)")
+    s.set_defaults(func=run_plan_step)
 
 
 def _scene_and_station(traj, scene_path, station_path):
@@ -195,4 +213,23 @@ def run_replay(args: argparse.Namespace) -> int:
     if args.json:
         write_text_atomic(Path(args.json), json.dumps({"final_objects": result.final_objects, "difference": diffs,
                                                        "sim_time_s": result.sim_time}, indent=1))
+    return 0
+
+
+def run_plan_step(args: argparse.Namespace) -> int:
+    from slax_drake.hardware.plan_step import plan_step_files
+
+    result = plan_step_files(args.scenario, args.depth, args.target_mask, args.joint_state, args.out,
+                             history=args.history, policy=args.policy)
+    t = result.timings
+    if result.action is None:
+        print(f"no action: {result.reason}; wrote {args.out} (no motion)")
+        return 0
+    a = result.action
+    params = f"d={a['d']:+.3f} m" if a["type"] == "push" else f"dx={a['dx']:+.3f} m, to y={a['dz']:+.3f} m"
+    motion = result.trajectory.motions[0]
+    print(f"{a['type']} {a['object']} ({params}): motion {motion.duration:.2f} s, {len(motion.times)} points, "
+          "checked (limits, jerk, continuity, collisions with the believed scene)")
+    print(f"perception {t['perception_s']:.3f} s, decision {t['decision_s']:.3f} s, planning and check "
+          f"{t['planning_s']:.2f} s; wrote {args.out}")
     return 0

@@ -79,11 +79,20 @@ class DistributionPolicy:
     def exclude(self, action, reason: str, whole_group: bool = False) -> None:
         self._exclusions.add(action, reason, whole_group, self._objects)
 
+    def resume(self, history) -> None:
+        """Continues a trial whose P'_{t-1} is ``history`` (a step planned by another process: plan-step)."""
+        self._history = None if history is None else np.asarray(history, dtype=float).copy()
+
     def rank(self, obs) -> Decision:  # pragma: no cover - interface
         raise NotImplementedError
 
     # helpers ---------------------------------------------------------------------------------------------
     def predict(self, obs, objects) -> np.ndarray:
+        """P(u) after the observed objects moved as ``objects`` says: in camera mode from the predicted image
+        (``obs.belief``), else from the distribution model on the believed scene."""
+        belief = getattr(obs, "belief", None)
+        if belief is not None:
+            return belief.predict(objects)
         return self.distribution.distribution(obs.scene_template.with_objects(objects))
 
     def candidates(self, objects, pushes=None, suctions=None):

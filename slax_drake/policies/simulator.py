@@ -40,6 +40,7 @@ class Observation:
     known: tuple  # the SceneObjects seen, in scene order
     p1d: np.ndarray  # (W_d,) the 1D occupancy distribution of the current state
     scene_template: Scene  # shelf and camera, and the known objects; never the target or hidden objects
+    belief: object = None  # camera mode: the ObservedBelief that made ``known`` and ``p1d`` (predicts from the image)
 
 
 def observe(scene: Scene, distribution_model, observation_width: int = 160) -> Observation:
@@ -53,11 +54,95 @@ def observe(scene: Scene, distribution_model, observation_width: int = 160) -> O
     return Observation(depth, labels, known, p1d, template)
 
 
-def observation_for(policy, scene: Scene):
+OBSERVATION_MODES = ("privileged", "camera")
+SEGMENTATIONS = ("labels", "depth")
+
+
+class CameraObserver:
+    """The camera mode of the shelf simulator: the policy sees a rendered frame, nothing else.
+
+    Per step: the scene (target included) is ray-cast at ``width`` px (the ray caster equals Drake's depth to
+    1e-6 m) -> optional L515 noise (``noise_seed``; :func:`~slax_drake.perception.sensor_noise.l515_depth_noise`,
+    step-indexed) -> the occluders' segmentation (``segmentation``: ``"labels"``, the render's object labels, the
+    idealised segmentation; ``"depth"``, :func:`~slax_drake.perception.segmentation.segment_depth` on the depth
+    alone) and the target mask (the render's target label, the stand-in for colour detection) -> the estimator's
+    hypotheses and P_t from the frame (:class:`~slax_drake.perception.belief.ObservedBelief` with the ``source``
+    distribution: ``"depth"`` or ``"network"``, the latter at the network's resolution).
+
+    :meth:`observe` also returns what only the simulator knows: which true object each hypothesis is (label
+    segmentation: segment id = object index + 1; depth segmentation: the object most of the segment's pixels
+    show), so that an action on ``segment_<id>`` is executed on that object."""
+
+    def __init__(self, shelf, camera, target_size, source: str = "depth", width: int = 160,
+                 segmentation: str = "labels", noise_seed: int | None = None):
+        from slax_drake.perception.belief import background_depth, make_source
+
+        if segmentation not in SEGMENTATIONS:
+            raise ValueError(f"segmentation must be one of {SEGMENTATIONS}, got {segmentation!r}")
+        self.shelf = shelf
+        self.source = make_source(source, shelf, target_size)
+        if source == "network":
+            w, h = self.source.resolution
+        else:
+            w, h = width, max(1, int(round(camera.height * width / camera.width)))
+        self.camera = camera.with_resolution(w, h)
+        self.segmentation = segmentation
+        self.noise_seed = noise_seed
+        self.background = background_depth(shelf, self.camera)
+        self.steps = 0
+
+    def observe(self, scene: Scene) -> tuple[Observation, dict]:
+        from slax_drake.perception.belief import ObservedBelief
+        from slax_drake.perception.observation import Observation as Frame
+        from slax_drake.perception.observation import occluder_segmentation
+
+        depth, labels = SceneRaycaster(scene, include_target=True).render(self.camera)
+        if self.noise_seed is not None:
+            from slax_drake.perception.sensor_noise import l515_depth_noise
+
+            depth = l515_depth_noise(depth, self.camera, self.noise_seed, self.steps)
+        self.steps += 1
+        n = len(scene.objects)
+        target = labels == n + 1
+        if self.segmentation == "labels":
+            segments = np.where((labels >= 1) & (labels <= n), labels, 0)
+        else:
+            from slax_drake.perception.segmentation import segment_depth
+
+            segments = segment_depth(depth, self.camera, self.shelf)
+        segments = occluder_segmentation(segments, target)
+        frame = Frame(depth, segments, target, self.camera, min_valid_fraction=0.0)
+        belief = ObservedBelief(frame, self.shelf, self.source, background=self.background)
+        names = {}
+        for h in belief.hypotheses:
+            owners = labels[segments == h.segment_id]
+            owners = owners[(owners >= 1) & (owners <= n)]
+            if len(owners):
+                names[h.object.name] = scene.objects[int(np.bincount(owners).argmax()) - 1].name
+        template = dataclasses.replace(scene, objects=belief.known, target=None)
+        return Observation(depth, segments, belief.known, belief.p1d, template, belief), names
+
+
+def on_true_object(action, hypotheses, scene: Scene, true_name: str):
+    """An action chosen on a hypothesis, as executed on the true object ``true_name``: a push moves it by the same
+    ``d``; a suction moves it by the same planar displacement (the cup holds the front face: the placement ``dz``
+    the policy chose for the hypothesis's centre is shifted by the true centre's offset from it)."""
+    if isinstance(action, Suction):
+        hyp = next(o for o in hypotheses if o.name == action.name)
+        true = next(o for o in scene.objects if o.name == true_name)
+        dz = action.dz + float(true.center[1] - hyp.center[1])
+        return dataclasses.replace(action, name=true_name, dz=dz)
+    return dataclasses.replace(action, name=true_name)
+
+
+def observation_for(policy, scene: Scene, observer: CameraObserver | None = None):
     """What ``policy`` decides on in the shelf simulator: the true scene for a policy that declares
-    ``needs_true_scene`` (an oracle), else the Observation from its own distribution model."""
+    ``needs_true_scene`` (an oracle, always privileged), else the Observation from its own distribution model
+    (privileged: ``observer`` None) or from the camera frame (``observer``'s :meth:`CameraObserver.observe`)."""
     if policy.needs_true_scene:
         return scene
+    if observer is not None:
+        return observer.observe(scene)[0]
     return observe(scene, policy.distribution, policy.observation_width)
 
 
@@ -162,12 +247,14 @@ class TrialResult:
 
 
 def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, suction_cost: float = 1.3,
-              density: int | None = None, max_seconds: float | None = None) -> TrialResult:
+              density: int | None = None, max_seconds: float | None = None,
+              observer: CameraObserver | None = None) -> TrialResult:
     """Rolls ``policy`` out on ``scene`` until the target is revealed, H actions are spent or no action is left.
 
     ``policy`` implements :class:`~slax_drake.policies.protocol.Policy`: it decides on
     :func:`observation_for` the scene (the Observation, or the true scene for an oracle) and its best candidate is
-    executed with its own action model."""
+    executed with its own action model. ``observer``: the camera mode for a non-oracle policy (its actions name
+    hypotheses, executed on the true object each hypothesis is); None: privileged."""
     policy.reset(scene)
     seconds, actions, notes = [], [], []
     pushes = suctions = 0
@@ -178,12 +265,25 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
         if fraction >= threshold:
             break
         t0 = time.perf_counter()
-        decision = policy.decide(observation_for(policy, scene))
+        names = None
+        if observer is not None and not policy.needs_true_scene:
+            observation, names = observer.observe(scene)
+        else:
+            observation = observation_for(policy, scene)
+        decision = policy.decide(observation)
         action = decision.best
         seconds.append(time.perf_counter() - t0)
         if action is None:
             reason = decision.stop_reason or "no action"
             break
+        if names is not None:  # camera mode: the hypothesis's true object (the executor's knowledge only)
+            true_name = names.get(action.name)
+            if true_name is None:
+                actions.append(action.describe())
+                notes.append(f"step {len(actions)}: {action.name} is no object (a segment of the shelf)")
+                pushes, suctions = (pushes + 1, suctions) if isinstance(action, Push) else (pushes, suctions + 1)
+                continue
+            action = on_true_object(action, observation.known, scene, true_name)
         scene, note = execute(scene, action, policy.action_model)
         actions.append(action.describe())
         if note:

@@ -170,6 +170,7 @@ def step_png_of_record(record, step: int, depth, labels, history, p1d) -> bytes:
     action = chosen["action"] if chosen else None
     object_y = None
     if action is not None:
-        object_y = entry.get("poses_before", {}).get(action["object"], {}).get("y")
+        pose = entry.get("hypotheses", {}).get(action["object"]) or entry.get("poses_before", {}).get(action["object"])
+        object_y = (pose or {}).get("y")
     return step_png(step, depth, labels, history, p1d, record.scene, action=action, object_y=object_y,
                     visible_fraction=entry.get("visible_fraction"))

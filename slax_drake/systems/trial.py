@@ -3,9 +3,18 @@
 :class:`TrialOptions` says which trial (config, station, object count, seed, policy, rules, ...);
 :func:`build_trial` samples the scene (``slax_drake.scene.sampling.sample_scene``: the same scenes as the shelf
 simulator for the same config, object count and seed), makes the policy and the motion planner and builds the
-diagram (station's ``desired_state`` and ``suction_command`` from the planner; the planner reads
-``measured_state``, ``depth_image``, ``label_image`` and ``body_poses``). Running it and recording its outputs
-(trial.json, step PNGs, HTML replay) is ``slax_drake.evaluation.trial``.
+diagram:
+
+    station camera depth_image -> [DepthNoiseSystem, with ``sensor_noise``] -> PerceptionSystem -> PlannerSystem
+    -> station (desired_state, suction_command)
+
+The PerceptionSystem also reads the station's ``label_image``, for the target mask only (the stand-in for detecting
+the target by its colour) and, with ``segmentation="labels"``, the occluders' segmentation (the idealised option;
+"depth": depth-only segmentation). The planner reads only the perception outputs (``observation``, ``hypotheses``,
+``occupancy_1d``), the station's ``measured_state`` and the evaluator's ``stop``. Ground truth (``body_poses``, the
+label image) goes only to the EvaluatorSystem, which scores the trial (target visible fraction, lost objects,
+poses) and tells the planner when the target is revealed. Running it and recording its outputs (trial.json, step
+PNGs, HTML replay) is ``slax_drake.evaluation.trial``.
 """
 
 from __future__ import annotations
@@ -42,6 +51,8 @@ class TrialOptions:
     sleep: bool = False  # lock resting objects out of the physics step (slax_drake.systems.sleep.ObjectSleep)
     target_size: tuple | None = None  # (x, y, z) m; default: drawn from the scenario's target sizes
     horizon: int | None = None  # actions at most; default: 2 per object
+    sensor_noise: bool = False  # the L515 depth-noise model between the camera and perception (seeded by ``seed``)
+    segmentation: str = "labels"  # "labels": the render's object labels (idealised); "depth": depth-only
     tool_rules: dict | None = None  # ToolConfig overrides (rule variants) for the policy and the planner; they
     # take precedence over the station's own limits (see station_tool_rules)
 
@@ -55,6 +66,8 @@ class TrialDiagram:
     station: object  # the station subdiagram (MakeStation)
     plant: object  # its MultibodyPlant
     planner_system: object  # PlannerSystem
+    evaluator: object  # EvaluatorSystem
+    perception: object  # PerceptionSystem
     scene: object  # the initial Scene
     scenario: object  # the scene Scenario (slax_drake.config)
     station_path: str
@@ -62,7 +75,8 @@ class TrialDiagram:
     X_WS: object  # RigidTransform, shelf frame S in world
     horizon: int  # actions at most
     tool_rules: dict  # the action-model rules in force (station cup limits and opts.tool_rules)
-    step_images: list  # (step, depth, labels, history, p1d), appended by the planner at every decision
+    step_images: list  # (step, depth, labels, history, p1d), appended by the planner at every decision; labels: the
+    # occluder segmentation with the target mask as label n + 1 (at the perception's working resolution)
 
 
 def station_for(config: str) -> str:
@@ -101,11 +115,17 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
     from slax_drake.scene.sampling import sample_scene
     from slax_drake.station.plant import shelf_pose
     from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.perception.belief import make_source
+    from slax_drake.scene.model import Scene
+    from slax_drake.systems.evaluator import EvaluatorSystem
+    from slax_drake.systems.perception_system import PerceptionSystem
     from slax_drake.systems.planner import PlannerSystem
     from slax_drake.systems.station import MakeStation
 
     if opts.objects < 1:
         raise TrialError(f"--objects must be at least 1 (got {opts.objects})")
+    if opts.segmentation not in ("labels", "depth"):
+        raise TrialError(f"segmentation must be 'labels' or 'depth' (got {opts.segmentation!r})")
     scenario = load_scenario(opts.config)
     station_path = opts.station or station_for(opts.config)
     station = load_station_scenario(station_path)
@@ -123,19 +143,45 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
     station_diagram = builder.AddNamedSystem("station", MakeStation(station, scene, meshcat=meshcat))
     plant = station_diagram.GetSubsystemByName("plant")
     bodies = [plant.GetBodyByName(o.name).index() for o in scene.objects]
-    target = plant.GetBodyByName("target").index() if scene.target is not None else None
     X_WS = shelf_pose(station, scene.camera)
+    size = scene.target.size if scene.target is not None else tuple(scenario.target.sizes[0])
+    source_kind = "network" if opts.perception == "learned" else "depth"
+    target_label = len(scene.objects) + 1
+    perception = builder.AddNamedSystem("perception", PerceptionSystem(
+        scene.camera, scene.shelf, size, source=source_kind, segmentation=opts.segmentation,
+        target_label=target_label, input_camera=scene.camera, width=policy.observation_width))
+    depth_out = station_diagram.GetOutputPort("depth_image")
+    if opts.sensor_noise:
+        from slax_drake.systems.depth_noise import DepthNoiseSystem
+
+        noise = builder.AddNamedSystem("depth_noise", DepthNoiseSystem(scene.camera, opts.seed))
+        builder.Connect(depth_out, noise.GetInputPort("depth_image"))
+        depth_out = noise.GetOutputPort("depth_image")
+    builder.Connect(depth_out, perception.GetInputPort("depth_image"))
+    builder.Connect(station_diagram.GetOutputPort("label_image"), perception.GetInputPort("label_image"))
     steps = []
+
+    def on_step(entry, depth, segmentation, target_mask, hist, p1d):
+        shown = np.where(target_mask, target_label, segmentation)
+        steps.append((entry["step"], depth, shown, None if hist is None else np.array(hist),
+                      None if p1d is None else np.array(p1d)))
+
+    camera = perception.camera
     planner_system = builder.AddNamedSystem("planner", PlannerSystem(
-        policy, planner, scene, bodies, target, X_WS, horizon, threshold=scenario.target.visibility_threshold,
-        image_size=(scene.camera.width, scene.camera.height), suction_cost=scenario.protocol.suction_cost,
-        on_step=lambda entry, depth, labels, hist, p1d: steps.append((entry["step"], depth, labels,
-                                                                       None if hist is None else np.array(hist),
-                                                                       None if p1d is None else np.array(p1d))),
-    ))
-    for name in ("measured_state", "depth_image", "label_image", "body_poses"):
-        builder.Connect(station_diagram.GetOutputPort(name), planner_system.GetInputPort(name))
+        policy, planner, Scene(scene.shelf, scene.camera, (), None), make_source(source_kind, scene.shelf, size),
+        horizon, camera.width, camera.height, suction_cost=scenario.protocol.suction_cost, on_step=on_step))
+    evaluator = builder.AddNamedSystem("evaluator", EvaluatorSystem(
+        scene, bodies, X_WS, threshold=scenario.target.visibility_threshold,
+        image_size=(scene.camera.width, scene.camera.height)))
+    for name in ("observation", "hypotheses", "occupancy_1d"):
+        builder.Connect(perception.GetOutputPort(name), planner_system.GetInputPort(name))
+    builder.Connect(station_diagram.GetOutputPort("measured_state"), planner_system.GetInputPort("measured_state"))
+    builder.Connect(evaluator.GetOutputPort("stop"), planner_system.GetInputPort("stop"))
+    builder.Connect(station_diagram.GetOutputPort("label_image"), evaluator.GetInputPort("label_image"))
+    builder.Connect(station_diagram.GetOutputPort("body_poses"), evaluator.GetInputPort("body_poses"))
+    builder.Connect(planner_system.GetOutputPort("deciding"), evaluator.GetInputPort("deciding"))
+    builder.Connect(perception.GetOutputPort("segmentation"), evaluator.GetInputPort("segmentation"))
     builder.Connect(planner_system.GetOutputPort("desired_state"), station_diagram.GetInputPort("desired_state"))
     builder.Connect(planner_system.GetOutputPort("suction_command"), station_diagram.GetInputPort("suction_command"))
-    return TrialDiagram(builder.Build(), station_diagram, plant, planner_system, scene, scenario, station_path,
-                        bodies, X_WS, horizon, tool_rules, steps)
+    return TrialDiagram(builder.Build(), station_diagram, plant, planner_system, evaluator, perception, scene,
+                        scenario, station_path, bodies, X_WS, horizon, tool_rules, steps)

@@ -63,7 +63,8 @@ def trial_summary(data: dict, written: list[Path], html: str | Path | None = Non
     for k, a in enumerate(actions, start=1):
         params = f"d={a['d']:+.3f} m" if a["type"] == "push" else f"dx={a['dx']:+.3f} m, to y={a['dz']:+.3f} m"
         rejected = len(a["rejected_before"])
-        lines.append(f"  {k}. {a['type']} {a['object']} ({params}): motion {a['motion']['duration_s']:.1f} s, "
+        who = a["object"] + (f" (= {a['true_object']})" if a.get("true_object") and a["true_object"] != a["object"] else "")
+        lines.append(f"  {k}. {a['type']} {who} ({params}): motion {a['motion']['duration_s']:.1f} s, "
                      f"planned in {a['planning_s']:.2f} s"
                      + (f" after {_plural(rejected, 'rejected candidate')}" if rejected else ""))
     lines.append(f"cost:    {_cost(data['cost'], pushes, len(actions) - pushes)}")

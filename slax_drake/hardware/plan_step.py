@@ -1,0 +1,375 @@
+"""One search step for a real robot from one camera frame: ``slax-drake plan-step``.
+
+Inputs (files, as a robot's driver writes them):
+
+- the station scenario (YAML): the robot, the shelf, the camera model (through its ``scene_config``), the cup;
+- the depth frame: ``.npy`` float32/float64 metres along the optical axis, or a 16-bit ``.png`` in millimetres
+  (the RealSense convention), 0 = no return; any resolution with the camera's aspect ratio;
+- the target mask: a ``.png`` (or ``.npy``) of the frame's size, non-zero where the target's colour was detected;
+- the joint state: JSON ``{"joint_names": [...], "positions": [...]}`` holding at least the nine planned joints
+  (``slax_drake.station.robot.PLANNED_JOINTS``; radians, metres for the torso and the tool shaft), or
+  ``{name: position}``;
+- optionally the history: the previous ``step.json`` (or its ``metadata.plan_step.history``): P'_{t-1} and the
+  step count, so that the policy's history encoding carries over between calls.
+
+What it does, with nothing but the frame: the frame is validated (:class:`~slax_drake.perception.observation.
+Observation`: an unusable frame -- wrong size or type, millimetres given as metres, mostly no returns -- is refused
+with one line, exit code 2), resampled to the policies' working resolution (160 px wide, nearest pixel), segmented
+from depth alone, turned into object hypotheses by the estimator and into P_t (hidden target placements judged from
+the depth image); the policy (Bluction-DAR by default) ranks the actions on the hypotheses, predicting each one's
+distribution from the shifted segments; the best one is planned by the motion planner against the believed scene
+(the hypotheses and the shelf) from the measured joint state, Ruckig-timed, exported in the export format
+(:mod:`slax_drake.hardware.trajectory_file`, ros-json) and checked by the independent checker
+(:func:`slax_drake.hardware.check.check_trajectory`: Fetch limits, jerk, continuity, collisions with the believed
+scene). A candidate whose motion fails planning or the check is excluded and the next one is tried.
+
+Output ``step.json``: the trajectory document (``slax-drake check-trajectory step.json`` reads it; the believed
+scene is embedded for its collision check), with ``metadata.plan_step``: the chosen action, its hypothesis, the
+hypotheses, the check report, timings and the updated history. When no action is left it still writes the file,
+with no motion and the reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from slax_drake.errors import UserError
+
+WORKING_WIDTH = 160
+MAX_CANDIDATES = 25
+# m: depth segmentation's margin from the shelf's panels for a real (noisy) frame: the L515's range noise and
+# offset (a few mm at 1 m) otherwise turn back-panel and floor pixels into thin spurious segments.
+PANEL_MARGIN = 0.015
+# m^2: the estimator's footprint overlap allowed between hypotheses; the exported scene (the checker's world) must
+# hold no two bodies interpenetrating by more than 1 mm (slax_drake.scene.io), a looser area bound lets through.
+HYPOTHESIS_OVERLAP = 1e-6
+
+
+class PlanStepError(UserError):
+    """An input of plan-step that cannot be used (exit code 2)."""
+
+
+@dataclasses.dataclass
+class StepResult:
+    """What one step produced: the exported trajectory (None when nothing is executable), the action's
+    description, the reason when there is none, and the timings (s)."""
+
+    trajectory: object
+    action: dict | None
+    reason: str | None
+    timings: dict
+
+
+def read_depth(path: str | Path) -> np.ndarray:
+    """A depth frame in metres (float32): ``.npy`` (float metres) or 16-bit ``.png`` (millimetres)."""
+    path = Path(path)
+    if not path.is_file():
+        raise PlanStepError(f"{path}: no such depth file")
+    if path.suffix.lower() == ".npy":
+        try:
+            depth = np.load(path, allow_pickle=False)
+        except (ValueError, OSError) as e:
+            raise PlanStepError(f"{path}: not a numpy array file ({e})") from None
+        if depth.ndim != 2:
+            raise PlanStepError(f"{path}: a depth frame must be a 2D array (rows, columns), got shape {depth.shape}")
+        return depth  # dtype and units are checked by Observation
+    if path.suffix.lower() == ".png":
+        import cv2
+
+        image = cv2.imread(str(path), cv2.IMREAD_ANYDEPTH | cv2.IMREAD_UNCHANGED)
+        if image is None:
+            raise PlanStepError(f"{path}: not a readable PNG")
+        if image.ndim != 2 or image.dtype != np.uint16:
+            raise PlanStepError(f"{path}: a depth PNG must be single-channel 16-bit millimetres, got "
+                                f"{image.dtype} with shape {image.shape}")
+        return image.astype(np.float32) / 1000.0
+    raise PlanStepError(f"{path}: depth must be .npy (metres) or .png (16-bit millimetres)")
+
+
+def read_mask(path: str | Path) -> np.ndarray:
+    """The target mask (bool): non-zero pixels of a ``.png`` (any channel) or ``.npy``."""
+    path = Path(path)
+    if not path.is_file():
+        raise PlanStepError(f"{path}: no such target-mask file")
+    if path.suffix.lower() == ".npy":
+        try:
+            mask = np.load(path, allow_pickle=False)
+        except (ValueError, OSError) as e:
+            raise PlanStepError(f"{path}: not a numpy array file ({e})") from None
+    else:
+        import cv2
+
+        mask = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        if mask is None:
+            raise PlanStepError(f"{path}: not a readable image")
+    mask = np.asarray(mask)
+    if mask.ndim == 3:
+        mask = mask.any(axis=2)
+    if mask.ndim != 2:
+        raise PlanStepError(f"{path}: a target mask must be a 2D image, got shape {mask.shape}")
+    return mask != 0
+
+
+def read_joint_state(path: str | Path) -> np.ndarray:
+    """The nine planned joints' positions (PLANNED_JOINTS order) from the joint-state JSON."""
+    from slax_drake.station.robot import PLANNED_JOINTS
+
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise PlanStepError(f"{path}: no such joint-state file") from None
+    except (OSError, json.JSONDecodeError) as e:
+        raise PlanStepError(f"{path}: not valid JSON ({e})") from None
+    if isinstance(doc, dict) and "joint_names" in doc and "positions" in doc:
+        names, values = doc["joint_names"], doc["positions"]
+        if not isinstance(names, list) or not isinstance(values, list) or len(names) != len(values):
+            raise PlanStepError(f"{path}: joint_names and positions must be lists of one length")
+        doc = dict(zip(names, values))
+    if not isinstance(doc, dict):
+        raise PlanStepError(f"{path}: expected {{\"joint_names\": [...], \"positions\": [...]}} or {{name: position}}")
+    missing = [n for n in PLANNED_JOINTS if n not in doc]
+    if missing:
+        raise PlanStepError(f"{path}: joint state lacks {', '.join(missing)}")
+    try:
+        q = np.array([float(doc[n]) for n in PLANNED_JOINTS])
+    except (TypeError, ValueError):
+        raise PlanStepError(f"{path}: joint positions must be numbers") from None
+    if not np.all(np.isfinite(q)):
+        raise PlanStepError(f"{path}: joint positions must be finite")
+    return q
+
+
+def read_history(path: str | Path | None) -> dict | None:
+    """The history a previous step wrote: ``{"policy", "steps", "history": [P'_(t-1)]}``; from a step.json or a
+    file holding that dict."""
+    if path is None:
+        return None
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise PlanStepError(f"{path}: no such history file") from None
+    except (OSError, json.JSONDecodeError) as e:
+        raise PlanStepError(f"{path}: not valid JSON ({e})") from None
+    if isinstance(doc, dict) and "metadata" in doc:
+        doc = (doc.get("metadata") or {}).get("plan_step", {}).get("history")
+    if not isinstance(doc, dict) or not isinstance(doc.get("history"), list):
+        raise PlanStepError(f"{path}: no history (expected a step.json written by plan-step, or "
+                            "{\"policy\": ..., \"steps\": k, \"history\": [...]})")
+    return doc
+
+
+def resample_nearest(image: np.ndarray, width: int, height: int) -> np.ndarray:
+    """``image`` (H, W) at (height, width) by the nearest pixel centre (no mixing across depth edges)."""
+    h, w = image.shape
+    if (w, h) == (width, height):
+        return image
+    rows = np.clip(np.rint((np.arange(height) + 0.5) * h / height - 0.5), 0, h - 1).astype(int)
+    cols = np.clip(np.rint((np.arange(width) + 0.5) * w / width - 0.5), 0, w - 1).astype(int)
+    return image[np.ix_(rows, cols)]
+
+
+class StepPlanner:
+    """Everything that does not change between frames: the station, the camera, the policy, the motion planner.
+    ``perceive`` and ``decide`` are the timed part of a step (benchmarks/bench_plan_step.py); ``plan_step`` adds
+    motion planning, export and the check."""
+
+    def __init__(self, station_path: str | Path, policy: str = "bluction-dar", width: int = WORKING_WIDTH):
+        from slax_drake.config import load_scenario
+        from slax_drake.perception.belief import DepthDistribution, background_depth
+        from slax_drake.policies.registry import make_policy
+        from slax_drake.scene.camera import Camera
+        from slax_drake.scene.sampling import shelf_of
+        from slax_drake.station.scenario import load_station_scenario
+        from slax_drake.systems.trial import station_tool_rules
+
+        self.station_path = str(station_path)
+        self.station = load_station_scenario(station_path)
+        self.scenario = load_scenario(self.station.scene_config)
+        self.camera = Camera.from_config(self.scenario.camera)
+        self.shelf = shelf_of(self.scenario)
+        self.tool_rules = station_tool_rules(self.station)
+        self.policy_name = policy
+        self.policy = make_policy(policy, self.scenario, tool_overrides=self.tool_rules)
+        if self.policy.needs_true_scene:
+            raise PlanStepError(f"policy '{policy}' needs the true scene (an oracle): it cannot plan from a frame")
+        self.target_size = tuple(self.scenario.target.sizes[0])
+        height = max(1, int(round(self.camera.height * width / self.camera.width)))
+        self.working = self.camera.with_resolution(width, height)
+        self.source = DepthDistribution(self.shelf, self.target_size)
+        self.background = background_depth(self.shelf, self.working)
+        self._motion_planner = None
+
+    def frame_camera(self, depth: np.ndarray):
+        """The camera at the frame's resolution (same aspect as the station camera's, else refused)."""
+        h, w = depth.shape
+        if w * self.camera.height != h * self.camera.width:
+            raise PlanStepError(f"depth frame {w}x{h} does not have the camera's aspect "
+                                f"({self.camera.width}x{self.camera.height})")
+        return self.camera.with_resolution(w, h)
+
+    def perceive(self, depth: np.ndarray, mask: np.ndarray, joint_state=None):
+        """Frame -> (the policy's Observation, the ObservedBelief). Raises ObservationError for an unusable frame."""
+        from slax_drake.perception.belief import ObservedBelief
+        from slax_drake.perception.estimator import EstimatorConfig
+        from slax_drake.perception.observation import Observation, occluder_segmentation
+        from slax_drake.perception.segmentation import segment_depth
+        from slax_drake.policies.simulator import Observation as PolicyObservation
+        from slax_drake.scene.model import Scene
+
+        camera = self.frame_camera(np.asarray(depth))
+        mask = np.asarray(mask, dtype=bool)
+        if mask.shape != np.asarray(depth).shape:
+            raise PlanStepError(f"target mask of shape {mask.shape} and depth frame of shape {np.shape(depth)} differ")
+        full = Observation(depth, np.zeros(mask.shape, np.int32), mask, camera, joint_state)  # validates the frame
+        w, h = self.working.width, self.working.height
+        small_depth = resample_nearest(full.depth, w, h)
+        small_mask = resample_nearest(full.target_mask, w, h)
+        segments = occluder_segmentation(segment_depth(small_depth, self.working, self.shelf, margin=PANEL_MARGIN),
+                                         small_mask)
+        frame = Observation(small_depth, segments, small_mask, self.working, joint_state, min_valid_fraction=0.0)
+        belief = ObservedBelief(frame, self.shelf, self.source, background=self.background,
+                                config=EstimatorConfig(overlap_tolerance=HYPOTHESIS_OVERLAP))
+        believed = Scene(self.shelf, self.camera, belief.known, None)
+        return PolicyObservation(small_depth, segments, belief.known, belief.p1d, believed, belief), belief
+
+    def decide(self, observation, history: dict | None = None):
+        """The policy's Decision on ``observation``, after restoring ``history`` (P'_{t-1})."""
+        self.policy.reset(observation.scene_template)
+        if history is not None:
+            previous = np.asarray(history["history"], dtype=float)
+            if previous.shape != np.shape(observation.p1d):
+                raise PlanStepError(f"history has {previous.size} columns, this step's distribution "
+                                    f"{np.size(observation.p1d)} (another resolution or policy?)")
+            self.policy.resume(previous)
+        return self.policy.decide(observation)
+
+    @property
+    def motion_planner(self):
+        if self._motion_planner is None:
+            from slax_drake.planning.planner import MotionPlanner
+            from slax_drake.policies.registry import tool_config
+
+            self._motion_planner = MotionPlanner(self.station, tool_config(self.scenario, **self.tool_rules))
+        return self._motion_planner
+
+    def plan_step(self, depth, mask, q, history: dict | None = None, source: str | None = None,
+                  collision_step: float = 0.005) -> StepResult:
+        """Perceive, decide, plan, export and check (module docstring)."""
+        from slax_drake.hardware.check import check_trajectory
+        from slax_drake.hardware.collision import CollisionWorld
+
+        timings = {}
+        t0 = time.perf_counter()
+        observation, belief = self.perceive(depth, mask, q)
+        timings["perception_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        decision = self.decide(observation, history)
+        timings["decision_s"] = time.perf_counter() - t0
+        believed = observation.scene_template
+        rejected, reason = [], decision.stop_reason
+        t0 = time.perf_counter()
+        world = None
+        for _ in range(MAX_CANDIDATES):
+            action = decision.best
+            if action is None:
+                reason = decision.stop_reason or reason or "no feasible action"
+                break
+            motion = self.motion_planner.plan(action, believed, q_start=q)
+            if motion.feasible:
+                traj = self._export(action, motion, belief, q, source)
+                world = world or CollisionWorld(self.station, believed, q_reference=q)
+                report = check_trajectory(traj, world, collision_step=collision_step)
+                if report.ok:
+                    timings["planning_s"] = time.perf_counter() - t0
+                    traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
+                                                              history, timings)
+                    return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings)
+                why = "check: " + report.summary().splitlines()[-1]
+            else:
+                why = motion.reason
+            rejected.append({"action": action.describe(), "reason": why})
+            from slax_drake.systems.planner import EARLY_FAILURES
+
+            self.policy.exclude(action, why, whole_group=why.startswith(EARLY_FAILURES))
+            decision = self.policy.decide(observation)
+            reason = "no feasible motion"
+        timings["planning_s"] = time.perf_counter() - t0
+        from slax_drake.hardware.trajectory_file import ExportedTrajectory
+
+        empty = ExportedTrajectory([], {"source": source, "station": self.station_path,
+                                        "initial_positions": list(map(float, q))})
+        empty.metadata["plan_step"] = self._record(None, belief, observation, rejected, None, history, timings,
+                                                   reason)
+        return StepResult(empty, None, reason, timings)
+
+    # ---------------------------------------------------------------------------------------------------------
+    def _export(self, action, motion, belief, q, source):
+        """The planned motion in the export format (one motion from t = 0; the planner's 1 ms records, every 10th
+        and the last)."""
+        from slax_drake.hardware.export import export_trial
+        from slax_drake.scene.model import Scene
+        from slax_drake.systems.planner import _describe
+
+        record = motion.trajectory  # from the measured joint state q, at rest, 1 ms records
+        poses = {o.name: {"x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
+                          "yaw": round(float(o.yaw), 5)} for o in belief.known}
+        data = {
+            "executed_trajectory": record.to_dict(stride=10, keep_times=[0.0]),
+            "actions": [{**_describe(action), "motion": {"duration_s": round(motion.trajectory.duration, 3),
+                                                         "suction_intervals": motion.suction_intervals}}],
+            "steps_log": [{"time": 0.0, "action": _describe(action), "poses_before": poses, "lost": []}],
+            "station": self.station_path, "config": self.station.scene_config, "policy": self.policy_name,
+        }
+        data["actions"][0]["motion"]["duration_s"] = float(motion.trajectory.duration)
+        believed = Scene(self.shelf, self.camera, belief.known, None)
+        exported = export_trial(data, rate=None, source=source, scene=believed)
+        exported.metadata["initial_positions"] = list(map(float, q))
+        return exported
+
+    def _record(self, action, belief, observation, rejected, report, history, timings, reason=None) -> dict:
+        from slax_drake.policies.distribution import support
+        from slax_drake.systems.planner import _describe
+
+        steps = int(history.get("steps", 0)) if history else 0
+        h = self.policy.history
+        return {
+            "action": None if action is None else _describe(action),
+            "reason": reason,
+            "policy": self.policy_name,
+            "hypotheses": {hyp.object.name: {"shape": hyp.object.shape,
+                                             "size": [round(float(v), 4) for v in hyp.object.size],
+                                             "x": round(float(hyp.object.center[0]), 5),
+                                             "y": round(float(hyp.object.center[1]), 5),
+                                             "yaw": round(float(hyp.object.yaw), 5), "pixels": hyp.pixels}
+                           for hyp in belief.hypotheses},
+            "target_pixels": int(np.count_nonzero(observation.belief.observation.target_mask)),
+            "support": support(h) if h is not None else None,
+            "rejected": rejected,
+            "check": None if report is None else {"ok": report.ok, "checked": report.checked},
+            "timings_s": {k: round(v, 4) for k, v in timings.items()},
+            "history": {"policy": self.policy_name, "steps": steps + (1 if action is not None else 0),
+                        "history": [] if h is None else [float(v) for v in h]},
+        }
+
+
+def plan_step_files(station: str, depth: str, mask: str, joint_state: str, out: str, history: str | None = None,
+                    policy: str = "bluction-dar") -> StepResult:
+    """``slax-drake plan-step``: reads the files, plans one step, writes ``out`` atomically (ros-json)."""
+    from slax_drake.hardware.trajectory_file import dumps
+    from slax_drake.io import write_text_atomic
+
+    q = read_joint_state(joint_state)
+    previous = read_history(history)
+    frame = read_depth(depth)
+    target = read_mask(mask)
+    planner = StepPlanner(station, policy=policy)
+    result = planner.plan_step(frame, target, q, previous, source=str(depth))
+    write_text_atomic(Path(out), dumps(result.trajectory, "ros-json"))
+    return result

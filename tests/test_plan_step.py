@@ -1,0 +1,114 @@
+"""slax-drake plan-step: one step for a real robot from a camera frame (refusals fast; the round trip slow)."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from slax_drake.cli import main
+from slax_drake.hardware.plan_step import read_history, resample_nearest
+
+STATION = "sim_configs/station_sim_shelf.yaml"
+
+
+def _joint_state(path):
+    from slax_drake.planning.planner import observation_positions
+    from slax_drake.station.robot import PLANNED_JOINTS
+    from slax_drake.station.scenario import load_station_scenario
+
+    q = observation_positions(load_station_scenario(STATION))
+    path.write_text(json.dumps({"joint_names": list(PLANNED_JOINTS), "positions": [float(v) for v in q]}))
+    return path
+
+
+def _frame(tmp_path, renderer="raycast", noise_seed=1, objects=3, seed=7):
+    """A frame of the station's camera (noisy, L515 model), its target mask and the joint state, as files."""
+    from slax_drake.config import load_scenario
+    from slax_drake.perception.sensor_noise import l515_depth_noise
+    from slax_drake.scene.sampling import sample_scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    scenario = load_scenario(load_station_scenario(STATION).scene_config)
+    scene = sample_scene(scenario, objects, seed)
+    if renderer == "drake":
+        from slax_drake.station.renderer import SceneRenderer
+
+        depth, labels = SceneRenderer(scene.camera).render(scene)
+    else:
+        from slax_drake.scene.raycast import SceneRaycaster
+
+        depth, labels = SceneRaycaster(scene, include_target=True).render(scene.camera)
+    depth = l515_depth_noise(depth, scene.camera, seed=noise_seed)
+    np.save(tmp_path / "frame.npy", depth.astype(np.float32))
+    cv2.imwrite(str(tmp_path / "mask.png"), ((labels == len(scene.objects) + 1) * 255).astype(np.uint8))
+    _joint_state(tmp_path / "q.json")
+    return depth
+
+
+def _args(tmp_path, depth="frame.npy", out="step.json", *extra):
+    return ["plan-step", "--scenario", STATION, "--depth", str(tmp_path / depth), "--target-mask",
+            str(tmp_path / "mask.png"), "--joint-state", str(tmp_path / "q.json"), "--out", str(tmp_path / out), *extra]
+
+
+def test_unusable_frames_are_refused_with_exit_code_2(tmp_path, capsys):
+    depth = _frame(tmp_path)
+    np.save(tmp_path / "mm.npy", (depth * 1000).astype(np.float32))
+    np.save(tmp_path / "blank.npy", np.zeros_like(depth, dtype=np.float32))
+    np.save(tmp_path / "square.npy", depth[:, :480].astype(np.float32))
+    np.save(tmp_path / "raw.npy", (depth * 1000).astype(np.uint16))
+    cv2.imwrite(str(tmp_path / "frame_mm.png"), (depth * 1000).astype(np.uint16))
+    expected = {"mm.npy": "millimetres", "blank.npy": "returns on only 0%", "square.npy": "aspect",
+                "raw.npy": "raw sensor units"}
+    for name, message in expected.items():
+        assert main(_args(tmp_path, name)) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+    assert not (tmp_path / "step.json").exists()
+    (tmp_path / "q.json").write_text(json.dumps({"torso_lift_joint": 0.1}))
+    assert main(_args(tmp_path)) == 2
+    assert "joint state lacks" in capsys.readouterr().err
+
+
+def test_a_16_bit_png_in_millimetres_reads_as_metres(tmp_path):
+    from slax_drake.hardware.plan_step import read_depth
+
+    depth = np.full((48, 64), 0.8, np.float32)
+    cv2.imwrite(str(tmp_path / "d.png"), (depth * 1000).astype(np.uint16))
+    np.testing.assert_allclose(read_depth(tmp_path / "d.png"), depth)
+
+
+def test_history_is_read_from_a_previous_step(tmp_path):
+    step = {"format": "x", "metadata": {"plan_step": {"history": {"policy": "bluction-dar", "steps": 2,
+                                                                  "history": [0.0, 0.5, 0.5]}}}}
+    (tmp_path / "step.json").write_text(json.dumps(step))
+    assert read_history(tmp_path / "step.json")["steps"] == 2
+    (tmp_path / "bad.json").write_text("{}")
+    from slax_drake.hardware.plan_step import PlanStepError
+
+    with pytest.raises(PlanStepError, match="no history"):
+        read_history(tmp_path / "bad.json")
+
+
+def test_resample_nearest_keeps_pixel_values():
+    image = np.arange(480 * 640, dtype=np.float32).reshape(480, 640)
+    small = resample_nearest(image, 160, 120)
+    assert small.shape == (120, 160) and np.isin(small, image).all()
+    assert resample_nearest(image, 640, 480) is image
+
+
+@pytest.mark.slow
+def test_round_trip_from_a_noisy_drake_frame_to_a_checked_trajectory(tmp_path, capsys):
+    _frame(tmp_path, renderer="drake")
+    assert main(_args(tmp_path)) == 0
+    doc = json.loads((tmp_path / "step.json").read_text())
+    record = doc["metadata"]["plan_step"]
+    assert record["action"]["object"].startswith("segment_")  # chosen on a hypothesis, not a true object
+    assert record["check"]["ok"] and len(doc["motions"]) == 1
+    assert record["history"]["steps"] == 1 and len(record["history"]["history"]) == 160
+    assert main(["check-trajectory", str(tmp_path / "step.json")]) == 0
+    assert "OK: no violation" in capsys.readouterr().out
+    assert main(_args(tmp_path, "frame.npy", "step2.json", "--history", str(tmp_path / "step.json"))) == 0
+    again = json.loads((tmp_path / "step2.json").read_text())["metadata"]["plan_step"]
+    assert again["history"]["steps"] == 2
+    assert all(b <= a + 1e-12 for a, b in zip(record["history"]["history"], again["history"]["history"]))

@@ -1,0 +1,76 @@
+"""The trial diagram's wiring: station camera -> (depth noise) -> perception -> planner; ground truth only to the
+evaluator. Builds the diagram (no simulation), so it is fast."""
+
+import pytest
+
+from slax_drake.systems.trial import TrialOptions, build_trial
+
+PLANNER_INPUTS = {"measured_state", "observation", "hypotheses", "occupancy_1d", "stop"}
+
+
+def _connections(diagram):
+    """[(source system, source port, destination system, destination port)] by name."""
+    out = []
+    for (dst, dst_port), (src, src_port) in diagram.connection_map().items():
+        out.append((src.get_name(), src.get_output_port(src_port).get_name(), dst.get_name(),
+                    dst.get_input_port(dst_port).get_name()))
+    return out
+
+
+@pytest.fixture(scope="module")
+def trial():
+    return build_trial(TrialOptions(objects=3, seed=7))
+
+
+def test_planner_has_no_input_carrying_true_poses(trial):
+    planner = trial.planner_system
+    names = {planner.get_input_port(i).get_name() for i in range(planner.num_input_ports())}
+    assert names == PLANNER_INPUTS
+    assert not names & {"body_poses", "label_image", "plant_state", "query_object", "contact_results"}
+    feeds = {(src, port) for src, port, dst, _ in _connections(trial.diagram) if dst == "planner"}
+    assert feeds == {("station", "measured_state"), ("perception", "observation"), ("perception", "hypotheses"),
+                     ("perception", "occupancy_1d"), ("evaluator", "stop")}
+
+
+def test_ground_truth_reaches_only_the_evaluator_and_the_target_mask(trial):
+    connections = _connections(trial.diagram)
+    readers = {(src_port, dst, dst_port) for src, src_port, dst, dst_port in connections
+               if src == "station" and src_port in ("body_poses", "label_image")}
+    assert readers == {("body_poses", "evaluator", "body_poses"), ("label_image", "evaluator", "label_image"),
+                       ("label_image", "perception", "label_image")}
+    assert ("station", "depth_image", "perception", "depth_image") in connections
+    assert ("planner", "desired_state", "station", "desired_state") in connections
+    assert ("planner", "suction_command", "station", "suction_command") in connections
+
+
+def test_sensor_noise_sits_between_camera_and_perception():
+    trial = build_trial(TrialOptions(objects=3, seed=7, sensor_noise=True))
+    connections = _connections(trial.diagram)
+    assert ("station", "depth_image", "depth_noise", "depth_image") in connections
+    assert ("depth_noise", "depth_image", "perception", "depth_image") in connections
+    assert ("station", "depth_image", "perception", "depth_image") not in connections
+
+
+def test_planner_decides_on_hypotheses_from_the_frame(trial):
+    """At the first decision the planner's belief holds segment_<id> hypotheses built from the perception ports."""
+    import numpy as np
+
+    context = trial.diagram.CreateDefaultContext()
+    perception = trial.perception
+    pc = perception.GetMyContextFromRoot(context)
+    obs = perception.GetOutputPort("observation").Eval(pc)
+    hyps = perception.GetOutputPort("hypotheses").Eval(pc)
+    p1d = perception.GetOutputPort("occupancy_1d").Eval(pc)
+    assert obs.depth.shape == (120, 160) and len(hyps) >= 1
+    assert all(h.object.name.startswith("segment_") for h in hyps)
+    assert p1d.shape == (160,) and np.isclose(p1d.sum(), 1.0)
+    ec = trial.evaluator.GetMyContextFromRoot(context)
+    owners = trial.evaluator.segment_owners(ec)
+    assert set(owners.values()) <= {o.name for o in trial.scene.objects} and owners
+
+
+def test_unknown_segmentation_is_refused():
+    from slax_drake.systems.trial import TrialError
+
+    with pytest.raises(TrialError, match="segmentation"):
+        build_trial(TrialOptions(segmentation="colour"))
