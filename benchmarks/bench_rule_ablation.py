@@ -15,7 +15,8 @@ import time
 import numpy as np
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import STRICT_RULES, ActionModel, Push, apply_action
+from slax_drake.policies.actions import ActionModel, Push, apply_action
+from slax_drake.policies.rules import STRICT_RULES
 from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.policies.registry import tool_config
 from slax_drake.policies.visibility import TargetOcclusion

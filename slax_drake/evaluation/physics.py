@@ -68,7 +68,7 @@ def _diverged_trial(message: str, wall_s: float) -> dict:
 
 def _run_scene(job) -> tuple[str, dict]:
     """Runs one scene in both simulators (in a worker process) and writes its result file."""
-    config, station, policy_name, density, index, seed, out, sleep, tool_rules = job
+    config, station, policy_name, density, index, seed, out, sleep, tool_rules, profile = job
     from slax_drake.config import load_scenario
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial as run_shelf_trial
@@ -77,10 +77,10 @@ def _run_scene(job) -> tuple[str, dict]:
 
     scenario = load_scenario(config)
     opts = protocol_trial(TrialOptions(config=config, station=station, policy=policy_name, out=None, sleep=sleep,
-                                       tool_rules=tool_rules), scenario, density, seed)
+                                       tool_rules=tool_rules, profile=profile), scenario, density, seed)
     scene = sample_scene(scenario, density, seed, target_size=opts.target_size)
     policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=opts.horizon,
-                         tool_overrides=tool_rules)
+                         tool_overrides=tool_rules, profile=profile)
     shelf = run_shelf_trial(scene, policy, opts.horizon, threshold=scenario.target.visibility_threshold,
                             suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
     t0 = time.perf_counter()
@@ -110,7 +110,7 @@ def _run_scene(job) -> tuple[str, dict]:
     }
     shelf_keep = {k: shelf[k] for k in ("success", "steps", "cost", "reason", "actions", "notes", "visible_fraction")}
     result = {"policy": policy_name, "density": density, "index": index, "seed": seed, "shelf": shelf_keep,
-              "drake": drake, "tool_rules": tool_rules}
+              "drake": drake, "profile": profile, "tool_rules": tool_rules}
     path = trial_path(Path(out), policy_name, density, index)
     write_text_atomic(path, json.dumps(result, indent=1, sort_keys=True))
     return str(path), result
@@ -144,12 +144,13 @@ def default_station(config: str) -> str:
 def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: int | None = None,
                           out: str | Path = "results/physics", workers: int = 1, densities=None,
                           station: str | None = None, sleep: bool = False, progress: bool = True,
-                          tool_rules: dict | None = None) -> dict:
+                          tool_rules: dict | None = None, profile: str = "station") -> dict:
     """Runs the missing scenes (both simulators) and writes physics.json and physics.md; returns the summary.
 
     ``config``: the protocol scenario YAML (e.g. sim_configs/table1.yaml); ``seed``: protocol seed (default the
     protocol's); ``densities``: default the protocol's; ``station``: default :func:`default_station`;
-    ``tool_rules``: ToolConfig overrides (rule variants) for both simulators, on top of the station's cup limit
+    ``profile``: the action model's rule profile for both simulators (default "station": the Drake station is the
+    physical tool, whatever the protocol scenario's profile); ``tool_rules``: rule overrides for both simulators, on top of the station's cup limit
     (``trial.station_tool_rules``); the rules in force are recorded in every scene file (a resumed run refuses
     scene files made under other rules).
     """
@@ -178,9 +179,9 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     if not Path(station).is_file():
         raise PhysicsBenchmarkError(f"station file not found: {station}")
     out = Path(out)
-    tool_rules = station_tool_rules(load_station_scenario(station), tool_rules)
-    _check_rules(out, policies, densities, scenes_per_density, tool_rules)
-    jobs = [(config, station, p, n, i, scene_seed(seed, n, i), str(out), sleep, tool_rules)
+    tool_rules = station_tool_rules(load_station_scenario(station), tool_rules, profile)
+    _check_rules(out, policies, densities, scenes_per_density, tool_rules, profile)
+    jobs = [(config, station, p, n, i, scene_seed(seed, n, i), str(out), sleep, tool_rules, profile)
             for p in policies for n in densities for i in range(scenes_per_density)
             if not trial_path(out, p, n, i).is_file()]
     # Scene index by scene index, densest first within each: a run stopped early holds the same number of scenes
@@ -205,7 +206,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     summary = summarise(trials, policies, densities)
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
                        "seed": seed, "densities": densities, "sleep": sleep, "workers": workers,
-                       "tool_rules": tool_rules,
+                       "profile": profile, "tool_rules": tool_rules,
                        "wall_seconds_this_run": round(elapsed, 1), "match_distance_m": MATCH_DISTANCE,
                        "match_yaw_deg": math.degrees(MATCH_YAW)}
     write_text_atomic(out / "physics.json", json.dumps(summary, indent=1, sort_keys=True))
@@ -214,7 +215,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     return summary
 
 
-def _check_rules(out: Path, policies, densities, scenes_per_density, tool_rules: dict) -> None:
+def _check_rules(out: Path, policies, densities, scenes_per_density, tool_rules: dict, profile: str) -> None:
     """Refuses, before any scene runs, an output folder holding scene files made under other tool rules."""
     from slax_drake.policies.registry import refuse_other_rules
 
@@ -223,7 +224,7 @@ def _check_rules(out: Path, policies, densities, scenes_per_density, tool_rules:
             for i in range(scenes_per_density):
                 path = trial_path(out, p, n, i)
                 if path.is_file():
-                    refuse_other_rules(path, tool_rules, PhysicsBenchmarkError)
+                    refuse_other_rules(path, tool_rules, PhysicsBenchmarkError, profile=profile)
 
 
 def load_results(out: Path, policies, densities, scenes_per_density) -> list[dict]:
@@ -339,8 +340,9 @@ def markdown_table(summary: dict) -> str:
               f"Planning per executed action: every candidate motion planned for that decision (rejected ones "
               f"included), one worker process each. "
               f"Object sleep {'on' if meta.get('sleep') else 'off'}."
-              + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
-                 if meta.get("tool_rules") else "")]
+              + f" Action-model rules: the '{meta.get('profile', 'station')}' profile"
+              + (f", with {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
+                 if meta.get("tool_rules") else ".")]
     for p, per in summary["policies"].items():
         endings = per.get("all", {}).get("drake_endings")
         if endings:
@@ -417,7 +419,8 @@ def run_from_args(args: argparse.Namespace) -> int:
     summary = run_physics_benchmark(args.config, [p.strip() for p in args.policies.split(",") if p.strip()], n,
                                     seed=args.seed, out=args.out, workers=args.workers, densities=densities,
                                     station=args.station, sleep=args.sleep, progress=not args.no_progress,
-                                    tool_rules=parse_tool_rules(args.tool_rule))
+                                    tool_rules=parse_tool_rules(args.tool_rule, args.profile or "station"),
+                                    profile=args.profile or "station")
     for p, per in summary["policies"].items():
         e = per["all"]
         match = "-" if e["match_rate"] is None else f"{100 * e['match_rate']:.0f} %"

@@ -29,6 +29,17 @@ class BenchmarkError(UserError):
     """A benchmark request that cannot be run, or a corrupt trial file."""
 
 
+def trial_oracle_status(searches: list[dict]) -> str:
+    """One word for an oracle trial from its searches' statuses: "cut by time" when any search was cut,
+    else the first search's ("optimal" or "infeasible"), or "none" when the target was visible from the start."""
+    statuses = [s["status"] for s in searches]
+    if not statuses:
+        return "none"
+    if "cut by time" in statuses:
+        return "cut by time"
+    return statuses[0]
+
+
 def scene_seed(protocol_seed: int, density: int, index: int) -> int:
     """The scene seed for trial ``index`` of ``density`` objects; the same for every policy."""
     return int(protocol_seed) * 1_000_003 + int(density) * 10_007 + int(index)
@@ -40,19 +51,28 @@ def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
 
 def _run_one(job):
     """Runs one trial in a worker; returns (path, trial dict)."""
-    scenario, policy_name, density, index, seed, perception, out, tool_rules = job
+    scenario, policy_name, density, index, seed, perception, out, tool_rules, profile, oracle_seconds = job
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial
     from slax_drake.scene.sampling import sample_scene
 
     scene = sample_scene(scenario, density, seed, target_size=tuple(scenario.target.sizes[0]))
     horizon = scenario.protocol.horizon_per_object * density
-    policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules)
+    oracle_options = {"seconds": oracle_seconds} if policy_name.startswith("oracle") and oracle_seconds else None
+    policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules,
+                         profile=profile, oracle_options=oracle_options)
+    t0 = time.perf_counter()
     result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                        suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
+    result["trial_seconds"] = round(time.perf_counter() - t0, 3)
     result["index"] = index
+    result["profile"] = profile
     if tool_rules:
         result["tool_rules"] = tool_rules
+    searches = getattr(policy, "search_log", None)
+    if searches is not None:  # the oracles: how each search ended (proven optimal, infeasible, cut by time)
+        result["oracle_searches"] = searches
+        result["oracle_status"] = trial_oracle_status(searches)
     path = _trial_path(Path(out), policy_name, density, index)
     write_text_atomic(path, json.dumps(result, sort_keys=True))
     return str(path), result
@@ -60,15 +80,19 @@ def _run_one(job):
 
 def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: int, out: Path, workers: int = 1,
                   backend: str = "local", perception: str = "ground-truth", densities=None, progress=True,
-                  tool_rules: dict | None = None) -> dict:
+                  tool_rules: dict | None = None, profile: str | None = None,
+                  oracle_seconds: float | None = None) -> dict:
     """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``).
-    ``tool_rules``: ToolConfig overrides (action-model rule variants), recorded in each trial file; a folder
-    holding trials made under other rules is refused before anything runs."""
-    from slax_drake.policies.registry import refuse_other_rules, without_defaults
+    ``profile``: the action model's rule profile (default: the scenario's); ``tool_rules``: single rule overrides
+    on top of it; both recorded in each trial file, and a folder holding trials made under another profile or
+    other rules is refused before anything runs. ``oracle_seconds``: the oracles' time limit per decision
+    (default: the Oracle's)."""
+    from slax_drake.policies.registry import refuse_other_rules, scenario_profile, without_defaults
 
     out = Path(out)
     densities = list(densities or scenario.protocol.densities)
-    tool_rules = without_defaults(dict(tool_rules or {}))
+    profile = scenario_profile(scenario, profile)
+    tool_rules = without_defaults(dict(tool_rules or {}), profile)
     jobs = []
     for policy in policies:
         for density in densities:
@@ -76,9 +100,9 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
                 path = _trial_path(out, policy, density, index)
                 if not path.is_file():
                     jobs.append((scenario, policy, density, index, scene_seed(seed, density, index), perception,
-                                 str(out), tool_rules))
+                                 str(out), tool_rules, profile, oracle_seconds))
                 else:
-                    refuse_other_rules(path, tool_rules, BenchmarkError, kind="trial file")
+                    refuse_other_rules(path, tool_rules, BenchmarkError, kind="trial file", profile=profile)
     # Heavy policies first, interleaved, so the pool stays busy to the end.
     jobs.sort(key=lambda j: (-j[2], j[3], j[1]))
     start = time.perf_counter()
@@ -112,7 +136,8 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     table = summarise(trials, policies, densities)
     table["meta"] = {"scenes_per_density": scenes_per_density, "seed": seed, "perception": perception,
                      "densities": densities, "wall_seconds_this_run": round(elapsed, 1), "workers": workers,
-                     "backend": backend, "tool_rules": tool_rules}
+                     "backend": backend, "profile": profile, "tool_rules": tool_rules,
+                     "oracle_seconds": oracle_seconds}
     write_tables(table, out)
     return table
 
@@ -134,7 +159,8 @@ def summarise(trials: list[dict], policies, densities) -> dict:
     """Per policy and density key ("4", ..., "all"): success_rate, median_steps, iqr, trials (count);
     steps statistics over successful trials, as in the paper's table; plus the raw ``trials`` list."""
     table = {"policies": {}, "trials": [
-        {k: t[k] for k in ("seed", "density", "policy", "success", "steps", "cost", "reason")} for t in trials
+        {k: t[k] for k in ("seed", "density", "policy", "success", "steps", "cost", "reason", "oracle_status")
+         if k in t} for t in trials
     ]}
     for policy in policies:
         per = {}
@@ -148,7 +174,12 @@ def summarise(trials: list[dict], policies, densities) -> dict:
                 "iqr": [float(np.percentile(steps, 25)), float(np.percentile(steps, 75))] if steps else None,
                 "trials": len(sel),
                 "mean_decision_seconds": round(float(np.mean(decision)), 4) if decision else None,
+                "mean_trial_seconds": (round(float(np.mean([t["trial_seconds"] for t in sel])), 3)
+                                       if sel and all("trial_seconds" in t for t in sel) else None),
             }
+            statuses = [t["oracle_status"] for t in sel if "oracle_status" in t]
+            if statuses:
+                per[key]["oracle_status"] = {s: statuses.count(s) for s in sorted(set(statuses))}
         table["policies"][policy] = per
     return table
 
@@ -184,8 +215,15 @@ def markdown_table(table: dict) -> str:
     lines.append("")
     lines.append(f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
                  f"{meta.get('perception', '?')} distributions; steps over successful trials."
-                 + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
-                    if meta.get("tool_rules") else ""))
+                 + f" Action-model rules: the '{meta.get('profile', 'station')}' profile"
+                 + (f", with {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
+                    if meta.get("tool_rules") else "."))
+    status = {p: table["policies"][p]["all"].get("oracle_status") for p in policies}
+    if any(status.values()):
+        lines.append("")
+        lines.append("Oracle searches per trial (proven optimal / proven infeasible within H / cut by time): "
+                     + "; ".join(f"{p}: " + ", ".join(f"{k} {v}" for k, v in s.items())
+                                 for p, s in status.items() if s) + ".")
     return "\n".join(lines) + "\n"
 
 

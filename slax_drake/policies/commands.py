@@ -34,6 +34,9 @@ def register(subparsers) -> None:
                    help="run the protocol through full Drake trials beside the shelf simulator on the same scenes "
                    "(non-oracle policies only; writes OUT/physics.md and OUT/physics.json; slow)")
     p.add_argument("--sleep", action="store_true", help="with --physics: object sleep in the Drake trials")
+    p.add_argument("--oracle-seconds", type=float, default=None,
+                   help="the oracles' time limit per decision in seconds (default: 20); a search cut by it is "
+                   "recorded per trial")
     add_tool_rule_argument(p, "recorded in the trial files")
     p.set_defaults(func=run)
 
@@ -44,7 +47,11 @@ def run(args: argparse.Namespace) -> int:
     from slax_drake.policies.registry import POLICY_NAMES, parse_tool_rules
 
     scenario = load_scenario(args.config)
-    tool_rules = parse_tool_rules(args.tool_rule)
+    # the shelf simulator's Table I runs the scenario's profile; --physics (Drake trials) the station's
+    profile = args.profile or ("station" if args.physics else scenario.profile)
+    tool_rules = parse_tool_rules(args.tool_rule, profile)
+    if args.oracle_seconds is not None and not args.oracle_seconds > 0:
+        raise UserError("--oracle-seconds must be positive")
     policies = [p.strip() for p in args.policies.split(",") if p.strip()]
     for p in policies:
         if p not in POLICY_NAMES:
@@ -58,18 +65,22 @@ def run(args: argparse.Namespace) -> int:
         raise UserError("--workers must be at least 1")
     seed = args.seed if args.seed is not None else scenario.protocol.seed
     if args.physics:
-        return _run_physics(args, policies, n, seed, tool_rules)
+        return _run_physics(args, policies, n, seed, tool_rules, profile)
     table = run_benchmark(scenario, policies, n, seed, args.out, workers=args.workers, backend=args.backend,
-                          perception=args.perception, progress=not args.no_progress, tool_rules=tool_rules)
+                          perception=args.perception, progress=not args.no_progress, tool_rules=tool_rules,
+                          profile=profile, oracle_seconds=args.oracle_seconds)
     for p in policies:
         e = table["policies"][p]["all"]
         print(f"{p:>18}: success {100 * e['success_rate']:.0f} % over {e['trials']} trials, median steps "
-              f"{e['median_steps']}")
+              f"{e['median_steps']}, {e['mean_trial_seconds']} s per trial"
+              + (f"; oracle searches {e['oracle_status']}" if e.get("oracle_status") else ""))
+    print(f"profile: {profile}" + (f", rule overrides {tool_rules}" if tool_rules else ""))
     print(f"wrote {args.out}/table1.md, table1.json, table1.png")
     return 0
 
 
-def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: int, tool_rules: dict) -> int:
+def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: int, tool_rules: dict,
+                 profile: str) -> int:
     """``--physics``: the same protocol through full Drake trials. The runner lives in ``slax_drake.systems``
     (the only stage that builds diagrams); this command only dispatches to it."""
     from slax_drake.evaluation.physics import run_physics_benchmark
@@ -78,7 +89,8 @@ def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: in
     if not drake_policies:
         raise UserError("--physics runs non-oracle policies only: name at least one in --policies")
     summary = run_physics_benchmark(args.config, drake_policies, n, seed=seed, out=args.out, workers=args.workers,
-                                    sleep=args.sleep, progress=not args.no_progress, tool_rules=tool_rules)
+                                    sleep=args.sleep, progress=not args.no_progress, tool_rules=tool_rules,
+                                    profile=profile)
     for p in drake_policies:
         e = summary["policies"][p]["all"]
         print(f"{p:>18}: success shelf {100 * e['shelf_success_rate']:.0f} %, Drake "

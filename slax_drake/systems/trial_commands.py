@@ -59,13 +59,15 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
 
 def run(args: argparse.Namespace) -> int:
     from slax_drake.policies.registry import parse_tool_rules
+
+    profile = args.profile or "station"  # Drake trials plan with the physical tool's rules unless told otherwise
     from slax_drake.systems.trial import run_trial, write_trial
 
     opts = TrialOptions(config=args.config, objects=DEFAULT_OBJECTS if args.objects is None else args.objects,
                         seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy,
                         perception=args.perception, station=args.station, meshcat=args.meshcat, html=args.html,
                         out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep,
-                        tool_rules=parse_tool_rules(args.tool_rule))
+                        tool_rules=parse_tool_rules(args.tool_rule, profile), profile=profile)
     if args.benchmark_scene is not None:
         if args.objects is not None or args.seed is not None:
             raise TrialError("--benchmark-scene replaces --objects and --seed: give one or the other")
@@ -87,8 +89,8 @@ def run(args: argparse.Namespace) -> int:
         params = f"d={a['d']:+.3f}" if a["type"] == "push" else f"dx={a['dx']:+.3f} dz={a['dz']:+.3f}"
         print(f"  {a['type']} {a['object']} {params}: motion {a['motion']['duration_s']:.1f} s, planned in "
               f"{a['planning_s']:.2f} s, {len(a['rejected_before'])} candidates rejected first")
-    if d["tool_rules"]:
-        print("action-model rules: " + ", ".join(f"{k}={v}" for k, v in d["tool_rules"].items())
-              + " (the station's cup limits and --tool-rule)")
+    print(f"action-model rules: the '{d['profile']}' profile"
+          + ("".join(f", {k}={v}" for k, v in d["tool_rules"].items()) + " (the station's cup limits and --tool-rule)"
+             if d["tool_rules"] else ""))
     print(f"wrote {written[0].parent} ({len(written)} files)")
     return 0
