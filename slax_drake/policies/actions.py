@@ -467,6 +467,7 @@ class _StateContext:
         self.occupied = np.any(self.masks, axis=0) if self.masks and self._radius_cells > 0 else None
         self.hidden_all = self._open(erode(self.count > 0))
         self._n = len(self.all_objs)
+        self._hidden_others: dict = {}
 
     def others(self, i):
         return [j for j in range(self._n) if j != i]
@@ -486,7 +487,11 @@ class _StateContext:
         return open_with_disc(mask & ~self.occupied if self.occupied is not None else mask, self._radius_cells)
 
     def hidden_others(self, i) -> np.ndarray:
-        return self._open(erode((self.count - self.shadows[i]) > 0))
+        """The hidden space as the other objects make it (cached per object: both push directions read it)."""
+        hit = self._hidden_others.get(i)
+        if hit is None:
+            hit = self._hidden_others[i] = self._open(erode((self.count - self.shadows[i]) > 0))
+        return hit
 
 
 def _first_false(ok: np.ndarray) -> int:
