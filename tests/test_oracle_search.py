@@ -74,3 +74,28 @@ def test_commutation_regions_separate_far_apart_pushes_only(paper):
     m_right = action_regions(model, objects, Push("m", (0, 0, 0), +0.05))
     assert not interacts(left_out, right_out, margin)  # pushed apart toward the walls: independent
     assert interacts(m_right, right_out, margin)  # m's push runs toward r: r's move may change m's stopper
+
+
+def test_cached_pushes_equal_the_whole_states_pushes(paper):
+    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.policies.actions import apply_action
+    from slax_drake.policies.oracle_search import PushCache
+    from slax_drake.scene.sampling import sample_scene
+
+    model = ActionModel(shelf_of(paper), paper.camera.position, tool_config(paper))
+    for n in (6, 10):
+        s = sample_scene(paper, n, scene_seed(0, n, 0), target_size=(0.06, 0.06, 0.06))
+        fixed = (s.target.as_object(),)
+        cache = PushCache(model, fixed)
+        states = [s.objects]
+        whole = model.enumerate(s.objects, fixed=fixed, suctions=False).feasible
+        states += [apply_action(s.objects, a) for a in whole]
+        for objects in states:
+            expected = model.enumerate(objects, fixed=fixed, suctions=False).feasible
+            assert sorted(map(repr, cache.pushes(objects))) == sorted(map(repr, expected))
+    # a push of an object behind another's push band leaves that one's pushes as they were: no recomputation
+    front, back = box("f", -0.15, -0.20, sx=0.08, sz=0.10), box("b", 0.15, 0.20, sx=0.08, sz=0.10)
+    cache = PushCache(model, ())
+    first = cache.pushes((front, back))
+    moved = apply_action((front, back), next(a for a in first if a.name == "b"))
+    assert cache.pushes(moved) == model.enumerate(moved, suctions=False).feasible and cache.hits == 1

@@ -141,13 +141,16 @@ class ActionModel:
         self._raster_cache: dict = {}
 
     # ----------------------------------------------------------------------------------------------------
-    def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True) -> Candidates:
-        """Candidates for moving each of ``objects``; ``fixed`` are known obstacles that never move (the
-        oracle's target). Returns feasible actions (deterministic order) and rejected ones with reasons."""
+    def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None) -> Candidates:
+        """Candidates for moving each of ``objects`` (or only those named in ``only``); ``fixed`` are known
+        obstacles that never move (the oracle's target). Returns feasible actions (deterministic order) and
+        rejected ones with reasons."""
         objects = tuple(objects)
         ctx = _StateContext(self, objects, tuple(fixed))
         feasible, rejected = [], []
         for i in range(len(objects)):
+            if only is not None and objects[i].name not in only:
+                continue
             if pushes:
                 for sign in (+1, -1):
                     self._pushes(ctx, i, sign, feasible, rejected)
@@ -193,7 +196,8 @@ class ActionModel:
             bad = _first_false(clear)
             if bad < first_bad:
                 first_bad, stopper = bad, ctx.all_names[j]
-        hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign)
+        hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign) if t.rules.push_hidden_check \
+            else first_bad
         if hidden_cells < first_bad:
             first_bad, stopper = hidden_cells, "hidden space"
         d_max = first_bad * t.grid.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok

@@ -44,7 +44,7 @@ Box = tuple[float, float, float, float]  # x_lo, x_hi, y_lo, y_hi in the shelf f
 class SearchResult:
     """A search's outcome: ``plan`` (a list of actions; [] when the goal holds already; None when none was found),
     ``status`` ("optimal", "infeasible" or "cut by time"), its ``cost``, ``lower_bound`` on the optimum, nodes
-    ``expansions`` and ``seconds`` spent."""
+    ``expansions`` and CPU ``seconds`` spent."""
 
     plan: list | None
     status: str
@@ -87,7 +87,7 @@ def action_regions(model: ActionModel, objects, action) -> tuple[list[Box], list
     y_front = -model.shelf.depth / 2 - FRONT_MARGIN
     if isinstance(action, Push):
         sign = 1 if action.d > 0 else -1
-        rects = model.push_swept_rects(fp, sign) + model.push_tool_rects(fp, sign)
+        rects = model.push_swept_rects(fp, sign)  # the parts of the tool a push checks (and drags along)
         y_lo = min([fp.y - ey] + [r[1] - r[3] for r in rects])
         y_hi = max([fp.y + ey] + [r[1] + r[3] for r in rects])
         x_tail = min([fp.x - ex] + [r[0] - r[2] for r in rects]) if sign > 0 else \
@@ -115,10 +115,11 @@ def interacts(regions_a, regions_b, margin: float) -> bool:
 
 def commutation_margin(model: ActionModel) -> float:
     """How far apart two regions must stay to be independent (m): hidden space is opened with a disc
-    ``min_hidden_width`` wide (what is hidden at a point depends on the shadows within that width), plus the
-    clearance, a raster cell and the blade's contact clearance."""
+    ``min_hidden_width`` wide (a point is in the opening when some such disc inside the hidden space covers it,
+    so what is hidden at a point depends on the shadows and footprints within that width of it), plus the
+    clearance, two raster cells (the erosion and rounding to cells) and 1 mm."""
     t = model.tool
-    return 2 * t.rules.min_hidden_width + t.physics.clearance + 2 * t.grid.cell + 1e-3
+    return t.rules.min_hidden_width + t.physics.clearance + 2 * t.grid.cell + 1e-3
 
 
 def maximal_pushes_only(actions: list) -> list:
@@ -134,22 +135,68 @@ def maximal_pushes_only(actions: list) -> list:
     return [a for a in actions if not isinstance(a, Push) or id(a) in keep]
 
 
+class PushCache:
+    """Each object's feasible pushes, cached by everything they depend on: the object's pose and the poses of the
+    objects that reach its push band (the strip of y its pushes and their tool lanes span, across the shelf,
+    widened by :func:`commutation_margin`) with their footprints or their shadows. The others cannot change
+    its blockers, stoppers or the hidden space in the band, so the pushes are computed on the smaller state
+    (exact: the same candidates as on the whole state)."""
+
+    def __init__(self, model: ActionModel, fixed):
+        self.model, self.fixed = model, tuple(fixed)
+        self.margin = commutation_margin(model)
+        self.cache: dict = {}
+        self.hits = self.misses = 0
+
+    def band(self, fp: Footprint) -> Box:
+        rects = [r for sign in (1, -1) for r in self.model.push_swept_rects(fp, sign)]  # what a push checks
+        ex, ey = fp.extents()
+        y_lo = min([fp.y - ey] + [r[1] - r[3] for r in rects])
+        y_hi = max([fp.y + ey] + [r[1] + r[3] for r in rects])
+        half_w = self.model.shelf.width / 2
+        return -half_w, half_w, y_lo, y_hi
+
+    def pushes(self, objects) -> list:
+        fps = [Footprint.of(o) for o in objects]
+        boxes = []
+        for fp in fps:
+            ex, ey = fp.extents()
+            boxes.append(((fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey), shadow_box(self.model, fp)))
+        out = []
+        for i, obj in enumerate(objects):
+            band = self.band(fps[i])
+            near = [j for j in range(len(objects)) if j == i or any(_overlap(b, band, self.margin) for b in boxes[j])]
+            key = tuple(state_key(objects[j:j + 1])[0] for j in near) + (i,)
+            hit = self.cache.get(key)
+            if hit is None:
+                self.misses += 1
+                sub = tuple(objects[j] for j in near)
+                hit = self.cache[key] = self.model.enumerate(sub, fixed=self.fixed, suctions=False,
+                                                             only={obj.name}).feasible
+            else:
+                self.hits += 1
+            out.extend(hit)
+        return out
+
+
 # ---- search ------------------------------------------------------------------------------------------------------
 def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions: bool, psi: float,
                 seconds: float, weight: float = 5.0, commute: bool = True, maximal_pushes: bool = True) -> SearchResult:
     """The cheapest plan from ``start`` (objects) to a state where ``h_of(objects) == 0`` within ``remaining``
     actions; ``fixed``: known obstacles that never move (the target); ``h_of(objects)``: an admissible
-    heuristic (0 exactly at the goal) counting actions; ``seconds``: the time limit; ``weight``: phase 1's
+    heuristic (0 exactly at the goal) counting actions; ``seconds``: the time limit (CPU seconds of this process,
+    so that other work on the machine does not change the result); ``weight``: phase 1's
     w (1 skips phase 1); ``commute``: commutation pruning (off only to check it); ``maximal_pushes``: the paper's
     coarse push set, each object pushed each way only up to its neighbour (the maximal push), not also on the
     ``push_resolution`` lattice (see :func:`maximal_pushes_only`)."""
-    t0 = time.perf_counter()
+    t0 = time.process_time()  # CPU seconds of this process: the limit does not shrink when the machine is shared
     deadline = t0 + seconds
     start = tuple(start)
     h0 = h_of(start)
     if h0 == 0:
         return SearchResult([], "optimal", 0.0, 0.0, 0, 0.0)
     margin = commutation_margin(model)
+    push_cache = PushCache(model, fixed)
     expansions = 0
     children_cache: dict = {}
 
@@ -158,7 +205,9 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
         key = state_key(objects)
         hit = children_cache.get(key)
         if hit is None:
-            cands = model.enumerate(objects, fixed=fixed, pushes=True, suctions=suctions).feasible
+            cands = push_cache.pushes(objects)
+            if suctions:
+                cands = cands + model.enumerate(objects, fixed=fixed, pushes=False, suctions=True).feasible
             if maximal_pushes:
                 cands = maximal_pushes_only(cands)
             hit = [(a, apply_action(objects, a), 1.0 if isinstance(a, Push) else psi) for a in cands]
@@ -183,7 +232,7 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
         frontier = [(w * h0, 0, 0.0, next(counter), start, h0, (), None, None)]
         best: dict = {}
         while frontier:
-            if time.perf_counter() > deadline:
+            if time.process_time() > deadline:
                 return None, None, False, min(n[2] + n[5] for n in frontier)
             f, neg_depth, g, _, objects, h, plan, last, node_key = heapq.heappop(frontier)
             if node_key is not None and (g, len(plan)) not in best.get(node_key, ()):
@@ -223,11 +272,11 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
         if plan1 is not None:
             upper, plan = cost1, plan1
         elif exhausted:
-            return SearchResult(None, "infeasible", None, math.inf, expansions, time.perf_counter() - t0)
+            return SearchResult(None, "infeasible", None, math.inf, expansions, time.process_time() - t0)
         else:
-            return SearchResult(None, "cut by time", None, float(h0), expansions, time.perf_counter() - t0)
+            return SearchResult(None, "cut by time", None, float(h0), expansions, time.process_time() - t0)
     plan2, cost2, exhausted, least = run(1.0, upper + 1e-6 if plan is not None else math.inf)
-    seconds_used = time.perf_counter() - t0
+    seconds_used = time.process_time() - t0
     if plan2 is not None:
         return SearchResult(plan2, "optimal", cost2, cost2, expansions, seconds_used)
     if exhausted:

@@ -125,6 +125,16 @@ class ShaftLaneCheck(Rule):
 
 
 @register
+class PushHiddenCheck(Rule):
+    """A push never moves its object into space hidden from the camera by other objects (it stops at its edge;
+    :func:`slax_drake.policies.floor.free_push_cells`). Both profiles: the paper's own rule ("objects may not be
+    pushed behind other objects, as to not risk collisions with obscured objects", Sec. VI-A). Off only as an
+    ablation."""
+
+    name, type, paper, station = "push_hidden_check", bool, True, True
+
+
+@register
 class HiddenSpace(Rule):
     """Which space counts as hidden, for the pushes' (and suction placements') hidden-space rule: "3d", a cell
     whose point ``hidden_probe_height`` above it is not seen by the camera (an unseen object at least that tall
