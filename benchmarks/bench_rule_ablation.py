@@ -1,5 +1,5 @@
-"""Evidence for the action model's rule variants: for the first-order defaults, each strict rule alone and all
-strict rules together, on the Table I scenes (protocol seed 0, the first N of each density), prints
+"""Evidence for the action model's rule variants: for the scenario's profile (sim_configs/table1.yaml: paper), each
+strict rule alone and all strict rules together (slax_drake.policies.rules.STRICT_RULES), on the Table I scenes (protocol seed 0, the first N of each density), prints
 
 - the feasible actions per state (mean count at the initial state, pushes and suctions),
 - the fraction of scenes where some occluder (an object hiding part of the target) can be pushed / suctioned,
@@ -15,7 +15,8 @@ import time
 import numpy as np
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import STRICT_RULES, ActionModel, Push, apply_action
+from slax_drake.policies.actions import ActionModel, Push, apply_action
+from slax_drake.policies.rules import STRICT_RULES
 from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.policies.registry import tool_config
 from slax_drake.policies.visibility import TargetOcclusion
@@ -33,7 +34,7 @@ def main():
     scenes = [sample_scene(sc, d, scene_seed(0, d, i), target_size=tuple(sc.target.sizes[0]))
               for d in densities for i in range(args.scenes)]
     occlusions = [TargetOcclusion(s, threshold=sc.target.visibility_threshold) for s in scenes]
-    variants = [("first-order (default)", {})] + [(f"strict {k}={v}", {k: v}) for k, v in STRICT_RULES.items()]
+    variants = [(f"{sc.profile} profile", {})] + [(f"strict {k}={v}", {k: v}) for k, v in STRICT_RULES.items()]
     variants.append(("all strict", dict(STRICT_RULES)))
     print(f"{len(scenes)} scenes ({args.scenes} each of {densities} objects)")
     print(f"{'variant':>36} | pushes/state | suctions/state | occluder pushable | occluder suctionable | "

@@ -16,6 +16,7 @@ from slax_drake.errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CONFIG = "sim_configs/sim_shelf.yaml"
+PROFILES = ("paper", "station")  # the action model's rule profiles (slax_drake.policies.rules.PROFILES)
 
 
 @dataclasses.dataclass
@@ -91,8 +92,11 @@ class ProtocolConfig:
 
 @dataclasses.dataclass
 class Scenario:
-    """Everything that defines a shelf world and how scenes are drawn in it."""
+    """Everything that defines a shelf world and how scenes are drawn in it, and the action model's rule profile
+    (``profile``: "paper", the paper's first-order simulator, or "station", our physical tool; see
+    :mod:`slax_drake.policies.rules`)."""
 
+    profile: str = "station"
     shelf: ShelfConfig = dataclasses.field(default_factory=ShelfConfig)
     camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)
     objects: ObjectsConfig = dataclasses.field(default_factory=ObjectsConfig)
@@ -167,6 +171,8 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             fail(key, value, "must be a positive number")
 
+    if scenario.profile not in PROFILES:
+        fail("profile", scenario.profile, f"must be one of {', '.join(map(repr, PROFILES))}")
     shelf = scenario.shelf
     for name in ("width", "height", "depth", "wall_thickness"):
         positive(f"shelf.{name}", getattr(shelf, name))

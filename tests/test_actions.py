@@ -20,7 +20,7 @@ def cyl(name, x, y, d=0.10, h=0.10):
 
 
 def model(**kw):
-    return ActionModel(SHELF, EYE, ToolConfig(**kw))
+    return ActionModel(SHELF, EYE, ToolConfig.build(**kw))
 
 
 def reasons(cands, what):
@@ -95,15 +95,15 @@ def test_push_moves_exactly_one_object_and_stops_before_its_neighbour():
     right = pushes_of(c, "a", +1)
     d_max = max(a_.d for a_ in right)
     gap = (0.10 - 0.04) - (-0.15 + 0.04)
-    assert d_max == pytest.approx(gap - m.tool.clearance, abs=m.tool.cell)
-    assert d_max <= gap - m.tool.clearance + 1e-9
+    assert d_max == pytest.approx(gap - m.tool.physics.clearance, abs=m.tool.grid.cell)
+    assert d_max <= gap - m.tool.physics.clearance + 1e-9
     after = apply_action((a, b), max(right, key=lambda p: p.d))
     assert np.allclose(after[1].X_SO, b.X_SO)  # b did not move
     assert after[0].center[1] == pytest.approx(a.center[1]) and after[0].center[0] > a.center[0]
-    assert footprints_clear(Footprint.of(after[0]), Footprint.of(after[1]), m.tool.clearance - 1e-9)
+    assert footprints_clear(Footprint.of(after[0]), Footprint.of(after[1]), m.tool.physics.clearance - 1e-9)
     # every candidate distance is a multiple of the resolution, or the maximal push
     for p in right:
-        assert p.d == pytest.approx(d_max) or abs(p.d / m.tool.push_resolution - round(p.d / m.tool.push_resolution)) < 1e-6
+        assert p.d == pytest.approx(d_max) or abs(p.d / m.tool.grid.push_resolution - round(p.d / m.tool.grid.push_resolution)) < 1e-6
 
 
 def test_nothing_is_pushed_into_space_hidden_behind_another_object():
@@ -151,9 +151,9 @@ def test_suction_placements_are_collision_free_and_inside_the_shelf():
         after = apply_action(objs, s)
         fps = [Footprint.of(o) for o in after]
         for i in range(len(fps)):
-            assert inside_shelf(fps[i], SHELF, m.tool.clearance - 1e-9)
+            assert inside_shelf(fps[i], SHELF, m.tool.physics.clearance - 1e-9)
             for j in range(i + 1, len(fps)):
-                assert footprints_clear(fps[i], fps[j], m.tool.clearance - 1e-9), s
+                assert footprints_clear(fps[i], fps[j], m.tool.physics.clearance - 1e-9), s
 
 
 def test_suction_rejections_say_why():
@@ -282,11 +282,11 @@ def test_the_blade_meets_the_object_where_the_push_starts(obj, sign):
     ex, _ = fp.extents()
     tip = m.blade_depth(fp, sign)
     x_plate = fp.x - sign * ex + sign * 0.001  # the blade's face after 1 mm of travel
-    plate = LineString([(x_plate, tip - m.tool.blade_width), (x_plate, tip)])
+    plate = LineString([(x_plate, tip - m.tool.geometry.blade_width), (x_plate, tip)])
     # a disc's true outline (the polygon circumscribes it), a rectangle's exact one
     outline = fp.polygon(16) if fp.shape == "box" else Point(fp.x, fp.y).buffer(fp.half_x, 256)
     assert plate.intersects(outline)
-    assert tip >= fp.y - fp.extents()[1] + m.tool.push_contact_depth - 1e-12
+    assert tip >= fp.y - fp.extents()[1] + m.tool.geometry.push_contact_depth - 1e-12
 
 
 def test_the_tube_must_reach_the_cup_contact_past_the_objects_in_front():

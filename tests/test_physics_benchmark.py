@@ -145,7 +145,7 @@ def test_tool_rules_are_typed_and_bad_ones_exit_with_code_2(capsys, tmp_path):
 
     assert parse_tool_rules(["max_suction_moment=0.4", "tube_approach_check=false"]) == {
         "max_suction_moment": 0.4, "tube_approach_check": False}
-    for bad, message in ((["no_such_rule=1"], "ToolConfig field"), (["max_suction_moment=heavy"], "needs a float"),
+    for bad, message in ((["no_such_rule=1"], "rule or tool field"), (["max_suction_moment=heavy"], "needs a float"),
                          (["tube_approach_check=maybe"], "needs a bool")):
         assert main(["--config", CONFIG, "--densities", "2", "--scenes-per-density", "1", "--out", str(tmp_path),
                      *[a for rule in bad for a in ("--tool-rule", rule)]]) == 2

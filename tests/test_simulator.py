@@ -18,7 +18,7 @@ def test_random_rollouts_never_overlap(sim_scenario, seed, n):
     scene = sample_scene(sim_scenario, n, seed, target_size=(0.06, 0.06, 0.06))
     model = make_policy("oracle-p+s", sim_scenario).action_model
     rng = np.random.default_rng(seed)
-    clearance = model.tool.clearance
+    clearance = model.tool.physics.clearance
     assert objects_overlap(scene, clearance - 1e-9) == []
     for _ in range(5):
         feasible = model.enumerate(scene.objects).feasible  # full state: sometimes moves beside the target
@@ -39,7 +39,7 @@ def test_unseen_obstacle_stops_a_push(sim_scenario):
     s = s.__class__(s.shelf, s.camera, s.objects, None, 0)
     moved, note = execute(s, Push("a", (-0.2225, -0.21, 0.0375), 0.30), model)
     assert "unseen obstacle" in note
-    assert objects_overlap(moved, model.tool.clearance - 1e-9) == []
+    assert objects_overlap(moved, model.tool.physics.clearance - 1e-9) == []
     assert moved.objects[0].center[0] > -0.15
 
 

@@ -51,6 +51,9 @@ def register(subparsers) -> None:
     p.add_argument("--station", default=None,
                    help="with --physics: station YAML (default: station_<config stem>.yaml, else the sim-shelf station)")
     p.add_argument("--sleep", action="store_true", help="with --physics: object sleep in the Drake trials")
+    p.add_argument("--oracle-seconds", type=arguments.positive_float, default=None,
+                   help="the oracles' CPU-time limit per decision in seconds (default: 20); a search cut by it is "
+                   "recorded per trial")
     add_tool_rule_argument(p, "recorded in the trial files (with --physics: for both simulators, over the station "
                            "cup's limits; max_suction_moment=inf and max_seal_angle_deg=90 lift them)")
     p.set_defaults(func=run)
@@ -74,7 +77,9 @@ def run(args: argparse.Namespace) -> int:
     from slax_drake.policies.registry import DEFAULT_BENCHMARK_POLICIES, POLICY_TABLE, parse_tool_rules
 
     scenario = load_scenario(args.config)
-    tool_rules = parse_tool_rules(args.tool_rule)
+    # the shelf simulator's Table I runs the scenario's profile; --physics (Drake trials) the station's
+    profile = args.profile or ("station" if args.physics else scenario.profile)
+    tool_rules = parse_tool_rules(args.tool_rule, profile)
     if args.policies is None:
         policies = list(DEFAULT_BENCHMARK_POLICIES)
         if args.physics:
@@ -93,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     densities = _densities(args.densities)
     seed = args.seed if args.seed is not None else scenario.protocol.seed
     if args.physics:
-        return _run_physics(args, policies, n, seed, densities, tool_rules)
+        return _run_physics(args, policies, n, seed, densities, tool_rules, profile)
     for flag, given in (("--station", args.station is not None), ("--sleep", args.sleep)):
         if given:
             raise UserError(f"{flag} applies to --physics only")
@@ -107,31 +112,37 @@ def run(args: argparse.Namespace) -> int:
 
     table = run_benchmark(scenario, policies, n, seed, args.out, workers=args.workers, backend=args.backend,
                           perception=args.perception, densities=densities, progress=not args.no_progress,
-                          tool_rules=tool_rules, config=args.config, ray_address=args.ray_address, camera=camera)
+                          tool_rules=tool_rules, config=args.config, ray_address=args.ray_address, camera=camera,
+                          profile=profile, oracle_seconds=args.oracle_seconds)
     meta = table["meta"]
     print(f"kept {meta['trials_kept']} trials already in {args.out}, ran {meta['trials_run']}")
     for p, per in table["policies"].items():
         e = per["all"]
         rate = "-" if e["success_rate"] is None else f"{100 * e['success_rate']:.0f} %"
         note = "" if p in policies else " (from an earlier run in this folder)"
-        print(f"{p:>18}: success {rate} over {e['trials']} trials, median steps {e['median_steps']}{note}")
+        searches = f"; oracle searches {e['oracle_status']}" if e.get("oracle_status") else ""
+        print(f"{p:>18}: success {rate} over {e['trials']} trials, median steps {e['median_steps']}{searches}{note}")
+    print(f"profile: {profile}" + (f", rule overrides {tool_rules}" if tool_rules else ""))
     print(f"wrote {args.out}/table1.md, table1.json, table1.png")
     return 0
 
 
-def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: int, densities, tool_rules: dict) -> int:
+def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: int, densities, tool_rules: dict,
+                 profile: str) -> int:
     """``--physics``: the same protocol through full Drake trials (slax_drake.evaluation.physics)."""
     from slax_drake.evaluation.physics import run_physics_benchmark
 
     if args.perception != "ground-truth":
         raise UserError("--physics runs ground-truth distributions only: leave out --perception")
+    if args.oracle_seconds is not None:
+        raise UserError("--oracle-seconds applies to the shelf simulator's oracles only")
     if args.observation is not None or args.segmentation is not None or args.sensor_noise:
         raise UserError("--observation, --segmentation and --sensor-noise apply to the shelf simulator only "
                         "(the physics benchmark's observation is its trial diagram's)")
     summary = run_physics_benchmark(args.config, policies, n, seed=seed, out=args.out, workers=args.workers,
                                     densities=densities, station=args.station, sleep=args.sleep,
                                     progress=not args.no_progress, tool_rules=tool_rules, backend=args.backend,
-                                    ray_address=args.ray_address)
+                                    ray_address=args.ray_address, profile=profile)
     meta = summary["meta"]
     print(f"kept {meta['scenes_kept']} scenes already in {args.out}, ran {meta['scenes_run']}")
     for p, per in summary["policies"].items():

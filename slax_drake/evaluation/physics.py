@@ -68,7 +68,7 @@ def _diverged_trial(message: str, wall_s: float) -> dict:
 def _run_scene(job) -> dict:
     """Runs one scene in both simulators (in whichever process the backend chose); returns its result file's
     content."""
-    config, station, policy_name, density, index, seed, sleep, tool_rules = job
+    config, station, policy_name, density, index, seed, sleep, tool_rules, profile = job
     from slax_drake.config import load_scenario
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial as run_shelf_trial
@@ -77,10 +77,10 @@ def _run_scene(job) -> dict:
 
     scenario = load_scenario(config)
     opts = protocol_trial(TrialOptions(config=config, station=station, policy=policy_name, out=None, sleep=sleep,
-                                       tool_rules=tool_rules), scenario, density, seed)
+                                       tool_rules=tool_rules, profile=profile), scenario, density, seed)
     scene = sample_scene(scenario, density, seed, target_size=opts.target_size)
     policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=opts.horizon,
-                         tool_overrides=tool_rules)
+                         tool_overrides=tool_rules, profile=profile)
     shelf = run_shelf_trial(scene, policy, opts.horizon, threshold=scenario.target.visibility_threshold,
                             suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
     t0 = time.perf_counter()
@@ -110,7 +110,7 @@ def _run_scene(job) -> dict:
     }
     shelf_keep = {k: shelf[k] for k in ("success", "steps", "cost", "reason", "actions", "notes", "visible_fraction")}
     return {"policy": policy_name, "density": density, "index": index, "seed": seed, "shelf": shelf_keep,
-            "drake": drake, "tool_rules": tool_rules}
+            "drake": drake, "profile": profile, "tool_rules": tool_rules}
 
 
 def protocol_trial(opts, scenario, density: int, seed: int):
@@ -142,13 +142,15 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
                           out: str | Path = "results/physics", workers: int = 1, densities=None,
                           station: str | None = None, sleep: bool = False, progress: bool = True,
                           tool_rules: dict | None = None, backend: str = "local",
-                          ray_address: str | None = None) -> dict:
+                          ray_address: str | None = None, profile: str = "station") -> dict:
     """Runs the missing scenes (both simulators) and writes physics.json and physics.md; returns the summary, whose
     ``meta`` says how many scenes were kept from the folder and how many ran.
 
     ``config``: the protocol scenario YAML (e.g. sim_configs/table1.yaml); ``seed``: protocol seed (default the
     protocol's); ``densities``: default the protocol's; ``station``: default :func:`default_station`;
-    ``tool_rules``: ToolConfig overrides (rule variants) for both simulators, on top of the station's cup limit
+    ``profile``: the action model's rule profile for both simulators (default "station": the Drake station is the
+    physical tool, whatever the protocol scenario's profile); ``tool_rules``: rule overrides of it for both
+    simulators, on top of the station's cup limit
     (``trial.station_tool_rules``); ``backend``, ``workers``, ``ray_address``: where the scenes run
     (:func:`slax_drake.backends.run_tasks`). The settings are recorded in the folder; a resumed run with other
     settings is refused before anything runs.
@@ -185,12 +187,12 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     if not Path(station).is_file():
         raise PhysicsBenchmarkError(f"station file not found: {station}")
     out = Path(out)
-    tool_rules = station_tool_rules(load_station_scenario(station), tool_rules)
-    settings = {**protocol_settings(scenario, config, seed, "ground-truth", tool_rules, policies),
+    tool_rules = station_tool_rules(load_station_scenario(station), tool_rules, profile)
+    settings = {**protocol_settings(scenario, config, seed, "ground-truth", tool_rules, policies, profile=profile),
                 "station": str(station), "station_sha256": file_digest(station), "sleep": bool(sleep)}
     record_or_refuse(out, settings, has_results=any((out / "physics_trials").glob("*/*.json")),
                      name=PHYSICS_SETTINGS_FILE)
-    all_jobs = [(config, station, p, n, i, scene_seed(seed, n, i), sleep, tool_rules)
+    all_jobs = [(config, station, p, n, i, scene_seed(seed, n, i), sleep, tool_rules, profile)
                 for p in policies for n in densities for i in range(scenes_per_density)]
     jobs = [j for j in all_jobs if not trial_path(out, j[2], j[3], j[4]).is_file()]
     # Scene index by scene index, densest first within each: a run stopped early holds the same number of scenes
@@ -207,7 +209,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     summary = summarise(trials, policies, densities)
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
                        "seed": seed, "densities": densities, "sleep": sleep, "workers": workers, "backend": backend,
-                       "tool_rules": tool_rules, "scenes_kept": len(all_jobs) - len(jobs), "scenes_run": len(jobs),
+                       "profile": profile, "tool_rules": tool_rules, "scenes_kept": len(all_jobs) - len(jobs), "scenes_run": len(jobs),
                        "wall_seconds_this_run": round(elapsed, 1), "match_distance_m": MATCH_DISTANCE,
                        "match_yaw_deg": math.degrees(MATCH_YAW)}
     write_text_atomic(out / "physics.json", json.dumps(summary, indent=1, sort_keys=True))
@@ -329,8 +331,9 @@ def markdown_table(summary: dict) -> str:
               f"Planning per executed action: every candidate motion planned for that decision (rejected ones "
               f"included), one worker process each. "
               f"Object sleep {'on' if meta.get('sleep') else 'off'}."
-              + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
-                 if meta.get("tool_rules") else "")]
+              + f" Action-model rules: the '{meta.get('profile', 'station')}' profile"
+              + (f", with {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
+                 if meta.get("tool_rules") else ".")]
     for p, per in summary["policies"].items():
         endings = per.get("all", {}).get("drake_endings")
         if endings:

@@ -51,10 +51,11 @@ def policy_settings(names) -> dict:
 
 
 def protocol_settings(scenario, config: str, seed: int, perception: str, tool_rules: dict, policies,
-                      camera=None) -> dict:
+                      camera=None, profile: str = "station", oracle_seconds: float | None = None) -> dict:
     """The outcome-changing settings of a Table I run (see the module docstring). ``config`` (the path) is recorded
     for the reader; its content is what is compared. ``camera``: the camera observation mode
-    (slax_drake.evaluation.table1.CameraMode) or None (privileged)."""
+    (slax_drake.evaluation.table1.CameraMode) or None (privileged); ``profile``: the action model's rule profile;
+    ``oracle_seconds``: the oracles' time limit per decision (None: the Oracle's default)."""
     return {
         "observation": "privileged" if camera is None else "camera",
         "camera": None if camera is None else dataclasses.asdict(camera),
@@ -66,7 +67,9 @@ def protocol_settings(scenario, config: str, seed: int, perception: str, tool_ru
         "horizon_per_object": int(scenario.protocol.horizon_per_object),
         "suction_cost": float(scenario.protocol.suction_cost),
         "visibility_threshold": float(scenario.target.visibility_threshold),
+        "profile": profile,
         "tool_rules": dict(tool_rules),
+        "oracle_seconds": oracle_seconds,
         "policies": policy_settings(policies),
     }
 
@@ -79,12 +82,13 @@ LABELS = {
     "horizon_per_object": "horizon (scenario protocol.horizon_per_object)",
     "suction_cost": "suction cost (scenario protocol.suction_cost)",
     "visibility_threshold": "visibility threshold (scenario target.visibility_threshold)",
+    "profile": "--profile (or the scenario's profile)", "oracle_seconds": "--oracle-seconds",
     "tool_rules": "--tool-rule", "station_sha256": "station (the --station file's content)", "sleep": "--sleep",
     "scenario_sha256": "scenario (the --config file's content)",
 }
 INFORMATIONAL = ("config", "station")
 # What a record made before a setting existed holds for it (folders made before --observation were privileged).
-RECORDED_DEFAULTS = {"observation": "privileged", "camera": None}
+RECORDED_DEFAULTS = {"observation": "privileged", "camera": None, "profile": "station", "oracle_seconds": None}
 
 
 def record_or_refuse(out: Path, settings: dict, has_results: bool, name: str = SETTINGS_FILE) -> dict:

@@ -42,6 +42,17 @@ class CameraMode:
     sensor_noise: bool = False
 
 
+def trial_oracle_status(searches: list[dict]) -> str:
+    """One word for an oracle trial from its searches' statuses: "cut by time" when any search was cut,
+    else the first search's ("optimal" or "infeasible"), or "none" when the target was visible from the start."""
+    statuses = [s["status"] for s in searches]
+    if not statuses:
+        return "none"
+    if "cut by time" in statuses:
+        return "cut by time"
+    return statuses[0]
+
+
 def scene_seed(protocol_seed: int, density: int, index: int) -> int:
     """The scene seed for trial ``index`` of ``density`` objects; the same for every policy."""
     return int(protocol_seed) * 1_000_003 + int(density) * 10_007 + int(index)
@@ -53,7 +64,7 @@ def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
 
 def _run_one(job) -> dict:
     """Runs one trial (in whichever process the backend chose); returns the trial file's content."""
-    scenario, policy_name, density, index, seed, perception, tool_rules, camera = job
+    scenario, policy_name, density, index, seed, perception, tool_rules, camera, profile, oracle_seconds = job
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import CameraObserver, run_trial
     from slax_drake.scene.sampling import sample_scene
@@ -61,42 +72,56 @@ def _run_one(job) -> dict:
     size = tuple(scenario.target.sizes[0])
     scene = sample_scene(scenario, density, seed, target_size=size)
     horizon = scenario.protocol.horizon_per_object * density
-    policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules)
+    oracle_options = {"seconds": oracle_seconds} if policy_name.startswith("oracle") and oracle_seconds else None
+    policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules,
+                         profile=profile, oracle_options=oracle_options)
     observer = None
     if camera is not None and not policy.needs_true_scene:  # the oracles always read the true scene
         observer = CameraObserver(scene.shelf, scene.camera, size,
                                   source="network" if perception == "learned" else "depth",
                                   width=policy.observation_width, segmentation=camera.segmentation,
                                   noise_seed=seed if camera.sensor_noise else None)
+    t0 = time.perf_counter()
     result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                        suction_cost=scenario.protocol.suction_cost, density=density, observer=observer).to_dict()
+    result["trial_seconds"] = round(time.perf_counter() - t0, 3)
     result["index"] = index
     result["observation"] = "privileged" if observer is None else "camera"
+    result["profile"] = profile
     if tool_rules:
         result["tool_rules"] = tool_rules
+    searches = getattr(policy, "search_log", None)
+    if searches is not None:  # the oracles: how each search ended (proven optimal, infeasible, cut by time)
+        result["oracle_searches"] = searches
+        result["oracle_status"] = trial_oracle_status(searches)
     return result
 
 
 def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: int, out: Path, workers: int = 1,
                   backend: str = "local", perception: str = "ground-truth", densities=None, progress=True,
                   tool_rules: dict | None = None, config: str | None = None, ray_address: str | None = None,
-                  camera: CameraMode | None = None) -> dict:
+                  camera: CameraMode | None = None, profile: str | None = None,
+                  oracle_seconds: float | None = None) -> dict:
     """Runs the missing trials and writes the tables; returns the table dict (see ``summarise``), whose ``meta``
     says how many trials were kept from the folder and how many ran.
 
-    ``tool_rules``: ToolConfig overrides (action-model rule variants), recorded in each trial file; ``config``: the
-    scenario's path, recorded beside its content's digest. A folder recorded with other settings is refused before
-    anything runs (:func:`slax_drake.evaluation.settings.record_or_refuse`). ``camera``: the camera observation
-    mode of the non-oracle policies (None: privileged, today's Observation; the oracles are privileged always)."""
+    ``profile``: the action model's rule profile (default: the scenario's); ``tool_rules``: single rule overrides
+    on top of it; both recorded in each trial file. ``config``: the scenario's path, recorded beside its content's
+    digest. A folder recorded with other settings (profile and rules included) is refused before anything runs
+    (:func:`slax_drake.evaluation.settings.record_or_refuse`). ``camera``: the camera observation mode of the
+    non-oracle policies (None: privileged, today's Observation; the oracles are privileged always).
+    ``oracle_seconds``: the oracles' CPU-time limit per decision (default: the Oracle's)."""
     from slax_drake.backends import check_backend, run_tasks
     from slax_drake.evaluation.settings import protocol_settings, record_or_refuse
-    from slax_drake.policies.registry import without_defaults
+    from slax_drake.policies.registry import scenario_profile, without_defaults
 
     out = Path(out)
     densities = list(densities or scenario.protocol.densities)
-    tool_rules = without_defaults(dict(tool_rules or {}))
+    profile = scenario_profile(scenario, profile)
+    tool_rules = without_defaults(dict(tool_rules or {}), profile)
     check_backend(backend, workers, ray_address)
-    settings = protocol_settings(scenario, config or "?", seed, perception, tool_rules, policies, camera)
+    settings = protocol_settings(scenario, config or "?", seed, perception, tool_rules, policies, camera, profile,
+                                 oracle_seconds)
     record_or_refuse(out, settings, has_results=bool(present_policies(out)))
     jobs, kept = [], 0
     for policy in policies:
@@ -106,7 +131,7 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
                     kept += 1
                 else:
                     jobs.append((scenario, policy, density, index, scene_seed(seed, density, index), perception,
-                                 tool_rules, camera))
+                                 tool_rules, camera, profile, oracle_seconds))
     # Heavy policies first, interleaved, so the pool stays busy to the end.
     jobs.sort(key=lambda j: (-j[2], j[3], j[1]))
     start = time.perf_counter()
@@ -123,7 +148,8 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     table = summarise(trials, in_table, densities)
     table["meta"] = {"scenes_per_density": scenes_per_density, "seed": seed, "perception": perception,
                      "densities": densities, "wall_seconds_this_run": round(elapsed, 1), "workers": workers,
-                     "backend": backend, "tool_rules": tool_rules, "trials_kept": kept, "trials_run": len(jobs),
+                     "backend": backend, "profile": profile, "tool_rules": tool_rules, "oracle_seconds": oracle_seconds,
+                     "trials_kept": kept, "trials_run": len(jobs),
                      "missing_trials": missing, "observation": "privileged" if camera is None else "camera",
                      "camera": None if camera is None else dataclasses.asdict(camera)}
     write_tables(table, out)
@@ -170,7 +196,8 @@ def summarise(trials: list[dict], policies, densities) -> dict:
     """Per policy and density key ("4", ..., "all"): success_rate, median_steps, iqr, trials (count);
     steps statistics over successful trials, as in the paper's table; plus the raw ``trials`` list."""
     table = {"policies": {}, "trials": [
-        {k: t[k] for k in ("seed", "density", "policy", "success", "steps", "cost", "reason")} for t in trials
+        {k: t[k] for k in ("seed", "density", "policy", "success", "steps", "cost", "reason", "oracle_status")
+         if k in t} for t in trials
     ]}
     for policy in policies:
         per = {}
@@ -184,7 +211,12 @@ def summarise(trials: list[dict], policies, densities) -> dict:
                 "iqr": [float(np.percentile(steps, 25)), float(np.percentile(steps, 75))] if steps else None,
                 "trials": len(sel),
                 "mean_decision_seconds": round(float(np.mean(decision)), 4) if decision else None,
+                "mean_trial_seconds": (round(float(np.mean([t["trial_seconds"] for t in sel])), 3)
+                                       if sel and all("trial_seconds" in t for t in sel) else None),
             }
+            statuses = [t["oracle_status"] for t in sel if "oracle_status" in t]
+            if statuses:
+                per[key]["oracle_status"] = {s: statuses.count(s) for s in sorted(set(statuses))}
         table["policies"][policy] = per
     return table
 
@@ -220,8 +252,9 @@ def markdown_table(table: dict) -> str:
     lines.append("")
     lines.append(f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
                  f"{meta.get('perception', '?')} distributions; steps over successful trials."
-                 + (f" Action-model rule variants: {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
-                    if meta.get("tool_rules") else ""))
+                 + f" Action-model rules: the '{meta.get('profile', 'station')}' profile"
+                 + (f", with {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
+                    if meta.get("tool_rules") else "."))
     if meta.get("observation") == "camera":
         cam = meta.get("camera") or {}
         lines.append(f"Observation: camera (rendered frames, {cam.get('segmentation', '?')} segmentation"
@@ -234,6 +267,12 @@ def markdown_table(table: dict) -> str:
     for policy, count in (meta.get("missing_trials") or {}).items():
         lines.append(f"{policy}: {count} of these trials are not in the folder (run it with --policies {policy} to "
                      "complete them); its figures are over the trials present.")
+    status = {p: table["policies"][p]["all"].get("oracle_status") for p in policies}
+    if any(status.values()):
+        lines.append("")
+        lines.append("Oracle searches per trial (proven optimal / proven infeasible within H / cut by time): "
+                     + "; ".join(f"{p}: " + ", ".join(f"{k} {v}" for k, v in s.items())
+                                 for p, s in status.items() if s) + ".")
     return "\n".join(lines) + "\n"
 
 

@@ -68,12 +68,14 @@ def run(args: argparse.Namespace) -> int:
     from slax_drake.evaluation.trial import run_trial, write_trial
     from slax_drake.systems.trial_summary import trial_summary
 
+    profile = args.profile or "station"  # Drake trials plan with the physical tool's rules unless told otherwise
+
     opts = TrialOptions(config=args.config, objects=DEFAULT_OBJECTS if args.objects is None else args.objects,
                         seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy,
                         perception=args.perception, station=args.station, meshcat=args.meshcat, html=args.html,
                         out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep,
                         sensor_noise=args.sensor_noise, segmentation=args.segmentation,
-                        tool_rules=parse_tool_rules(args.tool_rule))
+                        tool_rules=parse_tool_rules(args.tool_rule, profile), profile=profile)
     if args.benchmark_scene is not None:
         if args.objects is not None or args.seed is not None:
             raise TrialError("--benchmark-scene replaces --objects and --seed: give one or the other")

@@ -31,7 +31,8 @@ import dataclasses
 
 import numpy as np
 
-from slax_drake.policies.actions import Push, Suction, ToolConfig
+from slax_drake.policies.actions import Push, Suction
+from slax_drake.policies.rules import ToolConfig
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf
 from slax_drake.station import robot as robot_model
@@ -104,10 +105,10 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
     y_open = -shelf.depth / 2.0
     if isinstance(action, Push):
         sign = 1.0 if action.d > 0 else -1.0
-        edge = action.q[0] + sign * tool.blade_width / 2.0
+        edge = action.q[0] + sign * tool.geometry.blade_width / 2.0
         x = edge - sign * (BLADE_HALF_THICKNESS + PUSH_STANDOFF)
         y = action.q[1] - BLADE_HALF_LENGTH
-        z = tool.blade_height / 2.0 + BLADE_LIFT
+        z = tool.geometry.blade_height / 2.0 + BLADE_LIFT
         y_pre = y_open - approach_margin - BLADE_HALF_LENGTH
         x_end = x + action.d + sign * PUSH_STANDOFF
         R, f, s = push_rotation(), robot_model.BLADE_FACE_FRAME, robot_model.SHAFT_BLADE_DOWN

@@ -6,7 +6,7 @@ The names below are imported from their submodule on first use (:mod:`slax_drake
 from slax_drake.lazy_exports import lazy_exports
 
 _EXPORTS = {
-    "ActionModel": "actions", "Push": "actions", "Rejected": "actions", "Suction": "actions", "ToolConfig": "actions",
+    "ActionModel": "actions", "Push": "actions", "Rejected": "actions", "Suction": "actions", "ToolConfig": "rules",
     "apply_action": "actions",
     "DistributionModel": "distribution", "GroundTruthDistribution": "distribution",
     "POLICY_NAMES": "registry", "make_policy": "registry",

@@ -29,21 +29,12 @@ paths must be collision free (``suction_lift``: "over-lower", default, the objec
 that leaves room for it under the shelf's top, "lifted... clear of the clutter"; "slight", it is lifted only
 ``lift_height`` and passes over nothing); the placement must be collision free, inside the walls, and cover no
 cell hidden from the camera by any known object, the object's own old shadow included, since nobody has seen
-it yet (``suction_hidden_rule`` "placement", default; "path": the whole way in and out too).
+it yet (``suction_hidden_rule`` "placement", the station profile; "path": the whole way in and out too; "none",
+the paper profile: no hidden-space rule for suctions).
 
-Rule variants (ToolConfig fields; first-order defaults follow the paper's FOSS, where physical feasibility is
-left to the planner's kinematic checks): ``blade_gap`` 0.035 (strict: 0.065, the blade turned flat in the
-gap); ``shaft_lane_check`` False (strict: the shaft's way in from outside the shelf touches no object);
-``tube_approach_check`` True (the tube's straight way in to the contact touches no object taller than its
-underside: a contact point the horizontal tube cannot reach is not a "reachable point"; off, 70 of 168 initial
-candidates of six Table I scenes were suctions whose tube the Drake planner found inside another object); ``hidden_space`` "3d" (strict: "overhead"); ``suction_lift`` "over-lower" (strict: "slight");
-``suction_hidden_rule`` "placement" (strict: "path"); ``min_hidden_width`` 0.06 (strict: 0); ``max_suction_mass`` inf (strict: 2.0);
-``min_seal_radius`` 0.015 (strict: 0.04); ``max_suction_moment`` inf (held: 0.4 N m; in 80 Drake trials of
-Bluction-DAR, 3 of 91 suctioned objects whose weight hung less than 0.4 N m off the cup fell from it, and 31 of
-71 heavier-hanging ones); ``max_seal_angle_deg`` 90 (sealed: 10 deg; in the same trials, 3 of 117 suctions of box
-faces turned 15-35 deg from the tube ended where the model put the object and 97 left it where it stood, while 245 of
-305 under 10 deg (cylinders included) matched). The Drake station's cup sets both limits (``suction`` in the station YAML).
-:data:`STRICT_RULES` holds the strict set.
+Configuration (:mod:`slax_drake.policies.rules`): the tool's geometry, the discretisation, the objects'
+physics and the rules, each rule a small class with its value in the ``paper`` and ``station`` profiles
+and a docstring saying what it refuses and why.
 
 ``enumerate`` lists a state's candidates with d discretised at ``push_resolution`` (the maximal push is always a
 candidate) and placements on a ``suction_resolution`` lattice around the object, and returns every rejected
@@ -57,6 +48,7 @@ import math
 
 import numpy as np
 
+from slax_drake.policies.rules import RULES, ToolConfig, tool_config_problem
 from slax_drake.policies.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
 )
@@ -67,73 +59,6 @@ GRAVITY = 9.81  # m/s^2
 FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
 CONTACT_INSET = 0.01  # the blade's tip this far past the point where it meets the object (m)
 BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
-
-
-@dataclasses.dataclass(frozen=True)
-class ToolConfig:
-    """The bluction tool and the action discretisation (metres, kilograms)."""
-
-    blade_width: float = 0.065
-    blade_height: float = 0.075
-    cup_diameter: float = 0.03
-    tube_diameter: float = 0.03
-    max_suction_depth: float = 0.40  # the tube's length: deepest contact behind the opening
-    max_suction_mass: float = math.inf  # kg; strict variant 2.0 (the paper's FOSS weighs nothing)
-    min_seal_radius: float = 0.015  # a cylinder of smaller radius curves more than the cup (strict: 0.04)
-    max_suction_moment: float = math.inf  # N m: the object's weight times the horizontal distance from the cup's
-    # contact to its centre, at most (held variant: 0.4, about 0.6 x the 42 N pull times the 15 mm cup radius)
-    max_seal_angle_deg: float = 90.0  # deg: a box face turned more than this from the tube's axis (the shelf's
-    # y) cannot be sealed; 90 admits every face (the camera-facing face is never turned more than 45 deg)
-    lift_height: float = 0.02
-    object_density: float = 400.0  # kg/m^3, to weigh objects
-    clearance: float = 0.002  # moved objects stop this far from neighbours and walls
-    push_resolution: float = 0.05
-    suction_resolution: float = 0.05
-    min_push: float = 0.01
-    push_contact_depth: float = 0.03  # the blade's tip goes at least this far past the object's front extreme
-    tube_past_blade: float = 0.02  # the tube's end (the cup) reaches this far past the blade's tip (0.42 - 0.40 m
-    # in the tool model), so the gap must be free that much deeper: the Drake planner found the cup inside an
-    # object standing just behind the blade's lane
-    cell: float = 0.005  # the path step and the hidden-space raster's cell
-    # Rules of the first-order model (see the module docstring; the defaults follow the paper's FOSS):
-    shaft_lane_check: bool = False  # strict: the shaft's way in from outside the shelf touches no object
-    suction_lift: str = "over-lower"  # "slight": the lifted object passes over nothing; "over-lower": see doc
-    blade_gap: float = 0.035  # free width beside the object for the thin blade and the 3 cm tube along its edge
-    hidden_space: str = "3d"  # "overhead": 2D shadows of infinitely tall objects; "3d": see the module doc
-    hidden_probe_height: float = 0.05  # "3d": a cell is hidden when this point above it is not seen (m)
-    min_hidden_width: float = 0.06  # hidden space counts only where a disc this wide fits in it: the smallest
-    # object (0.06 m) contains such a disc, so narrower hidden slivers hold no unseen object (strict: 0)
-    tube_approach_check: bool = True  # the tube's straight way in to the cup's contact touches no object
-    # taller than the tube's underside (False: only the planner's collision checks decide)
-    suction_hidden_rule: str = "placement"  # "path": the whole way in avoids hidden space; "placement": the
-    # final placement only (pushes always sweep their whole path, so for them the two are the same)
-
-
-RULE_CHOICES = {"hidden_space": ("overhead", "3d"), "suction_hidden_rule": ("path", "placement"),
-                "suction_lift": ("slight", "over-lower")}
-POSITIVE_FIELDS = ("blade_width", "blade_height", "cup_diameter", "tube_diameter", "push_resolution",
-                   "suction_resolution", "cell")
-
-
-def tool_config_problem(tool: ToolConfig) -> str | None:
-    """What makes ``tool`` unusable, in one line, or None: an unknown rule variant, a negative (or, for sizes and
-    resolutions, zero) number, resolutions that are not multiples of ``cell``."""
-    for name, choices in RULE_CHOICES.items():
-        if getattr(tool, name) not in choices:
-            return f"{name} = {getattr(tool, name)!r}: must be one of {', '.join(map(repr, choices))}"
-    for f in dataclasses.fields(tool):
-        value = getattr(tool, f.name)
-        if isinstance(value, float) and not value >= (1e-12 if f.name in POSITIVE_FIELDS else 0.0):
-            return f"{f.name} = {value!r}: must be {'positive' if f.name in POSITIVE_FIELDS else 'non-negative'}"
-    for name in ("push_resolution", "suction_resolution"):
-        ratio = getattr(tool, name) / tool.cell
-        if abs(ratio - round(ratio)) > 1e-9:
-            return f"{name} = {getattr(tool, name)!r}: must be a multiple of cell = {tool.cell!r}"
-    return None
-
-
-STRICT_RULES = dict(min_hidden_width=0.0, blade_gap=0.065, shaft_lane_check=True, tube_approach_check=True, hidden_space="overhead",
-                    suction_lift="slight", suction_hidden_rule="path", max_suction_mass=2.0, min_seal_radius=0.04)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -211,18 +136,21 @@ class ActionModel:
         self.eye_xy = eye[:2]
         self.eye_z = float(eye[2]) if len(eye) > 2 else None  # needed by hidden_space="3d"
         self.tool = tool
-        self.grid = FloorGrid(shelf, tool.cell)
+        self.grid = FloorGrid(shelf, tool.grid.cell)
         self.y_front = -shelf.depth / 2 - FRONT_MARGIN
         self._raster_cache: dict = {}
 
     # ----------------------------------------------------------------------------------------------------
-    def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True) -> Candidates:
-        """Candidates for moving each of ``objects``; ``fixed`` are known obstacles that never move (the
-        oracle's target). Returns feasible actions (deterministic order) and rejected ones with reasons."""
+    def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None) -> Candidates:
+        """Candidates for moving each of ``objects`` (or only those named in ``only``); ``fixed`` are known
+        obstacles that never move (the oracle's target). Returns feasible actions (deterministic order) and
+        rejected ones with reasons."""
         objects = tuple(objects)
         ctx = _StateContext(self, objects, tuple(fixed))
         feasible, rejected = [], []
         for i in range(len(objects)):
+            if only is not None and objects[i].name not in only:
+                continue
             if pushes:
                 for sign in (+1, -1):
                     self._pushes(ctx, i, sign, feasible, rejected)
@@ -244,8 +172,8 @@ class ActionModel:
         if abs(gap_x) + rects[0][2] > shelf.width / 2 + 1e-9:
             rejected.append(Rejected(what, f"blade does not fit between {obj.name} and the {side} wall"))
             return
-        y_lo = min([y - ey] + [r[1] - r[3] for r in rects]) - t.clearance - 1e-6
-        y_hi = max([y + ey] + [r[1] + r[3] for r in rects]) + t.clearance + 1e-6
+        y_lo = min([y - ey] + [r[1] - r[3] for r in rects]) - t.physics.clearance - 1e-6
+        y_hi = max([y + ey] + [r[1] + r[3] for r in rects]) + t.physics.clearance + 1e-6
         band = ctx.others_in_band(i, 1, y_lo, y_hi)
         for j in band:
             for k_r, (rx, ry, hx, hy) in enumerate(rects):
@@ -253,32 +181,33 @@ class ActionModel:
                     where = "gap" if k_r == 0 else "shaft's way in"
                     rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
                     return
-        n = int(math.ceil(shelf.width / t.cell)) + 1
+        n = int(math.ceil(shelf.width / t.grid.cell)) + 1
         k = np.arange(1, n + 1)
-        xs = x + sign * k * t.cell
-        ok = np.abs(xs) + ex <= shelf.width / 2 - t.clearance + 1e-12
+        xs = x + sign * k * t.grid.cell
+        ok = np.abs(xs) + ex <= shelf.width / 2 - t.physics.clearance + 1e-12
         first_bad, stopper = _first_false(ok), "the wall"
         centers = np.column_stack([xs, np.full(n, y)])
         for j in band:
             other = ctx.all_fps[j]
-            clear = clear_of(fp.shape, centers, fp.yaw, (fp.half_x, fp.half_y), other, t.clearance)
+            clear = clear_of(fp.shape, centers, fp.yaw, (fp.half_x, fp.half_y), other, t.physics.clearance)
             for rx, ry, hx, hy in rects:
-                tool = np.column_stack([rx + sign * k * t.cell, np.full(n, ry)])
+                tool = np.column_stack([rx + sign * k * t.grid.cell, np.full(n, ry)])
                 clear &= clear_of("box", tool, 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)
             bad = _first_false(clear)
             if bad < first_bad:
                 first_bad, stopper = bad, ctx.all_names[j]
-        hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign)
+        hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign) if t.rules.push_hidden_check \
+            else first_bad
         if hidden_cells < first_bad:
             first_bad, stopper = hidden_cells, "hidden space"
-        d_max = first_bad * t.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
-        step = t.push_resolution
-        q = (lane_x, self.blade_depth(fp, sign), t.blade_height / 2)
-        if d_max < t.min_push - 1e-12:
+        d_max = first_bad * t.grid.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
+        step = t.grid.push_resolution
+        q = (lane_x, self.blade_depth(fp, sign), t.geometry.blade_height / 2)
+        if d_max < t.grid.min_push - 1e-12:
             rejected.append(Rejected(what, f"no room: {obj.name} is stopped by {stopper} at once"))
             return
         ds = list(np.arange(1, int(d_max / step + 1e-9) + 1) * step)
-        if not ds or d_max - ds[-1] > t.cell / 2:
+        if not ds or d_max - ds[-1] > t.grid.cell / 2:
             ds.append(d_max)
         for d in ds:
             feasible.append(Push(obj.name, q, round(float(sign * d), 6)))
@@ -291,51 +220,51 @@ class ActionModel:
         t, shelf = self.tool, self.shelf
         obj, fp = ctx.objects[i], ctx.fps[i]
         what = f"suction {obj.name}"
-        mass = object_mass(obj, t.object_density)
-        if mass > t.max_suction_mass:
-            rejected.append(Rejected(what, f"{obj.name} weighs {mass:.2f} kg > {t.max_suction_mass:.2f} kg"))
+        mass = object_mass(obj, t.physics.object_density)
+        if RULES["max_suction_mass"].refuses(t.rules.max_suction_mass, mass):
+            rejected.append(Rejected(what, f"{obj.name} weighs {mass:.2f} kg > {t.rules.max_suction_mass:.2f} kg"))
             return
         contact = self.suction_contact(obj)
         if contact is None:
             rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is too small or curved for the cup"))
             return
         cx, cy, cz = contact
-        angle = self.seal_angle_deg(obj) if t.max_seal_angle_deg < 45.0 else 0.0  # a front face turns 45 at most
-        if angle > t.max_seal_angle_deg:
+        angle = self.seal_angle_deg(obj) if t.rules.max_seal_angle_deg < 45.0 else 0.0  # a front face turns 45 at most
+        if RULES["max_seal_angle_deg"].refuses(t.rules.max_seal_angle_deg, angle):
             rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
-                                           f"tube > {t.max_seal_angle_deg:.0f} deg"))
+                                           f"tube > {t.rules.max_seal_angle_deg:.0f} deg"))
             return
         moment = mass * GRAVITY * math.hypot(float(obj.center[0]) - cx, float(obj.center[1]) - cy)
-        if moment > t.max_suction_moment:
+        if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
             rejected.append(Rejected(what, f"{obj.name}'s weight hangs {moment:.2f} N m off the cup "
-                                           f"> {t.max_suction_moment:.2f} N m"))
+                                           f"> {t.rules.max_suction_moment:.2f} N m"))
             return
-        if cy - (-shelf.depth / 2) > t.max_suction_depth:
+        if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, cy - (-shelf.depth / 2)):
             rejected.append(Rejected(what, f"{obj.name}'s face is beyond the tube's reach"))
             return
-        tube_r = t.tube_diameter / 2
+        tube_r = t.geometry.tube_diameter / 2
         corridor_half = (tube_r, (cy - self.y_front) / 2)
         corridor = np.array([[cx, (cy + self.y_front) / 2]])
-        for j in (ctx.others(i) if t.tube_approach_check else ()):
+        for j in (ctx.others(i) if t.rules.tube_approach_check else ()):
             if ctx.all_heights[j] <= cz - tube_r:
                 continue  # the tube passes over it
             if not clear_of("box", corridor, 0.0, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
                 rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
                 return
         ex, ey = fp.extents()
-        y_out = -shelf.depth / 2 - ey - t.cell
-        n_out = int(math.ceil((fp.y - y_out) / t.cell))
-        ys = fp.y - np.arange(1, n_out + 1) * t.cell
+        y_out = -shelf.depth / 2 - ey - t.grid.cell
+        n_out = int(math.ceil((fp.y - y_out) / t.grid.cell))
+        ys = fp.y - np.arange(1, n_out + 1) * t.grid.cell
         path = np.column_stack([np.full(n_out, fp.x), ys])
         blocking = [j for j in ctx.others(i) if not self.passes_over(obj, ctx.all_heights[j])]
-        for j in ctx.others_in_band(i, 0, fp.x - ex - t.clearance - 1e-6, fp.x + ex + t.clearance + 1e-6):
+        for j in ctx.others_in_band(i, 0, fp.x - ex - t.physics.clearance - 1e-6, fp.x + ex + t.physics.clearance + 1e-6):
             if j not in blocking:
                 continue
-            if not clear_of(fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.clearance).all():
+            if not clear_of(fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all():
                 rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
                 return
         cols, first_rows, last_rows = column_extents(ctx.masks[i])
-        path_rule = t.suction_hidden_rule == "path"
+        path_rule = t.rules.suction_hidden_rule == "path"
         if path_rule:
             hidden_o = ctx.hidden_others(i)
             if any(hidden_o[:r, c].any() for c, r in zip(cols, first_rows)):
@@ -343,10 +272,10 @@ class ActionModel:
                 return
         q = (float(cx), float(cy), float(cz))
         # Placements on a lattice around the object: x' = x + a res, y' = y + b res.
-        res = t.suction_resolution
-        cells_per = int(round(res / t.cell))
-        x_lim = shelf.width / 2 - t.clearance - ex
-        y_lim = shelf.depth / 2 - t.clearance - ey
+        res = t.grid.suction_resolution
+        cells_per = int(round(res / t.grid.cell))
+        x_lim = shelf.width / 2 - t.physics.clearance - ex
+        y_lim = shelf.depth / 2 - t.physics.clearance - ey
         a_all = np.arange(int(math.floor((-x_lim - fp.x) / res + 1e-9)), int(math.floor((x_lim - fp.x) / res + 1e-9)) + 1)
         a_all = a_all[np.abs(fp.x + a_all * res) <= x_lim + 1e-12]
         b_all = np.arange(int(math.ceil((-y_lim - fp.y) / res - 1e-9)), int(math.floor((y_lim - fp.y) / res + 1e-9)) + 1)
@@ -355,14 +284,14 @@ class ActionModel:
             return
         # Exact path check, vectorised over all columns x' and steps in from y_out to the deepest placement.
         y_deep = fp.y + b_all[-1] * res
-        n_in = int(math.ceil((y_deep - y_out) / t.cell)) + 1
-        steps = y_out + np.arange(n_in) * t.cell
+        n_in = int(math.ceil((y_deep - y_out) / t.grid.cell)) + 1
+        steps = y_out + np.arange(n_in) * t.grid.cell
         steps[-1] = min(steps[-1], y_deep)
         xs = fp.x + a_all * res
         grid_c = np.column_stack([np.repeat(xs, n_in), np.tile(steps, len(xs))])
         clear = np.ones(len(grid_c), dtype=bool)
         for j in blocking:
-            clear &= clear_of(fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.clearance)
+            clear &= clear_of(fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance)
         clear = clear.reshape(len(xs), n_in)
         first_bad = np.where(clear.all(axis=1), n_in, np.argmin(clear, axis=1))
         y_reach_exact = np.where(
@@ -384,14 +313,14 @@ class ActionModel:
             if path_rule:
                 # rows the footprint may advance by (relative to its current rows) before touching hidden cells
                 adv = (first_h[shifted_cols[inside]] - last_rows[inside] - 1).min()
-                y_reach = min(y_ex, fp.y + adv * t.cell if adv < NOT_FOUND // 2 else np.inf)
+                y_reach = min(y_ex, fp.y + adv * t.grid.cell if adv < NOT_FOUND // 2 else np.inf)
             else:
                 y_reach = y_ex
             bs = [b for b in b_all if not (a == 0 and b == 0) and fp.y + b * res <= y_reach + 1e-9]
             if not bs:
                 continue
             bs = np.array(bs)
-            if not path_rule:
+            if t.rules.suction_hidden_rule == "placement":
                 c_in = shifted_cols[inside]
                 r0 = np.clip(first_rows[inside][None, :] + bs[:, None] * cells_per, 0, ny)
                 r1 = np.clip(last_rows[inside][None, :] + bs[:, None] * cells_per + 1, 0, ny)
@@ -401,7 +330,7 @@ class ActionModel:
                 placed = np.column_stack([np.full(len(bs), x_new), fp.y + bs * res])
                 ok = np.ones(len(bs), dtype=bool)
                 for j in passed_over:
-                    ok &= clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.clearance)
+                    ok &= clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance)
                 bs = bs[ok]
             for b in bs:
                 y_new = fp.y + b * res
@@ -418,11 +347,11 @@ class ActionModel:
         t = self.tool
         ex, ey = fp.extents()
         edge = fp.x - ex if sign > 0 else fp.x + ex
-        blade_x = edge - sign * t.blade_width / 2  # q's x: the lane centre, whatever blade_gap is
+        blade_x = edge - sign * t.geometry.blade_width / 2  # q's x: the lane centre, whatever blade_gap is
         y_tip = self.blade_depth(fp, sign)
         y_face = fp.y - ey
-        blade = (blade_x, (y_face + y_tip) / 2, t.blade_width / 2, max(1e-4, (y_tip - y_face) / 2))
-        shaft = (blade_x, (self.y_front + y_tip) / 2, t.tube_diameter / 2, (y_tip - self.y_front) / 2)
+        blade = (blade_x, (y_face + y_tip) / 2, t.geometry.blade_width / 2, max(1e-4, (y_tip - y_face) / 2))
+        shaft = (blade_x, (self.y_front + y_tip) / 2, t.geometry.tube_diameter / 2, (y_tip - self.y_front) / 2)
         return [blade, shaft]
 
     def rasters(self, obj: SceneObject, fp: Footprint):
@@ -432,8 +361,8 @@ class ActionModel:
         if hit is not None:
             return hit
         grid, t = self.grid, self.tool
-        if t.hidden_space == "3d" and self.eye_z is not None:
-            shadow = grid.shadow_mask(fp, self.eye_xy, obj.size[2], self.eye_z, t.hidden_probe_height)
+        if t.rules.hidden_space == "3d" and self.eye_z is not None:
+            shadow = grid.shadow_mask(fp, self.eye_xy, obj.size[2], self.eye_z, t.rules.hidden_probe_height)
         else:
             shadow = grid.shadow_mask(fp, self.eye_xy)
         if len(self._raster_cache) >= 1500:
@@ -447,19 +376,19 @@ class ActionModel:
         when ``shaft_lane_check`` is on."""
         t = self.tool
         blade, shaft = self.push_tool_rects(fp, sign)
-        edge = blade[0] + sign * t.blade_width / 2
-        y_face, y_end = blade[1] - blade[3], blade[1] + blade[3] + t.tube_past_blade
-        gap = (edge - sign * t.blade_gap / 2, (y_face + y_end) / 2, t.blade_gap / 2, (y_end - y_face) / 2)
-        return [gap, shaft] if t.shaft_lane_check else [gap]
+        edge = blade[0] + sign * t.geometry.blade_width / 2
+        y_face, y_end = blade[1] - blade[3], blade[1] + blade[3] + t.rules.tube_past_blade
+        gap = (edge - sign * t.rules.blade_gap / 2, (y_face + y_end) / 2, t.rules.blade_gap / 2, (y_end - y_face) / 2)
+        return [gap, shaft] if t.rules.shaft_lane_check else [gap]
 
     def passes_over(self, lifted: SceneObject, obstacle_height: float) -> bool:
         """Whether the suctioned object, lifted, passes over an obstacle ``obstacle_height`` tall: never for
         ``suction_lift="slight"``; for ``"over-lower"`` when the object lifted ``lift_height`` above the
         obstacle still fits under the shelf's top (clearance to spare)."""
-        if self.tool.suction_lift == "slight":
+        if self.tool.rules.suction_lift == "slight":
             return False
         t = self.tool
-        return obstacle_height + t.lift_height + lifted.size[2] + t.clearance <= self.shelf.height
+        return obstacle_height + t.geometry.lift_height + lifted.size[2] + t.physics.clearance <= self.shelf.height
 
     def blade_depth(self, fp: Footprint, sign: int) -> float:
         """How deep the blade goes to push ``fp`` toward ``sign`` x (y of its tip, S): ``CONTACT_INSET`` past the
@@ -473,24 +402,24 @@ class ActionModel:
             corners = fp.corners()
             reach = -sign * corners[:, 0]  # pushing +x, the blade stands at the object's least x
             y_contact = float(corners[reach >= reach.max() - 1e-9, 1].min())
-        return max(fp.y - fp.extents()[1] + self.tool.push_contact_depth, y_contact + CONTACT_INSET)
+        return max(fp.y - fp.extents()[1] + self.tool.geometry.push_contact_depth, y_contact + CONTACT_INSET)
 
     def suction_contact(self, obj: SceneObject):
         """Where the cup seals on the object's camera-facing side (x, y, z), or None when it cannot."""
         t = self.tool
-        cup_r = t.cup_diameter / 2
+        cup_r = t.geometry.cup_diameter / 2
         h = obj.size[2]
-        if h < t.cup_diameter:
+        if h < t.geometry.cup_diameter:
             return None
         z = max(cup_r, h - cup_r - 0.005)
         cx, cy = float(obj.center[0]), float(obj.center[1])
         if obj.shape == "cylinder":
             r = obj.size[0] / 2
-            if r < t.min_seal_radius:
+            if RULES["min_seal_radius"].refuses(t.rules.min_seal_radius, r):
                 return None
             return cx, cy - r, z
         normal, half_w, dist = _front_face(obj)
-        if 2 * half_w < t.cup_diameter:
+        if 2 * half_w < t.geometry.cup_diameter:
             return None
         p = np.array([cx, cy]) + normal * dist
         return float(p[0]), float(p[1]), z
@@ -536,12 +465,13 @@ class _StateContext:
         self.aabbs = np.array([[fp.x - e[0], fp.x + e[0], fp.y - e[1], fp.y + e[1]]
                                for fp, e in ((fp, fp.extents()) for fp in self.all_fps)]).reshape(-1, 4)
         self.count = np.sum(shadows, axis=0) if shadows else np.zeros((grid.ny, grid.nx), dtype=int)
-        self._radius_cells = int(math.floor(model.tool.min_hidden_width / 2 / grid.cell + 1e-9))
+        self._radius_cells = int(math.floor(model.tool.rules.min_hidden_width / 2 / grid.cell + 1e-9))
         # cells under known objects hold no unseen object (only with min_hidden_width > 0, the strict
         # variant keeps the overhead shadows whole)
         self.occupied = np.any(self.masks, axis=0) if self.masks and self._radius_cells > 0 else None
         self.hidden_all = self._open(erode(self.count > 0))
         self._n = len(self.all_objs)
+        self._hidden_others: dict = {}
 
     def others(self, i):
         return [j for j in range(self._n) if j != i]
@@ -561,7 +491,11 @@ class _StateContext:
         return open_with_disc(mask & ~self.occupied if self.occupied is not None else mask, self._radius_cells)
 
     def hidden_others(self, i) -> np.ndarray:
-        return self._open(erode((self.count - self.shadows[i]) > 0))
+        """The hidden space as the other objects make it (cached per object: both push directions read it)."""
+        hit = self._hidden_others.get(i)
+        if hit is None:
+            hit = self._hidden_others[i] = self._open(erode((self.count - self.shadows[i]) > 0))
+        return hit
 
 
 def _first_false(ok: np.ndarray) -> int:

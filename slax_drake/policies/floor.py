@@ -12,9 +12,11 @@ Cells are ``cell`` metres square; row r, column c has its centre at
 
 from __future__ import annotations
 
+import functools
 import math
 
 import cv2
+
 import numpy as np
 
 from slax_drake.scene.footprint import Footprint, clear_of
@@ -146,8 +148,9 @@ def disc_offsets(radius_cells: int) -> list[tuple[int, int]]:
     return [(dr, dc) for dr in range(-r, r + 1) for dc in range(-r, r + 1) if dr * dr + dc * dc <= r * r]
 
 
+@functools.lru_cache(maxsize=8)
 def disc_kernel(radius_cells: int) -> np.ndarray:
-    """The disc of :func:`disc_offsets` as a (2r+1, 2r+1) uint8 structuring element."""
+    """The disc of :func:`disc_offsets` as a (2r+1, 2r+1) uint8 structuring element. (cached: read only)."""
     r = int(radius_cells)
     kernel = np.zeros((2 * r + 1, 2 * r + 1), dtype=np.uint8)
     for dr, dc in disc_offsets(r):

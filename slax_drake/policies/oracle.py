@@ -15,21 +15,18 @@ Goal (``goal``):
   triangle to the front face only, "equivalent to the 3D problem" for objects taller than the line of sight;
   with the camera 0.20 m high looking down 12 degrees, low objects do not occlude, so this goal is stricter.
 
-Search: A* with g = pushes + psi suctions and an admissible h (every action moves one object and costs at
-least 1), so the first goal popped is a cheapest plan on the action lattice (exact). States are deduplicated
-by their object poses; a child whose h exceeds the actions left in the horizon H is pruned (it cannot be
-finished in time, since h never overestimates). ``max_expansions`` bounds the work per plan: a search that
-hits it reports ``stop_reason = "search budget"`` (counted as a failure and reported as such).
+Search (:func:`slax_drake.policies.oracle_search.search_plan`): weighted A* for a first plan, then A* pruned
+by its cost to prove it optimal, with duplicate-state detection, commutation pruning and the horizon, within
+``seconds`` per decision. Each search's outcome ("optimal", "infeasible": proven, no plan within the horizon,
+"cut by time") is kept in ``search_log``; a search cut by time with a phase-1 plan still executes that plan.
 """
 
 from __future__ import annotations
 
-import heapq
-import itertools
-
 from shapely.geometry import Polygon
 
-from slax_drake.policies.actions import ActionModel, Push, apply_action
+from slax_drake.policies.actions import ActionModel, apply_action
+from slax_drake.policies.oracle_search import search_plan
 from slax_drake.policies.protocol import Decision, Exclusions
 from slax_drake.scene.model import state_key
 from slax_drake.policies.visibility import TargetOcclusion
@@ -47,8 +44,8 @@ class Oracle:
     history = None  # keeps no distribution history
 
     def __init__(self, action_model: ActionModel, suctions: bool, psi: float = 1.3, horizon: int | None = None,
-                 max_expansions: int = 60, overlap_tolerance: float = 1e-6, goal: str = "visibility",
-                 threshold: float = 0.80):
+                 seconds: float = 20.0, weight: float = 5.0, maximal_pushes: bool = True, overlap_tolerance: float = 1e-6,
+                 goal: str = "visibility", threshold: float = 0.80):
         if goal not in ("visibility", "triangle"):
             raise ValueError("goal must be 'visibility' or 'triangle'")
         self.goal = goal
@@ -57,7 +54,10 @@ class Oracle:
         self.suctions = suctions
         self.psi = psi
         self.horizon = horizon
-        self.max_expansions = max_expansions
+        self.seconds = seconds  # the time limit per decision (s)
+        self.weight = weight  # the first phase's heuristic weight
+        self.maximal_pushes = maximal_pushes  # the paper's coarse push set (oracle_search.maximal_pushes_only)
+        self.search_log: list[dict] = []  # one record per search (SearchResult.record())
         self.overlap_tolerance = overlap_tolerance
         self.name = "oracle-p+s" if suctions else "oracle-p"
         self.plan: list = []
@@ -79,6 +79,7 @@ class Oracle:
 
     def reset(self, scene) -> None:
         self.plan, self.next_expected, self.steps_taken, self.stop_reason = [], None, 0, None
+        self.search_log = []
         self.horizon_total = self.horizon if self.horizon is not None else 2 * len(scene.objects)
         self._exclusions, self._asked_again, self._objects = Exclusions(), False, ()
 
@@ -137,40 +138,12 @@ class Oracle:
                     return sum(blocks(o) for o in objects)
                 return h_parent - blocks(old) + blocks(new)
 
-        start = tuple(scene.objects)
-        h0 = h_of(start)
-        if h0 == 0:
-            return []
-        counter = itertools.count()
-        frontier = [(h0, 0, 0.0, next(counter), start, h0, ())]
-        seen = {state_key(start): 0.0}
-        self.expansions = 0
-        while frontier:
-            f, neg_depth, g, _, objects, h, plan = heapq.heappop(frontier)
-            if h == 0:
-                return list(plan)
-            if seen.get(state_key(objects), float("inf")) < g - 1e-9:
-                continue
-            if len(plan) >= remaining:
-                continue
-            self.expansions += 1
-            if self.expansions > self.max_expansions:
-                self.stop_reason = "search budget"
-                return None
-            cands = self.action_model.enumerate(objects, fixed=target, pushes=True, suctions=self.suctions)
-            by_name = {o.name: o for o in objects}
-            for a in self._exclusions.allowed(cands.feasible, objects):
-                after = apply_action(objects, a)
-                old = by_name[a.name]
-                new = next(o for o in after if o.name == a.name)
-                h2 = h_of(after, h, old, new)
-                if h2 > remaining - len(plan) - 1:
-                    continue  # cannot be finished within the horizon
-                g2 = g + (1.0 if isinstance(a, Push) else self.psi)
-                key = state_key(after)
-                if seen.get(key, float("inf")) <= g2 + 1e-9:
-                    continue
-                seen[key] = g2
-                heapq.heappush(frontier, (g2 + h2, -(len(plan) + 1), g2, next(counter), after, h2, plan + (a,)))
-        self.stop_reason = "no plan within the horizon"
-        return None
+        result = search_plan(self.action_model, scene.objects, target, h_of, remaining, self.suctions, self.psi,
+                             self.seconds, self.weight, maximal_pushes=self.maximal_pushes,
+                             allowed=self._exclusions.allowed)
+        self.expansions = result.expansions
+        self.search_log.append(result.record())
+        if result.plan is None:
+            self.stop_reason = ("no plan within the horizon" if result.status == "infeasible"
+                                else "search cut by time")
+        return result.plan

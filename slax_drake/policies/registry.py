@@ -19,7 +19,9 @@ from slax_drake.errors import UserError
 # used: the command-line parser imports this module for add_tool_rule_argument and POLICY_NAMES.
 if typing.TYPE_CHECKING:
     from slax_drake.config import Scenario
-    from slax_drake.policies.actions import ToolConfig
+
+# The rules are plain data (no heavy imports): the parser needs their profile names and fields.
+from slax_drake.policies.rules import PROFILES, RULES, ToolConfig, flat_field_names, tool_config_problem  # noqa: E402
 
 
 
@@ -57,28 +59,30 @@ class UnknownPolicyError(UserError):
 
 
 def add_tool_rule_argument(parser, note: str) -> None:
-    """The repeatable ``--tool-rule FIELD=VALUE`` option of the commands that run the action model (read it with
-    :func:`parse_tool_rules`); ``note`` says what the rules apply to."""
+    """The ``--profile NAME`` option and the repeatable ``--tool-rule FIELD=VALUE`` option of the commands that run
+    the action model (read them with :func:`parse_tool_rules`); ``note`` says what the rules apply to."""
+    parser.add_argument("--profile", choices=PROFILES, default=None,
+                        help="the action model's rule profile: 'paper' (the paper's first-order simulator) or "
+                        "'station' (our physical tool); default: the scenario's 'profile'")
     parser.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
-                        help="an action-model rule variant, a ToolConfig field of slax_drake/policies/actions.py "
-                        f"(e.g. max_suction_moment=0.4); repeatable; {note}")
+                        help="override one rule of the profile (a rule of slax_drake/policies/rules.py, e.g. "
+                        "max_suction_moment=0.4 or blade_gap=0.035) or a geometry/discretisation field; "
+                        f"repeatable; {note}")
 
 
-def parse_tool_rules(items) -> dict:
-    """``["max_suction_moment=0.4", "tube_approach_check=false"]`` -> typed ToolConfig overrides; UserError for an
-    unknown field or a value of the wrong type."""
-    from slax_drake.policies.actions import ToolConfig, tool_config_problem
-
-    fields = [f.name for f in dataclasses.fields(ToolConfig)]
-    defaults = ToolConfig()
+def parse_tool_rules(items, profile: str = "station") -> dict:
+    """``["max_suction_moment=0.4", "tube_approach_check=false"]`` -> typed overrides of ``profile``'s rules (or
+    of a geometry/discretisation field); UserError for an unknown field or a value of the wrong type."""
+    fields = flat_field_names()
+    defaults = ToolConfig.build(profile)
     rules = {}
     for item in items or ():
         key, sep, text = item.partition("=")
         key, text = key.strip(), text.strip()
         if not sep or key not in fields:
-            raise UserError(f"--tool-rule takes FIELD=VALUE with a ToolConfig field (got {item!r}; fields: "
+            raise UserError(f"--tool-rule takes FIELD=VALUE with a rule or tool field (got {item!r}; fields: "
                             f"{', '.join(fields)})")
-        kind = type(getattr(defaults, key))
+        kind = RULES[key].type if key in RULES else type(defaults.value(key))
         try:
             if kind is bool:
                 if text.lower() not in ("true", "false"):
@@ -89,31 +93,37 @@ def parse_tool_rules(items) -> dict:
         except ValueError:
             raise UserError(f"--tool-rule {key} needs a {kind.__name__} (got {text!r})") from None
         rules[key] = value
-    problem = tool_config_problem(ToolConfig(**rules))
+    problem = tool_config_problem(ToolConfig.build(profile, **rules))
     if problem:
         raise UserError(f"--tool-rule {problem}")
     return rules
 
 
-def without_defaults(rules: dict) -> dict:
-    """``rules`` less the entries equal to ToolConfig's first-order defaults, so that one set of rules has one
-    record (``max_suction_moment=inf`` is the default rule, recorded as no variant)."""
-    from slax_drake.policies.actions import ToolConfig
-
-    defaults = ToolConfig()
-    return {k: v for k, v in rules.items() if getattr(defaults, k) != v}
+def without_defaults(rules: dict, profile: str = "station") -> dict:
+    """``rules`` less the entries equal to ``profile``'s values, so that one set of rules has one record
+    (``max_suction_moment=inf`` is both profiles' value, recorded as no override)."""
+    defaults = ToolConfig.build(profile)
+    return {k: v for k, v in rules.items() if defaults.value(k) != v}
 
 
-def tool_config(scenario: Scenario, **overrides) -> ToolConfig:
-    from slax_drake.policies.actions import ToolConfig
+def scenario_profile(scenario: Scenario, profile: str | None = None) -> str:
+    """The profile a run uses: ``profile`` when given (``--profile``), else the scenario's."""
+    return profile or scenario.profile
 
-    return ToolConfig(object_density=scenario.objects.density, clearance=scenario.objects.clearance, **overrides)
+
+def tool_config(scenario: Scenario, profile: str | None = None, **overrides) -> ToolConfig:
+    """The action model's configuration for ``scenario``: its profile (or ``profile``), its objects' density
+    and clearance, and single ``overrides`` (flat names, see ToolConfig.build)."""
+    return ToolConfig.build(scenario_profile(scenario, profile), object_density=scenario.objects.density,
+                            clearance=scenario.objects.clearance, **overrides)
 
 
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,
-                target_size=None, tool_overrides: dict | None = None, oracle_options: dict | None = None):
-    """A fresh policy object named ``name`` (a key of :data:`POLICY_TABLE`) for ``scenario``'s shelf and camera.
-    ``oracle_options``: extra constructor options of the oracles (e.g. ``max_expansions``)."""
+                target_size=None, tool_overrides: dict | None = None, oracle_options: dict | None = None,
+                profile: str | None = None):
+    """A fresh policy object named ``name`` (a key of :data:`POLICY_TABLE`) for ``scenario``'s shelf and camera,
+    planning with ``profile``'s rules (default: the scenario's) and ``tool_overrides``. ``oracle_options``: extra
+    constructor options of the oracles (e.g. ``seconds``, the search time limit)."""
     from slax_drake.policies.actions import ActionModel
     from slax_drake.policies.distribution import make_distribution_model
     from slax_drake.scene.camera import Camera
@@ -125,7 +135,7 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
     cls = entry.load()
     psi = scenario.protocol.suction_cost
     model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position,
-                        tool_config(scenario, **(tool_overrides or {})))
+                        tool_config(scenario, profile, **(tool_overrides or {})))
     if cls.needs_true_scene:
         return cls(model, psi=psi, horizon=horizon, threshold=scenario.target.visibility_threshold,
                    **entry.options, **(oracle_options or {}))

@@ -169,7 +169,7 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         for (_, other), h in zip(obstacles, heights):
             if lifted and model.passes_over(obj, h):
                 continue
-            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.clearance)
+            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.physics.clearance)
             if lane is not None:
                 ok &= clear_of("box", lane, 0.0, lane_half, other, BLADE_CONTACT_CLEARANCE)
         bad = np.flatnonzero(~ok)
@@ -182,14 +182,14 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
             for rx, ry, hx, hy in rects:
                 if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)[0]:
                     return scene, f"blade blocked by {name}"
-        n = max(1, int(math.ceil(abs(action.d) / t.cell)))
+        n = max(1, int(math.ceil(abs(action.d) / t.grid.cell)))
         s = np.linspace(0.0, action.d, n + 1)[1:]
         xs = fp.x + s
-        inside = np.abs(xs) + ex <= shelf.width / 2 - t.clearance + 1e-12
+        inside = np.abs(xs) + ex <= shelf.width / 2 - t.physics.clearance + 1e-12
         ok = inside.copy()
         centers = np.column_stack([xs, np.full(n, fp.y)])
         for _, other in obstacles:
-            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.clearance)
+            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.physics.clearance)
             for rx, ry, hx, hy in rects:
                 ok &= clear_of("box", np.column_stack([rx + s, np.full(n, ry)]), 0.0, (hx, hy), other,
                                BLADE_CONTACT_CLEARANCE)
@@ -202,22 +202,22 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
 
     if isinstance(action, Suction):
-        y_out = -shelf.depth / 2 - ey - t.cell
-        n_out = max(1, int(math.ceil((fp.y - y_out) / t.cell)))
+        y_out = -shelf.depth / 2 - ey - t.grid.cell
+        n_out = max(1, int(math.ceil((fp.y - y_out) / t.grid.cell)))
         ys = np.linspace(fp.y, y_out, n_out + 1)[1:]
         if first_blocked(np.column_stack([np.full(n_out, fp.x), ys]), lifted=True) < n_out:
             return scene, "path out blocked by an unseen obstacle"
         x_new = fp.x + action.dx
-        if abs(x_new) + ex > shelf.width / 2 - t.clearance + 1e-9:
+        if abs(x_new) + ex > shelf.width / 2 - t.physics.clearance + 1e-9:
             return scene, "placement outside the walls"
-        n_in = max(1, int(math.ceil((action.dz - y_out) / t.cell)))
+        n_in = max(1, int(math.ceil((action.dz - y_out) / t.grid.cell)))
         ys = np.linspace(y_out, action.dz, n_in + 1)[1:]
         path_in = np.column_stack([np.full(n_in, x_new), ys])
         k = first_blocked(path_in, lifted=True)
         while k > 0 and first_blocked(path_in[k - 1:k]) == 0:
             k -= 1  # lowered there it would land on something it passed over: back out along the way in
         y_final = ys[k - 1] if k > 0 else None
-        if y_final is None or y_final - ey < -shelf.depth / 2 + t.clearance - 1e-9:
+        if y_final is None or y_final - ey < -shelf.depth / 2 + t.physics.clearance - 1e-9:
             # stopped before the whole object is back inside the bay: it is put back where it was
             return scene, "could not place the object: put back"
         moved = obj.moved_to(float(x_new), float(y_final))

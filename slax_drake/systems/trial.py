@@ -53,8 +53,10 @@ class TrialOptions:
     horizon: int | None = None  # actions at most; default: 2 per object
     sensor_noise: bool = False  # the L515 depth-noise model between the camera and perception (seeded by ``seed``)
     segmentation: str = "labels"  # "labels": the render's object labels (idealised); "depth": depth-only
-    tool_rules: dict | None = None  # ToolConfig overrides (rule variants) for the policy and the planner; they
+    tool_rules: dict | None = None  # rule overrides of the profile for the policy and the planner; they
     # take precedence over the station's own limits (see station_tool_rules)
+    profile: str = "station"  # the action model's rule profile: a Drake trial plans with the physical tool's
+    # rules whatever the scene scenario's profile is (slax_drake.policies.rules)
 
 
 @dataclasses.dataclass
@@ -90,10 +92,10 @@ def station_for(config: str) -> str:
     raise TrialError(f"no station file for {config} (expected {candidate}); pass --station")
 
 
-def station_tool_rules(station, overrides: dict | None = None) -> dict:
-    """The action-model rules (ToolConfig overrides) a trial on ``station`` plans with: the station cup's limits
+def station_tool_rules(station, overrides: dict | None = None, profile: str = "station") -> dict:
+    """The rule overrides of ``profile`` a trial on ``station`` plans with: the station cup's limits
     (``suction.max_held_moment`` as ``max_suction_moment`` when finite, ``suction.max_seal_angle_deg`` when under
-    90), then ``overrides`` on top; entries equal to the first-order defaults are left out."""
+    90), then ``overrides`` on top; entries equal to the profile's values are left out."""
     from slax_drake.policies.registry import without_defaults
 
     rules = {}
@@ -102,7 +104,7 @@ def station_tool_rules(station, overrides: dict | None = None) -> dict:
     if station.suction.max_seal_angle_deg < 90.0:
         rules["max_seal_angle_deg"] = float(station.suction.max_seal_angle_deg)
     rules.update(overrides or {})
-    return without_defaults(rules)
+    return without_defaults(rules, profile)
 
 
 def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
@@ -129,15 +131,15 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
     scenario = load_scenario(opts.config)
     station_path = opts.station or station_for(opts.config)
     station = load_station_scenario(station_path)
-    tool_rules = station_tool_rules(station, opts.tool_rules)
+    tool_rules = station_tool_rules(station, opts.tool_rules, opts.profile)
     target_size = None if opts.target_size is None else tuple(float(v) for v in opts.target_size)
     scene = sample_scene(scenario, opts.objects, seed=opts.seed, target_size=target_size)
     horizon = opts.horizon if opts.horizon is not None else 2 * opts.objects
     policy = make_policy(opts.policy, scenario, perception=opts.perception, horizon=horizon,
-                         tool_overrides=tool_rules)
+                         tool_overrides=tool_rules, profile=opts.profile)
     if policy.needs_true_scene:
         raise TrialError(f"policy '{opts.policy}' cannot run in a Drake trial (it needs the true scene: an oracle)")
-    planner = MotionPlanner(station, tool_config(scenario, **tool_rules))
+    planner = MotionPlanner(station, tool_config(scenario, opts.profile, **tool_rules))
 
     builder = DiagramBuilder()
     station_diagram = builder.AddNamedSystem("station", MakeStation(station, scene, meshcat=meshcat))

@@ -71,9 +71,12 @@ def trial_summary(data: dict, written: list[Path], html: str | Path | None = Non
     rtf = data.get("real_time_factor")
     lines.append(f"time:    simulated {data['sim_time_s']:.1f} s in {data['wall_s']:.1f} s of wall time"
                  + (f" (real-time factor {rtf:.1f})" if rtf else ""))
+    profile = f"the '{data['profile']}' profile" if data.get("profile") else "the action model's rules"
     if data.get("tool_rules"):
-        lines.append("rules:   " + ", ".join(f"{k}={v}" for k, v in data["tool_rules"].items())
+        lines.append(f"rules:   {profile}, with " + ", ".join(f"{k}={v}" for k, v in data["tool_rules"].items())
                      + " (the station cup's limits and --tool-rule)")
+    else:
+        lines.append(f"rules:   {profile}")
 
     written = [Path(p) for p in written]
     html_path = Path(html) if html else None

@@ -1,0 +1,290 @@
+"""The oracles' exact search over action sequences (paper Sec. V-D: "generates all action trees up to H"), in the
+first-order model: a cheapest plan (cost: pushes + psi suctions) that reaches the goal within H actions, with a
+proof of what was found.
+
+Two phases within one time limit per decision:
+
+1. weighted A* (f = g + w h, ``weight`` w >= 1): finds a plan fast; its cost U is an upper bound (and, since h is
+   admissible, at most w times the optimum);
+2. A* (f = g + h) pruned by U: proves U optimal, or finds the cheaper plan, or, when neither phase finds a plan
+   and the frontier empties, proves that no plan exists within H (on the action lattice).
+
+The result's ``status``: "optimal" (phase 2 finished), "infeasible" (proven: no plan within the horizon),
+"cut by time" (the limit came first; the plan, if any, is phase 1's, with ``lower_bound`` the least f left on
+the frontier).
+
+Pruning that keeps the search exact:
+
+- duplicate states: a node is kept only when no node of the same key has both a cost g and a depth no larger
+  (the depth matters because of the horizon: a cheaper arrival may have spent more actions);
+- the horizon: a child whose heuristic exceeds the actions left is dropped (h never overestimates: every
+  action moves one object and costs at least 1);
+- commutation: two actions on different objects whose regions do not interact (:func:`action_regions`) lead to
+  the same state in either order at the same cost, so after an action on object A the search expands an
+  independent action on object B only when B's name sorts after A's (one canonical order). The node key holds
+  the last action's region, so two arrivals at one state with different pruning are not merged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import heapq
+import itertools
+import math
+import time
+
+from slax_drake.policies.actions import FRONT_MARGIN, ActionModel, Push, apply_action
+from slax_drake.scene.footprint import Footprint
+from slax_drake.scene.model import state_key
+
+Box = tuple[float, float, float, float]  # x_lo, x_hi, y_lo, y_hi in the shelf frame (m)
+
+
+@dataclasses.dataclass
+class SearchResult:
+    """A search's outcome: ``plan`` (a list of actions; [] when the goal holds already; None when none was found),
+    ``status`` ("optimal", "infeasible" or "cut by time"), its ``cost``, ``lower_bound`` on the optimum, nodes
+    ``expansions`` and CPU ``seconds`` spent."""
+
+    plan: list | None
+    status: str
+    cost: float | None
+    lower_bound: float
+    expansions: int
+    seconds: float
+
+    def record(self) -> dict:
+        return {"status": self.status, "cost": self.cost, "lower_bound": round(self.lower_bound, 6),
+                "actions": None if self.plan is None else len(self.plan), "expansions": self.expansions,
+                "seconds": round(self.seconds, 3)}
+
+
+# ---- commutation -------------------------------------------------------------------------------------------------
+def shadow_box(model: ActionModel, fp: Footprint) -> Box:
+    """A box holding the space ``fp`` hides from the camera (its overhead shadow to the back wall, which holds
+    the 3D one): the footprint's box and the corners' rays from the eye to the back wall."""
+    ex, ey = fp.extents()
+    back = model.shelf.depth / 2
+    ex_, ey_ = model.eye_xy
+    xs = [fp.x - ex, fp.x + ex]
+    for cx in (fp.x - ex, fp.x + ex):
+        for cy in (fp.y - ey, fp.y + ey):
+            if cy > ey_ + 1e-9:
+                xs.append(ex_ + (cx - ex_) * (back - ey_) / (cy - ey_))
+    return min(xs), max(xs), fp.y - ey, back
+
+
+def action_regions(model: ActionModel, objects, action) -> tuple[list[Box], list[Box]]:
+    """(act boxes, shadow boxes) of ``action`` taken on ``objects``: the act boxes hold everything whose contents
+    decide the action's feasibility and its candidate set (the object's sweep, the tool's lanes, the band to
+    the wall in a push's direction, where its stopper may stand; a suction's ways out and in), the shadow boxes
+    the space the object hides before and after. They depend only on the moved object's pose and the action."""
+    t = model.tool
+    obj = next(o for o in objects if o.name == action.name)
+    fp = Footprint.of(obj)
+    ex, ey = fp.extents()
+    half_w = model.shelf.width / 2
+    y_front = -model.shelf.depth / 2 - FRONT_MARGIN
+    if isinstance(action, Push):
+        sign = 1 if action.d > 0 else -1
+        rects = model.push_swept_rects(fp, sign)  # the parts of the tool a push checks (and drags along)
+        y_lo = min([fp.y - ey] + [r[1] - r[3] for r in rects])
+        y_hi = max([fp.y + ey] + [r[1] + r[3] for r in rects])
+        x_tail = min([fp.x - ex] + [r[0] - r[2] for r in rects]) if sign > 0 else \
+            max([fp.x + ex] + [r[0] + r[2] for r in rects])
+        act = [(x_tail, half_w, y_lo, y_hi) if sign > 0 else (-half_w, x_tail, y_lo, y_hi)]
+        after = dataclasses.replace(fp, x=fp.x + action.d)
+    else:
+        x_new = fp.x + action.dx
+        act = [(fp.x - ex, fp.x + ex, y_front, fp.y + ey), (x_new - ex, x_new + ex, y_front, action.dz + ey)]
+        after = dataclasses.replace(fp, x=x_new, y=action.dz)
+    return act, [shadow_box(model, fp), shadow_box(model, after)]
+
+
+def _overlap(a: Box, b: Box, margin: float) -> bool:
+    return a[0] - margin <= b[1] and b[0] - margin <= a[1] and a[2] - margin <= b[3] and b[2] - margin <= a[3]
+
+
+def interacts(regions_a, regions_b, margin: float) -> bool:
+    """Whether two actions' regions interact: an act box of one meets an act or shadow box of the other."""
+    act_a, shadow_a = regions_a
+    act_b, shadow_b = regions_b
+    return any(_overlap(p, q, margin) for p in act_a for q in act_b + shadow_b) or \
+        any(_overlap(p, q, margin) for p in act_b for q in shadow_a)
+
+
+def commutation_margin(model: ActionModel) -> float:
+    """How far apart two regions must stay to be independent (m): hidden space is opened with a disc
+    ``min_hidden_width`` wide (a point is in the opening when some such disc inside the hidden space covers it,
+    so what is hidden at a point depends on the shadows and footprints within that width of it), plus the
+    clearance, two raster cells (the erosion and rounding to cells) and 1 mm."""
+    t = model.tool
+    return t.rules.min_hidden_width + t.physics.clearance + 2 * t.grid.cell + 1e-3
+
+
+def maximal_pushes_only(actions: list) -> list:
+    """``actions`` with each object's pushes reduced to the longest one per direction (the paper's "push next to
+    the nearest neighbour"); suctions unchanged; order kept."""
+    longest: dict = {}
+    for a in actions:
+        if isinstance(a, Push):
+            key = (a.name, a.d > 0)
+            if key not in longest or abs(a.d) > abs(longest[key].d):
+                longest[key] = a
+    keep = set(id(a) for a in longest.values())
+    return [a for a in actions if not isinstance(a, Push) or id(a) in keep]
+
+
+class PushCache:
+    """Each object's feasible pushes, cached by everything they depend on: the object's pose and the poses of the
+    objects that reach its push band (the strip of y its pushes and their tool lanes span, across the shelf,
+    widened by :func:`commutation_margin`) with their footprints or their shadows. The others cannot change
+    its blockers, stoppers or the hidden space in the band, so the pushes are computed on the smaller state
+    (exact: the same candidates as on the whole state)."""
+
+    def __init__(self, model: ActionModel, fixed):
+        self.model, self.fixed = model, tuple(fixed)
+        self.margin = commutation_margin(model)
+        self.cache: dict = {}
+        self.hits = self.misses = 0
+
+    def band(self, fp: Footprint) -> Box:
+        rects = [r for sign in (1, -1) for r in self.model.push_swept_rects(fp, sign)]  # what a push checks
+        ex, ey = fp.extents()
+        y_lo = min([fp.y - ey] + [r[1] - r[3] for r in rects])
+        y_hi = max([fp.y + ey] + [r[1] + r[3] for r in rects])
+        half_w = self.model.shelf.width / 2
+        return -half_w, half_w, y_lo, y_hi
+
+    def pushes(self, objects) -> list:
+        fps = [Footprint.of(o) for o in objects]
+        boxes = []
+        for fp in fps:
+            ex, ey = fp.extents()
+            boxes.append(((fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey), shadow_box(self.model, fp)))
+        out = []
+        for i, obj in enumerate(objects):
+            band = self.band(fps[i])
+            near = [j for j in range(len(objects)) if j == i or any(_overlap(b, band, self.margin) for b in boxes[j])]
+            key = tuple(state_key(objects[j:j + 1])[0] for j in near) + (i,)
+            hit = self.cache.get(key)
+            if hit is None:
+                self.misses += 1
+                sub = tuple(objects[j] for j in near)
+                hit = self.cache[key] = self.model.enumerate(sub, fixed=self.fixed, suctions=False,
+                                                             only={obj.name}).feasible
+            else:
+                self.hits += 1
+            out.extend(hit)
+        return out
+
+
+# ---- search ------------------------------------------------------------------------------------------------------
+def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions: bool, psi: float,
+                seconds: float, weight: float = 5.0, commute: bool = True, maximal_pushes: bool = True,
+                allowed=None) -> SearchResult:
+    """The cheapest plan from ``start`` (objects) to a state where ``h_of(objects) == 0`` within ``remaining``
+    actions; ``fixed``: known obstacles that never move (the target); ``h_of(objects)``: an admissible
+    heuristic (0 exactly at the goal) counting actions; ``seconds``: the time limit (CPU seconds of this process,
+    so that other work on the machine does not change the result); ``weight``: phase 1's
+    w (1 skips phase 1); ``commute``: commutation pruning (off only to check it); ``maximal_pushes``: the paper's
+    coarse push set, each object pushed each way only up to its neighbour (the maximal push), not also on the
+    ``push_resolution`` lattice (see :func:`maximal_pushes_only`); ``allowed(candidates, objects)``: the candidates
+    the search may use (the policy's exclusions, :class:`slax_drake.policies.protocol.Exclusions`), all when None."""
+    t0 = time.process_time()  # CPU seconds of this process: the limit does not shrink when the machine is shared
+    deadline = t0 + seconds
+    start = tuple(start)
+    h0 = h_of(start)
+    if h0 == 0:
+        return SearchResult([], "optimal", 0.0, 0.0, 0, 0.0)
+    margin = commutation_margin(model)
+    push_cache = PushCache(model, fixed)
+    expansions = 0
+    children_cache: dict = {}
+
+    def children(objects):
+        """Feasible (action, after, h, step cost, regions) of a state, cached across phases."""
+        key = state_key(objects)
+        hit = children_cache.get(key)
+        if hit is None:
+            cands = push_cache.pushes(objects)
+            if suctions:
+                cands = cands + model.enumerate(objects, fixed=fixed, pushes=False, suctions=True).feasible
+            if maximal_pushes:
+                cands = maximal_pushes_only(cands)
+            if allowed is not None:
+                cands = list(allowed(cands, objects))
+            hit = [(a, apply_action(objects, a), 1.0 if isinstance(a, Push) else psi) for a in cands]
+            hit = [(a, after, h_of(after), c, None) for a, after, c in hit]
+            children_cache[key] = hit
+        return hit
+
+    regions_cache: dict = {}
+
+    def regions(objects, a):
+        key = (state_key(objects), a)
+        r = regions_cache.get(key)
+        if r is None:
+            r = regions_cache[key] = action_regions(model, objects, a)
+        return r
+
+    def run(w: float, bound: float):
+        """One best-first search; returns (plan, cost, exhausted, least f left)."""
+        nonlocal expansions
+        counter = itertools.count()
+        # node: (f, -depth, g, tie, objects, h, plan, last (parent objects, action) or None)
+        frontier = [(w * h0, 0, 0.0, next(counter), start, h0, (), None, None)]
+        best: dict = {}
+        while frontier:
+            if time.process_time() > deadline:
+                return None, None, False, min(n[2] + n[5] for n in frontier)
+            f, neg_depth, g, _, objects, h, plan, last, node_key = heapq.heappop(frontier)
+            if node_key is not None and (g, len(plan)) not in best.get(node_key, ()):
+                continue  # a better arrival at the same node came later
+            if h == 0:
+                return list(plan), g, False, g
+            if g + h >= bound - 1e-9:
+                continue
+            depth = len(plan)
+            if depth >= remaining:
+                continue
+            expansions += 1
+            last_regions = regions(*last) if (commute and last is not None) else None
+            last_name = last[1].name if last is not None else None
+            for a, after, h2, c, _ in children(objects):
+                if h2 > remaining - depth - 1:
+                    continue  # cannot be finished within the horizon
+                g2 = g + c
+                if g2 + h2 >= bound - 1e-9:
+                    continue
+                if last_regions is not None and a.name != last_name and a.name < last_name and \
+                        not interacts(last_regions, regions(objects, a), margin):
+                    continue  # the same state is reached with a first, in the canonical order
+                node_key = (state_key(after), state_key((next(o for o in objects if o.name == a.name),)))
+                kept = best.setdefault(node_key, [])
+                if any(g_old <= g2 + 1e-9 and d_old <= depth + 1 for g_old, d_old in kept):
+                    continue
+                kept[:] = [(g_old, d_old) for g_old, d_old in kept if not (g2 <= g_old + 1e-9 and depth + 1 <= d_old)]
+                kept.append((g2, depth + 1))
+                heapq.heappush(frontier, (g2 + w * h2, -(depth + 1), g2, next(counter), after, h2, plan + (a,),
+                                          (objects, a), node_key))
+        return None, None, True, math.inf
+
+    upper, plan = math.inf, None
+    if weight > 1.0:
+        plan1, cost1, exhausted, _ = run(weight, math.inf)
+        if plan1 is not None:
+            upper, plan = cost1, plan1
+        elif exhausted:
+            return SearchResult(None, "infeasible", None, math.inf, expansions, time.process_time() - t0)
+        else:
+            return SearchResult(None, "cut by time", None, float(h0), expansions, time.process_time() - t0)
+    plan2, cost2, exhausted, least = run(1.0, upper + 1e-6 if plan is not None else math.inf)
+    seconds_used = time.process_time() - t0
+    if plan2 is not None:
+        return SearchResult(plan2, "optimal", cost2, cost2, expansions, seconds_used)
+    if exhausted:
+        if plan is not None:
+            return SearchResult(plan, "optimal", upper, upper, expansions, seconds_used)
+        return SearchResult(None, "infeasible", None, math.inf, expansions, seconds_used)
+    return SearchResult(plan, "cut by time", None if plan is None else upper, least, expansions, seconds_used)

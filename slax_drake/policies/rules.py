@@ -1,0 +1,363 @@
+"""The action model's configuration, split in four: the tool's geometry, the action discretisation, the scene's
+contact physics, and the rules; and the two named profiles of the rules.
+
+A rule is one small class: its name (the ``--tool-rule`` key and the scenario's), its type, its value in each
+profile, the check where it is small enough to live here (otherwise the docstring names the
+:class:`~slax_drake.policies.actions.ActionModel` method that applies it), and a docstring that says what it
+refuses, which profile has it and why. A new rule is one class with the ``@register`` decorator.
+
+Profiles (see ../DESIGN.md, "Two profiles of the action model"):
+
+- ``paper``: the paper's first-order shelf simulator (FOSS) literally (Sec. III, VI-A): objects move exactly as
+  commanded, never topple, one object per action; a push moves its object along x at most until the neighbour,
+  never into space hidden behind other objects, with a blade as thin as the real one; a suction is any
+  collision-free grasp on the camera-facing side with any collision-free placement. The Table I protocol
+  (``sim_configs/table1.yaml``) runs it.
+- ``station``: what our physical tool can do (the blade's 3.5 cm lane with the tube along its edge, the tube's
+  way in and reach, placements kept out of hidden space); the Drake station's cup limits come on top from the
+  station YAML's ``suction`` section. Drake trials and the station scenarios plan with it.
+
+Lengths in metres, masses in kilograms, angles in degrees where the name says ``_deg``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from slax_drake.config import PROFILES  # ("paper", "station"): defined below the scenario, which names one
+
+
+# --------------------------------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class ToolGeometry:
+    """The bluction tool's shape (m): the same in both profiles (the rules decide which parts must be free)."""
+
+    blade_width: float = 0.065  # the blade's extent along the shelf's y (its face is normal to x)
+    blade_height: float = 0.075
+    cup_diameter: float = 0.03
+    tube_diameter: float = 0.03
+    lift_height: float = 0.02  # a suctioned object is lifted this much before it is pulled out
+    push_contact_depth: float = 0.03  # the blade's tip goes at least this far past the object's front extreme
+
+
+@dataclasses.dataclass(frozen=True)
+class Discretisation:
+    """How the continuous actions are sampled (m): push distances on a ``push_resolution`` lattice plus the
+    maximal push (up to the neighbour), suction placements on a ``suction_resolution`` lattice around the object;
+    ``cell`` is the path step and the hidden-space raster's cell (the resolutions are multiples of it)."""
+
+    push_resolution: float = 0.05
+    suction_resolution: float = 0.05
+    min_push: float = 0.01
+    cell: float = 0.005
+
+
+@dataclasses.dataclass(frozen=True)
+class ObjectPhysics:
+    """The scene's contact physics, copied from the scenario (``objects.density``, ``objects.clearance``)."""
+
+    object_density: float = 400.0  # kg/m^3, to weigh objects
+    clearance: float = 0.002  # moved objects stop this far from neighbours and walls (m)
+
+
+# --------------------------------------------------------------------------------------------------------------
+class Rule:
+    """One rule of the action model. Subclasses set the class attributes and write the docstring."""
+
+    name: str
+    type: type = float
+    paper = None
+    station = None
+    choices: tuple | None = None
+
+    def problem(self, value) -> str | None:
+        """What makes ``value`` unusable for this rule, in one line, or None."""
+        if self.choices is not None:
+            return None if value in self.choices else f"must be one of {', '.join(map(repr, self.choices))}"
+        if self.type is float and not value >= 0.0:
+            return "must be non-negative"
+        return None
+
+    @property
+    def doc(self) -> str:
+        return " ".join((type(self).__doc__ or "").split())
+
+
+RULES: dict[str, Rule] = {}
+
+
+def register(cls):
+    """Class decorator: one registration per rule (its ``name`` becomes a RuleSet field)."""
+    rule = cls()
+    if rule.name in RULES:
+        raise ValueError(f"rule {rule.name!r} registered twice")
+    RULES[rule.name] = rule
+    return cls
+
+
+# ---- pushes --------------------------------------------------------------------------------------------------
+@register
+class BladeGap(Rule):
+    """The free width (m) beside the object that a push needs for the tool, from the object's front to the
+    blade's tip (:meth:`ActionModel.push_swept_rects`). ``paper``: 1 mm, a blade as thin as the real one (the
+    FOSS relaxed Huang et al.'s blade-width separation, Sec. VI-A). ``station``: 3.5 cm, the 3 cm tube runs
+    along the blade's upper edge, centred on its plane."""
+
+    name, paper, station = "blade_gap", 0.001, 0.035
+
+
+@register
+class TubePastBlade(Rule):
+    """How far (m) past the blade's tip the gap must be free as well: the tube's end (the cup) reaches 2 cm past
+    the blade's tip (0.42 - 0.40 m in the tool model). ``station`` only: the Drake planner found the cup inside
+    an object standing just behind the blade's lane. ``paper``: 0, the FOSS has no tube."""
+
+    name, paper, station = "tube_past_blade", 0.0, 0.02
+
+
+@register
+class ShaftLaneCheck(Rule):
+    """The shaft's straight way in from outside the shelf to the blade's depth touches no object. Off in both
+    profiles: the blade goes in edge first and turns in the gap; the Drake planner checks the arm itself."""
+
+    name, type, paper, station = "shaft_lane_check", bool, False, False
+
+
+@register
+class PushHiddenCheck(Rule):
+    """A push never moves its object into space hidden from the camera by other objects (it stops at its edge;
+    :func:`slax_drake.policies.floor.free_push_cells`). Both profiles: the paper's own rule ("objects may not be
+    pushed behind other objects, as to not risk collisions with obscured objects", Sec. VI-A). Off only as an
+    ablation."""
+
+    name, type, paper, station = "push_hidden_check", bool, True, True
+
+
+@register
+class HiddenSpace(Rule):
+    """Which space counts as hidden, for the pushes' (and suction placements') hidden-space rule: "3d", a cell
+    whose point ``hidden_probe_height`` above it is not seen by the camera (an unseen object at least that tall
+    could stand there); "overhead", the 2D shadows of infinitely tall objects. Both profiles: "3d", since the
+    visibility goal itself is 3D (with the camera 0.20 m high, low objects hide little)."""
+
+    name, type, paper, station, choices = "hidden_space", str, "3d", "3d", ("overhead", "3d")
+
+
+@register
+class HiddenProbeHeight(Rule):
+    """With ``hidden_space`` "3d": the height (m) of the point above a cell that must be seen for the cell to
+    count as seen. Both profiles: 5 cm (an unseen object shorter than that hides nothing of a 6 cm target)."""
+
+    name, paper, station = "hidden_probe_height", 0.05, 0.05
+
+
+@register
+class MinHiddenWidth(Rule):
+    """Hidden space counts only where a disc this wide (m) fits in it, clear of known objects: the smallest
+    object (0.06 m) contains such a disc, so narrower hidden slivers hold no unseen object. Both profiles."""
+
+    name, paper, station = "min_hidden_width", 0.06, 0.06
+
+
+# ---- suctions ------------------------------------------------------------------------------------------------
+@register
+class SuctionHiddenRule(Rule):
+    """Which part of a suction must stay out of hidden space: "placement", the final placement; "path", the
+    whole way in and out as well; "none", nothing (only collisions with known objects are checked). ``paper``:
+    "none", the FOSS admits any collision-free placement. ``station``: "placement", the physical tool must not
+    put an object down onto something it cannot see."""
+
+    name, type, paper, station, choices = "suction_hidden_rule", str, "none", "placement", ("path", "placement", "none")
+
+
+@register
+class SuctionLift(Rule):
+    """How the suctioned object leaves and re-enters: "over-lower", lifted over any object that leaves room for
+    it under the shelf's top ("lifted... clear of the clutter"); "slight", lifted only ``lift_height``, passing
+    over nothing. Both profiles: "over-lower"."""
+
+    name, type, paper, station, choices = "suction_lift", str, "over-lower", "over-lower", ("slight", "over-lower")
+
+
+@register
+class TubeApproachCheck(Rule):
+    """The tube's straight way in to the cup's contact touches no object taller than the tube's underside: a
+    contact the horizontal tube cannot reach is no "reachable point". ``station`` only: off, 70 of 168 initial
+    candidates of six Table I scenes were suctions whose tube the Drake planner found inside another object.
+    ``paper``: off, the FOSS admits any grasp on the camera-facing side."""
+
+    name, type, paper, station = "tube_approach_check", bool, False, True
+
+
+@register
+class MaxSuctionDepth(Rule):
+    """The deepest contact behind the shelf's opening that the cup reaches (m; the tube's length).
+    ``station``: 0.40 m. ``paper``: unlimited, the FOSS admits any grasp on the camera-facing side."""
+
+    name, paper, station = "max_suction_depth", math.inf, 0.40
+
+    def refuses(self, value: float, contact_depth: float) -> bool:
+        return contact_depth > value
+
+
+@register
+class MaxSuctionMass(Rule):
+    """The heaviest object (kg) the cup may pick. Unlimited in both profiles (the FOSS's objects weigh nothing;
+    the station's cup limit is the held moment, ``max_suction_moment``)."""
+
+    name, paper, station = "max_suction_mass", math.inf, math.inf
+
+    def refuses(self, value: float, mass: float) -> bool:
+        return mass > value
+
+
+@register
+class MinSealRadius(Rule):
+    """A cylinder of smaller radius (m) curves more than the cup can seal on. ``station``: 1.5 cm (half the
+    cup). ``paper``: 0, any camera-facing side is graspable."""
+
+    name, paper, station = "min_seal_radius", 0.0, 0.015
+
+    def refuses(self, value: float, radius: float) -> bool:
+        return radius < value
+
+
+@register
+class MaxSuctionMoment(Rule):
+    """The object's weight times the horizontal distance from the cup's contact to its centre (N m), at most.
+    Unlimited in both profiles' defaults; the Drake station's cup sets it (``suction.max_held_moment`` in the
+    station YAML: 0.4 N m, about 0.6 x the 42 N pull times the 15 mm cup radius; in 80 Drake trials of
+    Bluction-DAR, 3 of 91 suctioned objects hanging less than 0.4 N m off the cup fell, and 31 of 71 heavier)."""
+
+    name, paper, station = "max_suction_moment", math.inf, math.inf
+
+    def refuses(self, value: float, moment: float) -> bool:
+        return moment > value
+
+
+@register
+class MaxSealAngleDeg(Rule):
+    """A box face turned more than this (deg) from the tube's axis (the shelf's y) cannot be sealed; 90 admits
+    every face. Both profiles' defaults 90; the Drake station's cup sets it (``suction.max_seal_angle_deg``: 10;
+    in 80 Drake trials, 3 of 117 suctions of faces turned 15-35 deg ended where the model put the object, 245 of
+    305 under 10 deg did)."""
+
+    name, paper, station = "max_seal_angle_deg", 90.0, 90.0
+
+    def refuses(self, value: float, angle_deg: float) -> bool:
+        return angle_deg > value
+
+
+# --------------------------------------------------------------------------------------------------------------
+RuleSet = dataclasses.make_dataclass(
+    "RuleSet", [(r.name, r.type, dataclasses.field(default=r.station)) for r in RULES.values()], frozen=True)
+RuleSet.__doc__ = "The value of every registered rule (defaults: the station profile); see rule_set()."
+
+
+def profile_values(profile: str) -> dict:
+    """{rule name: value} of a named profile."""
+    if profile not in PROFILES:
+        raise ValueError(f"unknown profile {profile!r} (known: {', '.join(PROFILES)})")
+    return {name: getattr(rule, profile) for name, rule in RULES.items()}
+
+
+def rule_set(profile: str = "station", **overrides) -> RuleSet:
+    """The rules of ``profile`` with single ``overrides`` ({rule name: value}) on top."""
+    values = profile_values(profile)
+    unknown = set(overrides) - set(values)
+    if unknown:
+        raise ValueError(f"unknown rule(s) {sorted(unknown)} (known: {', '.join(RULES)})")
+    values.update(overrides)
+    return RuleSet(**values)
+
+
+def rules_problem(rules) -> str | None:
+    """The first unusable rule value of ``rules`` in one line ("name = value: why"), or None."""
+    for name, rule in RULES.items():
+        value = getattr(rules, name)
+        why = rule.problem(value)
+        if why:
+            return f"{name} = {value!r}: {why}"
+    return None
+
+
+def overrides_of(rules, profile: str) -> dict:
+    """The entries of ``rules`` that differ from ``profile``'s values (what a result file records)."""
+    base = profile_values(profile)
+    return {k: getattr(rules, k) for k in RULES if getattr(rules, k) != base[k]}
+
+
+SECTIONS = {"geometry": ToolGeometry, "grid": Discretisation, "physics": ObjectPhysics}
+
+
+@dataclasses.dataclass(frozen=True)
+class ToolConfig:
+    """Everything the action model is configured with: geometry, discretisation, object physics and rules.
+
+    ``ToolConfig.build(profile, **flat)`` routes flat keyword overrides (``blade_gap=0.05``, ``cell=0.01``,
+    ``clearance=0.002``) to their section."""
+
+    geometry: ToolGeometry = ToolGeometry()
+    grid: Discretisation = Discretisation()
+    physics: ObjectPhysics = ObjectPhysics()
+    rules: RuleSet = RuleSet()
+    profile: str = "station"
+
+    @classmethod
+    def build(cls, profile: str = "station", **flat) -> "ToolConfig":
+        parts = {}
+        for section, kind in SECTIONS.items():
+            names = {f.name for f in dataclasses.fields(kind)}
+            mine = {k: flat.pop(k) for k in list(flat) if k in names}
+            parts[section] = kind(**mine)
+        unknown = set(flat) - set(RULES)
+        if unknown:
+            raise ValueError(f"unknown tool field(s) {sorted(unknown)} (known: {', '.join(flat_field_names())})")
+        return cls(rules=rule_set(profile, **flat), profile=profile, **parts)
+
+    def value(self, name: str):
+        """A field's value by its flat name (a rule, a geometry, discretisation or physics field)."""
+        if name in RULES:
+            return getattr(self.rules, name)
+        for section, kind in SECTIONS.items():
+            if name in {f.name for f in dataclasses.fields(kind)}:
+                return getattr(getattr(self, section), name)
+        raise KeyError(name)
+
+
+def flat_field_names() -> list[str]:
+    """Every flat name ToolConfig.build accepts: the rules first, then the other sections' fields."""
+    return list(RULES) + [f.name for kind in SECTIONS.values() for f in dataclasses.fields(kind)]
+
+
+POSITIVE_FIELDS = ("blade_width", "blade_height", "cup_diameter", "tube_diameter", "push_resolution",
+                   "suction_resolution", "cell")
+
+
+def tool_config_problem(tool: ToolConfig) -> str | None:
+    """What makes ``tool`` unusable, in one line, or None: an unknown profile, an unusable rule value, a
+    negative (or, for sizes and resolutions, zero) number, resolutions that are not multiples of ``cell``."""
+    if tool.profile not in PROFILES:
+        return f"profile = {tool.profile!r}: must be one of {', '.join(map(repr, PROFILES))}"
+    problem = rules_problem(tool.rules)
+    if problem:
+        return problem
+    for section in SECTIONS:
+        part = getattr(tool, section)
+        for f in dataclasses.fields(part):
+            value = getattr(part, f.name)
+            if isinstance(value, float) and not value >= (1e-12 if f.name in POSITIVE_FIELDS else 0.0):
+                return f"{f.name} = {value!r}: must be {'positive' if f.name in POSITIVE_FIELDS else 'non-negative'}"
+    for name in ("push_resolution", "suction_resolution"):
+        ratio = getattr(tool.grid, name) / tool.grid.cell
+        if abs(ratio - round(ratio)) > 1e-9:
+            return f"{name} = {getattr(tool.grid, name)!r}: must be a multiple of cell = {tool.grid.cell!r}"
+    return None
+
+
+STRICT_RULES = dict(min_hidden_width=0.0, blade_gap=0.065, shaft_lane_check=True, tube_approach_check=True,
+                    hidden_space="overhead", suction_lift="slight", suction_hidden_rule="path", max_suction_mass=2.0,
+                    min_seal_radius=0.04)
+"""The strictest variant of each rule (the blade turned flat in the gap, 2D shadows, ...), for
+benchmarks/bench_rule_ablation.py."""
