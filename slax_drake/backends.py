@@ -16,13 +16,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
 
-from slax_drake.errors import UserError
+from slax_drake.errors import BackendError
 
 BACKENDS = ("local", "ray")
-
-
-class BackendError(UserError):
-    """A backend that cannot be used: unknown, Ray missing, or a Ray cluster that cannot be reached."""
 
 
 def add_backend_arguments(parser, what: str) -> None:

@@ -11,13 +11,9 @@ from __future__ import annotations
 
 import os
 
-from slax_drake.errors import UserError
+from slax_drake.errors import MemoryBudgetError
 
 GB = 1e9
-
-
-class MemoryBudgetError(UserError):
-    """A request whose estimated memory exceeds what this machine has available."""
 
 
 def available_memory_bytes() -> int:

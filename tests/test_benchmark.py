@@ -28,7 +28,7 @@ def test_tiny_benchmark_writes_tables_and_resumes(sim_scenario, tmp_path):
 def test_corrupt_trial_file_is_a_user_error(sim_scenario, tmp_path, capsys):
     run_benchmark(sim_scenario, ["oracle-p"], 1, 0, tmp_path, densities=[4], progress=False)
     (tmp_path / "trials" / "oracle-p" / "04_0000.json").write_text("{not json")
-    from slax_drake.evaluation.table1 import BenchmarkError
+    from slax_drake.errors import BenchmarkError
 
     with pytest.raises(BenchmarkError, match="unreadable trial file"):
         run_benchmark(sim_scenario, ["oracle-p"], 1, 0, tmp_path, densities=[4], progress=False)
@@ -59,7 +59,7 @@ def test_tool_rules_are_recorded_and_a_folder_of_other_rules_is_refused(sim_scen
 
 
 def test_camera_observation_is_recorded_oracles_stay_privileged_and_modes_do_not_mix(sim_scenario, tmp_path, capsys):
-    from slax_drake.evaluation.settings import SettingsMismatchError
+    from slax_drake.errors import SettingsMismatchError
     from slax_drake.evaluation.table1 import CameraMode
 
     table = run_benchmark(sim_scenario, ["oracle-p", "bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False,

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from slax_drake.dataset import DatasetReader, DatasetSpec, generate
-from slax_drake.dataset.shards import DatasetError
+from slax_drake.errors import DatasetError
 
 ARGS = ["--scenes", "6", "--shard-size", "2", "--resolution", "64x48", "--seed", "5", "--grid-step", "0.01"]
 SPEC = DatasetSpec(config="sim_configs/sim_shelf.yaml", scenes=6, resolution=(64, 48), seed=5, shard_size=2,

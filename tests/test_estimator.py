@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from slax_drake.errors import UserError
-from slax_drake.perception.errors import ObservationError
+from slax_drake.errors import ObservationError
 from slax_drake.perception.estimator import (
     DepthPrior, EstimatorConfig, estimate_objects, hypothesis_objects, predict_observation,
 )

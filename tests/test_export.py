@@ -9,7 +9,8 @@ from trial_records import fake_trial
 from slax_drake.cli import main
 from slax_drake.hardware.export import export_trial
 from slax_drake.hardware.fetch_limits import FETCH_JOINTS
-from slax_drake.hardware.trajectory_file import TrajectoryFileError, load_trajectory, save_trajectory
+from slax_drake.errors import TrajectoryFileError
+from slax_drake.hardware.trajectory_file import load_trajectory, save_trajectory
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,8 @@ import pytest
 
 from slax_drake.config import load_scenario
 from slax_drake.occupancy import compute_occupancy
-from slax_drake.occupancy.from_depth import DepthOccupancyError, occupancy_from_depth
+from slax_drake.errors import DepthOccupancyError
+from slax_drake.occupancy.from_depth import occupancy_from_depth
 from slax_drake.scene import sample_scene
 from slax_drake.scene.raycast import SceneRaycaster
 

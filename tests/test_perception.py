@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from slax_drake.perception.data import TrainingData, from_scenes
-from slax_drake.perception.errors import ImageSizeError, WeightFileError
+from slax_drake.errors import ImageSizeError, WeightFileError
 from slax_drake.perception.inference import OccupancyPredictor, truncate_support
 from slax_drake.perception.loss import kl_per_head, masked_kl_loss, own_head_mask
 from slax_drake.perception.metrics import MetricsAccumulator

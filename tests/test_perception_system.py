@@ -10,7 +10,7 @@ from pydrake.systems.primitives import ConstantValueSource
 from pydrake.systems.sensors import ImageDepth32F
 
 from slax_drake.perception.distribution_model import LearnedDistribution
-from slax_drake.perception.errors import ImageSizeError
+from slax_drake.errors import ImageSizeError
 from slax_drake.perception.inference import OccupancyPredictor
 from slax_drake.perception.network import NetworkConfig, OccupancyUNet
 from slax_drake.perception.segmentation import instance_mean_iou, segment_depth

@@ -9,7 +9,8 @@ import pytest
 from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.cli import main as cli_main
 from slax_drake.errors import UserError
-from slax_drake.evaluation.physics import PhysicsBenchmarkError, action_matches, run_physics_benchmark, trial_path
+from slax_drake.errors import PhysicsBenchmarkError
+from slax_drake.evaluation.physics import action_matches, run_physics_benchmark, trial_path
 
 CONFIG = "sim_configs/sim_shelf.yaml"
 TINY = dict(policies=["bluction-dar"], scenes_per_density=1, seed=3, densities=[2], progress=False)

@@ -84,7 +84,7 @@ def test_history_is_read_from_a_previous_step(tmp_path):
     (tmp_path / "step.json").write_text(json.dumps(step))
     assert read_history(tmp_path / "step.json")["steps"] == 2
     (tmp_path / "bad.json").write_text("{}")
-    from slax_drake.hardware.plan_step import PlanStepError
+    from slax_drake.errors import PlanStepError
 
     with pytest.raises(PlanStepError, match="no history"):
         read_history(tmp_path / "bad.json")

@@ -101,7 +101,7 @@ def test_the_default_drake_trial_plans_with_the_station_rules():
 
 def test_benchmark_records_the_profile_and_refuses_another(tmp_path, capsys):
     from slax_drake.cli import main
-    from slax_drake.evaluation.settings import SettingsMismatchError
+    from slax_drake.errors import SettingsMismatchError
     from slax_drake.evaluation.table1 import run_benchmark
 
     scenario = load_scenario("sim_configs/table1.yaml")

@@ -70,7 +70,7 @@ def test_planner_decides_on_hypotheses_from_the_frame(trial):
 
 
 def test_unknown_segmentation_is_refused():
-    from slax_drake.systems.trial import TrialError
+    from slax_drake.errors import TrialError
 
     with pytest.raises(TrialError, match="segmentation"):
         build_trial(TrialOptions(segmentation="colour"))

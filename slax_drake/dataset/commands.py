@@ -33,7 +33,7 @@ def register(subparsers) -> None:
 
 
 def parse_resolution(text: str) -> tuple[int, int]:
-    from slax_drake.dataset.shards import DatasetError
+    from slax_drake.errors import DatasetError
 
     try:
         w, h = (int(v) for v in text.lower().split("x"))
@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     from slax_drake.dataset import DatasetSpec, generate
     from slax_drake.dataset.generate import dataset_memory_bytes
     from slax_drake.resources import check_memory
-    from slax_drake.dataset.shards import DatasetError
+    from slax_drake.errors import DatasetError
 
     if args.scenes < 1:
         raise DatasetError(f"--scenes {args.scenes}: must be at least 1")

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.dataset.shards import MANIFEST, TARGET_SIZES, DatasetError, Sample, shard_name, write_shard
+from slax_drake.errors import DatasetError
+from slax_drake.dataset.shards import MANIFEST, TARGET_SIZES, Sample, shard_name, write_shard
 
 PARAMS = "dataset_params.json"
 DEFAULT_GRID_STEP = 0.005

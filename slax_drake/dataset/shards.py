@@ -24,16 +24,12 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.errors import UserError
+from slax_drake.errors import DatasetError
 from slax_drake.io import set_default_file_mode
 
 # The paper's three target aspect ratios (x, y, z in metres), in the order of the network's heads.
 TARGET_SIZES = ((0.06, 0.06, 0.03), (0.06, 0.06, 0.06), (0.06, 0.06, 0.12))
 MANIFEST = "manifest.json"
-
-
-class DatasetError(UserError):
-    """A dataset folder or shard is missing, corrupt, or was made with other arguments."""
 
 
 @dataclasses.dataclass

@@ -33,15 +33,11 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.errors import UserError
+from slax_drake.errors import PhysicsBenchmarkError
 from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
 
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
-
-
-class PhysicsBenchmarkError(UserError):
-    """A physics benchmark request that cannot be run, or a corrupt per-scene result file."""
 
 
 def trial_path(out: Path, policy: str, density: int, index: int) -> Path:
@@ -128,7 +124,8 @@ def default_station(config: str) -> str:
     """The station made for ``config`` (``station_<stem>.yaml``), else the sim-shelf station; MakeStation refuses
     a scene whose shelf differs from the station's."""
     from slax_drake.station.scenario import DEFAULT_STATION
-    from slax_drake.systems.trial import TrialError, station_for
+    from slax_drake.errors import TrialError
+    from slax_drake.systems.trial import station_for
 
     try:
         return station_for(config)

@@ -18,15 +18,11 @@ import hashlib
 import json
 from pathlib import Path
 
-from slax_drake.errors import UserError
+from slax_drake.errors import SettingsMismatchError
 from slax_drake.io import write_text_atomic
 
 SETTINGS_FILE = "settings.json"  # the Table I benchmark's record
 PHYSICS_SETTINGS_FILE = "physics_settings.json"  # the physics benchmark's, beside it in the same folder
-
-
-class SettingsMismatchError(UserError):
-    """A resumed benchmark whose settings differ from those its folder was made with."""
 
 
 def scenario_digest(scenario) -> str:

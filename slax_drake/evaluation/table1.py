@@ -19,17 +19,13 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.config import Scenario
-from slax_drake.errors import UserError
+from slax_drake.errors import BenchmarkError
 from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
 
 PAPER_TABLE1 = {  # success % for 4/6/8/10/All (paper Table I)
     "oracle-p": [100, 100, 99, 94, 98], "oracle-p+s": [100, 100, 100, 100, 100], "dar": [77, 68, 45, 24, 54],
     "der-3": [83, 72, 50, 34, 60], "bluction-dar": [96, 92, 88, 67, 86],
 }
-
-
-class BenchmarkError(UserError):
-    """A benchmark request that cannot be run, or a corrupt trial file."""
 
 
 @dataclasses.dataclass(frozen=True)

@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialError, TrialOptions  # noqa: F401
+from slax_drake.errors import TrialError
+from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
 
 
 @dataclasses.dataclass

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import logging
 
-from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialError, TrialOptions
+from slax_drake.errors import TrialError
+from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
 
 
 def register(subparsers) -> None:

@@ -78,7 +78,7 @@ def register(subparsers) -> None:
 
 
 def _scene_and_station(traj, scene_path, station_path):
-    from slax_drake.hardware.trajectory_file import TrajectoryFileError
+    from slax_drake.errors import TrajectoryFileError
     from slax_drake.scene.io import load_scene, scene_from_dict
     from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.trial import station_for
@@ -120,7 +120,8 @@ def run_export(args: argparse.Namespace) -> int:
 
 
 def _export_bag(args: argparse.Namespace, data: dict) -> int:
-    from slax_drake.hardware.export import TrialFileError, trial_scene
+    from slax_drake.errors import TrialFileError
+    from slax_drake.hardware.export import trial_scene
     from slax_drake.hardware.rosbag_export import STEP_DEPTH_FILE, read_step_depth, write_trial_bag
     from slax_drake.scene.io import load_scene, save_scene
 
@@ -183,7 +184,8 @@ def run_check(args: argparse.Namespace) -> int:
 
 def run_replay(args: argparse.Namespace) -> int:
     from slax_drake.hardware.replay import compare_final_objects, replay
-    from slax_drake.hardware.trajectory_file import TrajectoryFileError, load_trajectory
+    from slax_drake.errors import TrajectoryFileError
+    from slax_drake.hardware.trajectory_file import load_trajectory
     from slax_drake.io import write_text_atomic
 
     traj = load_trajectory(args.trajectory)

@@ -27,13 +27,10 @@ import numpy as np
 
 from slax_drake.hardware.fetch_limits import FETCH_JOINTS
 from slax_drake.hardware.interpolation import resample
-from slax_drake.hardware.trajectory_file import ExportedTrajectory, Motion, TrajectoryFileError
+from slax_drake.hardware.trajectory_file import ExportedTrajectory, Motion
+from slax_drake.errors import TrialFileError
 
 TIME_EPS = 1e-6  # s: trial.json rounds its times to 1e-6
-
-
-class TrialFileError(TrajectoryFileError):
-    """A trial.json cannot be exported (missing, malformed, or without the executed trajectory)."""
 
 
 def read_trial(path: str | Path) -> dict:

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.errors import UserError
+from slax_drake.errors import PlanStepError
 
 WORKING_WIDTH = 160
 MAX_CANDIDATES = 25
@@ -48,10 +48,6 @@ PANEL_MARGIN = 0.015
 # m^2: the estimator's footprint overlap allowed between hypotheses; the exported scene (the checker's world) must
 # hold no two bodies interpenetrating by more than 1 mm (slax_drake.scene.io), a looser area bound lets through.
 HYPOTHESIS_OVERLAP = 1e-6
-
-
-class PlanStepError(UserError):
-    """An input of plan-step that cannot be used (exit code 2)."""
 
 
 @dataclasses.dataclass

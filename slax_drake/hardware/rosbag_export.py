@@ -50,7 +50,8 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.hardware.export import TrialFileError, export_trial
+from slax_drake.errors import TrialFileError
+from slax_drake.hardware.export import export_trial
 from slax_drake.hardware.fetch_limits import FETCH_JOINTS
 
 STEP_DEPTH_FILE = "step_depth.npz"  # written by slax_drake.systems.trial.write_trial beside trial.json

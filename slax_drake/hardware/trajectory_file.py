@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.errors import UserError
+from slax_drake.errors import TrajectoryFileError
 from slax_drake.hardware.fetch_limits import FETCH_JOINTS
 
 FORMAT_NAME = "slax-drake-fetch-trajectory"
@@ -46,10 +46,6 @@ FORMAT_VERSION = 1
 FORMATS = {"ros-json": ".json", "ros-yaml": ".yaml", "csv": ".csv"}
 CSV_MAGIC = f"# {FORMAT_NAME} v{FORMAT_VERSION}"
 GOAL_TIME_TOLERANCE = 0.5  # s, written into the FollowJointTrajectory goals
-
-
-class TrajectoryFileError(UserError):
-    """An exported trajectory file cannot be read (missing, malformed, truncated, wrong joints, bad times)."""
 
 
 @dataclasses.dataclass

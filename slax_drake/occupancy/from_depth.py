@@ -37,13 +37,10 @@ from slax_drake.occupancy.hidden import (
 )
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Shelf
+from slax_drake.errors import DepthOccupancyError
 
 COARSE_GRID_STEP = 0.01  # the policies' settings (GroundTruthDistribution): 1 cm lattice, 1 cm samples
 COARSE_SURFACE_SPACING = 0.01
-
-
-class DepthOccupancyError(ValueError):
-    """A depth image or setting the depth-based occupancy cannot use."""
 
 
 @dataclasses.dataclass(frozen=True)

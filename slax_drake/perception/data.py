@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.perception.errors import PerceptionDataError
+from slax_drake.errors import PerceptionDataError
 from slax_drake.perception.targets import TARGET_SIZES, ratio_index
 
 

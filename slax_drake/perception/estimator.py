@@ -50,7 +50,7 @@ import math
 import cv2
 import numpy as np
 
-from slax_drake.perception.errors import ObservationError
+from slax_drake.errors import ObservationError
 from slax_drake.perception.observation import Observation
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose

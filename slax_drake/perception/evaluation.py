@@ -28,7 +28,7 @@ def evaluate_model(model: LoadedModel, data: TrainingData, batch_size: int = 32,
 
     cfg = model.config
     if data.resolution != (cfg.width, cfg.height):
-        from slax_drake.perception.errors import ImageSizeError
+        from slax_drake.errors import ImageSizeError
 
         w, h = data.resolution
         raise ImageSizeError(f"{data.source}: {w}x{h} images, but model {model.path} takes {cfg.width}x{cfg.height} "

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from slax_drake.perception.errors import ImageSizeError
+from slax_drake.errors import ImageSizeError
 from slax_drake.perception.network import distributions_2d
 from slax_drake.perception.targets import ratio_index
 from slax_drake.perception.weights import LoadedModel, load_weights

@@ -19,7 +19,7 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from slax_drake.perception.errors import ImageSizeError
+from slax_drake.errors import ImageSizeError
 
 
 @dataclasses.dataclass(frozen=True)

@@ -13,7 +13,7 @@ An :class:`Observation` holds, all at the camera's resolution (H, W):
 - ``joint_state``: the robot's joint positions (radians / metres, the station's order), or None.
 
 The constructor validates everything: a frame that does not fit the camera, a wrong data type, or a depth image
-with mostly no returns raises :class:`~slax_drake.perception.errors.ObservationError` (a user error: one line,
+with mostly no returns raises :class:`~slax_drake.errors.ObservationError` (a user error: one line,
 exit code 2), since real frames reach it from files (``plan-step``).
 """
 
@@ -23,7 +23,7 @@ import dataclasses
 
 import numpy as np
 
-from slax_drake.perception.errors import ObservationError
+from slax_drake.errors import ObservationError
 from slax_drake.scene.camera import Camera
 
 MIN_VALID_FRACTION = 0.5  # an observation needs depth returns on at least this fraction of its pixels

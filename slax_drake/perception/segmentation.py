@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from slax_drake.perception.errors import ImageSizeError
+from slax_drake.errors import ImageSizeError
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Shelf
 

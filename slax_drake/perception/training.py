@@ -26,7 +26,7 @@ import numpy as np
 import torch
 
 from slax_drake.perception.data import TrainingData
-from slax_drake.perception.errors import PerceptionDataError, WeightFileError
+from slax_drake.errors import PerceptionDataError, WeightFileError
 from slax_drake.perception.loss import masked_kl_loss, own_head_mask
 from slax_drake.perception.metrics import MetricsAccumulator
 from slax_drake.perception.network import NetworkConfig, OccupancyUNet

@@ -23,7 +23,7 @@ from pathlib import Path
 import torch
 
 from slax_drake.config import REPO_ROOT
-from slax_drake.perception.errors import ImageSizeError, WeightFileError
+from slax_drake.errors import ImageSizeError, WeightFileError
 from slax_drake.perception.network import NetworkConfig, OccupancyUNet
 from slax_drake.perception.shipped_model import DEFAULT_MODEL
 from slax_drake.perception.targets import TARGET_SIZES

@@ -10,14 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from slax_drake.errors import UserError
+from slax_drake.errors import TimingError
 from slax_drake.planning.trajectory import JointTrajectory
 
 SAMPLE_PERIOD = 0.001  # s
-
-
-class TimingError(UserError):
-    """Ruckig could not time a segment."""
 
 
 def time_segment(q0, q1, velocity, acceleration, jerk, dt: float = SAMPLE_PERIOD):

@@ -13,7 +13,7 @@ import dataclasses
 import importlib
 import typing
 
-from slax_drake.errors import UserError
+from slax_drake.errors import UnknownPolicyError, UserError
 
 # The action model, the distributions and the scene sampler (OpenCV, shapely, trimesh, torch) are imported where
 # used: the command-line parser imports this module for add_tool_rule_argument and POLICY_NAMES.
@@ -22,7 +22,6 @@ if typing.TYPE_CHECKING:
 
 # The rules are plain data (no heavy imports): the parser needs their profile names and fields.
 from slax_drake.policies.rules import PROFILES, RULES, ToolConfig, flat_field_names, tool_config_problem  # noqa: E402
-
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,11 +50,6 @@ POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
 OUR_POLICIES = ("bluction-la2",)  # the project's own
 DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
-
-
-
-class UnknownPolicyError(UserError):
-    """A policy name that does not exist."""
 
 
 def add_tool_rule_argument(parser, note: str) -> None:

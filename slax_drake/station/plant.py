@@ -42,7 +42,8 @@ from slax_drake.errors import ConfigError
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
-from slax_drake.station.scenario import SHELF_BODY, SceneMismatchError, StationScenario, observation_positions
+from slax_drake.errors import SceneMismatchError
+from slax_drake.station.scenario import SHELF_BODY, StationScenario, observation_positions
 
 
 class PlantPurpose(enum.Enum):

@@ -20,7 +20,7 @@ from pydrake.multibody.parsing import ModelDirective
 from pydrake.multibody.plant import MultibodyPlantConfig
 
 from slax_drake.config import REPO_ROOT
-from slax_drake.errors import ConfigError, UserError
+from slax_drake.errors import ConfigError
 from slax_drake.scene.camera import Camera
 from slax_drake.station import DEFAULT_STATION, robot as robot_model  # noqa: F401  (DEFAULT_STATION re-exported)
 
@@ -45,10 +45,6 @@ class SuctionParameters:
 
 
 SHELF_BODY = "shelf_body"
-
-
-class SceneMismatchError(UserError):
-    """A scene does not belong to the station's shelf (different bay)."""
 
 
 def _default_plant_config():

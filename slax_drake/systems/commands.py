@@ -7,12 +7,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from slax_drake.errors import UserError
+from slax_drake.errors import GraphvizMissingError, UserError
 from slax_drake.station import DEFAULT_STATION
-
-
-class GraphvizMissingError(UserError):
-    """Graphviz's ``dot`` is not installed, so the SVG cannot be drawn."""
 
 
 def register(subparsers) -> None:

@@ -33,7 +33,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem, ValueProducer
 from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I
 
-from slax_drake.perception.errors import ImageSizeError
+from slax_drake.errors import ImageSizeError
 from slax_drake.perception.estimator import estimate_objects
 from slax_drake.perception.observation import Observation, occluder_segmentation
 from slax_drake.perception.segmentation import segment_depth

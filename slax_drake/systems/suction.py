@@ -21,7 +21,6 @@ Output: ``spatial_forces`` (a list of ExternallyAppliedSpatialForce for the plan
 ``applied_spatial_force`` input) and ``suction_state`` (1-vector: the present pull in newtons, 0 when off).
 """
 
-import dataclasses
 import math
 
 import numpy as np

@@ -25,14 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from slax_drake.errors import UserError
+from slax_drake.errors import TrialError
 
 DEFAULT_OBJECTS = 3
 DEFAULT_SEED = 7
-
-
-class TrialError(UserError):
-    """A trial cannot be set up (bad config, no station for the shelf, unsupported option)."""
 
 
 @dataclasses.dataclass
