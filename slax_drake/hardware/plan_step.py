@@ -61,16 +61,25 @@ class StepResult:
     timings: dict
 
 
-def read_depth(path: str | Path) -> np.ndarray:
-    """A depth frame in metres (float32): ``.npy`` (float metres) or 16-bit ``.png`` (millimetres)."""
+def _existing(path: str | Path, what: str) -> Path:
     path = Path(path)
     if not path.is_file():
-        raise PlanStepError(f"{path}: no such depth file")
+        raise PlanStepError(f"{path}: no such {what} file")
+    return path
+
+
+def _load_npy(path: Path) -> np.ndarray:
+    try:
+        return np.load(path, allow_pickle=False)
+    except (ValueError, OSError) as e:
+        raise PlanStepError(f"{path}: not a numpy array file ({e})") from None
+
+
+def read_depth(path: str | Path) -> np.ndarray:
+    """A depth frame in metres (float32): ``.npy`` (float metres) or 16-bit ``.png`` (millimetres)."""
+    path = _existing(path, "depth")
     if path.suffix.lower() == ".npy":
-        try:
-            depth = np.load(path, allow_pickle=False)
-        except (ValueError, OSError) as e:
-            raise PlanStepError(f"{path}: not a numpy array file ({e})") from None
+        depth = _load_npy(path)
         if depth.ndim != 2:
             raise PlanStepError(f"{path}: a depth frame must be a 2D array (rows, columns), got shape {depth.shape}")
         return depth  # dtype and units are checked by Observation
@@ -89,14 +98,9 @@ def read_depth(path: str | Path) -> np.ndarray:
 
 def read_mask(path: str | Path) -> np.ndarray:
     """The target mask (bool): non-zero pixels of a ``.png`` (any channel) or ``.npy``."""
-    path = Path(path)
-    if not path.is_file():
-        raise PlanStepError(f"{path}: no such target-mask file")
+    path = _existing(path, "target-mask")
     if path.suffix.lower() == ".npy":
-        try:
-            mask = np.load(path, allow_pickle=False)
-        except (ValueError, OSError) as e:
-            raise PlanStepError(f"{path}: not a numpy array file ({e})") from None
+        mask = _load_npy(path)
     else:
         import cv2
 
