@@ -124,11 +124,14 @@ def test_physics_exposes_the_options_of_the_old_module_cli():
 
 
 def _trial_files(out):
-    """Trial files less their timings (wall-clock seconds differ from run to run)."""
+    """Trial files less their timings (seconds differ from run to run; the oracles' searches record theirs)."""
     files = {}
     for p in sorted((Path(out) / "trials").glob("*/*.json")):
         d = json.loads(p.read_text())
         d.pop("decision_seconds")
+        d.pop("trial_seconds")
+        for search in d.get("oracle_searches", ()):
+            search.pop("seconds")
         files[p.relative_to(out).as_posix()] = d
     return files
 
