@@ -26,8 +26,17 @@ COMMAND_MODULES = (
 )
 
 
+class OneLineErrorParser(argparse.ArgumentParser):
+    """An ArgumentParser whose argument errors are one line, like every other user error of the command line:
+    ``slax-drake COMMAND: error: MESSAGE (see slax-drake COMMAND --help)``, exit code 2 (argparse's own prints the
+    whole usage block first). Subcommand parsers are of this class too."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineErrorParser(
         prog="slax-drake",
         description="Lateral-access mechanical search on shelves with the bluction tool (SLAX-RAY), on Drake.",
     )

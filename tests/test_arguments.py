@@ -12,15 +12,17 @@ SEED_ERROR = "argument --seed: must be an integer in [0, 2^63 - 1], got '-1'"
 
 
 def _refused(argv, capsys) -> str:
-    """Runs the command line, expects argparse's refusal (exit code 2) and returns its error line."""
+    """Runs the command line, expects the parser's refusal (exit code 2, one line) and returns that line less its
+    pointer to --help."""
     with pytest.raises(SystemExit) as info:
         main(argv)
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err
-    lines = err.strip().splitlines()
-    assert lines[0].startswith("usage: ")
-    return lines[-1]
+    (line,) = err.strip().splitlines()
+    message, _, see = line.rpartition(" (see ")
+    assert see == f"slax-drake {argv[0]} --help)"
+    return message
 
 
 @pytest.mark.parametrize("argv", [
