@@ -182,7 +182,7 @@ class PushCache:
 # ---- search ------------------------------------------------------------------------------------------------------
 def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions: bool, psi: float,
                 seconds: float, weight: float = 5.0, commute: bool = True, maximal_pushes: bool = True,
-                allowed=None, max_expansions: int | None = None) -> SearchResult:
+                allowed=None) -> SearchResult:
     """The cheapest plan from ``start`` (objects) to a state where ``h_of(objects) == 0`` within ``remaining``
     actions; ``fixed``: known obstacles that never move (the target); ``h_of(objects)``: an admissible
     heuristic (0 exactly at the goal) counting actions; ``seconds``: the time limit (CPU seconds of this process,
@@ -190,9 +190,7 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
     w (1 skips phase 1); ``commute``: commutation pruning (off only to check it); ``maximal_pushes``: the paper's
     coarse push set, each object pushed each way only up to its neighbour (the maximal push), not also on the
     ``push_resolution`` lattice (see :func:`maximal_pushes_only`); ``allowed(candidates, objects)``: the candidates
-    the search may use (the policy's exclusions, :class:`slax_drake.policies.protocol.Exclusions`), all when None;
-    ``max_expansions``: a node budget as well (deterministic, unlike the time limit): a search that reaches it ends
-    as "cut by budget", with what it had found, like one cut by time."""
+    the search may use (the policy's exclusions, :class:`slax_drake.policies.protocol.Exclusions`), all when None."""
     t0 = time.process_time()  # CPU seconds of this process: the limit does not shrink when the machine is shared
     deadline = t0 + seconds
     start = tuple(start)
@@ -238,7 +236,7 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
         frontier = [(w * h0, 0, 0.0, next(counter), start, h0, (), None, None)]
         best: dict = {}
         while frontier:
-            if time.process_time() > deadline or (max_expansions is not None and expansions >= max_expansions):
+            if time.process_time() > deadline:
                 return None, None, False, min(n[2] + n[5] for n in frontier)
             f, neg_depth, g, _, objects, h, plan, last, node_key = heapq.heappop(frontier)
             if node_key is not None and (g, len(plan)) not in best.get(node_key, ()):
@@ -272,9 +270,6 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
                                           (objects, a), node_key))
         return None, None, True, math.inf
 
-    def cut() -> str:
-        return "cut by budget" if max_expansions is not None and expansions >= max_expansions else "cut by time"
-
     upper, plan = math.inf, None
     if weight > 1.0:
         plan1, cost1, exhausted, _ = run(weight, math.inf)
@@ -283,7 +278,7 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
         elif exhausted:
             return SearchResult(None, "infeasible", None, math.inf, expansions, time.process_time() - t0)
         else:
-            return SearchResult(None, cut(), None, float(h0), expansions, time.process_time() - t0)
+            return SearchResult(None, "cut by time", None, float(h0), expansions, time.process_time() - t0)
     plan2, cost2, exhausted, least = run(1.0, upper + 1e-6 if plan is not None else math.inf)
     seconds_used = time.process_time() - t0
     if plan2 is not None:
@@ -292,4 +287,4 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
         if plan is not None:
             return SearchResult(plan, "optimal", upper, upper, expansions, seconds_used)
         return SearchResult(None, "infeasible", None, math.inf, expansions, seconds_used)
-    return SearchResult(plan, cut(), None if plan is None else upper, least, expansions, seconds_used)
+    return SearchResult(plan, "cut by time", None if plan is None else upper, least, expansions, seconds_used)

@@ -50,11 +50,12 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "bluction-dar-literal": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "paper", "corrected": False}),
     "bluction-dar-cost": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "cost", "corrected": True}),
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
+    "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
 }
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
 LITERAL_POLICIES = ("dar-literal", "bluction-dar-literal")  # the paper's text without the corrections
-OUR_POLICIES = ("bluction-la2",)  # the project's own
+OUR_POLICIES = ("bluction-la2", "slax-hindsight")  # the project's own
 DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
 
 
@@ -142,7 +143,9 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
                      **entry.options, **(oracle_options or {}))
     else:
         size = target_size or tuple(scenario.target.sizes[0])
-        policy = cls(model, make_distribution_model(perception, size), psi=psi, **entry.options,
-                     **(policy_options or {}))
+        options = dict(entry.options, **(policy_options or {}))
+        if getattr(cls, "uses_visibility_threshold", False):  # a policy that plans for the success test itself
+            options.setdefault("threshold", scenario.target.visibility_threshold)
+        policy = cls(model, make_distribution_model(perception, size), psi=psi, **options)
     policy.name = name  # the table's row name (one class may serve several rows, e.g. "dar" and "dar-literal")
     return policy

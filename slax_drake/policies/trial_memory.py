@@ -8,7 +8,8 @@ redoes it, until the horizon. :class:`TrialMemory` holds the two facts the corre
 
 - the arrangements observed so far (the seen objects' planar poses), compared within ``position_tolerance`` (m)
   and ``yaw_tolerance`` (rad), by name and, when the names differ (camera-mode hypotheses are renamed per frame),
-  by matching shapes and poses;
+  by matching shapes and poses; an object seen in one arrangement and hidden in the other does not count (the
+  objects seen in both decide);
 - the last proposed action, the objects it was chosen on and the pose the action model predicts for its object.
   :meth:`outcome` compares that prediction with the next observation: "moved nothing" (the object stands where
   it stood), "moved less than predicted" (it moved, but stands more than ``position_tolerance`` short of or away
@@ -72,9 +73,13 @@ class TrialMemory:
         return abs(dyaw) <= self.yaw_tolerance
 
     def same_arrangement(self, a: tuple, b: tuple) -> bool:
-        """Every object of ``a`` stands where one of ``b`` stands (one-to-one; by name first), and vice versa."""
-        if len(a) != len(b):
-            return False
+        """Every object of the smaller of ``a`` and ``b`` stands where one of the other stands (one-to-one; by name
+        when the names match, else by shape and pose): the objects seen in one and not the other are hidden there,
+        so both are the same shelf. Two empty arrangements are the same; an empty one and another are not."""
+        if len(a) > len(b):
+            a, b = b, a
+        if not a:
+            return not b
         by_name = {o.name: o for o in b}
         if all(o.name in by_name for o in a):
             return all(self._close(o, by_name[o.name]) for o in a)
