@@ -30,7 +30,6 @@ corrections and the next decision samples again.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 
@@ -39,7 +38,7 @@ import numpy as np
 from slax_drake.policies.actions import Push, Suction, apply_action
 from slax_drake.policies.policies import BluctionDAR
 from slax_drake.policies.protocol import Decision
-from slax_drake.scene.model import Target, planar_pose, state_key
+from slax_drake.scene.model import state_key
 
 
 class Hindsight(BluctionDAR):
@@ -50,16 +49,13 @@ class Hindsight(BluctionDAR):
     name = "slax-hindsight"
     uses_visibility_threshold = True
 
-    def __init__(self, *args, samples: int = 8, depth: int = 2, shortlist: int = 6, seconds: float = 3.0,
-                 grid_step: float = 0.01, threshold: float = 0.80, leaf_weight: float = 1.5,
-                 failure_cost: float = 3.0, **kwargs):
+    def __init__(self, *args, samples: int = 64, shortlist: int = 6, seconds: float = 3.0,
+                 grid_step: float = 0.01, threshold: float = 0.80, failure_cost: float = 3.0, **kwargs):
         kwargs.setdefault("corrected", True)
         kwargs.setdefault("suction_weighting", "paper")
         super().__init__(*args, **kwargs)
         self.samples = samples
-        self.depth = depth
         self.shortlist = shortlist
-        self.leaf_weight = leaf_weight
         self.seconds = seconds
         self.grid_step = grid_step
         self.threshold = threshold
@@ -109,9 +105,6 @@ class Hindsight(BluctionDAR):
         return 1.0 if isinstance(action, Push) else self.psi
 
     def rank(self, obs) -> Decision:
-        from slax_drake.policies.visibility import TargetOcclusion
-        from slax_drake.scene.footprint import Footprint, footprints_clear
-
         t0 = time.process_time()
         prior = super().rank(obs)
         self._step += 1
@@ -124,60 +117,39 @@ class Hindsight(BluctionDAR):
             return prior
         template = obs.scene_template
         seed = template.seed if template.seed is not None else 0
-        size = self.target_size()
         known = tuple(obs.known)
+        worlds = Worlds(template, self.draw(placements, seed), self.target_size(), self.threshold)
+        log["samples"] = worlds.count
         cands = list(prior.candidates)
+        alive = np.ones(worlds.count, dtype=bool)  # the worlds still possible: all, before any action
 
-        worlds = []  # per sample: (target footprint, occlusion)
-        for x, y in self.draw(placements, seed):
-            target = Target(size=size, X_ST=planar_pose(float(x), float(y), size[2] / 2.0, 0.0))
-            scene = dataclasses.replace(template, objects=known, target=target)
-            worlds.append((Footprint.of(target.as_object()), TargetOcclusion(scene, threshold=self.threshold)))
-        log["samples"] = len(worlds)
+        def step(objects, a, after, possible):
+            """(probability that ``a`` reveals the target among ``possible`` worlds, the worlds where it does not)."""
+            revealed = worlds.revealed(after) & ~worlds.blocks(after, a.name) & possible
+            n = possible.sum()
+            return (revealed.sum() / n if n else 0.0), possible & ~revealed
 
-        def leaf(w, objects) -> float:
-            """The estimated cost still needed in world ``w``: 0 when the target is revealed, else ``leaf_weight``
-            times the fewest objects whose removal reveals it."""
-            return 0.0 if w[1].revealed(objects) else self.leaf_weight * w[1].min_objects_to_move(objects)
-
-        def hits_target(objects, a, w) -> bool:
-            moved = next(o for o in objects if o.name == a.name)
-            return not footprints_clear(Footprint.of(moved), w[0], 0.0)
-
-        def value(objects, w, depth) -> float:
-            """min over the moves b of c(b) + value after b (``depth`` moves), the leaf estimate at depth 0."""
-            now = leaf(w, objects)
-            if now == 0.0 or depth == 0:
-                return now
-            best = now + self.failure_cost  # no move helps: the failure cost on top of the estimate
-            for b, after, c in self.moves(objects):
-                if c >= best:
-                    continue
-                if hits_target(after, b, w):
-                    continue
-                best = min(best, c + value(after, w, depth - 1))
-            return best
-
-        scored = []  # (Q, order in the prior, action)
+        scored = []  # [Q, order in the prior, action, objects after, worlds left]
         for order, a in enumerate(cands):
             after = apply_action(known, a)
-            q = 0.0
-            for w in worlds:
-                q += self.cost(a) + (leaf(w, known) + self.failure_cost if hits_target(after, a, w) else leaf(w, after))
-            scored.append([q / len(worlds), order, a, after])
+            p, left = step(known, a, after, alive)
+            scored.append([self.cost(a) + (1.0 - p) * self.failure_cost, order, a, after, left, p])
         scored.sort(key=lambda e: e[:2])
         for entry in scored[: self.shortlist]:  # the most promising first moves, one move further
             if time.process_time() - t0 > self.seconds:
                 log["capped"] = True
                 break
-            a, after = entry[2], entry[3]
-            q = 0.0
-            for w in worlds:
-                if hits_target(after, a, w):
-                    q += self.cost(a) + leaf(w, known) + self.failure_cost
-                else:
-                    q += self.cost(a) + value(after, w, self.depth - 1)
-            entry[0] = q / len(worlds)
+            a, after, left, p = entry[2], entry[3], entry[4], entry[5]
+            if p >= 1.0 or not left.any():
+                log["scored"] += 1
+                continue
+            best_rest = self.failure_cost
+            for b, after_b, c in self.moves(after):
+                if c >= best_rest:
+                    continue
+                p_b, _ = step(after, b, after_b, left)
+                best_rest = min(best_rest, c + (1.0 - p_b) * self.failure_cost)
+            entry[0] = self.cost(a) + (1.0 - p) * best_rest
             log["scored"] += 1
         top = scored[: max(log["scored"], 1)]
         top.sort(key=lambda e: e[:2])
@@ -219,6 +191,59 @@ def nearest_candidate(action, candidates, objects):
         if gap < best_gap:
             best, best_gap = a, gap
     return best
+
+
+class Worlds:
+    """The sampled target placements as worlds, evaluated together: which of them an arrangement of the seen
+    objects reveals (the target there seen at the threshold), and which of them a moved object runs into."""
+
+    def __init__(self, template, centers: np.ndarray, size, threshold: float, spacing: float = 0.02):
+        from slax_drake.scene.raycast import SceneRaycaster
+        from slax_drake.scene.surface import box_surface_points
+
+        self.template, self.size, self.threshold = template, tuple(size), threshold
+        self.centers = np.asarray(centers, dtype=float).reshape(-1, 2)
+        self.count = len(self.centers)
+        points, normals = box_surface_points(self.size, spacing)
+        offsets = np.column_stack([self.centers, np.full(self.count, self.size[2] / 2.0)])
+        self.points = points[None, :, :] + offsets[:, None, :]  # (K, P, 3) in the shelf frame (m)
+        self.eye = np.asarray(template.camera.position, dtype=float)
+        facing = np.einsum("pj,kpj->kp", normals, self.eye - self.points) > 0.0
+        self.shown = facing & SceneRaycaster(template, objects=()).visible(self.eye, self.points)
+        self.n_shown = self.shown.sum(axis=1)
+        self._revealed: dict = {}
+        self._hidden: dict = {}
+
+    def hidden_by(self, obj) -> np.ndarray:
+        """(K, P) bool: the target points of each world that ``obj`` alone hides (cached per object pose); a point is
+        hidden past several objects exactly when one of them hides it, so a state's masks are OR-ed."""
+        key = state_key((obj,))[0]
+        hit = self._hidden.get(key)
+        if hit is None:
+            from slax_drake.scene.raycast import SceneRaycaster
+
+            seen = SceneRaycaster(self.template, objects=(obj,)).visible(self.eye, self.points)
+            hit = self._hidden[key] = self.shown & ~seen
+        return hit
+
+    def revealed(self, objects) -> np.ndarray:
+        """(K,) bool: the target of each world seen at the threshold past ``objects``."""
+        key = state_key(objects)
+        hit = self._revealed.get(key)
+        if hit is None:
+            hidden = np.zeros_like(self.shown)
+            for o in objects:
+                hidden |= self.hidden_by(o)
+            seen = (self.shown & ~hidden).sum(axis=1)
+            hit = self._revealed[key] = (self.n_shown > 0) & (seen >= self.threshold * self.n_shown - 1e-9)
+        return hit
+
+    def blocks(self, objects, name: str) -> np.ndarray:
+        """(K,) bool: the object ``name`` of ``objects`` overlaps the target of each world."""
+        from slax_drake.scene.footprint import Footprint, clear_of
+
+        obj = next(o for o in objects if o.name == name)
+        return ~clear_of("box", self.centers, 0.0, (self.size[0] / 2, self.size[1] / 2), Footprint.of(obj), 0.0)
 
 
 def possible_placements(scene, size, step: float, threshold: float, spacing: float = 0.02) -> np.ndarray:
