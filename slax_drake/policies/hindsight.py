@@ -1,56 +1,56 @@
-"""slax-hindsight (ours): hindsight optimisation over sampled target placements, with the exact oracle search
-(issue 19 item 5).
+"""slax-hindsight (ours): the expected cost of revealing the target over sampled target placements, with a
+one-move lookahead (issue 19 item 5).
 
 The oracles reach 98-100 % with the full state while the distribution policies stay far lower: what they miss is
-the target's position, not mobility. This policy reads only the Observation (the seen objects, P_t) and
-determinises the unknown:
+the target's position, not mobility. This policy reads only the Observation (the seen objects; never the target)
+and determinises the unknown, as in hindsight optimisation:
 
-1. The placements where the target may stand: the hidden placements of the target box on a ``grid_step`` lattice
-   with the seen objects where they stand (:func:`slax_drake.occupancy.compute_occupancy`; the support of P_t in
-   the shelf plane), intersected over the trial's observations (the target does not move, so it stands where it
-   was hidden at every step: the 2D form of the history encoding P'_t).
-2. ``samples`` placements drawn from them, stratified along x (one draw per equal-count stratum), by a generator
-   seeded with the scene seed and the step: a rollout is a function of the scene.
-3. Per sample, the seen objects plus the target there make a full state, and the oracles' exact search
-   (:func:`slax_drake.policies.oracle_search.search_plan`, pushes and suctions, target as a fixed obstacle, the
-   visibility goal at the scenario's threshold, ``depth`` actions at most, ``expansions`` nodes at most) gives
-   the cheapest plan V_s.
-4. The candidates scored: the first ``shortlist`` of Bluction-DAR's ranking (with its corrections) and the first
-   action of every sample's plan (the policy's nearest candidate: same object, same kind, same direction, the
-   closest displacement). Q(a) = mean over samples of c(a) + V_s(a's successor) (pushes cost 1, suctions psi;
-   a sample where the moved object would run into the sampled target counts the action as wasted; no plan within
-   ``depth`` costs ``failure_cost``). The least Q wins; ties keep Bluction-DAR's order.
+1. Where the target may stand (:func:`possible_placements`): the lattice placements (``grid_step``) of the target
+   box clear of the seen objects and wholly hidden at the first observation (the scene generator hides it), seen
+   less than the threshold v at each later one (else the trial would have ended), intersected over the trial's
+   observations (the target does not move: the 2D form of the history encoding P'_t).
+2. ``samples`` of them (stratified along x, drawn by a generator seeded with the scene seed and the step: a
+   rollout is a function of the scene) are the worlds (:class:`Worlds`), evaluated together: for an arrangement
+   of the seen objects, which worlds' target is seen at v (per-object occlusion masks of the target's surface
+   points, cached per object pose), and which worlds' target a moved object would run into.
+3. Every candidate a (Bluction-DAR's, with its corrections; suctions only those whose ways out and in and
+   placement stay in space the camera has seen, ``safe_suctions``) gets Q(a) = c(a) + (1 - p_a) F, p_a the share
+   of the worlds still possible that a reveals, F = ``failure_cost``; the ``shortlist`` best are looked at one
+   move further: Q(a) = c(a) + (1 - p_a) min_b [c(b) + (1 - p_b|a) F] over the moves b after a (pushes up to the
+   neighbour, safe suctions), p_b|a over the worlds a did not reveal. Pushes cost 1, suctions psi. The least Q
+   wins; ties keep Bluction-DAR's order.
 
-Limits: ``expansions`` per search makes every decision deterministic; ``seconds`` (CPU seconds of the process
-per decision) is a safety cap only: when reached, the candidates not yet scored on every sample are left out
-(``decision_log`` records it per decision; with the defaults no Table I decision reached it in our runs). Unseen
-objects are not in the sampled states (the search cannot know them); an action they stop is excluded by the
-corrections and the next decision samples again.
+No random number is drawn but from the seeded generator, and no limit depends on the clock but ``seconds``, a
+safety cap per decision (CPU seconds): when reached, the candidates not yet looked at further are left out
+(``decision_log`` records it per decision). Unseen objects are not in the worlds; an action they stop is
+excluded by the corrections, and the next decision samples again.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
 import numpy as np
 
-from slax_drake.policies.actions import Push, Suction, apply_action
+from slax_drake.policies.actions import ActionModel, Push, Suction, apply_action
 from slax_drake.policies.policies import BluctionDAR
 from slax_drake.policies.protocol import Decision
 from slax_drake.scene.model import state_key
 
 
 class Hindsight(BluctionDAR):
-    """See the module docstring. Options: ``samples`` (K), ``depth`` (actions per sampled plan), ``expansions``
-    (nodes per search), ``shortlist`` (Bluction-DAR's first candidates scored besides the samples' plans),
-    ``seconds`` (the per-decision safety cap), ``grid_step`` (m, the placement lattice), ``threshold`` (v)."""
+    """See the module docstring. Options: ``samples`` (worlds per decision), ``shortlist`` (candidates looked at one
+    move further), ``failure_cost`` (F), ``safe_suctions``, ``seconds`` (the per-decision safety cap, CPU s),
+    ``grid_step`` (m, the placement lattice), ``threshold`` (v; the registry passes the scenario's)."""
 
     name = "slax-hindsight"
     uses_visibility_threshold = True
 
     def __init__(self, *args, samples: int = 64, shortlist: int = 6, seconds: float = 3.0,
-                 grid_step: float = 0.01, threshold: float = 0.80, failure_cost: float = 3.0, **kwargs):
+                 grid_step: float = 0.01, threshold: float = 0.80, failure_cost: float = 3.0,
+                 safe_suctions: bool = True, **kwargs):
         kwargs.setdefault("corrected", True)
         kwargs.setdefault("suction_weighting", "paper")
         super().__init__(*args, **kwargs)
@@ -64,6 +64,12 @@ class Hindsight(BluctionDAR):
         self._consistent: set | None = None
         self._step = 0
         self._moves: dict = {}  # state -> its moves on the seen objects, for the whole trial
+        self.safe_model = None  # the suctions it uses: way out, way in and placement in seen space only
+        if safe_suctions:
+            model = self.action_model
+            rules = dataclasses.replace(model.tool.rules, suction_hidden_rule="path")
+            eye = model.eye_xy if model.eye_z is None else np.array([*model.eye_xy, model.eye_z])
+            self.safe_model = ActionModel(model.shelf, eye, dataclasses.replace(model.tool, rules=rules))
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -157,6 +163,24 @@ class Hindsight(BluctionDAR):
         best = top[0][2]
         return Decision((best, *(a for a in cands if a != best)))
 
+    def safe_suctions(self, objects) -> set | None:
+        """The suctions whose ways out and in and whose placement stay in space the camera has seen (None: every
+        suction of the profile is used). In the paper profile a placement may enter hidden space, where an unseen
+        object stops it and the object is put back: a wasted action."""
+        if self.safe_model is None:
+            return None
+        return set(self.safe_model.enumerate(objects, pushes=False, suctions=True).feasible)
+
+    def candidates(self, objects, pushes=None, suctions=None):
+        """Bluction-DAR's candidates (exclusions and no return applied), suctions only the safe ones; all of them
+        when that leaves none."""
+        base = super().candidates(objects, pushes, suctions)
+        safe = self.safe_suctions(objects)
+        if safe is None:
+            return base
+        kept = [a for a in base if not isinstance(a, Suction) or a in safe]
+        return kept or base
+
     def moves(self, objects) -> list:
         """(action, objects after, cost) of every move from ``objects`` on the seen objects (pushes up to the
         neighbour, as the oracles'; every suction placement), cached for the trial."""
@@ -166,31 +190,11 @@ class Hindsight(BluctionDAR):
             from slax_drake.policies.oracle_search import maximal_pushes_only
 
             found = maximal_pushes_only(self.action_model.enumerate(objects, pushes=True, suctions=True).feasible)
+            safe = self.safe_suctions(objects)
+            if safe is not None:
+                found = [a for a in found if not isinstance(a, Suction) or a in safe]
             hit = self._moves[key] = [(a, apply_action(objects, a), self.cost(a)) for a in found]
         return hit
-
-
-def nearest_candidate(action, candidates, objects):
-    """The candidate closest to ``action`` (a sampled plan's first step, enumerated with the sampled target as an
-    obstacle): ``action`` itself when it is a candidate, else the same object's same kind (a push in the same
-    direction with the closest displacement; a suction with the closest placement), None when there is none."""
-    if action in candidates:
-        return action
-    best, best_gap = None, math.inf
-    for a in candidates:
-        if a.name != action.name or type(a) is not type(action):
-            continue
-        if isinstance(a, Push):
-            if (a.d > 0) != (action.d > 0):
-                continue
-            gap = abs(a.d - action.d)
-        elif isinstance(a, Suction):
-            gap = math.hypot(a.dx - action.dx, a.dz - action.dz)
-        else:
-            continue
-        if gap < best_gap:
-            best, best_gap = a, gap
-    return best
 
 
 class Worlds:

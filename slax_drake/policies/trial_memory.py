@@ -73,16 +73,19 @@ class TrialMemory:
         return abs(dyaw) <= self.yaw_tolerance
 
     def same_arrangement(self, a: tuple, b: tuple) -> bool:
-        """Every object of the smaller of ``a`` and ``b`` stands where one of the other stands (one-to-one; by name
-        when the names match, else by shape and pose): the objects seen in one and not the other are hidden there,
-        so both are the same shelf. Two empty arrangements are the same; an empty one and another are not."""
+        """Whether ``a`` and ``b`` show the same shelf. When they share names: every object seen in both stands in
+        both at the same pose (an object seen in only one of them is hidden in the other, and a hidden object is
+        never acted on, so it has not moved). Otherwise (camera-mode hypotheses may be renamed per frame): the
+        smaller arrangement's objects each stand where one of the other's stands, by shape and pose, one-to-one.
+        Two empty arrangements are the same; an empty one and another are not."""
         if len(a) > len(b):
             a, b = b, a
         if not a:
             return not b
         by_name = {o.name: o for o in b}
-        if all(o.name in by_name for o in a):
-            return all(self._close(o, by_name[o.name]) for o in a)
+        common = [o for o in a if o.name in by_name]
+        if common:
+            return all(self._close(o, by_name[o.name]) for o in common)
         free = list(b)
         for o in a:
             match = next((k for k, other in enumerate(free) if self._close(o, other)), None)
