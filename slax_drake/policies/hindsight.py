@@ -1,5 +1,5 @@
-"""slax-hindsight (ours): the expected cost of revealing the target over sampled target placements, with a
-one-move lookahead (issue 19 item 5).
+"""slax-hindsight (ours): hindsight optimisation over sampled target placements with a one-move lookahead
+(issue 19 item 5).
 
 The oracles reach 98-100 % with the full state while the distribution policies stay far lower: what they miss is
 the target's position, not mobility. This policy reads only the Observation (the seen objects; never the target)
@@ -13,12 +13,16 @@ and determinises the unknown, as in hindsight optimisation:
    rollout is a function of the scene) are the worlds (:class:`Worlds`), evaluated together: for an arrangement
    of the seen objects, which worlds' target is seen at v (per-object occlusion masks of the target's surface
    points, cached per object pose), and which worlds' target a moved object would run into.
-3. Every candidate a (Bluction-DAR's, with its corrections; suctions only those whose ways out and in and
-   placement stay in space the camera has seen, ``safe_suctions``) gets Q(a) = c(a) + (1 - p_a) F, p_a the share
-   of the worlds still possible that a reveals, F = ``failure_cost``; the ``shortlist`` best are looked at one
-   move further: Q(a) = c(a) + (1 - p_a) min_b [c(b) + (1 - p_b|a) F] over the moves b after a (pushes up to the
-   neighbour, safe suctions), p_b|a over the worlds a did not reveal. Pushes cost 1, suctions psi. The least Q
-   wins; ties keep Bluction-DAR's order.
+3. The candidates are Bluction-DAR's (with its corrections), suctions only those whose ways out and in and
+   placement stay in space the camera has seen (``safe_suctions``). ``scoring="hindsight"`` (the default): per
+   world w, a leaf value L_w(s) of an arrangement s: 0 when the target is seen at v, 1 when taking one object
+   away would show it, F = ``failure_cost`` otherwise. Every candidate gets Q(a) = c(a) + mean_w L_w(after a);
+   the ``shortlist`` best are looked at one move further, each world taking its own best next move b
+   (hindsight): Q(a) = c(a) + mean_w min(L_w(after a), min_b [c(b) + L_w(after a, b)]) over the moves b
+   (pushes up to the neighbour, safe suctions). ``scoring="reveal"``: Q(a) = c(a) + (1 - p_a) F, p_a the share
+   of worlds a reveals, and one move further c(a) + (1 - p_a) min_b [c(b) + (1 - p_b|a) F], one b for all
+   worlds a did not reveal. Pushes cost 1, suctions psi; a world where the moved object runs into the target
+   counts the action as wasted. The least Q wins; ties keep Bluction-DAR's order.
 
 No random number is drawn but from the seeded generator, and no limit depends on the clock but ``seconds``, a
 safety cap per decision (CPU seconds): when reached, the candidates not yet looked at further are left out
@@ -42,7 +46,7 @@ from slax_drake.scene.model import state_key
 
 class Hindsight(BluctionDAR):
     """See the module docstring. Options: ``samples`` (worlds per decision), ``shortlist`` (candidates looked at one
-    move further), ``failure_cost`` (F), ``safe_suctions``, ``seconds`` (the per-decision safety cap, CPU s),
+    move further), ``failure_cost`` (F), ``safe_suctions``, ``scoring``, ``seconds`` (the per-decision safety cap, CPU s),
     ``grid_step`` (m, the placement lattice), ``threshold`` (v; the registry passes the scenario's)."""
 
     name = "slax-hindsight"
@@ -50,12 +54,15 @@ class Hindsight(BluctionDAR):
 
     def __init__(self, *args, samples: int = 64, shortlist: int = 6, seconds: float = 3.0,
                  grid_step: float = 0.01, threshold: float = 0.80, failure_cost: float = 3.0,
-                 safe_suctions: bool = True, **kwargs):
+                 safe_suctions: bool = True, scoring: str = "hindsight", **kwargs):
         kwargs.setdefault("corrected", True)
         kwargs.setdefault("suction_weighting", "paper")
         super().__init__(*args, **kwargs)
         self.samples = samples
         self.shortlist = shortlist
+        if scoring not in ("hindsight", "reveal"):
+            raise ValueError("scoring must be 'hindsight' or 'reveal'")
+        self.scoring = scoring
         self.seconds = seconds
         self.grid_step = grid_step
         self.threshold = threshold
@@ -135,6 +142,8 @@ class Hindsight(BluctionDAR):
             n = possible.sum()
             return (revealed.sum() / n if n else 0.0), possible & ~revealed
 
+        if self.scoring == "hindsight":
+            return self.rank_hindsight(prior, known, worlds, log, t0)
         scored = []  # [Q, order in the prior, action, objects after, worlds left]
         for order, a in enumerate(cands):
             after = apply_action(known, a)
@@ -162,6 +171,45 @@ class Hindsight(BluctionDAR):
         log["seconds"] = round(time.process_time() - t0, 3)
         best = top[0][2]
         return Decision((best, *(a for a in cands if a != best)))
+
+    def leaf(self, worlds, objects, a=None, fallback=None) -> np.ndarray:
+        """(K,) estimated cost still needed per world after ``objects``: 0 revealed, 1 when removing one object
+        would reveal it, ``failure_cost`` otherwise; where ``a``'s moved object runs into the world's target, the
+        ``fallback`` values (the action is wasted there)."""
+        revealed, one_away = worlds.distance(objects)
+        v = np.where(revealed, 0.0, np.where(one_away, 1.0, self.failure_cost))
+        if a is not None and fallback is not None:
+            v = np.where(worlds.blocks(objects, a.name), fallback, v)
+        return v
+
+    def rank_hindsight(self, prior, known, worlds, log, t0) -> Decision:
+        """Hindsight scoring: Q(a) = c(a) + mean over worlds of the world's own best continuation (each world
+        picks its best next move b, min(leaf after a, c(b) + leaf after b)), for the ``shortlist`` candidates with
+        the least one-step value c(a) + mean leaf after a."""
+        cands = list(prior.candidates)
+        now = self.leaf(worlds, known)
+        scored = []
+        for order, a in enumerate(cands):
+            after = apply_action(known, a)
+            v = self.leaf(worlds, after, a, now + self.cost(a))
+            scored.append([self.cost(a) + float(v.mean()), order, a, after, v])
+        scored.sort(key=lambda e: e[:2])
+        for entry in scored[: self.shortlist]:
+            if time.process_time() - t0 > self.seconds:
+                log["capped"] = True
+                break
+            a, after, v = entry[2], entry[3], entry[4]
+            best = v.copy()
+            if (best > 0).any():
+                for b, after_b, c in self.moves(after):
+                    best = np.minimum(best, c + self.leaf(worlds, after_b, b, v + c))
+            entry[0] = self.cost(a) + float(best.mean())
+            log["scored"] += 1
+        top = scored[: max(log["scored"], 1)]
+        top.sort(key=lambda e: e[:2])
+        log["seconds"] = round(time.process_time() - t0, 3)
+        best_action = top[0][2]
+        return Decision((best_action, *(x for x in cands if x != best_action)))
 
     def safe_suctions(self, objects) -> set | None:
         """The suctions whose ways out and in and whose placement stay in space the camera has seen (None: every
@@ -228,6 +276,21 @@ class Worlds:
 
             seen = SceneRaycaster(self.template, objects=(obj,)).visible(self.eye, self.points)
             hit = self._hidden[key] = self.shown & ~seen
+        return hit
+
+    def distance(self, objects) -> tuple[np.ndarray, np.ndarray]:
+        """(K,) bool twice: the target of each world seen at the threshold past ``objects``; and seen so once one
+        of the objects is taken away (a point hidden by that object alone is then seen)."""
+        key = ("distance", state_key(objects))
+        hit = self._revealed.get(key)
+        if hit is None:
+            masks = np.stack([self.hidden_by(o) for o in objects]) if objects else np.zeros((0,) + self.shown.shape, bool)
+            count = masks.sum(axis=0)
+            need = self.threshold * self.n_shown - 1e-9
+            revealed = (self.n_shown > 0) & ((self.shown & (count == 0)).sum(axis=1) >= need)
+            alone = (self.shown[None] & (count[None] - masks == 0)).sum(axis=2)  # (n, K) seen without object i
+            one_away = (self.n_shown > 0) & (alone >= need[None]).any(axis=0) if len(objects) else revealed
+            hit = self._revealed[key] = (revealed, one_away | revealed)
         return hit
 
     def revealed(self, objects) -> np.ndarray:
