@@ -45,7 +45,16 @@ class GroundTruthDistribution(DistributionModel):
         self.image_width = image_width
         self.cache_size = cache_size
         self._cache: dict = {}
+        self._hidden: dict = {}  # state key -> number of hidden placements (the unseen space, in lattice cells)
         self.calls = 0  # distributions actually computed (cache misses)
+
+    def hidden_count(self, scene: Scene) -> int:
+        """The number of hidden target placements on the lattice in ``scene`` (the unseen space P is spread over;
+        computed with, and cached beside, :meth:`distribution`)."""
+        key = state_key(scene.objects)
+        if key not in self._hidden:
+            self.distribution(scene)
+        return self._hidden[key]
 
     def distribution(self, scene: Scene) -> np.ndarray:
         key = state_key(scene.objects)
@@ -65,7 +74,9 @@ class GroundTruthDistribution(DistributionModel):
         self.calls += 1
         if len(self._cache) >= self.cache_size:
             self._cache.clear()
+            self._hidden.clear()
         self._cache[key] = p
+        self._hidden[key] = int(occ.num_hidden)
         return p
 
 

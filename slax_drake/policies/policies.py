@@ -11,6 +11,18 @@ hypothetical action by the distribution its model predicts for the observed obje
 - Bluction-DAR: pushes and suctions; a suction's reduction is weighted Delta r^s = psi Delta r (the paper's
   form, ``suction_weighting="paper"``) or Delta r / psi (``"cost"``, the variant ``bluction-dar-cost``).
 
+The corrections (``corrected=True``, the registry's ``dar`` and ``bluction-dar``; ``dar-literal`` and
+``bluction-dar-literal`` are the paper's text alone). The paper leaves implicit what any implementation needs when
+the first-order model is wrong about the true shelf (:mod:`slax_drake.policies.trial_memory`):
+
+1. an executed action that left the observation unchanged, or moved its object less than predicted, is excluded
+   for the rest of the trial through the protocol's exclusion record, with its reason (a push that moved nothing
+   excludes that object's pushes in that direction while it stands there: they all start with the same contact);
+2. no candidate that would return the seen objects to an arrangement already observed in this trial;
+3. an action whose predicted support reduction is zero and that reveals no unseen space (the number of hidden
+   target placements the distribution model counts does not drop) is not taken while another candidate reduces
+   the support or reveals unseen space; among equal reductions, the one that reveals more unseen space first.
+
 Ties are broken deterministically: the smaller support of the raw predicted distribution, then the cheaper
 action, then the smaller displacement, then enumeration order. No policy draws random numbers, so a rollout
 is a function of the scene alone.
@@ -29,6 +41,7 @@ import numpy as np
 from slax_drake.policies.actions import ActionModel, Push, Suction, apply_action
 from slax_drake.policies.distribution import DistributionModel, entropy, history_min, support
 from slax_drake.policies.protocol import Decision, Exclusions, read_only
+from slax_drake.policies.trial_memory import TrialMemory
 
 
 class DistributionPolicy:
@@ -42,7 +55,9 @@ class DistributionPolicy:
     use_suctions = False
 
     def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
-                 observation_width: int = 160, max_placements: int = 4):
+                 observation_width: int = 160, max_placements: int = 4, corrected: bool = False):
+        self.corrected = corrected  # the implementation's corrections (module docstring); False: the paper's text
+        self.memory = TrialMemory()
         self._action_model = action_model
         self.distribution = distribution
         self.psi = psi
@@ -70,14 +85,32 @@ class DistributionPolicy:
         self._history = None
         self._exclusions = Exclusions()
         self._objects = ()
+        self.memory.reset()
 
     def decide(self, obs) -> Decision:
         self._history = history_min(obs.p1d, self._history)
         self._objects = obs.known
-        return self.rank(obs)
+        if self.corrected:
+            self.learn(obs)
+        decision = self.rank(obs)
+        if self.corrected and decision.best is not None:
+            self.memory.propose(decision.best, obs.known)
+        return decision
+
+    def learn(self, obs) -> None:
+        """Correction 1: the last proposed action, now executed, is excluded when ``obs`` shows that it did not move
+        its object as predicted; ``obs``'s arrangement joins the observed ones (correction 2)."""
+        failed = self.memory.outcome(obs.known)
+        if failed is not None:
+            proposal, reason = failed
+            unchanged = reason.startswith("the observation did not change")
+            self._exclusions.add(proposal.action, f"executed: {reason}", unchanged and isinstance(proposal.action, Push),
+                                 proposal.before)
+        self.memory.observe(obs.known)
 
     def exclude(self, action, reason: str, whole_group: bool = False) -> None:
         self._exclusions.add(action, reason, whole_group, self._objects)
+        self.memory.withdraw(action)
 
     def resume(self, history) -> None:
         """Continues a trial whose P'_{t-1} is ``history`` (a step planned by another process: plan-step)."""
@@ -96,12 +129,24 @@ class DistributionPolicy:
         return self.distribution.distribution(obs.scene_template.with_objects(objects))
 
     def candidates(self, objects, pushes=None, suctions=None):
-        """The feasible actions on ``objects`` that have not been excluded, in enumeration order."""
+        """The feasible actions on ``objects`` that have not been excluded, in enumeration order; with the
+        corrections, also none that returns the objects to an arrangement observed in this trial."""
         c = self._action_model.enumerate(
             objects, pushes=self.use_pushes if pushes is None else pushes,
             suctions=self.use_suctions if suctions is None else suctions,
         )
-        return self._exclusions.allowed(c.feasible, objects)
+        allowed = self._exclusions.allowed(c.feasible, objects)
+        if self.corrected and self.memory.observed:
+            allowed = [a for a in allowed if not self.memory.seen_before(apply_action(tuple(objects), a))]
+        return allowed
+
+    def unseen_space(self, obs, objects) -> int | None:
+        """The number of hidden target placements with the seen objects at ``objects`` (the distribution model's
+        ``hidden_count``; None when the model has none, e.g. camera mode or the learned network)."""
+        count = getattr(self.distribution, "hidden_count", None)
+        if count is None or getattr(obs, "belief", None) is not None:
+            return None
+        return count(obs.scene_template.with_objects(objects))
 
     def action_cost(self, action) -> float:
         return 1.0 if isinstance(action, Push) else self.psi
@@ -151,17 +196,22 @@ class DAR(DistributionPolicy):
         r_t = support(h)
         cands = self.candidates(obs.known)
         if not cands:
-            return Decision.stop("no feasible action")
+            return Decision.stop("no feasible action" if not (self.corrected and self.memory.observed) else
+                                 "no feasible action that leads to an arrangement not yet observed")
         best, best_key = None, None
         order = 0
         ranked = []
+        hidden_now = self.unseen_space(obs, obs.known) if self.corrected else None
 
         def consider(a, p):
             nonlocal best, best_key, order
             dr = r_t - support(np.minimum(p, h))
             weighted = dr * (self.suction_weight() if isinstance(a, Suction) else 1.0)
             disp = abs(a.d) if isinstance(a, Push) else abs(a.dx) + abs(a.dz)
-            key = (-weighted, support(p), self.action_cost(a), disp, order)
+            revealed = 0
+            if hidden_now is not None:  # correction 3: the unseen space it reveals (lattice placements)
+                revealed = hidden_now - self.unseen_space(obs, apply_action(obs.known, a))
+            key = (-weighted, -revealed, support(p), self.action_cost(a), disp, order)
             order += 1
             ranked.append((key, a))
             if best_key is None or key < best_key:
@@ -183,6 +233,9 @@ class DAR(DistributionPolicy):
                     if dr >= dr_removed:
                         break
         ranked.sort(key=lambda r: r[0])
+        if hidden_now is not None and ranked and (ranked[0][0][0] < 0 or ranked[0][0][1] < 0):
+            # correction 3: something reduces the support or reveals unseen space; drop what does neither
+            ranked = [r for r in ranked if r[0][0] < 0 or r[0][1] < 0]
         return Decision(tuple(a for _, a in ranked))
 
 

@@ -40,15 +40,22 @@ _POLICIES = "slax_drake.policies.policies"
 POLICY_TABLE: dict[str, PolicyEntry] = {
     "oracle-p": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": False}),
     "oracle-p+s": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": True}),
-    "dar": PolicyEntry(f"{_POLICIES}:DAR"),
+    # DAR and Bluction-DAR with the corrections any implementation needs (policies.py's docstring: a failed action
+    # is excluded, no return to an observed arrangement, no zero-reduction action while another reveals unseen
+    # space); the "-literal" rows are the paper's text alone, kept so that the corrections' effect is visible.
+    "dar": PolicyEntry(f"{_POLICIES}:DAR", {"corrected": True}),
+    "dar-literal": PolicyEntry(f"{_POLICIES}:DAR", {"corrected": False}),
     "der-3": PolicyEntry(f"{_POLICIES}:DER", {"depth": 3}),
-    "bluction-dar": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "paper"}),
-    "bluction-dar-cost": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "cost"}),
+    "bluction-dar": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "paper", "corrected": True}),
+    "bluction-dar-literal": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "paper", "corrected": False}),
+    "bluction-dar-cost": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "cost", "corrected": True}),
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
+    "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
 }
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
-OUR_POLICIES = ("bluction-la2",)  # the project's own
+LITERAL_POLICIES = ("dar-literal", "bluction-dar-literal")  # the paper's text without the corrections
+OUR_POLICIES = ("bluction-la2", "slax-hindsight")  # the project's own
 DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
 
 
@@ -114,10 +121,11 @@ def tool_config(scenario: Scenario, profile: str | None = None, **overrides) -> 
 
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,
                 target_size=None, tool_overrides: dict | None = None, oracle_options: dict | None = None,
-                profile: str | None = None):
+                profile: str | None = None, policy_options: dict | None = None):
     """A fresh policy object named ``name`` (a key of :data:`POLICY_TABLE`) for ``scenario``'s shelf and camera,
     planning with ``profile``'s rules (default: the scenario's) and ``tool_overrides``. ``oracle_options``: extra
-    constructor options of the oracles (e.g. ``seconds``, the search time limit)."""
+    constructor options of the oracles (e.g. ``seconds``, the search time limit); ``policy_options``: extra
+    constructor options of a distribution policy (e.g. ``seconds``, the hindsight policy's time per decision)."""
     from slax_drake.policies.actions import ActionModel
     from slax_drake.policies.distribution import make_distribution_model
     from slax_drake.scene.camera import Camera
@@ -131,7 +139,13 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
     model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position,
                         tool_config(scenario, profile, **(tool_overrides or {})))
     if cls.needs_true_scene:
-        return cls(model, psi=psi, horizon=horizon, threshold=scenario.target.visibility_threshold,
-                   **entry.options, **(oracle_options or {}))
-    size = target_size or tuple(scenario.target.sizes[0])
-    return cls(model, make_distribution_model(perception, size), psi=psi, **entry.options)
+        policy = cls(model, psi=psi, horizon=horizon, threshold=scenario.target.visibility_threshold,
+                     **entry.options, **(oracle_options or {}))
+    else:
+        size = target_size or tuple(scenario.target.sizes[0])
+        options = dict(entry.options, **(policy_options or {}))
+        if getattr(cls, "uses_visibility_threshold", False):  # a policy that plans for the success test itself
+            options.setdefault("threshold", scenario.target.visibility_threshold)
+        policy = cls(model, make_distribution_model(perception, size), psi=psi, **options)
+    policy.name = name  # the table's row name (one class may serve several rows, e.g. "dar" and "dar-literal")
+    return policy
