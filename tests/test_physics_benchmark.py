@@ -185,3 +185,49 @@ def test_unusable_tool_rule_values_exit_with_code_2_before_anything_runs(capsys,
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_mismatch_kinds_name_the_first_reason_an_action_missed_its_prediction():
+    from slax_drake.evaluation.physics import mismatch_kind
+
+    here = {"x": 0.0, "y": 0.0, "yaw": 0.0}
+    predicted = {"x": 0.10, "y": 0.0, "yaw": 0.0}
+
+    def kind(outcome, type_="push", lost=False, before=here):
+        a = {"type": type_, "predicted": predicted, "outcome": outcome, "before": before, "lost_after": lost,
+             "matched": action_matches(predicted, outcome)}
+        return mismatch_kind(a, 0.6, 0.6)
+
+    assert kind({"x": 0.11, "y": 0.0, "yaw": 0.0}) is None  # matched
+    assert kind({"x": 0.0, "y": -0.5, "yaw": 0.0}, "suction", lost=True) == "dropped"
+    assert kind({"x": 0.05, "y": 0.0, "yaw": 0.0}, lost=True) == "toppled"
+    assert kind({"x": 0.005, "y": 0.0, "yaw": 0.02}, "suction") == "seal never formed"
+    assert kind({"x": 0.005, "y": 0.0, "yaw": 0.02}, "push") == "slid"  # a push that stopped short slid
+    assert kind({"x": 0.05, "y": 0.0, "yaw": 0.0}, "suction") == "slid"
+    assert kind({"x": 0.10, "y": 0.0, "yaw": math.radians(25)}) == "turned"
+    assert mismatch_kind({"type": "push", "matched": None, "outcome": None, "predicted": predicted}, 0.6, 0.6) is None
+
+
+def test_summary_counts_match_per_action_kind_and_mismatch_kinds():
+    from slax_drake.evaluation.physics import markdown_table, summarise
+
+    def action(type_, matched, mismatch=None):
+        a = {"type": type_, "matched": matched, "planning_s": 0.1}
+        if mismatch:
+            a["mismatch"] = mismatch
+        return a
+
+    drake = {"success": False, "result": "horizon", "steps": 4, "toppled": [], "dropped": [],
+             "real_time_factor": 1.0, "wall_s": 1.0,
+             "actions": [action("push", True), action("push", False, "slid"), action("suction", True),
+                         action("suction", False, "seal never formed"), action("suction", None)]}
+    old = dict(drake, actions=[action("push", False)])  # a file from before the classification
+    results = [{"policy": "p", "density": 4, "index": i, "seed": i, "shelf": {"success": False, "steps": 4},
+                "drake": d} for i, d in enumerate((drake, old))]
+    e = summarise(results, ["p"], [4])["policies"]["p"]["all"]
+    assert e["match_by_action"] == {"push": {"matched": 1, "judged": 3, "match_rate": 0.3333},
+                                    "suction": {"matched": 1, "judged": 2, "match_rate": 0.5}}
+    assert e["mismatch_kinds"] == {"dropped": 0, "toppled": 0, "seal never formed": 1, "slid": 1, "turned": 0,
+                                   "unclassified": 1}
+    md = markdown_table({"policies": {"p": {"all": {**e, "trials": 2}}}, "meta": {}})
+    assert "| p | All | 33 % (1/3) | 50 % (1/2) | 0 | 0 | 1 | 1 | 0 | 1 |" in md

@@ -53,6 +53,34 @@ def action_matches(predicted: dict, outcome: dict | None) -> bool | None:
     return distance <= MATCH_DISTANCE and dyaw <= MATCH_YAW
 
 
+SEAL_MOVE = 0.01  # m: a suctioned object that moved less than this (and turned < SEAL_TURN) was never sealed
+SEAL_TURN = math.radians(5.0)  # rad
+MISMATCH_KINDS = ("dropped", "toppled", "seal never formed", "slid", "turned")
+
+
+def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str | None:
+    """Why an executed action did not match its prediction (None when it matched or has no outcome), the first
+    of: "dropped" (the object was lost at the next decision, its centre out of the bay), "toppled" (lost, inside
+    the bay: tilted over 20 deg), "seal never formed" (a suction whose object moved less than ``SEAL_MOVE`` and
+    turned less than ``SEAL_TURN`` from where it stood), "slid" (its planar position more than ``MATCH_DISTANCE``
+    from the prediction), "turned" (its position within it, its yaw more than ``MATCH_YAW`` off). ``action``: a
+    physics record's action (``matched``, ``outcome``, ``before``, ``lost_after``, ``type``)."""
+    if action.get("matched") is not False:
+        return None
+    out, before = action["outcome"], action.get("before")
+    if action.get("lost_after"):
+        inside = abs(out["x"]) < shelf_width / 2 and abs(out["y"]) < shelf_depth / 2
+        return "toppled" if inside else "dropped"
+    if action["type"] == "suction" and before is not None:
+        moved = math.hypot(out["x"] - before["x"], out["y"] - before["y"])
+        if moved < SEAL_MOVE and abs(math.remainder(out["yaw"] - before["yaw"], 2.0 * math.pi)) < SEAL_TURN:
+            return "seal never formed"
+    predicted = action["predicted"]
+    if math.hypot(out["x"] - predicted["x"], out["y"] - predicted["y"]) > MATCH_DISTANCE:
+        return "slid"
+    return "turned"
+
+
 def _diverged_trial(message: str, wall_s: float) -> dict:
     """The record of a Drake trial whose simulation blew up (a non-finite pose): a failure with no actions kept,
     so that one unstable contact does not stop the benchmark."""
@@ -90,10 +118,13 @@ def _run_scene(job) -> dict:
     for a in d["actions"]:
         params = {k: a[k] for k in ("d", "dx", "dz") if k in a}
         timings = (a.get("motion") or {}).get("timings", {})
-        actions.append({"type": a["type"], "object": a["object"], **params, "predicted": a["predicted"],
-                        "outcome": a["outcome"], "matched": action_matches(a["predicted"], a["outcome"]),
-                        "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
-                        "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}})
+        record = {"type": a["type"], "object": a["object"], **params, "predicted": a["predicted"],
+                  "before": a.get("before"), "outcome": a["outcome"], "lost_after": a.get("lost_after"),
+                  "matched": action_matches(a["predicted"], a["outcome"]),
+                  "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
+                  "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
+        record["mismatch"] = mismatch_kind(record, scenario.shelf.width, scenario.shelf.depth)
+        actions.append(record)
     final = d["final_objects"]
     drake = {
         "success": d["success"], "result": d["result"], "steps": d["steps"], "cost": d["cost"],
@@ -251,6 +282,12 @@ def summarise(results: list[dict], policies, densities) -> dict:
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],
             "drake_wall_s": d["wall_s"],
             "planning_s": [a["planning_s"] for a in d["actions"] if a.get("planning_s") is not None],
+            "judged_by_kind": {kind: [sum(1 for a in d["actions"] if a["type"] == kind and a["matched"]),
+                                      sum(1 for a in d["actions"] if a["type"] == kind and a["matched"] is not None)]
+                               for kind in ACTION_KINDS},
+            # a file written before mismatches were classified counts its mismatches as "unclassified"
+            "mismatches": dict(collections.Counter(a.get("mismatch", "unclassified") for a in d["actions"]
+                                                   if a["matched"] is False)),
         })
     for p in policies:
         per = {}
@@ -275,9 +312,32 @@ def summarise(results: list[dict], policies, densities) -> dict:
                 "median_real_time_factor": _median([t["real_time_factor"] for t in sel
                                                     if t["real_time_factor"] is not None]),
                 **_planning_stats([s for t in sel for s in t["planning_s"]]),
+                "match_by_action": _match_by_action(sel),
+                "mismatch_kinds": _mismatch_counts(sel),
             }
         summary["policies"][p] = per
     return summary
+
+
+ACTION_KINDS = ("push", "suction")
+
+
+def _match_by_action(trials: list[dict]) -> dict:
+    """{action kind: {"matched", "judged", "match_rate"}} over ``trials`` (summary rows)."""
+    out = {}
+    for kind in ACTION_KINDS:
+        matched = sum(t["judged_by_kind"][kind][0] for t in trials)
+        judged = sum(t["judged_by_kind"][kind][1] for t in trials)
+        out[kind] = {"matched": matched, "judged": judged, "match_rate": round(matched / judged, 4) if judged else None}
+    return out
+
+
+def _mismatch_counts(trials: list[dict]) -> dict:
+    """{mismatch kind: count} over ``trials``, every kind of MISMATCH_KINDS listed (0 when none)."""
+    counts = collections.Counter()
+    for t in trials:
+        counts.update(t["mismatches"])
+    return {**{k: counts.get(k, 0) for k in MISMATCH_KINDS}, **{k: v for k, v in counts.items() if k not in MISMATCH_KINDS}}
 
 
 def _ending(result: str) -> str:
@@ -335,6 +395,22 @@ def markdown_table(summary: dict) -> str:
         endings = per.get("all", {}).get("drake_endings")
         if endings:
             lines += ["", f"{p}, Drake trial endings: " + ", ".join(f"{k} {v}" for k, v in endings.items()) + "."]
+    lines += ["", "Physics fidelity per action kind (actions matching the first-order prediction) and the mismatches by "
+              "kind (dropped: lost out of the bay; toppled: lost inside it; seal never formed: a suction that left its "
+              f"object within {100 * SEAL_MOVE:.0f} cm and {math.degrees(SEAL_TURN):.0f} deg of where it stood; slid: "
+              f"more than {100 * MATCH_DISTANCE:.0f} cm from the prediction; turned: within it, yaw off):", "",
+              "| Policy | Objects | Pushes matching | Suctions matching | " + " | ".join(
+                  k.capitalize() for k in MISMATCH_KINDS) + " | Other |",
+              "|---|---|---|---|" + "---|" * (len(MISMATCH_KINDS) + 1)]
+    for p, per in summary["policies"].items():
+        for key, e in per.items():
+            by = e.get("match_by_action", {})
+            cells = [("-" if by.get(k, {}).get("match_rate") is None else
+                      f"{100 * by[k]['match_rate']:.0f} % ({by[k]['matched']}/{by[k]['judged']})") for k in ACTION_KINDS]
+            kinds = e.get("mismatch_kinds", {})
+            other = sum(v for k, v in kinds.items() if k not in MISMATCH_KINDS)
+            lines.append(f"| {p} | {'All' if key == 'all' else key} | " + " | ".join(cells) + " | "
+                         + " | ".join(str(kinds.get(k, 0)) for k in MISMATCH_KINDS) + f" | {other} |")
     return "\n".join(lines) + "\n"
 
 
