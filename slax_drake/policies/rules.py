@@ -237,11 +237,29 @@ class MaxSuctionMoment(Rule):
 
 
 @register
+class MaxToolYawDeg(Rule):
+    """How far (deg) the tool may turn about the shelf's z axis to meet a turned box face along its normal: the
+    tube then comes in along the face's normal, turned by the face's angle clamped to this value and to what the
+    side walls leave the tube at the opening (its axis from the contact out to the opening keeps a tube radius
+    from the walls); the seal-angle rule (``max_seal_angle_deg``) applies to the angle left between the face's
+    normal and the turned tube, and the tube's reach (``max_suction_depth``) is measured along it. ``station``:
+    30 deg, with the 10 deg seal limit every box face up to 40 deg seals (a front face turns 45 deg at most); the
+    planner checks the arm at the turned poses. ``paper``: 0, the FOSS's tube stays along the shelf's y (its seal
+    angle is unlimited)."""
+
+    name, paper, station = "max_tool_yaw_deg", 0.0, 30.0
+
+    def problem(self, value) -> str | None:
+        return None if 0.0 <= value <= 90.0 else "must lie in [0, 90]"
+
+
+@register
 class MaxSealAngleDeg(Rule):
-    """A box face turned more than this (deg) from the tube's axis (the shelf's y) cannot be sealed; 90 admits
-    every face. Both profiles' defaults 90; the Drake station's cup sets it (``suction.max_seal_angle_deg``: 10;
-    in 80 Drake trials, 3 of 117 suctions of faces turned 15-35 deg ended where the model put the object, 245 of
-    305 under 10 deg did)."""
+    """A box face turned more than this (deg) from the tube's axis cannot be sealed; 90 admits every face (the
+    tube's axis is the shelf's y, or turned by ``max_tool_yaw_deg`` toward the face's normal). Both profiles'
+    defaults 90; the Drake station's cup sets it (``suction.max_seal_angle_deg``: 10; in 80 Drake trials with the
+    tube along y, 3 of 117 suctions of faces turned 15-35 deg ended where the model put the object, 245 of 305
+    under 10 deg did)."""
 
     name, paper, station = "max_seal_angle_deg", 90.0, 90.0
 
