@@ -52,6 +52,7 @@ from slax_drake.policies.rules import RULES, ToolConfig, tool_config_problem
 from slax_drake.policies.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
 )
+from slax_drake.scene import mass as scene_mass
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import SceneObject, Shelf
 
@@ -116,10 +117,10 @@ class Candidates:
     rejected: list
 
 
-def object_mass(obj: SceneObject, density: float) -> float:
-    sx, sy, sz = obj.size
-    volume = math.pi * (sx / 2) ** 2 * sz if obj.shape == "cylinder" else sx * sy * sz
-    return density * volume
+def object_mass(obj: SceneObject, density: float, physics=None) -> float:
+    """The object's mass (kg): its recorded mass, else what ``physics`` (ObjectPhysics) expects, else density x
+    volume (:func:`slax_drake.scene.mass.object_mass`)."""
+    return scene_mass.object_mass(obj, density, physics)
 
 
 def apply_action(objects: tuple[SceneObject, ...], action) -> tuple[SceneObject, ...]:
@@ -229,7 +230,7 @@ class ActionModel:
         t, shelf = self.tool, self.shelf
         obj, fp = ctx.objects[i], ctx.fps[i]
         what = f"suction {obj.name}"
-        mass = object_mass(obj, t.physics.object_density)
+        mass = object_mass(obj, t.physics.object_density, t.physics)
         if RULES["max_suction_mass"].refuses(t.rules.max_suction_mass, mass):
             rejected.append(Rejected(what, f"{obj.name} weighs {mass:.2f} kg > {t.rules.max_suction_mass:.2f} kg"))
             return

@@ -55,10 +55,15 @@ class Discretisation:
 
 @dataclasses.dataclass(frozen=True)
 class ObjectPhysics:
-    """The scene's contact physics, copied from the scenario (``objects.density``, ``objects.clearance``)."""
+    """The scene's contact physics, copied from the scenario (``objects.density``, ``objects.clearance``, the
+    ``physics`` section's mass model): an object weighs its recorded mass, else what the mass model expects
+    (:func:`slax_drake.scene.mass.object_mass`)."""
 
     object_density: float = 400.0  # kg/m^3, to weigh objects
     clearance: float = 0.002  # moved objects stop this far from neighbours and walls (m)
+    mass_model: str = "density"  # or "household": an object without a recorded mass weighs its class's median
+    box_masses: tuple = ()  # household classes ((largest volume L, lightest kg, heaviest kg), ...)
+    cylinder_masses: tuple = ()
 
 
 # --------------------------------------------------------------------------------------------------------------
