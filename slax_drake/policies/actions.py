@@ -52,6 +52,7 @@ from slax_drake.policies.rules import RULES, ToolConfig, tool_config_problem
 from slax_drake.policies.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
 )
+from slax_drake.policies.reach import load_reach_map
 from slax_drake.scene import mass as scene_mass
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import SceneObject, Shelf
@@ -60,6 +61,7 @@ GRAVITY = 9.81  # m/s^2
 FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
 CONTACT_INSET = 0.01  # the blade's tip this far past the point where it meets the object (m)
 BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
+REACH_MARGIN = 0.015  # m: the reach map refuses a tool position only when every grid node this near it is unreached
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,6 +151,7 @@ class ActionModel:
         self.grid = FloorGrid(shelf, tool.grid.cell)
         self.y_front = -shelf.depth / 2 - FRONT_MARGIN
         self._raster_cache: dict = {}
+        self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
     # ----------------------------------------------------------------------------------------------------
     def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None) -> Candidates:
@@ -213,6 +216,17 @@ class ActionModel:
         d_max = first_bad * t.grid.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
         step = t.grid.push_resolution
         q = (lane_x, self.blade_depth(fp, sign), t.geometry.blade_height / 2)
+        if self.reach is not None:
+            layer = "push+x" if sign > 0 else "push-x"
+            if self.reach.refuses(layer, q[0], q[1], REACH_MARGIN):
+                rejected.append(Rejected(what, f"the arm cannot reach the blade beside {obj.name} at "
+                                               f"({q[0]:+.2f}, {q[1]:+.2f}) m (reach map)"))
+                return
+            k_reach = _first_false(np.array([not self.reach.refuses(layer, q[0] + sign * kk * t.grid.cell, q[1],
+                                                                    REACH_MARGIN) for kk in range(1, first_bad + 1)]))
+            if k_reach < first_bad:
+                first_bad, stopper = k_reach, "the arm's reach"
+                d_max = first_bad * t.grid.cell
         if d_max < t.grid.min_push - 1e-12:
             rejected.append(Rejected(what, f"no room: {obj.name} is stopped by {stopper} at once"))
             return
@@ -256,6 +270,10 @@ class ActionModel:
             return
         if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, (cy - (-shelf.depth / 2)) / math.cos(yaw)):
             rejected.append(Rejected(what, f"{obj.name}'s face is beyond the tube's reach"))
+            return
+        if self.reach is not None and yaw == 0.0 and self.reach.refuses("cup", cx, cy, REACH_MARGIN):
+            rejected.append(Rejected(what, f"the arm cannot reach the cup at {obj.name}'s face ({cx:+.2f}, {cy:+.2f}) "
+                                           "m (reach map)"))
             return
         tube_r = t.geometry.tube_diameter / 2
         # the tube's straight way in along its (turned) axis, from in front of the opening to the contact

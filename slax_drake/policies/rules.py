@@ -272,6 +272,27 @@ class MaxSealAngleDeg(Rule):
         return angle_deg > value
 
 
+@register
+class ReachMapRule(Rule):
+    """The station's precomputed reach map (a JSON path, :mod:`slax_drake.policies.reach`; "" for none): a push
+    whose blade, inserted or at the push's end, and a suction with the tube along y whose cup at the seal, lies
+    where the motion planner found no IK solution from the observation pose on the empty shelf (every grid node
+    around it unreached) is refused before the planner tries. Conservative: only what the map shows unreachable
+    all around; turned suctions are not checked (the map has only the yaw-0 cup). The map belongs to a station
+    (the robot's placement): both profiles' value is "", and a Drake trial's station sets it (the station YAML's
+    ``reach_map``, through ``station_tool_rules``)."""
+
+    name, type, paper, station = "reach_map", str, "", ""
+
+    def problem(self, value) -> str | None:
+        if not value:
+            return None
+        from slax_drake.config import REPO_ROOT
+        from pathlib import Path
+
+        return None if Path(value).is_file() or (REPO_ROOT / value).is_file() else "no such reach map file"
+
+
 # --------------------------------------------------------------------------------------------------------------
 RuleSet = dataclasses.make_dataclass(
     "RuleSet", [(r.name, r.type, dataclasses.field(default=r.station)) for r in RULES.values()], frozen=True)

@@ -75,6 +75,9 @@ class StationScenario:
     head_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
     suction: SuctionParameters = dataclasses.field(default_factory=SuctionParameters)
     camera: bool = True
+    # The station's reach map (models/reach/*.json, slax_drake.planning.reach), "" for none: the action model's
+    # reach_map rule in Drake trials on this station (slax_drake.policies.reach).
+    reach_map: str = ""
 
 
 def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:
