@@ -10,8 +10,12 @@ target size, so both simulators start from the very scene that ``slax-drake benc
 
 Per action of the Drake trial, the first-order prediction (the action model applied to the poses observed before
 the action) is compared with the physical outcome (the object's pose at the next decision): it *matches* when the
-planar position is within ``MATCH_DISTANCE`` (2 cm) and the yaw within ``MATCH_YAW`` (10 deg). Toppled objects
-(z axis tilted more than 20 deg at the end) and dropped ones (centre outside the bay at the end) are counted.
+planar position is within ``MATCH_DISTANCE`` (2 cm) and the object turned less than ``MATCH_YAW`` (10 deg; the
+first-order model turns nothing, and a perceived hypothesis's yaw may name the same box turned by 90 deg, so the
+object's own turn is what is judged, :func:`action_matches`). Each mismatch is classified (:func:`mismatch_kind`:
+dropped, toppled, seal never formed, slid, turned) and the report gives the match rate per action kind. Toppled
+objects (z axis tilted more than 20 deg at the end) and dropped ones (centre outside the bay at the end) are
+counted.
 
 Each finished scene is written atomically as ``<out>/physics_trials/<policy>/<n>_<index>.json`` (so a stopped run
 resumes; the settings are recorded in ``<out>/physics_settings.json`` and a run with other settings is refused);
@@ -44,13 +48,28 @@ def trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return Path(out) / "physics_trials" / policy / f"{density:02d}_{index:04d}.json"
 
 
-def action_matches(predicted: dict, outcome: dict | None) -> bool | None:
-    """Whether the physical outcome is within 2 cm and 10 deg of the first-order prediction (None: no outcome)."""
+def action_matches(predicted: dict, outcome: dict | None, before: dict | None = None) -> bool | None:
+    """Whether the physical outcome is within 2 cm and 10 deg of the first-order prediction (None: no outcome).
+
+    With ``before`` (the true object's pose at the decision) the yaw test is the object's own turn, outcome less
+    before: the first-order model never turns an object, and the prediction's yaw is the perceived hypothesis's,
+    whose box axes may be the true object's turned by 90 or 180 deg (the same box). Without it (records from
+    before it was kept), the predicted yaw is compared directly."""
     if outcome is None:
         return None
     distance = math.hypot(outcome["x"] - predicted["x"], outcome["y"] - predicted["y"])
-    dyaw = abs(math.remainder(outcome["yaw"] - predicted["yaw"], 2.0 * math.pi))
+    reference = before["yaw"] if before is not None else predicted["yaw"]
+    dyaw = abs(math.remainder(outcome["yaw"] - reference, 2.0 * math.pi))
     return distance <= MATCH_DISTANCE and dyaw <= MATCH_YAW
+
+
+def judge_action(action: dict, shelf_width: float, shelf_depth: float) -> tuple:
+    """(matched, mismatch kind) of a physics record's action, judged again from its stored poses with the current
+    rules (a file from before ``before`` was kept keeps its own verdict)."""
+    if "before" not in action:
+        return action["matched"], action.get("mismatch", "unclassified" if action["matched"] is False else None)
+    matched = action_matches(action["predicted"], action["outcome"], action["before"])
+    return matched, mismatch_kind({**action, "matched": matched}, shelf_width, shelf_depth)
 
 
 SEAL_MOVE = 0.01  # m: a suctioned object that moved less than this (and turned < SEAL_TURN) was never sealed
@@ -78,7 +97,7 @@ def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str |
     predicted = action["predicted"]
     if math.hypot(out["x"] - predicted["x"], out["y"] - predicted["y"]) > MATCH_DISTANCE:
         return "slid"
-    return "turned"
+    return "turned"  # within MATCH_DISTANCE, so its yaw (its own turn, with ``before``) is off
 
 
 def _diverged_trial(message: str, wall_s: float) -> dict:
@@ -120,7 +139,7 @@ def _run_scene(job) -> dict:
         timings = (a.get("motion") or {}).get("timings", {})
         record = {"type": a["type"], "object": a["object"], **params, "predicted": a["predicted"],
                   "before": a.get("before"), "outcome": a["outcome"], "lost_after": a.get("lost_after"),
-                  "matched": action_matches(a["predicted"], a["outcome"]),
+                  "matched": action_matches(a["predicted"], a["outcome"], a.get("before")),
                   "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
                   "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
         record["mismatch"] = mismatch_kind(record, scenario.shelf.width, scenario.shelf.depth)
@@ -234,7 +253,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
                 bar.update(1)
     elapsed = time.perf_counter() - start
     trials = load_results(out, policies, densities, scenes_per_density)
-    summary = summarise(trials, policies, densities)
+    summary = summarise(trials, policies, densities, (scenario.shelf.width, scenario.shelf.depth))
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
                        "seed": seed, "densities": densities, "sleep": sleep, "workers": workers, "backend": backend,
                        "profile": profile, "tool_rules": tool_rules, "scenes_kept": len(all_jobs) - len(jobs), "scenes_run": len(jobs),
@@ -265,13 +284,15 @@ def _median(values):
     return float(np.median(values)) if values else None
 
 
-def summarise(results: list[dict], policies, densities) -> dict:
+def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.inf)) -> dict:
     """Per policy and density key ("4", ..., "all"): shelf and Drake success rate and median steps (over
-    successful trials), the fraction of Drake actions whose outcome matched the prediction, toppled and dropped
-    object counts, outcome agreement between the two simulators; plus one row per scene under ``trials``."""
+    successful trials), the fraction of Drake actions whose outcome matched the prediction (judged again from the
+    stored poses, :func:`judge_action`; ``shelf``: the bay's width and depth, to tell dropped from toppled), toppled and
+    dropped object counts, outcome agreement between the two simulators; plus one row per scene under ``trials``."""
     summary = {"policies": {}, "trials": []}
     for r in results:
         d = r["drake"]
+        d = {**d, "actions": [dict(a, matched=m, mismatch=k) for a in d["actions"] for m, k in [judge_action(a, *shelf)]]}
         summary["trials"].append({
             "policy": r["policy"], "density": r["density"], "index": r["index"], "seed": r["seed"],
             "shelf_success": r["shelf"]["success"], "shelf_steps": r["shelf"]["steps"],
@@ -286,7 +307,7 @@ def summarise(results: list[dict], policies, densities) -> dict:
                                       sum(1 for a in d["actions"] if a["type"] == kind and a["matched"] is not None)]
                                for kind in ACTION_KINDS},
             # a file written before mismatches were classified counts its mismatches as "unclassified"
-            "mismatches": dict(collections.Counter(a.get("mismatch", "unclassified") for a in d["actions"]
+            "mismatches": dict(collections.Counter(a["mismatch"] or "unclassified" for a in d["actions"]
                                                    if a["matched"] is False)),
         })
     for p in policies:
