@@ -223,7 +223,8 @@ class ActionModel:
                                                f"({q[0]:+.2f}, {q[1]:+.2f}) m (reach map)"))
                 return
             k_reach = _first_false(np.array([not self.reach.refuses(layer, q[0] + sign * kk * t.grid.cell, q[1],
-                                                                    REACH_MARGIN) for kk in range(1, first_bad + 1)]))
+                                                                    REACH_MARGIN) for kk in range(1, first_bad + 1)],
+                                           dtype=bool))
             if k_reach < first_bad:
                 first_bad, stopper = k_reach, "the arm's reach"
                 d_max = first_bad * t.grid.cell
