@@ -59,6 +59,40 @@ class ObjectsConfig:
     density: float = 400.0
 
 
+# Household goods' masses by package volume, from published product data (kg; [largest volume in litres of the
+# class, lightest, heaviest]). Sources (approximate: masses as published, volumes of the bounding box or
+# cylinder from the published dimensions, rounded): the YCB object set (Calli et al., "Benchmarking in
+# Manipulation Research: The YCB Object and Model Set", IEEE RAM 2015, its object table): boxes: gelatin box 0.097
+# kg / 0.11 L, pudding box 0.187 kg / 0.31 L, sugar box 0.514 kg / 0.63 L, cracker box 0.411 kg / 2.0 L; cylinders:
+# tuna can 0.171 kg / 0.19 L, tomato soup can 0.349 kg / 0.35 L, coffee can 0.414 kg / 1.1 L, chips can
+# 0.205 kg / 1.1 L, mustard bottle 0.603 kg / 1.0 L; and net contents printed on common packages (a 500 g cereal
+# box about 4-5 L, a tissue box about 0.15 kg / 2.6 L, a 1 L detergent or shampoo bottle about 1.1 kg, a 2 L
+# bottle about 2.1 kg in about 3 L). Larger packages hold more air: the heaviest per class grows slower than the
+# volume. Objects larger than the last class take its range.
+HOUSEHOLD_BOX_MASSES = [[0.5, 0.05, 0.50], [2.0, 0.10, 0.80], [8.0, 0.15, 1.20]]
+HOUSEHOLD_CYLINDER_MASSES = [[0.5, 0.10, 0.50], [2.0, 0.20, 1.10], [8.0, 0.30, 2.10]]
+
+
+@dataclasses.dataclass
+class PhysicsConfig:
+    """The objects' physical properties.
+
+    ``mass_model``: "density" (mass = ``objects.density`` x volume: the earlier runs, reproducible) or "household"
+    (each object's mass drawn log-uniformly, per scene seed, between the lightest and heaviest of its shape's
+    volume class in ``box_masses`` / ``cylinder_masses``: [[largest volume (L), lightest (kg), heaviest (kg)],
+    ...] in increasing volume; see HOUSEHOLD_BOX_MASSES for the sources). ``object_friction``: the Coulomb
+    friction coefficient of the objects (static = dynamic) in the Drake station; 0.5, cardboard and plastic
+    packaging on a laminated board (published static coefficients: paperboard on paperboard 0.3-0.6 by TAPPI T 815
+    inclined-plane tests, wood on plastic or cardboard 0.3-0.5; approximate). The shelf board's 0.4 is fixed in the
+    shelf models (Drake combines the two as 2 mu1 mu2 / (mu1 + mu2), 0.44)."""
+
+    mass_model: str = "density"
+    box_masses: list[list[float]] = dataclasses.field(default_factory=lambda: [list(r) for r in HOUSEHOLD_BOX_MASSES])
+    cylinder_masses: list[list[float]] = dataclasses.field(
+        default_factory=lambda: [list(r) for r in HOUSEHOLD_CYLINDER_MASSES])
+    object_friction: float = 0.5
+
+
 @dataclasses.dataclass
 class TargetConfig:
     """Target sizes [x, y, z] (metres) to draw from, and the spacing of points sampled on its surface."""
@@ -100,6 +134,7 @@ class Scenario:
     shelf: ShelfConfig = dataclasses.field(default_factory=ShelfConfig)
     camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)
     objects: ObjectsConfig = dataclasses.field(default_factory=ObjectsConfig)
+    physics: PhysicsConfig = dataclasses.field(default_factory=PhysicsConfig)
     target: TargetConfig = dataclasses.field(default_factory=TargetConfig)
     sampling: SamplingConfig = dataclasses.field(default_factory=SamplingConfig)
     protocol: ProtocolConfig = dataclasses.field(default_factory=ProtocolConfig)
@@ -212,6 +247,19 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     if len(objects.count_range) != 2 or objects.count_range[0] < 1 or objects.count_range[1] < objects.count_range[0]:
         fail("objects.count_range", objects.count_range, "must be [min, max] with 1 <= min <= max")
     check_object_count(scenario, objects.count_range[1], source=source, key="objects.count_range")
+
+    physics = scenario.physics
+    if physics.mass_model not in ("density", "household"):
+        fail("physics.mass_model", physics.mass_model, "must be 'density' or 'household'")
+    for key in ("box_masses", "cylinder_masses"):
+        table = getattr(physics, key)
+        if not table:
+            fail(f"physics.{key}", table, "must list at least one [largest volume (L), lightest (kg), heaviest (kg)]")
+        for i, row in enumerate(table):
+            if len(row) != 3 or not 0 < row[1] <= row[2] or not row[0] > 0 or (i and not row[0] > table[i - 1][0]):
+                fail(f"physics.{key}[{i}]", row, "must be [largest volume (L), lightest (kg), heaviest (kg)] with "
+                     "0 < lightest <= heaviest, volumes increasing")
+    positive("physics.object_friction", physics.object_friction)
 
     target = scenario.target
     if not target.sizes:

@@ -134,6 +134,11 @@ class PlanStepError(UserError):
     """An input of plan-step that cannot be used (exit code 2)."""
 
 
+class ActionSpecError(UserError):
+    """A check-action request that cannot be used: a malformed --action, an unknown object, no station for the
+    scene's shelf."""
+
+
 class TrajectoryFileError(UserError):
     """An exported trajectory file cannot be read (missing, malformed, truncated, wrong joints, bad times)."""
 

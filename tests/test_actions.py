@@ -316,14 +316,17 @@ def test_an_object_hanging_too_much_weight_off_the_cup_is_not_suctioned():
 
 @pytest.mark.parametrize("yaw_deg, angle_deg", [(0.0, 0.0), (8.0, 8.0), (25.0, 25.0), (70.0, 20.0), (135.0, 45.0)])
 def test_a_box_face_turned_too_far_from_the_tube_is_not_sealed(yaw_deg, angle_deg):
-    """The seal angle is the front face's turn from the tube's axis (the shelf's y); the cup refuses more than
-    max_seal_angle_deg, and the first-order default (90) refuses nothing."""
+    """With the tube along the shelf's y (``max_tool_yaw_deg=0``), the seal angle is the front face's turn from
+    it; the cup refuses more than max_seal_angle_deg, and the first-order default (90) refuses nothing. With the
+    station's turning tool (30 deg) only the turn beyond 30 deg counts."""
     import math
 
     turned = box("turned", 0.0, 0.0, sx=0.10, sy=0.10, sz=0.10, yaw=math.radians(yaw_deg))
     assert ActionModel.seal_angle_deg(turned) == pytest.approx(angle_deg, abs=1e-6)
     assert ActionModel.seal_angle_deg(cyl("round", 0.0, 0.0)) == 0.0
-    sealed = model(max_seal_angle_deg=10.0).enumerate((turned,), pushes=False)
+    turning = model(max_seal_angle_deg=10.0).enumerate((turned,), pushes=False)
+    assert bool(turning.feasible) == (angle_deg <= 40.0)
+    sealed = model(max_seal_angle_deg=10.0, max_tool_yaw_deg=0.0).enumerate((turned,), pushes=False)
     if angle_deg > 10.0:
         assert not sealed.feasible
         assert reasons(sealed, "suction turned") == [

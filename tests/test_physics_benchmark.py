@@ -49,7 +49,7 @@ def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
     assert e["drake_success_rate"] == float(drake["success"])
     assert e["actions_judged"] == sum(a["matched"] is not None for a in drake["actions"])
     for a in drake["actions"]:
-        assert a["matched"] == action_matches(a["predicted"], a["outcome"])
+        assert a["matched"] == action_matches(a["predicted"], a["outcome"], a["before"])
         assert a["planning_s"] > 0.0 and a["rejected_before"] >= 0
         assert set(a["motion_timings"]) == {"ik_s", "check_s", "timing_s"}
     planned = sorted(a["planning_s"] for a in drake["actions"])
@@ -72,7 +72,7 @@ def test_shelf_side_is_the_shelf_benchmarks_scene(tiny):
     scene = sample_scene(scenario, 2, scene_seed(3, 2, 0), target_size=tuple(scenario.target.sizes[0]))
     saved = json.loads(trial_path(out, "bluction-dar", 2, 0).read_text())
     # Both simulators plan under the station cup's holding limit (sim_configs/station_sim_shelf.yaml).
-    assert saved["tool_rules"] == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0}
+    assert saved["tool_rules"] == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0, "reach_map": "models/reach/station_sim_shelf.json"}
     expected = run_trial(scene, make_policy("bluction-dar", scenario, perception="ground-truth", horizon=4,
                                             tool_overrides=saved["tool_rules"]), 4)
     shelf = saved["shelf"]
@@ -122,6 +122,11 @@ def test_action_matches_within_2_cm_and_10_deg():
     assert action_matches(p, {"x": 0.1, "y": 0.021, "yaw": p["yaw"]}) is False
     assert action_matches(p, {"x": 0.1, "y": 0.0, "yaw": p["yaw"] - math.radians(11)}) is False
     assert action_matches(p, None) is None
+    # with the true pose before the action, the object's own turn is judged: a hypothesis whose box axes are the
+    # true box's turned by 90 deg predicts a yaw 90 deg off, and the untouched turn still matches
+    before = {"x": 0.0, "y": 0.0, "yaw": p["yaw"] + math.pi / 2}
+    assert action_matches(p, {"x": 0.1, "y": 0.0, "yaw": before["yaw"] + 0.05}, before) is True
+    assert action_matches(p, {"x": 0.1, "y": 0.0, "yaw": before["yaw"] + 0.2}, before) is False
 
 
 def test_a_diverged_simulation_is_a_failed_trial_not_a_crash(tmp_path, monkeypatch):
@@ -185,3 +190,54 @@ def test_unusable_tool_rule_values_exit_with_code_2_before_anything_runs(capsys,
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_mismatch_kinds_name_the_first_reason_an_action_missed_its_prediction():
+    from slax_drake.evaluation.physics import mismatch_kind
+
+    here = {"x": 0.0, "y": 0.0, "yaw": 0.0}
+    predicted = {"x": 0.10, "y": 0.0, "yaw": 0.0}
+
+    def kind(outcome, type_="push", lost=False, before=here):
+        a = {"type": type_, "predicted": predicted, "outcome": outcome, "before": before, "lost_after": lost,
+             "matched": action_matches(predicted, outcome)}
+        return mismatch_kind(a, 0.6, 0.6)
+
+    assert kind({"x": 0.11, "y": 0.0, "yaw": 0.0}) is None  # matched
+    assert kind({"x": 0.0, "y": -0.5, "yaw": 0.0}, "suction", lost=True) == "dropped"
+    assert kind({"x": 0.05, "y": 0.0, "yaw": 0.0}, lost=True) == "toppled"
+    assert kind({"x": 0.005, "y": 0.0, "yaw": 0.02}, "suction") == "seal never formed"
+    assert kind({"x": 0.005, "y": 0.0, "yaw": 0.02}, "push") == "slid"  # a push that stopped short slid
+    assert kind({"x": 0.05, "y": 0.0, "yaw": 0.0}, "suction") == "slid"
+    assert kind({"x": 0.10, "y": 0.0, "yaw": math.radians(25)}) == "turned"
+    assert mismatch_kind({"type": "push", "matched": None, "outcome": None, "predicted": predicted}, 0.6, 0.6) is None
+
+
+def test_summary_counts_match_per_action_kind_and_mismatch_kinds():
+    from slax_drake.evaluation.physics import markdown_table, summarise
+
+    def action(type_, matched, mismatch=None):
+        a = {"type": type_, "matched": matched, "planning_s": 0.1}
+        if mismatch:
+            a["mismatch"] = mismatch
+        return a
+
+    drake = {"success": False, "result": "horizon", "steps": 4, "toppled": [], "dropped": [],
+             "real_time_factor": 1.0, "wall_s": 1.0,
+             "actions": [action("push", True), action("push", False, "slid"), action("suction", True),
+                         action("suction", False, "seal never formed"), action("suction", None)]}
+    old = dict(drake, actions=[action("push", False)])  # a file from before the classification
+    # a push whose hypothesis named its box 90 deg turned: recorded as turned, judged again as matched
+    rejudged = {"type": "push", "matched": False, "mismatch": "turned", "planning_s": 0.1, "lost_after": False,
+                "predicted": {"x": 0.1, "y": 0.0, "yaw": 0.0}, "outcome": {"x": 0.1, "y": 0.0, "yaw": 1.58},
+                "before": {"x": 0.0, "y": 0.0, "yaw": 1.57}}
+    drake = dict(drake, actions=drake["actions"] + [rejudged])
+    results = [{"policy": "p", "density": 4, "index": i, "seed": i, "shelf": {"success": False, "steps": 4},
+                "drake": d} for i, d in enumerate((drake, old))]
+    e = summarise(results, ["p"], [4])["policies"]["p"]["all"]
+    assert e["match_by_action"] == {"push": {"matched": 2, "judged": 4, "match_rate": 0.5},
+                                    "suction": {"matched": 1, "judged": 2, "match_rate": 0.5}}
+    assert e["mismatch_kinds"] == {"dropped": 0, "toppled": 0, "seal never formed": 1, "slid": 1, "turned": 0,
+                                   "unclassified": 1}
+    md = markdown_table({"policies": {"p": {"all": {**e, "trials": 2}}}, "meta": {}})
+    assert "| p | All | 50 % (2/4) | 50 % (1/2) | 0 | 0 | 1 | 1 | 0 | 1 |" in md

@@ -119,7 +119,11 @@ def test_the_station_cup_limits_are_planning_rules_that_overrides_replace():
 
     from slax_drake.systems.trial import station_tool_rules
 
-    station = load_station_scenario(DEFAULT_STATION_PATH)
+    shipped = load_station_scenario(DEFAULT_STATION_PATH)
+    # the station's reach map is one of its planning rules too
+    assert station_tool_rules(shipped) == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0,
+                                           "reach_map": "models/reach/station_sim_shelf.json"}
+    station = dataclasses.replace(shipped, reach_map="")
     assert station.suction.max_held_moment == pytest.approx(0.4)
     assert station.suction.max_seal_angle_deg == pytest.approx(10.0)
     assert station_tool_rules(station) == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0}

@@ -10,8 +10,12 @@ target size, so both simulators start from the very scene that ``slax-drake benc
 
 Per action of the Drake trial, the first-order prediction (the action model applied to the poses observed before
 the action) is compared with the physical outcome (the object's pose at the next decision): it *matches* when the
-planar position is within ``MATCH_DISTANCE`` (2 cm) and the yaw within ``MATCH_YAW`` (10 deg). Toppled objects
-(z axis tilted more than 20 deg at the end) and dropped ones (centre outside the bay at the end) are counted.
+planar position is within ``MATCH_DISTANCE`` (2 cm) and the object turned less than ``MATCH_YAW`` (10 deg; the
+first-order model turns nothing, and a perceived hypothesis's yaw may name the same box turned by 90 deg, so the
+object's own turn is what is judged, :func:`action_matches`). Each mismatch is classified (:func:`mismatch_kind`:
+dropped, toppled, seal never formed, slid, turned) and the report gives the match rate per action kind. Toppled
+objects (z axis tilted more than 20 deg at the end) and dropped ones (centre outside the bay at the end) are
+counted.
 
 Each finished scene is written atomically as ``<out>/physics_trials/<policy>/<n>_<index>.json`` (so a stopped run
 resumes; the settings are recorded in ``<out>/physics_settings.json`` and a run with other settings is refused);
@@ -44,13 +48,56 @@ def trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return Path(out) / "physics_trials" / policy / f"{density:02d}_{index:04d}.json"
 
 
-def action_matches(predicted: dict, outcome: dict | None) -> bool | None:
-    """Whether the physical outcome is within 2 cm and 10 deg of the first-order prediction (None: no outcome)."""
+def action_matches(predicted: dict, outcome: dict | None, before: dict | None = None) -> bool | None:
+    """Whether the physical outcome is within 2 cm and 10 deg of the first-order prediction (None: no outcome).
+
+    With ``before`` (the true object's pose at the decision) the yaw test is the object's own turn, outcome less
+    before: the first-order model never turns an object, and the prediction's yaw is the perceived hypothesis's,
+    whose box axes may be the true object's turned by 90 or 180 deg (the same box). Without it (records from
+    before it was kept), the predicted yaw is compared directly."""
     if outcome is None:
         return None
     distance = math.hypot(outcome["x"] - predicted["x"], outcome["y"] - predicted["y"])
-    dyaw = abs(math.remainder(outcome["yaw"] - predicted["yaw"], 2.0 * math.pi))
+    reference = before["yaw"] if before is not None else predicted["yaw"]
+    dyaw = abs(math.remainder(outcome["yaw"] - reference, 2.0 * math.pi))
     return distance <= MATCH_DISTANCE and dyaw <= MATCH_YAW
+
+
+def judge_action(action: dict, shelf_width: float, shelf_depth: float) -> tuple:
+    """(matched, mismatch kind) of a physics record's action, judged again from its stored poses with the current
+    rules (a file from before ``before`` was kept keeps its own verdict)."""
+    if "before" not in action:
+        return action["matched"], action.get("mismatch", "unclassified" if action["matched"] is False else None)
+    matched = action_matches(action["predicted"], action["outcome"], action["before"])
+    return matched, mismatch_kind({**action, "matched": matched}, shelf_width, shelf_depth)
+
+
+SEAL_MOVE = 0.01  # m: a suctioned object that moved less than this (and turned < SEAL_TURN) was never sealed
+SEAL_TURN = math.radians(5.0)  # rad
+MISMATCH_KINDS = ("dropped", "toppled", "seal never formed", "slid", "turned")
+
+
+def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str | None:
+    """Why an executed action did not match its prediction (None when it matched or has no outcome), the first
+    of: "dropped" (the object was lost at the next decision, its centre out of the bay), "toppled" (lost, inside
+    the bay: tilted over 20 deg), "seal never formed" (a suction whose object moved less than ``SEAL_MOVE`` and
+    turned less than ``SEAL_TURN`` from where it stood), "slid" (its planar position more than ``MATCH_DISTANCE``
+    from the prediction), "turned" (its position within it, its yaw more than ``MATCH_YAW`` off). ``action``: a
+    physics record's action (``matched``, ``outcome``, ``before``, ``lost_after``, ``type``)."""
+    if action.get("matched") is not False:
+        return None
+    out, before = action["outcome"], action.get("before")
+    if action.get("lost_after"):
+        inside = abs(out["x"]) < shelf_width / 2 and abs(out["y"]) < shelf_depth / 2
+        return "toppled" if inside else "dropped"
+    if action["type"] == "suction" and before is not None:
+        moved = math.hypot(out["x"] - before["x"], out["y"] - before["y"])
+        if moved < SEAL_MOVE and abs(math.remainder(out["yaw"] - before["yaw"], 2.0 * math.pi)) < SEAL_TURN:
+            return "seal never formed"
+    predicted = action["predicted"]
+    if math.hypot(out["x"] - predicted["x"], out["y"] - predicted["y"]) > MATCH_DISTANCE:
+        return "slid"
+    return "turned"  # within MATCH_DISTANCE, so its yaw (its own turn, with ``before``) is off
 
 
 def _diverged_trial(message: str, wall_s: float) -> dict:
@@ -90,10 +137,13 @@ def _run_scene(job) -> dict:
     for a in d["actions"]:
         params = {k: a[k] for k in ("d", "dx", "dz") if k in a}
         timings = (a.get("motion") or {}).get("timings", {})
-        actions.append({"type": a["type"], "object": a["object"], **params, "predicted": a["predicted"],
-                        "outcome": a["outcome"], "matched": action_matches(a["predicted"], a["outcome"]),
-                        "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
-                        "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}})
+        record = {"type": a["type"], "object": a["object"], **params, "predicted": a["predicted"],
+                  "before": a.get("before"), "outcome": a["outcome"], "lost_after": a.get("lost_after"),
+                  "matched": action_matches(a["predicted"], a["outcome"], a.get("before")),
+                  "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
+                  "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
+        record["mismatch"] = mismatch_kind(record, scenario.shelf.width, scenario.shelf.depth)
+        actions.append(record)
     final = d["final_objects"]
     drake = {
         "success": d["success"], "result": d["result"], "steps": d["steps"], "cost": d["cost"],
@@ -203,7 +253,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
                 bar.update(1)
     elapsed = time.perf_counter() - start
     trials = load_results(out, policies, densities, scenes_per_density)
-    summary = summarise(trials, policies, densities)
+    summary = summarise(trials, policies, densities, (scenario.shelf.width, scenario.shelf.depth))
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
                        "seed": seed, "densities": densities, "sleep": sleep, "workers": workers, "backend": backend,
                        "profile": profile, "tool_rules": tool_rules, "scenes_kept": len(all_jobs) - len(jobs), "scenes_run": len(jobs),
@@ -234,13 +284,15 @@ def _median(values):
     return float(np.median(values)) if values else None
 
 
-def summarise(results: list[dict], policies, densities) -> dict:
+def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.inf)) -> dict:
     """Per policy and density key ("4", ..., "all"): shelf and Drake success rate and median steps (over
-    successful trials), the fraction of Drake actions whose outcome matched the prediction, toppled and dropped
-    object counts, outcome agreement between the two simulators; plus one row per scene under ``trials``."""
+    successful trials), the fraction of Drake actions whose outcome matched the prediction (judged again from the
+    stored poses, :func:`judge_action`; ``shelf``: the bay's width and depth, to tell dropped from toppled), toppled and
+    dropped object counts, outcome agreement between the two simulators; plus one row per scene under ``trials``."""
     summary = {"policies": {}, "trials": []}
     for r in results:
         d = r["drake"]
+        d = {**d, "actions": [dict(a, matched=m, mismatch=k) for a in d["actions"] for m, k in [judge_action(a, *shelf)]]}
         summary["trials"].append({
             "policy": r["policy"], "density": r["density"], "index": r["index"], "seed": r["seed"],
             "shelf_success": r["shelf"]["success"], "shelf_steps": r["shelf"]["steps"],
@@ -251,6 +303,12 @@ def summarise(results: list[dict], policies, densities) -> dict:
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],
             "drake_wall_s": d["wall_s"],
             "planning_s": [a["planning_s"] for a in d["actions"] if a.get("planning_s") is not None],
+            "judged_by_kind": {kind: [sum(1 for a in d["actions"] if a["type"] == kind and a["matched"]),
+                                      sum(1 for a in d["actions"] if a["type"] == kind and a["matched"] is not None)]
+                               for kind in ACTION_KINDS},
+            # a file written before mismatches were classified counts its mismatches as "unclassified"
+            "mismatches": dict(collections.Counter(a["mismatch"] or "unclassified" for a in d["actions"]
+                                                   if a["matched"] is False)),
         })
     for p in policies:
         per = {}
@@ -275,9 +333,32 @@ def summarise(results: list[dict], policies, densities) -> dict:
                 "median_real_time_factor": _median([t["real_time_factor"] for t in sel
                                                     if t["real_time_factor"] is not None]),
                 **_planning_stats([s for t in sel for s in t["planning_s"]]),
+                "match_by_action": _match_by_action(sel),
+                "mismatch_kinds": _mismatch_counts(sel),
             }
         summary["policies"][p] = per
     return summary
+
+
+ACTION_KINDS = ("push", "suction")
+
+
+def _match_by_action(trials: list[dict]) -> dict:
+    """{action kind: {"matched", "judged", "match_rate"}} over ``trials`` (summary rows)."""
+    out = {}
+    for kind in ACTION_KINDS:
+        matched = sum(t["judged_by_kind"][kind][0] for t in trials)
+        judged = sum(t["judged_by_kind"][kind][1] for t in trials)
+        out[kind] = {"matched": matched, "judged": judged, "match_rate": round(matched / judged, 4) if judged else None}
+    return out
+
+
+def _mismatch_counts(trials: list[dict]) -> dict:
+    """{mismatch kind: count} over ``trials``, every kind of MISMATCH_KINDS listed (0 when none)."""
+    counts = collections.Counter()
+    for t in trials:
+        counts.update(t["mismatches"])
+    return {**{k: counts.get(k, 0) for k in MISMATCH_KINDS}, **{k: v for k, v in counts.items() if k not in MISMATCH_KINDS}}
 
 
 def _ending(result: str) -> str:
@@ -335,6 +416,22 @@ def markdown_table(summary: dict) -> str:
         endings = per.get("all", {}).get("drake_endings")
         if endings:
             lines += ["", f"{p}, Drake trial endings: " + ", ".join(f"{k} {v}" for k, v in endings.items()) + "."]
+    lines += ["", "Physics fidelity per action kind (actions matching the first-order prediction) and the mismatches by "
+              "kind (dropped: lost out of the bay; toppled: lost inside it; seal never formed: a suction that left its "
+              f"object within {100 * SEAL_MOVE:.0f} cm and {math.degrees(SEAL_TURN):.0f} deg of where it stood; slid: "
+              f"more than {100 * MATCH_DISTANCE:.0f} cm from the prediction; turned: within it, yaw off):", "",
+              "| Policy | Objects | Pushes matching | Suctions matching | " + " | ".join(
+                  k.capitalize() for k in MISMATCH_KINDS) + " | Other |",
+              "|---|---|---|---|" + "---|" * (len(MISMATCH_KINDS) + 1)]
+    for p, per in summary["policies"].items():
+        for key, e in per.items():
+            by = e.get("match_by_action", {})
+            cells = [("-" if by.get(k, {}).get("match_rate") is None else
+                      f"{100 * by[k]['match_rate']:.0f} % ({by[k]['matched']}/{by[k]['judged']})") for k in ACTION_KINDS]
+            kinds = e.get("mismatch_kinds", {})
+            other = sum(v for k, v in kinds.items() if k not in MISMATCH_KINDS)
+            lines.append(f"| {p} | {'All' if key == 'all' else key} | " + " | ".join(cells) + " | "
+                         + " | ".join(str(kinds.get(k, 0)) for k in MISMATCH_KINDS) + f" | {other} |")
     return "\n".join(lines) + "\n"
 
 

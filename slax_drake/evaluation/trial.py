@@ -95,12 +95,21 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         a["rejected_before"] = entry["rejected"]
         a["predicted"] = pred
         a["true_object"] = entry.get("segments", {}).get(a["object"])  # the object the hypothesis was
+        a["before"] = entry.get("poses_before", {}).get(a["true_object"]) if a["true_object"] else None
         actions.append(a)
-    # actual outcome of each action: the true object's pose at the next decision
+    # actual outcome of each action: the true object's pose at the next decision, and whether it was lost then
+    # (toppled or out of the bay, the evaluator's rule; for an action with no next decision, at the trial's end)
     decisions = log
     for k, a in enumerate(actions):
         after = decisions[k + 1] if k + 1 < len(decisions) else None
         a["outcome"] = after.get("poses_before", {}).get(a["true_object"]) if after and a["true_object"] else None
+        if a["true_object"] is None:
+            a["lost_after"] = None
+        elif after is not None and "lost" in after:
+            a["lost_after"] = a["true_object"] in after["lost"]
+        else:
+            end = final[a["true_object"]]
+            a["lost_after"] = not (end["upright"] and end["inside"])
     trajectory = executed_trajectory(planner_system.planner, state.motions, sim_time)
     n_push = sum(1 for a in actions if a["type"] == "push")
     n_suction = len(actions) - n_push

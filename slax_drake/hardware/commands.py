@@ -76,6 +76,24 @@ def register(subparsers) -> None:
     s.add_argument("--out", required=True, help="output step JSON (the export format, ros-json)")
     s.set_defaults(func=run_plan_step)
 
+    a = subparsers.add_parser(
+        "check-action", help="is an action kinematically feasible on a scene? (the action model, then the planner)",
+        description="Ask the station's action model (the 'station' profile with the station cup's limits) whether "
+        "the action exists on the scene, then plan its motion (IK, collision checks, Ruckig timing) from the "
+        "observation pose and back. Prints feasible with the motion's duration and the IK / check / Ruckig times, "
+        "or the first reason it is not. Exit code 0 when feasible, 1 when not. --all: every candidate action of "
+        "the scene with its verdict (a table; --png: a top-down picture coloured by verdict).")
+    a.add_argument("--scene", required=True, help="scene JSON (slax-drake scene, or a trial's scene.json)")
+    a.add_argument("--station", default=None, help="station YAML (default: the shipped station of the scene's shelf)")
+    what = a.add_mutually_exclusive_group(required=True)
+    what.add_argument("--action", default=None,
+                      help="push:OBJECT:D (blade push by D m along the shelf's x) or suction:OBJECT:DX:DZ (move by "
+                      "DX along x, place at depth y = DZ), e.g. push:object_2:+0.10")
+    what.add_argument("--all", action="store_true", help="every candidate action of the scene")
+    a.add_argument("--png", default=None, help="with --all: write the top-down verdict picture here")
+    a.add_argument("--json", default=None, help="also write the verdict(s) as JSON here")
+    a.set_defaults(func=run_check_action)
+
 
 def _scene_and_station(traj, scene_path, station_path):
     from slax_drake.errors import TrajectoryFileError
@@ -235,3 +253,26 @@ def run_plan_step(args: argparse.Namespace) -> int:
     print(f"perception {t['perception_s']:.3f} s, decision {t['decision_s']:.3f} s, planning and check "
           f"{t['planning_s']:.2f} s; wrote {args.out}")
     return 0
+
+
+def run_check_action(args: argparse.Namespace) -> int:
+    from slax_drake.errors import ActionSpecError
+    from slax_drake.hardware.check_action import check_action, check_all, table, verdict_png
+    from slax_drake.io import write_bytes_atomic, write_text_atomic
+
+    if args.png and not args.all:
+        raise ActionSpecError("--png applies to --all only")
+    if args.all:
+        checker, checks = check_all(args.scene, args.station)
+        print(table(checks), end="")
+        if args.png:
+            write_bytes_atomic(Path(args.png), verdict_png(checker, checks))
+            print(f"wrote {args.png}")
+    else:
+        checks = [check_action(args.scene, args.action, args.station)]
+        print(checks[0].line())
+    if args.json:
+        write_text_atomic(Path(args.json), json.dumps([
+            {"action": c.action, "feasible": c.feasible, "stage": c.stage, "reason": c.reason,
+             "duration_s": c.duration_s, "timings": c.timings} for c in checks], indent=1))
+    return 0 if all(c.feasible for c in checks) or args.all else 1

@@ -135,7 +135,7 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
         events = []
         for on, off in action["motion"].get("suction_intervals") or []:
             events += [(float(on), True), (float(off), False)]
-        act = {k: action[k] for k in ("type", "object", "d", "dx", "dz") if k in action}
+        act = {k: action[k] for k in ("type", "object", "d", "dx", "dz", "yaw") if k in action}
         motions.append(Motion(t0, mt, mq, mv, ma, events, act, entry.get("poses_before"), list(entry.get("lost", []))))
     metadata = {
         "source": source, "config": data.get("config"), "station": data.get("station"),

@@ -186,6 +186,16 @@ class MotionPlanner:
         motion.timings = _rounded(timings)
         return motion
 
+    def reaches(self, scene: Scene, waypoint: ToolWaypoint) -> bool:
+        """Whether the planner finds a collision-free IK solution for ``waypoint`` in ``scene`` from the
+        observation pose (its first-waypoint search: every seed of its library)."""
+        timings = {"ik_s": 0.0, "check_s": 0.0, "ik_solves": 0}
+        try:
+            self._first_waypoints(self.world(scene), waypoint, self.q_observation, "", timings)
+        except _Reject:
+            return False
+        return True
+
     # -----------------------------------------------------------------------------------------------------
     def _ik(self, world, wp: ToolWaypoint, guess, timings, min_distance=None):
         from pydrake.math import RigidTransform

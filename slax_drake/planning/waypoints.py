@@ -12,12 +12,13 @@ pointing along S +y) goes ``PUSH_STANDOFF`` beside the object's extreme x (so th
 clears a tall object) instead of the lane's centre, and pushes d + standoff, so the object moves by d: pre-approach in front of the opening (``APPROACH_MARGIN``), insert along +y to the tip
 depth, push d + standoff along x, back off the standoff, retract along -y.
 
-Suction (q, d_x, d_z): q = the contact point on the camera-facing side. The blade is turned up
-(``SHAFT_BLADE_UP``), the cup (``cup_tip_frame``, its axis along S +y) approaches to 1 cm before the face,
-seals (suction on, pressing ``SEAL_PRESS`` in), lifts ``LIFT`` (about 1 cm), pulls the object out of the shelf
+Suction (q, d_x, d_z, yaw): q = the contact point on the camera-facing side. The blade is turned up
+(``SHAFT_BLADE_UP``), the cup (``cup_tip_frame``, its axis along S +y turned by the action's yaw about S z, so
+along a turned face's normal) approaches along its axis to 1 cm before the face, seals (suction on, pressing
+``SEAL_PRESS`` in along the axis), and, keeping its yaw, lifts ``LIFT`` (about 1 cm), pulls the object out of the shelf
 toward the camera (by default until its back is out of the shelf; the planner may carry it across shallower,
 :func:`pull_out_options`), translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
-(suction off), backs off and retracts. The lift is ``LIFT`` unless the carried object's straight way out, across
+(suction off), backs off along its axis and retracts. The lift is ``LIFT`` unless the carried object's straight way out, across
 and in (its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above
 the tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones). The segments
 arriving at "pull out", "translate" and "push in" carry the object clear of the support (``carried``): the
@@ -63,9 +64,12 @@ def push_rotation() -> np.ndarray:
     return np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
-def suction_rotation() -> np.ndarray:
-    """R_SC of ``cup_tip_frame`` with the blade up: cup axis (x) along S +y, y along S +x, z down."""
-    return np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+def suction_rotation(yaw: float = 0.0) -> np.ndarray:
+    """R_SC of ``cup_tip_frame`` with the blade up, the tool turned ``yaw`` (rad) about S z: cup axis (x) along
+    (-sin yaw, cos yaw, 0) in S (S +y at yaw 0), y along (cos yaw, sin yaw, 0), z down."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    Rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return Rz @ np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,24 +129,32 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         oy = float(obj.center[1])
         y_place = cy + (action.dz - oy)
         y_pre = y_open - approach_margin
-        x2 = cx + action.dx
         y_far = full_pull_out(action, obj, shelf, approach_margin) if pull_to is None else pull_to
         lift = carry_lift(obj, objects, [(0.0, 0.0), (0.0, y_far - cy), (action.dx, y_far - cy),
                                          (action.dx, y_place - cy)])
-        R, f, s = suction_rotation(), robot_model.CUP_TIP_FRAME, robot_model.SHAFT_BLADE_UP
+        # The tube comes in along its axis a (turned by the action's yaw toward the face's normal): the
+        # pre-approach is on that axis in front of the opening, the cup meets the face along it and presses in;
+        # once sealed the tool keeps its yaw and carries the object along S y and x; it backs off along -a.
+        ax, ay = action.axis
+        back = (cy - y_pre) / ay  # along the axis from the contact to the pre-approach's depth
+        px, py = cx + SEAL_PRESS * ax, cy + SEAL_PRESS * ay  # the cup at the seal
+        x2 = px + action.dx
+        y_in = py + (y_place - cy)  # the cup with the object at its placement
+        R, f, s = suction_rotation(action.yaw), robot_model.CUP_TIP_FRAME, robot_model.SHAFT_BLADE_UP
         on = dict(contact=True, suction=True)
+        x_off, y_off = x2 - (RELEASE_BACKOFF + SEAL_PRESS) * ax, y_in - (RELEASE_BACKOFF + SEAL_PRESS) * ay
         return [
-            ToolWaypoint("pre-approach", f, _pose(R, (cx, y_pre, cz)), s),
-            ToolWaypoint("approach", f, _pose(R, (cx, cy - CUP_STANDOFF, cz)), s),
-            ToolWaypoint("seal", f, _pose(R, (cx, cy + SEAL_PRESS, cz)), s, contact=True, suction=True, dwell=DWELL),
-            ToolWaypoint("lift", f, _pose(R, (cx, cy + SEAL_PRESS, cz + lift)), s, carried="resting", **on),
-            ToolWaypoint("pull out", f, _pose(R, (cx, y_far, cz + lift)), s, carried="clear", **on),
+            ToolWaypoint("pre-approach", f, _pose(R, (cx - back * ax, y_pre, cz)), s),
+            ToolWaypoint("approach", f, _pose(R, (cx - CUP_STANDOFF * ax, cy - CUP_STANDOFF * ay, cz)), s),
+            ToolWaypoint("seal", f, _pose(R, (px, py, cz)), s, contact=True, suction=True, dwell=DWELL),
+            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift)), s, carried="resting", **on),
+            ToolWaypoint("pull out", f, _pose(R, (px, y_far, cz + lift)), s, carried="clear", **on),
             ToolWaypoint("translate", f, _pose(R, (x2, y_far, cz + lift)), s, carried="clear", **on),
-            ToolWaypoint("push in", f, _pose(R, (x2, y_place + SEAL_PRESS, cz + lift)), s, carried="clear", **on),
-            ToolWaypoint("lower", f, _pose(R, (x2, y_place + SEAL_PRESS, cz)), s, carried="resting", **on),
-            ToolWaypoint("release", f, _pose(R, (x2, y_place + SEAL_PRESS, cz)), s, contact=True, dwell=DWELL),
-            ToolWaypoint("back off", f, _pose(R, (x2, y_place - RELEASE_BACKOFF, cz)), s, contact=True),
-            ToolWaypoint("retract", f, _pose(R, (x2, y_pre, cz)), s, contact=True),
+            ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz + lift)), s, carried="clear", **on),
+            ToolWaypoint("lower", f, _pose(R, (x2, y_in, cz)), s, carried="resting", **on),
+            ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),
+            ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
+            ToolWaypoint("retract", f, _pose(R, (x_off, y_pre, cz)), s, contact=True),
         ]
     raise TypeError(f"not an action: {action!r}")
 

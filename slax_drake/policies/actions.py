@@ -52,6 +52,8 @@ from slax_drake.policies.rules import RULES, ToolConfig, tool_config_problem
 from slax_drake.policies.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
 )
+from slax_drake.policies.reach import load_reach_map
+from slax_drake.scene import mass as scene_mass
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import SceneObject, Shelf
 
@@ -59,6 +61,7 @@ GRAVITY = 9.81  # m/s^2
 FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
 CONTACT_INSET = 0.01  # the blade's tip this far past the point where it meets the object (m)
 BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
+REACH_MARGIN = 0.015  # m: the reach map refuses a tool position only when every grid node this near it is unreached
 
 
 @dataclasses.dataclass(frozen=True)
@@ -77,17 +80,26 @@ class Push:
 
 @dataclasses.dataclass(frozen=True)
 class Suction:
-    """Suction object ``name`` at contact ``q``, translate it by ``dx`` and place it at depth y = ``dz``."""
+    """Suction object ``name`` at contact ``q``, translate it by ``dx`` and place it at depth y = ``dz``. ``yaw``
+    (rad): the tool's turn about the shelf's z axis while it holds the object; the tube points into the shelf
+    along (-sin yaw, cos yaw) in S (0: along +y), the cup meets the face along that axis (``max_tool_yaw_deg``)."""
 
     name: str
     q: tuple[float, float, float]
     dx: float
     dz: float
+    yaw: float = 0.0
 
     kind = "suction"
 
     def describe(self) -> str:
-        return f"suction {self.name} dx={self.dx:+.3f} dz={self.dz:+.3f}"
+        turned = f" yaw={math.degrees(self.yaw):+.0f}deg" if self.yaw else ""
+        return f"suction {self.name} dx={self.dx:+.3f} dz={self.dz:+.3f}{turned}"
+
+    @property
+    def axis(self) -> np.ndarray:
+        """The tube's axis into the shelf in the floor plane of S (unit (x, y))."""
+        return np.array([-math.sin(self.yaw), math.cos(self.yaw)])
 
 
 Action = Push | Suction
@@ -107,10 +119,10 @@ class Candidates:
     rejected: list
 
 
-def object_mass(obj: SceneObject, density: float) -> float:
-    sx, sy, sz = obj.size
-    volume = math.pi * (sx / 2) ** 2 * sz if obj.shape == "cylinder" else sx * sy * sz
-    return density * volume
+def object_mass(obj: SceneObject, density: float, physics=None) -> float:
+    """The object's mass (kg): its recorded mass, else what ``physics`` (ObjectPhysics) expects, else density x
+    volume (:func:`slax_drake.scene.mass.object_mass`)."""
+    return scene_mass.object_mass(obj, density, physics)
 
 
 def apply_action(objects: tuple[SceneObject, ...], action) -> tuple[SceneObject, ...]:
@@ -139,6 +151,7 @@ class ActionModel:
         self.grid = FloorGrid(shelf, tool.grid.cell)
         self.y_front = -shelf.depth / 2 - FRONT_MARGIN
         self._raster_cache: dict = {}
+        self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
     # ----------------------------------------------------------------------------------------------------
     def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None) -> Candidates:
@@ -203,6 +216,18 @@ class ActionModel:
         d_max = first_bad * t.grid.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
         step = t.grid.push_resolution
         q = (lane_x, self.blade_depth(fp, sign), t.geometry.blade_height / 2)
+        if self.reach is not None:
+            layer = "push+x" if sign > 0 else "push-x"
+            if self.reach.refuses(layer, q[0], q[1], REACH_MARGIN):
+                rejected.append(Rejected(what, f"the arm cannot reach the blade beside {obj.name} at "
+                                               f"({q[0]:+.2f}, {q[1]:+.2f}) m (reach map)"))
+                return
+            k_reach = _first_false(np.array([not self.reach.refuses(layer, q[0] + sign * kk * t.grid.cell, q[1],
+                                                                    REACH_MARGIN) for kk in range(1, first_bad + 1)],
+                                           dtype=bool))
+            if k_reach < first_bad:
+                first_bad, stopper = k_reach, "the arm's reach"
+                d_max = first_bad * t.grid.cell
         if d_max < t.grid.min_push - 1e-12:
             rejected.append(Rejected(what, f"no room: {obj.name} is stopped by {stopper} at once"))
             return
@@ -220,7 +245,7 @@ class ActionModel:
         t, shelf = self.tool, self.shelf
         obj, fp = ctx.objects[i], ctx.fps[i]
         what = f"suction {obj.name}"
-        mass = object_mass(obj, t.physics.object_density)
+        mass = object_mass(obj, t.physics.object_density, t.physics)
         if RULES["max_suction_mass"].refuses(t.rules.max_suction_mass, mass):
             rejected.append(Rejected(what, f"{obj.name} weighs {mass:.2f} kg > {t.rules.max_suction_mass:.2f} kg"))
             return
@@ -229,26 +254,37 @@ class ActionModel:
             rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is too small or curved for the cup"))
             return
         cx, cy, cz = contact
-        angle = self.seal_angle_deg(obj) if t.rules.max_seal_angle_deg < 45.0 else 0.0  # a front face turns 45 at most
+        yaw = self.tool_yaw(obj, (cx, cy))
+        face = math.degrees(self.face_yaw(obj))
+        angle = abs(face - math.degrees(yaw))
+        if t.rules.max_seal_angle_deg >= 45.0:
+            angle = 0.0  # a front face turns 45 deg at most (from y, and from a tube turned toward it): none refused
         if RULES["max_seal_angle_deg"].refuses(t.rules.max_seal_angle_deg, angle):
+            turned = f" (the tool turns {abs(math.degrees(yaw)):.0f} deg)" if yaw else ""
             rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
-                                           f"tube > {t.rules.max_seal_angle_deg:.0f} deg"))
+                                           f"tube{turned} > {t.rules.max_seal_angle_deg:.0f} deg"))
             return
         moment = mass * GRAVITY * math.hypot(float(obj.center[0]) - cx, float(obj.center[1]) - cy)
         if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
             rejected.append(Rejected(what, f"{obj.name}'s weight hangs {moment:.2f} N m off the cup "
                                            f"> {t.rules.max_suction_moment:.2f} N m"))
             return
-        if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, cy - (-shelf.depth / 2)):
+        if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, (cy - (-shelf.depth / 2)) / math.cos(yaw)):
             rejected.append(Rejected(what, f"{obj.name}'s face is beyond the tube's reach"))
             return
+        if self.reach is not None and yaw == 0.0 and self.reach.refuses("cup", cx, cy, REACH_MARGIN):
+            rejected.append(Rejected(what, f"the arm cannot reach the cup at {obj.name}'s face ({cx:+.2f}, {cy:+.2f}) "
+                                           "m (reach map)"))
+            return
         tube_r = t.geometry.tube_diameter / 2
-        corridor_half = (tube_r, (cy - self.y_front) / 2)
-        corridor = np.array([[cx, (cy + self.y_front) / 2]])
+        # the tube's straight way in along its (turned) axis, from in front of the opening to the contact
+        length = (cy - self.y_front) / math.cos(yaw)
+        corridor_half = (tube_r, length / 2)
+        corridor = np.array([[cx + math.sin(yaw) * length / 2, cy - math.cos(yaw) * length / 2]])
         for j in (ctx.others(i) if t.rules.tube_approach_check else ()):
             if ctx.all_heights[j] <= cz - tube_r:
                 continue  # the tube passes over it
-            if not clear_of("box", corridor, 0.0, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
+            if not clear_of("box", corridor, yaw, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
                 rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
                 return
         ex, ey = fp.extents()
@@ -334,7 +370,8 @@ class ActionModel:
                 bs = bs[ok]
             for b in bs:
                 y_new = fp.y + b * res
-                feasible.append(Suction(obj.name, q, round(float(a * res), 6), round(float(y_new), 6)))
+                feasible.append(Suction(obj.name, q, round(float(a * res), 6), round(float(y_new), 6),
+                                        round(float(yaw), 6)))
                 n_found += 1
         if n_found == 0:
             rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
@@ -426,12 +463,35 @@ class ActionModel:
 
     @staticmethod
     def seal_angle_deg(obj: SceneObject) -> float:
-        """The angle (deg) between the tube's axis (the shelf's y) and the normal of the face the cup seals on:
-        0 for a cylinder (sealed where its front faces the tube), at most 45 for a box."""
+        """The angle (deg) between the shelf's y and the normal of the face the cup seals on: 0 for a cylinder
+        (sealed where its front faces the tube), at most 45 for a box."""
+        return abs(math.degrees(ActionModel.face_yaw(obj)))
+
+    @staticmethod
+    def face_yaw(obj: SceneObject) -> float:
+        """The tool yaw (rad, about S z) that brings the tube along the inward normal of the face the cup seals
+        on: the face's outward normal is (sin yaw, -cos yaw); 0 for a cylinder; in [-pi/4, pi/4] for a box."""
         if obj.shape == "cylinder":
             return 0.0
         normal = _front_face(obj)[0]
-        return math.degrees(math.acos(min(1.0, -float(normal[1]))))
+        return math.atan2(float(normal[0]), -float(normal[1]))
+
+    def tool_yaw(self, obj: SceneObject, contact_xy) -> float:
+        """The tool's yaw (rad) for a suction of ``obj`` at ``contact_xy`` (S): the face's yaw clamped to
+        ``max_tool_yaw_deg`` and to the turns whose tube axis, from the contact out to the opening, stays a tube
+        radius inside the side walls there (0 when the contact itself is that close to a wall)."""
+        limit = math.radians(self.tool.rules.max_tool_yaw_deg)
+        if limit == 0.0:
+            return 0.0
+        yaw = min(limit, max(-limit, self.face_yaw(obj)))
+        cx, cy = float(contact_xy[0]), float(contact_xy[1])
+        depth = cy + self.shelf.depth / 2  # behind the opening
+        x_max = self.shelf.width / 2 - self.tool.geometry.tube_diameter / 2
+        if depth <= 1e-9 or abs(cx) >= x_max:
+            return 0.0
+        # the axis meets the opening at x = cx + tan(yaw) * depth
+        lo, hi = math.atan((-x_max - cx) / depth), math.atan((x_max - cx) / depth)
+        return min(hi, max(lo, yaw))
 
 
 def _front_face(obj: SceneObject):

@@ -113,10 +113,13 @@ def scenario_profile(scenario: Scenario, profile: str | None = None) -> str:
 
 
 def tool_config(scenario: Scenario, profile: str | None = None, **overrides) -> ToolConfig:
-    """The action model's configuration for ``scenario``: its profile (or ``profile``), its objects' density
-    and clearance, and single ``overrides`` (flat names, see ToolConfig.build)."""
+    """The action model's configuration for ``scenario``: its profile (or ``profile``), its objects' density,
+    clearance and mass model, and single ``overrides`` (flat names, see ToolConfig.build)."""
+    physics = scenario.physics
     return ToolConfig.build(scenario_profile(scenario, profile), object_density=scenario.objects.density,
-                            clearance=scenario.objects.clearance, **overrides)
+                            clearance=scenario.objects.clearance, mass_model=physics.mass_model,
+                            box_masses=tuple(tuple(r) for r in physics.box_masses),
+                            cylinder_masses=tuple(tuple(r) for r in physics.cylinder_masses), **overrides)
 
 
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,

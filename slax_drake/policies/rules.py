@@ -55,10 +55,15 @@ class Discretisation:
 
 @dataclasses.dataclass(frozen=True)
 class ObjectPhysics:
-    """The scene's contact physics, copied from the scenario (``objects.density``, ``objects.clearance``)."""
+    """The scene's contact physics, copied from the scenario (``objects.density``, ``objects.clearance``, the
+    ``physics`` section's mass model): an object weighs its recorded mass, else what the mass model expects
+    (:func:`slax_drake.scene.mass.object_mass`)."""
 
     object_density: float = 400.0  # kg/m^3, to weigh objects
     clearance: float = 0.002  # moved objects stop this far from neighbours and walls (m)
+    mass_model: str = "density"  # or "household": an object without a recorded mass weighs its class's median
+    box_masses: tuple = ()  # household classes ((largest volume L, lightest kg, heaviest kg), ...)
+    cylinder_masses: tuple = ()
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -237,16 +242,55 @@ class MaxSuctionMoment(Rule):
 
 
 @register
+class MaxToolYawDeg(Rule):
+    """How far (deg) the tool may turn about the shelf's z axis to meet a turned box face along its normal: the
+    tube then comes in along the face's normal, turned by the face's angle clamped to this value and to what the
+    side walls leave the tube at the opening (its axis from the contact out to the opening keeps a tube radius
+    from the walls); the seal-angle rule (``max_seal_angle_deg``) applies to the angle left between the face's
+    normal and the turned tube, and the tube's reach (``max_suction_depth``) is measured along it. ``station``:
+    30 deg, with the 10 deg seal limit every box face up to 40 deg seals (a front face turns 45 deg at most); the
+    planner checks the arm at the turned poses. ``paper``: 0, the FOSS's tube stays along the shelf's y (its seal
+    angle is unlimited)."""
+
+    name, paper, station = "max_tool_yaw_deg", 0.0, 30.0
+
+    def problem(self, value) -> str | None:
+        return None if 0.0 <= value <= 90.0 else "must lie in [0, 90]"
+
+
+@register
 class MaxSealAngleDeg(Rule):
-    """A box face turned more than this (deg) from the tube's axis (the shelf's y) cannot be sealed; 90 admits
-    every face. Both profiles' defaults 90; the Drake station's cup sets it (``suction.max_seal_angle_deg``: 10;
-    in 80 Drake trials, 3 of 117 suctions of faces turned 15-35 deg ended where the model put the object, 245 of
-    305 under 10 deg did)."""
+    """A box face turned more than this (deg) from the tube's axis cannot be sealed; 90 admits every face (the
+    tube's axis is the shelf's y, or turned by ``max_tool_yaw_deg`` toward the face's normal). Both profiles'
+    defaults 90; the Drake station's cup sets it (``suction.max_seal_angle_deg``: 10; in 80 Drake trials with the
+    tube along y, 3 of 117 suctions of faces turned 15-35 deg ended where the model put the object, 245 of 305
+    under 10 deg did)."""
 
     name, paper, station = "max_seal_angle_deg", 90.0, 90.0
 
     def refuses(self, value: float, angle_deg: float) -> bool:
         return angle_deg > value
+
+
+@register
+class ReachMapRule(Rule):
+    """The station's precomputed reach map (a JSON path, :mod:`slax_drake.policies.reach`; "" for none): a push
+    whose blade, inserted or at the push's end, and a suction with the tube along y whose cup at the seal, lies
+    where the motion planner found no IK solution from the observation pose on the empty shelf (every grid node
+    around it unreached) is refused before the planner tries. Conservative: only what the map shows unreachable
+    all around; turned suctions are not checked (the map has only the yaw-0 cup). The map belongs to a station
+    (the robot's placement): both profiles' value is "", and a Drake trial's station sets it (the station YAML's
+    ``reach_map``, through ``station_tool_rules``)."""
+
+    name, type, paper, station = "reach_map", str, "", ""
+
+    def problem(self, value) -> str | None:
+        if not value:
+            return None
+        from slax_drake.config import REPO_ROOT
+        from pathlib import Path
+
+        return None if Path(value).is_file() or (REPO_ROOT / value).is_file() else "no such reach map file"
 
 
 # --------------------------------------------------------------------------------------------------------------

@@ -5,7 +5,7 @@ Layout (all lengths metres, poses 4x4 row-major nested lists in the shelf frame 
     {"schema_version": 1, "seed": 0,
      "shelf": {"width", "height", "depth", "wall_thickness"},
      "camera": {"X_SC", "width", "height", "fx", "fy", "cx", "cy", "near", "far"},
-     "objects": [{"name", "shape": "box" | "cylinder", "size": [x, y, z], "X_SO"}],
+     "objects": [{"name", "shape": "box" | "cylinder", "size": [x, y, z], "X_SO", "mass" (kg, optional)}],
      "target": {"size": [x, y, z], "X_ST"} | null}
 
 Camera frame C: z along the optical axis, x right and y down in the image. Object frames sit at the object's
@@ -119,7 +119,8 @@ def scene_from_dict(data) -> Scene:
             raise SceneFileError(f"field '{where}.size' = {list(size)}: a cylinder's size is [diameter, diameter, height]")
         X_SO = _pose(obj_d, "X_SO", where)
         _check_on_shelf(shelf, size, X_SO, where)
-        objects.append(SceneObject(name=name, shape=shape, size=size, X_SO=X_SO))
+        mass = _positive(obj_d, "mass", where) if obj_d.get("mass") is not None else None
+        objects.append(SceneObject(name=name, shape=shape, size=size, X_SO=X_SO, mass=mass))
     target = None
     if data.get("target") is not None:
         t_d = _field(data, "target", dict)

@@ -31,12 +31,14 @@ class Shelf:
 
 @dataclasses.dataclass(frozen=True)
 class SceneObject:
-    """An occluding object: ``shape`` "box" or "cylinder", ``size`` [x, y, z] and its pose X_SO (4x4)."""
+    """An occluding object: ``shape`` "box" or "cylinder", ``size`` [x, y, z], its pose X_SO (4x4) and, when the
+    scenario draws masses, its ``mass`` (kg)."""
 
     name: str
     shape: str
     size: tuple[float, float, float]
     X_SO: np.ndarray
+    mass: float | None = None  # kg; None: from the scenario's density (slax_drake.scene.mass.object_mass)
 
     @property
     def center(self) -> np.ndarray:
@@ -64,7 +66,10 @@ class SceneObject:
         return dataclasses.replace(self, X_SO=X)
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "shape": self.shape, "size": list(self.size), "X_SO": self.X_SO.tolist()}
+        data = {"name": self.name, "shape": self.shape, "size": list(self.size), "X_SO": self.X_SO.tolist()}
+        if self.mass is not None:
+            data["mass"] = self.mass
+        return data
 
 
 @dataclasses.dataclass(frozen=True)

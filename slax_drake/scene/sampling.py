@@ -28,6 +28,7 @@ from slax_drake.errors import SceneGenerationError
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.io import DECIMALS
 from slax_drake.scene.footprint import Footprint, clear_of
+from slax_drake.scene.mass import sample_masses
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
 from slax_drake.scene.raycast import SceneRaycaster
 from slax_drake.scene.surface import box_surface_points
@@ -67,7 +68,8 @@ def sample_scene(
         scene = Scene(shelf=shelf, camera=camera, objects=tuple(objects), target=None, seed=seed)
         target = _place_hidden_target(scenario, scene, target_size, rng)
         if target is not None:
-            return Scene(shelf, camera, tuple(_rounded_object(o) for o in scene.objects), _rounded_target(target), seed)
+            objects = sample_masses(tuple(_rounded_object(o) for o in scene.objects), scenario.physics, seed)
+            return Scene(shelf, camera, objects, _rounded_target(target), seed)
     raise SceneGenerationError(
         f"could not place {num_objects} objects with a hidden {target_size} m target in "
         f"{scenario.sampling.scene_attempts} attempts (seed {seed}); use fewer objects or a larger shelf"

@@ -167,8 +167,9 @@ def make_station_plant(scenario: StationScenario, scene: Scene | None = None,
         from slax_drake.config import load_scenario
         from slax_drake.station.scene_world import add_scene_objects
 
-        density = load_scenario(scenario.scene_config).objects.density
-        scene_bodies = add_scene_objects(plant, scene, density, include_target=with_target)
+        scene_scenario = load_scenario(scenario.scene_config)
+        scene_bodies = add_scene_objects(plant, scene, scene_scenario.objects.density, include_target=with_target,
+                                         friction=scene_scenario.physics.object_friction)
         objects = {name: plant.get_body(index) for name, index in zip(scene_bodies.names, scene_bodies.all())}
     plant.Finalize()
     return StationPlant(purpose, plant, scene_graph, builder, robot, shelf, X_WS, objects, camera, scene_bodies)

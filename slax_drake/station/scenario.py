@@ -40,8 +40,14 @@ class SuctionParameters:
 
     @property
     def max_force(self) -> float:
-        """The largest pull (N): vacuum pressure times cup area."""
+        """The largest pull (N): vacuum pressure times cup area (60 kPa on a 15 mm radius: 42.4 N)."""
         return self.vacuum_pressure * math.pi * self.cup_radius**2
+
+    @property
+    def lip_moment(self) -> float:
+        """The moment (N m) the sealed cup resists before its lip peels: the pull acting at the rim's radius, about
+        the rim point opposite (42.4 N x 15 mm = 0.64 N m). ``max_held_moment`` keeps a margin below it."""
+        return self.max_force * self.cup_radius
 
 
 SHELF_BODY = "shelf_body"
@@ -69,6 +75,9 @@ class StationScenario:
     head_configuration: typing.Dict[str, float] = dataclasses.field(default_factory=dict)
     suction: SuctionParameters = dataclasses.field(default_factory=SuctionParameters)
     camera: bool = True
+    # The station's reach map (models/reach/*.json, slax_drake.planning.reach), "" for none: the action model's
+    # reach_map rule in Drake trials on this station (slax_drake.policies.reach).
+    reach_map: str = ""
 
 
 def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:
@@ -109,6 +118,9 @@ def _validate(scenario: StationScenario, source: str) -> None:
     for name in ("vacuum_pressure", "cup_radius", "max_distance", "max_angle_deg"):
         if not getattr(p, name) > 0:
             raise ConfigError(f"{source}: key 'suction.{name}' = {getattr(p, name)!r}: must be positive")
+    if math.isfinite(p.max_held_moment) and p.max_held_moment > p.lip_moment:
+        raise ConfigError(f"{source}: key 'suction.max_held_moment' = {p.max_held_moment!r}: must not exceed what the "
+                          f"cup's model holds, vacuum_pressure x cup area x cup_radius = {p.lip_moment:.3f} N m")
     if not p.max_held_moment > 0:
         raise ConfigError(f"{source}: key 'suction.max_held_moment' = {p.max_held_moment!r}: must be positive "
                           "(.inf for no limit)")

@@ -6,9 +6,11 @@ boxes of ``slax_drake.scene.raycast.shelf_boxes``, so the physics, the renderer 
 geometry. Objects (and the target) are free bodies whose frame O is at the object's centre, z up.
 
 Physics choices (documented numbers):
-- mass from ``density`` (kg/m^3, the scenario's ``objects.density``, 400 in sim_shelf.yaml) times the volume,
-  inertia of the solid box or cylinder;
-- Coulomb friction 0.5 (static = dynamic) for objects, 0.4 for the shelf (cardboard and wood, plausible);
+- mass: the object's recorded mass (scenario ``physics.mass_model: household``, drawn from household goods'
+  published masses, slax_drake.scene.mass), else ``density`` (kg/m^3, the scenario's ``objects.density``, 400 in
+  sim_shelf.yaml) times the volume; inertia of the solid box or cylinder of that mass;
+- Coulomb friction (static = dynamic): the scenario's ``physics.object_friction`` (default 0.5) for objects, 0.4
+  for the shelf (packaging on a laminated board; sources in slax_drake/config.py's PhysicsConfig);
 - point contact: stiffness 2e5 N/m per contact point and Hunt-Crossley dissipation 5 s/m;
 - Drake's point contact between two boxes returns one contact point, which lets a resting box rock; each box
   therefore carries eight 1 mm spheres inset at its corners (tangent to its faces), and each cylinder
@@ -96,10 +98,11 @@ def shelf_sdf(shelf: Shelf) -> str:
 
 
 def object_mass(obj: SceneObject, density: float) -> float:
-    """Mass (kg) of a solid box or cylinder of ``density`` kg/m^3."""
-    sx, sy, sz = obj.size
-    volume = sx * sy * sz if obj.shape == "box" else math.pi * (sx / 2.0) ** 2 * sz
-    return density * volume
+    """Mass (kg): the object's recorded mass (a household-mass scene), else a solid box or cylinder of ``density``
+    kg/m^3."""
+    from slax_drake.scene.mass import object_mass as mass_of
+
+    return mass_of(obj, density)
 
 
 def _corner_points(obj: SceneObject, r: float) -> list[np.ndarray]:
@@ -115,8 +118,10 @@ def _corner_points(obj: SceneObject, r: float) -> list[np.ndarray]:
     return points
 
 
-def add_scene_objects(plant, scene: Scene, density: float, include_target: bool = True) -> SceneBodies:
-    """Adds the scene's objects (and target) as free bodies, each in its own model instance named after it.
+def add_scene_objects(plant, scene: Scene, density: float, include_target: bool = True,
+                      friction: float = OBJECT_FRICTION) -> SceneBodies:
+    """Adds the scene's objects (and target) as free bodies, each in its own model instance named after it, with
+    Coulomb ``friction`` (static = dynamic; the scenario's ``physics.object_friction``).
 
     Call before ``plant.Finalize()``; set their poses with ``set_default_object_poses`` (or
     ``plant.SetDefaultFloatingBaseBodyPose``) once the shelf's pose in the world is known.
@@ -146,7 +151,7 @@ def add_scene_objects(plant, scene: Scene, density: float, include_target: bool 
         AddContactMaterial(
             dissipation=HUNT_CROSSLEY_DISSIPATION,
             point_stiffness=POINT_STIFFNESS,
-            friction=CoulombFriction(OBJECT_FRICTION, OBJECT_FRICTION),
+            friction=CoulombFriction(friction, friction),
             properties=props,
         )
         plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"{obj.name}_collision", props)

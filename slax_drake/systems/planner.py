@@ -225,7 +225,8 @@ EARLY_FAILURES = ("pre-approach", "insert", "approach", "segment to pre-approach
 def _describe(action) -> dict:
     if isinstance(action, Push):
         return {"type": "push", "object": action.name, "q": list(action.q), "d": action.d}
-    return {"type": "suction", "object": action.name, "q": list(action.q), "dx": action.dx, "dz": action.dz}
+    return {"type": "suction", "object": action.name, "q": list(action.q), "dx": action.dx, "dz": action.dz,
+            "yaw": action.yaw}
 
 
 def _predicted(objects, action) -> dict:

@@ -91,7 +91,7 @@ def station_for(config: str) -> str:
 def station_tool_rules(station, overrides: dict | None = None, profile: str = "station") -> dict:
     """The rule overrides of ``profile`` a trial on ``station`` plans with: the station cup's limits
     (``suction.max_held_moment`` as ``max_suction_moment`` when finite, ``suction.max_seal_angle_deg`` when under
-    90), then ``overrides`` on top; entries equal to the profile's values are left out."""
+    90) and its reach map (``reach_map`` when given), then ``overrides`` on top; entries equal to the profile's values are left out."""
     from slax_drake.policies.registry import without_defaults
 
     rules = {}
@@ -99,6 +99,8 @@ def station_tool_rules(station, overrides: dict | None = None, profile: str = "s
         rules["max_suction_moment"] = float(station.suction.max_held_moment)
     if station.suction.max_seal_angle_deg < 90.0:
         rules["max_seal_angle_deg"] = float(station.suction.max_seal_angle_deg)
+    if station.reach_map:
+        rules["reach_map"] = station.reach_map
     rules.update(overrides or {})
     return without_defaults(rules, profile)
 

@@ -1,0 +1,127 @@
+"""Computing a station's reach map (:class:`slax_drake.policies.reach.ReachMap`) with the motion planner.
+
+    python -m slax_drake.planning.reach --station sim_configs/station_sim_shelf.yaml \\
+        --out models/reach/station_sim_shelf.json --png models/reach/station_sim_shelf.png
+
+For every grid node (x, y) of the bay floor (``step`` apart, from a tool-width inside the side walls to 5 cm from
+the back), the empty shelf, and each layer: the tool waypoint the action model's action with parameter (x, y) puts
+the tool at (the blade inserted for a push toward +x / -x: ``action_waypoints``'s "insert"; the cup at the seal of
+a yaw-0 suction at height ``CUP_HEIGHT``: "seal"), and whether :meth:`MotionPlanner.reaches` finds a
+collision-free IK solution from the observation pose with its seed library. One node takes about a second where
+the arm does not reach (every seed is tried), less where it does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from slax_drake.policies.reach import LAYERS, ReachMap, grid
+
+CUP_HEIGHT = 0.10  # m, the cup layer's contact height (contacts sit 1.5-18.5 cm high)
+STEP = 0.05  # m
+WALL_INSET = 0.035  # m: the first blade lane's centre from a side wall
+BACK_INSET = 0.05  # m: the deepest node from the back wall
+
+
+def layer_waypoint(layer: str, x: float, y: float, scene, tool):
+    """The tool waypoint of ``layer`` at the action parameter (x, y) (S, m)."""
+    from slax_drake.planning.waypoints import action_waypoints
+    from slax_drake.policies.actions import Push, Suction
+    from slax_drake.scene.model import SceneObject, planar_pose
+
+    # action_waypoints reads the moved object's footprint (for a suction's carry); a small box behind the
+    # contact, which the planning world does not hold
+    dummy = SceneObject("reach_probe", "box", (0.06, 0.06, 0.06), planar_pose(x, y + 0.03, 0.03, 0.0))
+    if layer in ("push+x", "push-x"):
+        d = 0.05 if layer == "push+x" else -0.05
+        wps = action_waypoints(Push(dummy.name, (x, y, tool.geometry.blade_height / 2), d), (dummy,), scene.shelf, tool)
+        return next(w for w in wps if w.label == "insert")
+    wps = action_waypoints(Suction(dummy.name, (x, y, CUP_HEIGHT), 0.0, y + 0.03), (dummy,), scene.shelf, tool)
+    return next(w for w in wps if w.label == "seal")
+
+
+def compute_reach_map(station_path: str, step: float = STEP, progress: bool = True) -> ReachMap:
+    from slax_drake.config import load_scenario
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.policies.registry import tool_config
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.scene.sampling import shelf_of
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario(station_path)
+    scenario = load_scenario(station.scene_config)
+    shelf = shelf_of(scenario)
+    scene = Scene(shelf, Camera.from_config(scenario.camera), (), None, 0)
+    tool = tool_config(scenario, "station")
+    planner = MotionPlanner(station, tool)
+    xs = grid(-shelf.width / 2 + WALL_INSET, shelf.width / 2 - WALL_INSET, step)
+    ys = grid(-shelf.depth / 2 + 0.03, shelf.depth / 2 - BACK_INSET, step)
+    reach = {}
+    t0 = time.perf_counter()
+    for layer in LAYERS:
+        ok = np.zeros((len(ys), len(xs)), bool)
+        for j, y in enumerate(ys):
+            for i, x in enumerate(xs):
+                ok[j, i] = planner.reaches(scene, layer_waypoint(layer, float(x), float(y), scene, tool))
+        reach[layer] = ok
+        if progress:
+            print(f"{layer}: {int(ok.sum())} of {ok.size} nodes reached ({time.perf_counter() - t0:.0f} s)", flush=True)
+    heights = {"push+x": tool.geometry.blade_height / 2, "push-x": tool.geometry.blade_height / 2, "cup": CUP_HEIGHT}
+    return ReachMap(str(station_path), xs, ys, reach, heights)
+
+
+def reach_png(rmap: ReachMap, shelf) -> bytes:
+    """One panel per layer: reached nodes green, unreached red, over the bay's outline (S, top-down)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+
+    from slax_drake.io import figure_png
+
+    fig, axes = plt.subplots(1, len(LAYERS), figsize=(4.2 * len(LAYERS), 4.6))
+    X, Y = np.meshgrid(rmap.xs, rmap.ys)
+    for ax, layer in zip(axes, LAYERS):
+        ok = rmap.reach[layer]
+        ax.add_patch(Rectangle((-shelf.width / 2, -shelf.depth / 2), shelf.width, shelf.depth, fill=False))
+        ax.scatter(X[ok], Y[ok], c="#2ca02c", s=18, label="reached")
+        ax.scatter(X[~ok], Y[~ok], c="#d62728", s=18, marker="x", label="not reached")
+        ax.set_aspect("equal")
+        ax.set_title(f"{layer} (z = {rmap.heights[layer]:.3f} m): {int(ok.sum())}/{ok.size}", fontsize=9)
+        ax.set_xlabel("x (m)")
+    axes[0].set_ylabel("y (m), into the shelf")
+    axes[0].legend(fontsize=7, loc="lower left")
+    fig.suptitle(f"reach map of {rmap.station} (the action's q; empty shelf, from the observation pose)", fontsize=9)
+    fig.tight_layout()
+    return figure_png(fig, 100)
+
+
+def main(argv=None) -> int:
+    from slax_drake.config import load_scenario
+    from slax_drake.io import write_bytes_atomic, write_text_atomic
+    from slax_drake.scene.sampling import shelf_of
+    from slax_drake.station.scenario import load_station_scenario
+    import json
+    from pathlib import Path
+
+    parser = argparse.ArgumentParser(description="compute a station's reach map")
+    parser.add_argument("--station", required=True)
+    parser.add_argument("--out", required=True, help="reach map JSON")
+    parser.add_argument("--png", default=None)
+    parser.add_argument("--step", type=float, default=STEP)
+    args = parser.parse_args(argv)
+    rmap = compute_reach_map(args.station, args.step)
+    write_text_atomic(Path(args.out), json.dumps(rmap.to_dict()) + "\n")
+    if args.png:
+        shelf = shelf_of(load_scenario(load_station_scenario(args.station).scene_config))
+        write_bytes_atomic(Path(args.png), reach_png(rmap, shelf))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,88 @@
+"""A station's precomputed reach map and the conservative lookup the action model's ``reach_map`` rule reads.
+
+The map (computed by :mod:`slax_drake.planning.reach`, committed under ``models/reach/``) holds, on a grid of the
+shelf frame S (x right, y into the shelf; metres) over the bay floor, whether the motion planner found a
+collision-free IK solution from the observation pose, on the empty shelf, for each layer:
+
+- ``push+x`` / ``push-x``: the blade inserted for a push toward +x / -x whose action parameter q is (x, y) (the
+  blade lane's centre and the blade tip's depth; the action model's Push.q);
+- ``cup``: the cup at the seal of a suction with the tube along y (yaw 0) whose contact is (x, y), at the height
+  ``heights["cup"]``.
+
+:meth:`ReachMap.refuses` is conservative: a point is refused only when every grid node of every cell within
+``margin`` of it (the cells its neighbourhood touches) is unreachable, so a refused point lies inside a region
+where the planner found nothing; points off the grid are never refused.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+LAYERS = ("push+x", "push-x", "cup")
+
+
+@dataclasses.dataclass(frozen=True)
+class ReachMap:
+    """``xs``, ``ys``: grid coordinates (S, m, increasing); ``reach[layer]``: bool (len(ys), len(xs)), True where
+    the planner reached; ``heights``: the tool's height per layer (m); ``station``: the station file it is of."""
+
+    station: str
+    xs: np.ndarray
+    ys: np.ndarray
+    reach: dict
+    heights: dict
+
+    def refuses(self, layer: str, x: float, y: float, margin: float = 0.0) -> bool:
+        """True when every grid node around (x +- margin, y +- margin) is unreachable in ``layer`` (see the
+        module docstring); False off the grid or where any such node was reached."""
+        xs, ys = self.xs, self.ys
+        if not (xs[0] - 1e-9 <= x <= xs[-1] + 1e-9 and ys[0] - 1e-9 <= y <= ys[-1] + 1e-9):
+            return False
+        i0 = max(0, int(np.searchsorted(xs, x - margin - 1e-9, side="right")) - 1)
+        i1 = min(len(xs) - 1, int(np.searchsorted(xs, x + margin + 1e-9, side="left")))
+        j0 = max(0, int(np.searchsorted(ys, y - margin - 1e-9, side="right")) - 1)
+        j1 = min(len(ys) - 1, int(np.searchsorted(ys, y + margin + 1e-9, side="left")))
+        return not bool(self.reach[layer][j0:j1 + 1, i0:i1 + 1].any())
+
+    def to_dict(self) -> dict:
+        return {"station": self.station, "xs": [round(float(v), 6) for v in self.xs],
+                "ys": [round(float(v), 6) for v in self.ys], "heights": dict(self.heights),
+                "reach": {k: np.asarray(v, int).tolist() for k, v in self.reach.items()}}
+
+    @staticmethod
+    def from_dict(data: dict) -> "ReachMap":
+        return ReachMap(data["station"], np.array(data["xs"], float), np.array(data["ys"], float),
+                        {k: np.array(v, bool) for k, v in data["reach"].items()}, dict(data["heights"]))
+
+
+@functools.lru_cache(maxsize=8)
+def load_reach_map(path: str) -> ReachMap:
+    """The reach map JSON at ``path`` (relative paths from the repository root), read once per process."""
+    from slax_drake.config import REPO_ROOT
+    from slax_drake.errors import ConfigError
+
+    p = Path(path)
+    if not p.is_absolute() and not p.is_file():
+        p = REPO_ROOT / p
+    try:
+        data = json.loads(p.read_text())
+        rmap = ReachMap.from_dict(data)
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise ConfigError(f"{path}: not a reach map ({e})") from None
+    for layer in LAYERS:
+        if layer not in rmap.reach or rmap.reach[layer].shape != (len(rmap.ys), len(rmap.xs)):
+            raise ConfigError(f"{path}: reach map without a {len(rmap.ys)} x {len(rmap.xs)} layer {layer!r}")
+    return rmap
+
+
+def grid(lo: float, hi: float, step: float) -> np.ndarray:
+    """Grid coordinates from ``lo`` to ``hi`` (inclusive, ``step`` apart, the last one at ``hi``)."""
+    n = int(math.floor((hi - lo) / step + 1e-9))
+    values = lo + step * np.arange(n + 1)
+    return values if abs(values[-1] - hi) < 1e-9 else np.append(values, hi)

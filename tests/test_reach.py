@@ -1,0 +1,107 @@
+"""The reach map and the action model's reach_map rule (issue 17 item 3): conservative lookup, the committed maps
+of the shipped stations, the rule refusing what the map shows unreachable, and (slow) agreement with the motion
+planner on a seeded sample of poses."""
+
+import numpy as np
+import pytest
+
+from slax_drake.policies.actions import ActionModel
+from slax_drake.policies.reach import LAYERS, ReachMap, load_reach_map
+from slax_drake.policies.registry import tool_config
+from slax_drake.scene.model import SceneObject, planar_pose
+from slax_drake.scene.sampling import shelf_of
+
+SIM_MAP = "models/reach/station_sim_shelf.json"
+
+
+def _toy_map():
+    xs, ys = np.array([0.0, 0.1, 0.2, 0.3]), np.array([0.0, 0.1, 0.2])
+    ok = np.array([[True, True, False, False]] * 3)  # reached left of x = 0.1, not from x = 0.2
+    return ReachMap("toy", xs, ys, {layer: ok for layer in LAYERS}, {layer: 0.1 for layer in LAYERS})
+
+
+def test_the_lookup_refuses_only_where_every_node_around_is_unreached():
+    m = _toy_map()
+    assert m.refuses("cup", 0.25, 0.05)  # every node of its cell unreached
+    assert m.refuses("cup", 0.3, 0.2)  # a corner node: the one cell it touches is unreached
+    assert not m.refuses("cup", 0.15, 0.05)  # its cell holds reached nodes (x = 0.1)
+    assert not m.refuses("cup", 0.2, 0.1)  # on a node: the cells it touches reach back to x = 0.1
+    assert not m.refuses("cup", 0.25, 0.05, margin=0.06)  # the margin takes in the cell from x = 0.1
+    assert not m.refuses("cup", 0.5, 0.1) and not m.refuses("cup", 0.25, -0.2)  # off the grid: never refused
+    again = ReachMap.from_dict(m.to_dict())
+    assert all((again.reach[k] == m.reach[k]).all() for k in LAYERS) and (again.xs == m.xs).all()
+
+
+@pytest.mark.parametrize("station", ["sim_configs/station_sim_shelf.yaml", "sim_configs/station_physical_shelf.yaml"])
+def test_the_shipped_stations_name_their_committed_maps(station):
+    from slax_drake.config import load_scenario
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.trial import station_tool_rules
+
+    st = load_station_scenario(station)
+    rmap = load_reach_map(st.reach_map)
+    shelf = load_scenario(st.scene_config).shelf
+    assert rmap.xs[0] >= -shelf.width / 2 and rmap.xs[-1] <= shelf.width / 2 and rmap.ys[-1] <= shelf.depth / 2
+    for layer in LAYERS:  # the front of the bay is reached, somewhere its back is not
+        assert rmap.reach[layer][0].any() and not rmap.reach[layer].all()
+    assert station_tool_rules(st)["reach_map"] == st.reach_map
+
+
+def test_the_rule_refuses_a_push_the_map_shows_unreachable(sim_scenario):
+    """A box whose +x push puts the blade where the map reached nothing: without the map the action model offers
+    the push, with it the push is refused with the reach map's reason; the paper profile has no map."""
+    rmap = load_reach_map(SIM_MAP)
+    shelf = shelf_of(sim_scenario)
+
+    def pushes(box, **rules):
+        model = ActionModel(shelf, (0.0, -0.75, 0.2), tool_config(sim_scenario, "station", **rules))
+        return model.enumerate((box,), suctions=False)
+
+    for j, i in np.argwhere(~rmap.reach["push+x"]):
+        x, y = float(rmap.xs[i]), float(rmap.ys[j])
+        box = SceneObject("b", "box", (0.06, 0.06, 0.10), planar_pose(x + 0.05, y - 0.03, 0.05, 0.0))
+        if abs(box.center[0]) > shelf.width / 2 - 0.04 or abs(box.center[1]) > shelf.depth / 2 - 0.04:
+            continue
+        offered = [a for a in pushes(box).feasible if a.d > 0]
+        if offered and rmap.refuses("push+x", offered[0].q[0], offered[0].q[1], 0.015):
+            break
+    else:
+        pytest.fail("no unreached node of the map takes a +x push of a small box")
+    with_map = pushes(box, reach_map=SIM_MAP)
+    assert not [a for a in with_map.feasible if a.d > 0]
+    assert [r.reason for r in with_map.rejected if r.what == "push b +x"][0].endswith("m (reach map)")
+    assert tool_config(sim_scenario, "paper").rules.reach_map == ""
+
+
+@pytest.mark.slow
+def test_the_rule_agrees_with_the_planner_on_a_sample_of_poses(sim_scenario):
+    """Seeded random tool positions per layer: each one the map refuses has no collision-free IK solution from
+    the observation pose; each one in a grid cell whose four nodes were all reached has one."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.planning.reach import layer_waypoint
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    rmap = load_reach_map(station.reach_map)
+    tool = tool_config(sim_scenario, "station")
+    planner = MotionPlanner(station, tool)
+    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    rng = np.random.default_rng(17)
+    checked = {"refused": 0, "accepted": 0}
+    for layer in LAYERS:
+        refused, accepted = [], []
+        while len(refused) < 3 or len(accepted) < 3:
+            x = rng.uniform(rmap.xs[0], rmap.xs[-1])
+            y = rng.uniform(rmap.ys[0], rmap.ys[-1])
+            i = min(len(rmap.xs) - 2, int(np.searchsorted(rmap.xs, x)) - 1)
+            j = min(len(rmap.ys) - 2, int(np.searchsorted(rmap.ys, y)) - 1)
+            if rmap.refuses(layer, x, y, 0.015) and len(refused) < 3:
+                refused.append((x, y))
+            elif rmap.reach[layer][j:j + 2, i:i + 2].all() and len(accepted) < 3:
+                accepted.append((x, y))
+        for (x, y), expected in [(p, False) for p in refused] + [(p, True) for p in accepted]:
+            assert planner.reaches(scene, layer_waypoint(layer, x, y, scene, tool)) == expected, (layer, x, y)
+            checked["refused" if not expected else "accepted"] += 1
+    assert checked == {"refused": 9, "accepted": 9}
