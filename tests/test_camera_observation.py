@@ -117,3 +117,19 @@ def test_camera_observation_holds_hypotheses_not_true_objects(scenario):
     assert set(names.values()) <= {o.name for o in scene.objects}
     assert obs.scene_template.target is None
     assert obs.p1d.shape == (160,)
+
+
+def test_a_prediction_where_a_moved_object_hides_another_moved_one_does_not_fail(scenario):
+    """Two hypotheses move: the first is carried in front of the second, whose segment it then covers wholly, and
+    the second moves too. The prediction keeps the second where it cannot be seen instead of failing (the physics
+    benchmark stopped on "segment 5 is not in the observation" from this case)."""
+    scene = sample_scene(scenario, 6, 1, target_size=SIZE)
+    frame, _ = _frame(scene)
+    belief = ObservedBelief(frame, scene.shelf, DepthDistribution(scene.shelf, SIZE))
+    front, hidden = (next(o for o in belief.known if o.name == n) for n in ("segment_1", "segment_3"))
+    objects = tuple(o.moved_to(hidden.center[0], hidden.center[1] - 0.03) if o is front
+                    else o.moved_to(o.center[0] + 0.02, o.center[1]) if o is hidden else o for o in belief.known)
+    predicted = belief.predicted_observation(objects)
+    assert not (predicted.segmentation == belief.segment_id(hidden.name)).any()  # covered by the moved front one
+    assert (predicted.segmentation == belief.segment_id(front.name)).any()
+    assert np.isfinite(belief.predict(objects)).all()

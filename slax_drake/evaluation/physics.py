@@ -43,6 +43,11 @@ from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
 
+# What the Drake trials' planner sees (slax_drake.systems.trial.build_trial's defaults): recorded in the settings
+# and said in the report, beside the shelf simulator's privileged observation.
+DRAKE_OBSERVATION = ("camera: rendered frames, the render's labels as segmentation, estimator hypotheses, P_t from "
+                     "the depth frame, no sensor noise")
+
 
 def trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return Path(out) / "physics_trials" / policy / f"{density:02d}_{index:04d}.json"
@@ -236,6 +241,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     out = Path(out)
     tool_rules = station_tool_rules(load_station_scenario(station), tool_rules, profile)
     settings = {**protocol_settings(scenario, config, seed, "ground-truth", tool_rules, policies, profile=profile),
+                "drake_observation": DRAKE_OBSERVATION,
                 "station": str(station), "station_sha256": file_digest(station), "sleep": bool(sleep)}
     record_or_refuse(out, settings, has_results=any((out / "physics_trials").glob("*/*.json")),
                      name=PHYSICS_SETTINGS_FILE)
@@ -401,7 +407,9 @@ def markdown_table(summary: dict) -> str:
                          f"{secs(e.get('planning_median_s'))} / {secs(e.get('planning_p90_s'))} |")
     meta = summary.get("meta", {})
     lines += ["", f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
-              f"ground-truth distributions, the same scenes in both simulators. Steps over successful trials. "
+              f"the same scenes in both simulators: the shelf simulator with the objects seen as they are and ground-truth "
+              f"distributions (privileged), the Drake trials with what their camera sees ({DRAKE_OBSERVATION}). "
+              f"Steps over successful trials. "
               f"An action matches when the object's physical pose at the next decision is within "
               f"{100 * MATCH_DISTANCE:.0f} cm and {math.degrees(MATCH_YAW):.0f} deg of the first-order prediction. "
               f"Toppled/dropped: objects tilted > 20 deg / outside the bay at the end of the Drake trial; "

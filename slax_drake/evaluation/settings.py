@@ -79,12 +79,14 @@ LABELS = {
     "suction_cost": "suction cost (scenario protocol.suction_cost)",
     "visibility_threshold": "visibility threshold (scenario target.visibility_threshold)",
     "profile": "--profile (or the scenario's profile)", "oracle_seconds": "--oracle-seconds",
+    "drake_observation": "the Drake trials' observation (this version's trial diagram)",
     "tool_rules": "--tool-rule", "station_sha256": "station (the --station file's content)", "sleep": "--sleep",
     "scenario_sha256": "scenario (the --config file's content)",
 }
 INFORMATIONAL = ("config", "station")
 # What a record made before a setting existed holds for it (folders made before --observation were privileged).
-RECORDED_DEFAULTS = {"observation": "privileged", "camera": None, "profile": "station", "oracle_seconds": None}
+RECORDED_DEFAULTS = {"observation": "privileged", "camera": None, "profile": "station", "oracle_seconds": None,
+                     "drake_observation": "privileged (true poses; before perception was in the loop)"}
 
 
 def record_or_refuse(out: Path, settings: dict, has_results: bool, name: str = SETTINGS_FILE) -> dict:

@@ -138,6 +138,10 @@ class ObservedBelief:
             dx, dy = (float(v) for v in after.center[:2] - before.center[:2])
             if abs(dx) < _MOVED and abs(dy) < _MOVED:
                 continue
+            if sid not in obs.segment_ids:
+                # An object moved earlier in this loop now covers this one wholly: it has no pixel left to move, so
+                # the prediction leaves it out (an approximation: had it come out from behind, the frame would show it).
+                continue
             previous = obs.segmentation == sid
             obs = predict_observation(obs, sid, dx, dy)
             left = previous & (obs.segmentation != sid) & (obs.depth <= 0)
