@@ -14,7 +14,7 @@ import json
 import sys
 from pathlib import Path
 
-from slax_drake.io import write_text_atomic
+from table1_readme import replace_section  # beside this script
 
 BEGIN, END = "<!-- observation-modes:begin -->", "<!-- observation-modes:end -->"
 KEYS = ["4", "6", "8", "10", "all"]
@@ -58,13 +58,7 @@ def main() -> int:
     if args.write is None:
         print(text, end="")
         return 0
-    readme = args.write.read_text()
-    if BEGIN not in readme or END not in readme:
-        sys.exit(f"{args.write} has no {BEGIN} ... {END} markers")
-    head, rest = readme.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    write_text_atomic(args.write, head + BEGIN + "\n" + text + END + tail)
-    return 0
+    return replace_section(args.write, BEGIN, END, text)
 
 
 if __name__ == "__main__":

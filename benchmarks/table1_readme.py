@@ -91,13 +91,19 @@ def main(argv=None) -> int:
     if args.write is None:
         print(text, end="")
         return 0
-    readme = args.write.read_text()
-    if BEGIN not in readme or END not in readme:
-        print(f"error: {args.write} has no {BEGIN} ... {END} section", file=sys.stderr)
+    return replace_section(args.write, BEGIN, END, text)
+
+
+def replace_section(path: Path, begin: str, end: str, text: str) -> int:
+    """Replaces what stands between the markers ``begin`` and ``end`` of the file at ``path`` with ``text``
+    (atomically); 2 with a message when the file lacks them."""
+    readme = path.read_text()
+    if begin not in readme or end not in readme:
+        print(f"error: {path} has no {begin} ... {end} section", file=sys.stderr)
         return 2
-    head, rest = readme.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    write_text_atomic(args.write, head + BEGIN + "\n" + text + END + tail)
+    head, rest = readme.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    write_text_atomic(path, head + begin + "\n" + text + end + tail)
     return 0
 
 
