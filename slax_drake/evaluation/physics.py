@@ -121,7 +121,7 @@ def _run_scene(job) -> dict:
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial as run_shelf_trial
     from slax_drake.scene.sampling import sample_scene
-    from slax_drake.evaluation.trial import TrialOptions, run_trial
+    from slax_drake.evaluation.trial import TrialOptions, drake_info_silenced, run_trial
 
     scenario = load_scenario(config)
     opts = protocol_trial(TrialOptions(config=config, station=station, policy=policy_name, out=None, sleep=sleep,
@@ -133,7 +133,8 @@ def _run_scene(job) -> dict:
                             suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
     t0 = time.perf_counter()
     try:
-        d = run_trial(opts).data
+        with drake_info_silenced():
+            d = run_trial(opts).data
     except RuntimeError as e:
         if "non-finite" not in str(e):
             raise

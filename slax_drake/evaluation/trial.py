@@ -9,17 +9,35 @@ poses. :func:`write_trial` writes ``trial.json``, ``scene.json`` (the initial sc
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import io
 import json
+import logging
 import math
 import time
 from pathlib import Path
 
 import numpy as np
 
-from slax_drake.errors import TrialError
-from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
+from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions  # noqa: F401  (the runner's options)
+
+
+@contextlib.contextmanager
+def drake_info_silenced():
+    """Drake's log (pydrake logs through Python's ``logging.getLogger("drake")``) at warnings and above while the
+    block runs. Its INFO lines ("Meshcat listening for connections at ...", a localhost address that dies with the
+    process; "Allocating contexts to support implicit context parallelism", once per planned action, from each new
+    collision checker) say nothing a user of a trial can act on."""
+    import pydrake.common  # noqa: F401  (pydrake ties its C++ log level to this logger's level)
+
+    logger = logging.getLogger("drake")
+    previous = logger.level
+    logger.setLevel(logging.WARNING)
+    try:
+        yield
+    finally:
+        logger.setLevel(previous)
 
 
 @dataclasses.dataclass

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import logging
 
 from slax_drake.errors import TrialError
 from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
@@ -66,7 +65,7 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
 
 def run(args: argparse.Namespace) -> int:
     from slax_drake.policies.registry import parse_tool_rules
-    from slax_drake.evaluation.trial import run_trial, write_trial
+    from slax_drake.evaluation.trial import drake_info_silenced, run_trial, write_trial
     from slax_drake.systems.trial_summary import trial_summary
 
     profile = args.profile or "station"  # Drake trials plan with the physical tool's rules unless told otherwise
@@ -81,8 +80,7 @@ def run(args: argparse.Namespace) -> int:
         if args.objects is not None or args.seed is not None:
             raise TrialError("--benchmark-scene replaces --objects and --seed: give one or the other")
         opts = benchmark_scene_options(opts, args.benchmark_scene)
-    previous_level = quiet_drake_info()
-    try:
+    with drake_info_silenced():
         meshcat = None
         if args.meshcat or args.html:
             from pydrake.geometry import Meshcat
@@ -91,22 +89,7 @@ def run(args: argparse.Namespace) -> int:
             if args.meshcat:
                 print(f"meshcat: {meshcat.web_url()} (a live view while this command runs)", flush=True)
         record = run_trial(opts, meshcat=meshcat)
-    finally:
-        logging.getLogger("drake").setLevel(previous_level)
     written = write_trial(record, args.out, html=args.html)
     print(trial_summary(record.data, written, html=args.html,
                         meshcat_url=meshcat.web_url() if args.meshcat else None))
     return 0
-
-
-def quiet_drake_info() -> int:
-    """Sets Drake's log (pydrake logs through Python's ``logging.getLogger("drake")``) to warnings and above and
-    returns the level it had. Its INFO lines ("Meshcat listening for connections at ...", a localhost address that
-    dies with the process; "Allocating contexts to support implicit context parallelism", once per planned action,
-    from each new collision checker) say nothing a user of the trial can act on."""
-    import pydrake.common  # noqa: F401  (pydrake ties its C++ log level to this logger's level)
-
-    logger = logging.getLogger("drake")
-    previous = logger.level
-    logger.setLevel(logging.WARNING)
-    return previous
