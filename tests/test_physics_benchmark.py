@@ -8,8 +8,7 @@ import pytest
 
 from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.cli import main as cli_main
-from slax_drake.errors import UserError
-from slax_drake.errors import PhysicsBenchmarkError
+from slax_drake.errors import PhysicsBenchmarkError, UserError
 from slax_drake.evaluation.physics import action_matches, run_physics_benchmark, trial_path
 
 CONFIG = "sim_configs/sim_shelf.yaml"
@@ -175,6 +174,17 @@ def test_a_resumed_run_refuses_scene_files_made_under_other_rules(tiny):
         run_physics_benchmark(CONFIG, out=out, tool_rules={"max_suction_moment": 0.3}, **TINY)
     with pytest.raises(UserError, match="made with another --sleep"):
         run_physics_benchmark(CONFIG, out=out, **{**TINY, "sleep": True})
+    with pytest.raises(UserError, match="made with another Drake-trial observation"):
+        run_physics_benchmark(CONFIG, out=out, **{**TINY, "sensor_noise": True})
+
+
+@pytest.mark.slow
+def test_the_physics_benchmark_runs_with_sensor_noise_and_says_so(tmp_path):
+    summary = run_physics_benchmark(CONFIG, out=tmp_path, **{**TINY, "sensor_noise": True})
+    assert summary["meta"]["sensor_noise"] is True
+    settings = json.loads((tmp_path / "physics_settings.json").read_text())
+    assert "L515 depth-noise model" in settings["drake_observation"]
+    assert "with the L515 depth-noise model" in (tmp_path / "physics.md").read_text()
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -42,7 +42,8 @@ def register(subparsers) -> None:
                    help="with --observation camera: the render's object labels (default, idealised) or depth-only "
                    "segmentation")
     p.add_argument("--sensor-noise", action="store_true",
-                   help="with --observation camera: the L515 depth-noise model on every frame (seeded by the scene)")
+                   help="with --observation camera (or --physics): the L515 depth-noise model on every frame (seeded by the "
+                   "scene)")
     p.add_argument("--out", default="results/table1", help="output folder (default: results/table1)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--physics", action="store_true",
@@ -136,13 +137,14 @@ def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: in
         raise UserError("--physics runs ground-truth distributions only: leave out --perception")
     if args.oracle_seconds is not None:
         raise UserError("--oracle-seconds applies to the shelf simulator's oracles only")
-    if args.observation is not None or args.segmentation is not None or args.sensor_noise:
-        raise UserError("--observation, --segmentation and --sensor-noise apply to the shelf simulator only "
-                        "(the physics benchmark's observation is its trial diagram's)")
+    if args.observation is not None or args.segmentation is not None:
+        raise UserError("--observation and --segmentation apply to the shelf simulator only (the physics benchmark's "
+                        "observation is its trial diagram's camera; --sensor-noise adds the L515 model to it)")
     summary = run_physics_benchmark(args.config, policies, n, seed=seed, out=args.out, workers=args.workers,
                                     densities=densities, station=args.station, sleep=args.sleep,
                                     progress=not args.no_progress, tool_rules=tool_rules, backend=args.backend,
-                                    ray_address=args.ray_address, profile=profile)
+                                    ray_address=args.ray_address, profile=profile,
+                                    sensor_noise=args.sensor_noise)
     meta = summary["meta"]
     print(f"kept {meta['scenes_kept']} scenes already in {args.out}, ran {meta['scenes_run']}")
     for p, per in summary["policies"].items():

@@ -43,10 +43,14 @@ from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
 
-# What the Drake trials' planner sees (slax_drake.systems.trial.build_trial's defaults): recorded in the settings
-# and said in the report, beside the shelf simulator's privileged observation.
-DRAKE_OBSERVATION = ("camera: rendered frames, the render's labels as segmentation, estimator hypotheses, P_t from "
-                     "the depth frame, no sensor noise")
+
+
+def drake_observation(sensor_noise: bool) -> str:
+    """What the Drake trials' planner sees (slax_drake.systems.trial.build_trial, labels segmentation): recorded in
+    the settings and said in the report, beside the shelf simulator's privileged observation."""
+    return ("camera: rendered frames" + (" with the L515 depth-noise model" if sensor_noise else "")
+            + ", the render's labels as segmentation, estimator hypotheses, P_t from the depth frame"
+            + ("" if sensor_noise else ", no sensor noise"))
 
 
 def trial_path(out: Path, policy: str, density: int, index: int) -> Path:
@@ -116,7 +120,7 @@ def _diverged_trial(message: str, wall_s: float) -> dict:
 def _run_scene(job) -> dict:
     """Runs one scene in both simulators (in whichever process the backend chose); returns its result file's
     content."""
-    config, station, policy_name, density, index, seed, sleep, tool_rules, profile = job
+    config, station, policy_name, density, index, seed, sleep, tool_rules, profile, sensor_noise = job
     from slax_drake.config import load_scenario
     from slax_drake.policies.registry import make_policy
     from slax_drake.policies.simulator import run_trial as run_shelf_trial
@@ -125,6 +129,7 @@ def _run_scene(job) -> dict:
 
     scenario = load_scenario(config)
     opts = protocol_trial(TrialOptions(config=config, station=station, policy=policy_name, out=None, sleep=sleep,
+                                       sensor_noise=sensor_noise,
                                        tool_rules=tool_rules, profile=profile), scenario, density, seed)
     scene = sample_scene(scenario, density, seed, target_size=opts.target_size)
     policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=opts.horizon,
@@ -195,7 +200,8 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
                           out: str | Path = "results/physics", workers: int = 1, densities=None,
                           station: str | None = None, sleep: bool = False, progress: bool = True,
                           tool_rules: dict | None = None, backend: str = "local",
-                          ray_address: str | None = None, profile: str = "station") -> dict:
+                          ray_address: str | None = None, profile: str = "station",
+                          sensor_noise: bool = False) -> dict:
     """Runs the missing scenes (both simulators) and writes physics.json and physics.md; returns the summary, whose
     ``meta`` says how many scenes were kept from the folder and how many ran.
 
@@ -205,8 +211,9 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     physical tool, whatever the protocol scenario's profile); ``tool_rules``: rule overrides of it for both
     simulators, on top of the station's cup limit
     (``trial.station_tool_rules``); ``backend``, ``workers``, ``ray_address``: where the scenes run
-    (:func:`slax_drake.backends.run_tasks`). The settings are recorded in the folder; a resumed run with other
-    settings is refused before anything runs.
+    (:func:`slax_drake.backends.run_tasks`); ``sensor_noise``: the L515 depth-noise model between the Drake
+    trials' camera and their perception (seeded per scene). The settings are recorded in the folder; a resumed run
+    with other settings is refused before anything runs.
     """
     from tqdm import tqdm
 
@@ -242,11 +249,11 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     out = Path(out)
     tool_rules = station_tool_rules(load_station_scenario(station), tool_rules, profile)
     settings = {**protocol_settings(scenario, config, seed, "ground-truth", tool_rules, policies, profile=profile),
-                "drake_observation": DRAKE_OBSERVATION,
+                "drake_observation": drake_observation(sensor_noise),
                 "station": str(station), "station_sha256": file_digest(station), "sleep": bool(sleep)}
     record_or_refuse(out, settings, has_results=any((out / "physics_trials").glob("*/*.json")),
                      name=PHYSICS_SETTINGS_FILE)
-    all_jobs = [(config, station, p, n, i, scene_seed(seed, n, i), sleep, tool_rules, profile)
+    all_jobs = [(config, station, p, n, i, scene_seed(seed, n, i), sleep, tool_rules, profile, sensor_noise)
                 for p in policies for n in densities for i in range(scenes_per_density)]
     jobs = [j for j in all_jobs if not trial_path(out, j[2], j[3], j[4]).is_file()]
     # Scene index by scene index, densest first within each: a run stopped early holds the same number of scenes
@@ -262,7 +269,8 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     trials = load_results(out, policies, densities, scenes_per_density)
     summary = summarise(trials, policies, densities, (scenario.shelf.width, scenario.shelf.depth))
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
-                       "seed": seed, "densities": densities, "sleep": sleep, "workers": workers, "backend": backend,
+                       "seed": seed, "densities": densities, "sleep": sleep, "sensor_noise": sensor_noise,
+                       "workers": workers, "backend": backend,
                        "profile": profile, "tool_rules": tool_rules, "scenes_kept": len(all_jobs) - len(jobs), "scenes_run": len(jobs),
                        "wall_seconds_this_run": round(elapsed, 1), "match_distance_m": MATCH_DISTANCE,
                        "match_yaw_deg": math.degrees(MATCH_YAW)}
@@ -409,7 +417,8 @@ def markdown_table(summary: dict) -> str:
     meta = summary.get("meta", {})
     lines += ["", f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
               f"the same scenes in both simulators: the shelf simulator with the objects seen as they are and ground-truth "
-              f"distributions (privileged), the Drake trials with what their camera sees ({DRAKE_OBSERVATION}). "
+              f"distributions (privileged), the Drake trials with what their camera sees "
+              f"({drake_observation(bool(meta.get('sensor_noise')))}). "
               f"Steps over successful trials. "
               f"An action matches when the object's physical pose at the next decision is within "
               f"{100 * MATCH_DISTANCE:.0f} cm and {math.degrees(MATCH_YAW):.0f} deg of the first-order prediction. "

@@ -79,7 +79,7 @@ LABELS = {
     "suction_cost": "suction cost (scenario protocol.suction_cost)",
     "visibility_threshold": "visibility threshold (scenario target.visibility_threshold)",
     "profile": "--profile (or the scenario's profile)", "oracle_seconds": "--oracle-seconds",
-    "drake_observation": "the Drake trials' observation (this version's trial diagram)",
+    "drake_observation": "Drake-trial observation (--sensor-noise, or an older version's trial diagram)",
     "tool_rules": "--tool-rule", "station_sha256": "station (the --station file's content)", "sleep": "--sleep",
     "scenario_sha256": "scenario (the --config file's content)",
 }
