@@ -75,6 +75,15 @@ def _load_npy(path: Path) -> np.ndarray:
         raise PlanStepError(f"{path}: not a numpy array file ({e})") from None
 
 
+def _load_json(path: Path, what: str):
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise PlanStepError(f"{path}: no such {what} file") from None
+    except (OSError, json.JSONDecodeError) as e:
+        raise PlanStepError(f"{path}: not valid JSON ({e})") from None
+
+
 def read_depth(path: str | Path) -> np.ndarray:
     """A depth frame in metres (float32): ``.npy`` (float metres) or 16-bit ``.png`` (millimetres)."""
     path = _existing(path, "depth")
@@ -120,12 +129,7 @@ def read_joint_state(path: str | Path) -> np.ndarray:
     from slax_drake.station.robot import PLANNED_JOINTS
 
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise PlanStepError(f"{path}: no such joint-state file") from None
-    except (OSError, json.JSONDecodeError) as e:
-        raise PlanStepError(f"{path}: not valid JSON ({e})") from None
+    doc = _load_json(path, "joint-state")
     if isinstance(doc, dict) and "joint_names" in doc and "positions" in doc:
         names, values = doc["joint_names"], doc["positions"]
         if not isinstance(names, list) or not isinstance(values, list) or len(names) != len(values):
@@ -151,12 +155,7 @@ def read_history(path: str | Path | None) -> dict | None:
     if path is None:
         return None
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise PlanStepError(f"{path}: no such history file") from None
-    except (OSError, json.JSONDecodeError) as e:
-        raise PlanStepError(f"{path}: not valid JSON ({e})") from None
+    doc = _load_json(path, "history")
     if isinstance(doc, dict) and "metadata" in doc:
         doc = (doc.get("metadata") or {}).get("plan_step", {}).get("history")
     if not isinstance(doc, dict) or not isinstance(doc.get("history"), list):
