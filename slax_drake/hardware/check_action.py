@@ -134,11 +134,11 @@ def spec_of(action) -> str:
 def default_station(scene) -> str:
     """The first shipped station (sim_configs/station_*.yaml) whose scene scenario has the scene's shelf."""
     from slax_drake.config import REPO_ROOT, load_scenario
+    from slax_drake.scene.sampling import shelf_of
     from slax_drake.station.scenario import load_station_scenario
 
     for path in sorted((REPO_ROOT / "sim_configs").glob("station_*.yaml")):
-        shelf = load_scenario(load_station_scenario(path).scene_config).shelf
-        if (shelf.width, shelf.height, shelf.depth) == (scene.shelf.width, scene.shelf.height, scene.shelf.depth):
+        if shelf_of(load_scenario(load_station_scenario(path).scene_config)) == scene.shelf:
             return str(path)
     raise ActionSpecError(f"no shipped station has the scene's {scene.shelf.width} x {scene.shelf.height} x "
                           f"{scene.shelf.depth} m shelf; pass --station")
@@ -151,16 +151,14 @@ def make_checker(scene, station_path: str | None = None) -> Checker:
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.policies.actions import ActionModel
     from slax_drake.policies.registry import tool_config
+    from slax_drake.station.plant import scene_camera
     from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.trial import station_tool_rules
 
     station_path = station_path or default_station(scene)
     station = load_station_scenario(station_path)
+    scene_camera(station, scene)  # SceneMismatchError when the station serves another shelf
     scenario = load_scenario(station.scene_config)
-    shelf = scenario.shelf
-    if (shelf.width, shelf.height, shelf.depth) != (scene.shelf.width, scene.shelf.height, scene.shelf.depth):
-        raise ActionSpecError(f"{station_path} serves a {shelf.width} x {shelf.height} x {shelf.depth} m shelf, the "
-                              f"scene's is {scene.shelf.width} x {scene.shelf.height} x {scene.shelf.depth} m")
     tool = tool_config(scenario, "station", **station_tool_rules(station))
     model = ActionModel(scene.shelf, scene.camera.position[:2], tool)
     known = dataclasses.replace(scene, target=None)
