@@ -108,6 +108,10 @@ class GraphvizMissingError(UserError):
     """Graphviz's ``dot`` is not installed, so the SVG cannot be drawn."""
 
 
+class StationNotFoundError(UserError):
+    """No station file fits a scene scenario or a scene's shelf (pass ``--station``)."""
+
+
 class TrialError(UserError):
     """A trial cannot be set up (bad config, no station for the shelf, unsupported option)."""
 

@@ -1,6 +1,8 @@
 """One plant builder: the simulated station, the planning world, the checker's world and the controller plant all
 load the robot that the station scenario's directives name, and nothing else names it."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -143,3 +145,23 @@ def test_directives_without_the_robot_are_refused(tmp_path):
     scenario.robot_model = "no_such_robot"
     with pytest.raises(ConfigError, match="exactly one model named 'no_such_robot'"):
         make_station_plant(scenario, purpose=PlantPurpose.PLANNING)
+
+
+def test_station_for_finds_by_name_then_by_shelf_and_refuses_an_unknown_shelf(tmp_path):
+    """One lookup for every command: station_<stem>.yaml first, else a shipped station with the same shelf."""
+    import shutil
+
+    from slax_drake.config import REPO_ROOT
+    from slax_drake.errors import StationNotFoundError
+    from slax_drake.scene.model import Shelf
+    from slax_drake.station.scenario import station_for
+
+    assert Path(station_for("sim_configs/sim_shelf.yaml")).name == "station_sim_shelf.yaml"
+    # table1.yaml has no station of its own: the shipped station with its shelf (the sim shelf)
+    assert Path(station_for(REPO_ROOT / "sim_configs" / "table1.yaml")).name == "station_sim_shelf.yaml"
+    # a copy elsewhere under another name is found by its shelf
+    copy = tmp_path / "my_table.yaml"
+    shutil.copy(REPO_ROOT / "sim_configs" / "physical_shelf.yaml", copy)
+    assert Path(station_for(copy)).name == "station_physical_shelf.yaml"
+    with pytest.raises(StationNotFoundError, match="pass --station"):
+        station_for(shelf=Shelf(width=1.234, height=0.5, depth=0.5))

@@ -173,27 +173,14 @@ def _run_scene(job) -> dict:
 def protocol_trial(opts, scenario, density: int, seed: int):
     """``opts`` (TrialOptions) set to the protocol scene of ``density`` objects and scene seed ``seed`` of
     ``scenario`` (loaded from ``opts.config``): the protocol's first target size, H = horizon_per_object * density
-    and, unless ``opts`` names a station, :func:`default_station`. The one definition of a protocol scene's Drake
+    and, unless ``opts`` names a station, :func:`slax_drake.station.scenario.station_for`. The one definition of a protocol scene's Drake
     trial, shared by this benchmark and ``slax-drake trial --benchmark-scene``."""
+    from slax_drake.station.scenario import station_for
+
     return dataclasses.replace(opts, objects=density, seed=seed,
                                target_size=tuple(float(v) for v in scenario.target.sizes[0]),
                                horizon=scenario.protocol.horizon_per_object * density,
-                               station=opts.station or default_station(opts.config))
-
-
-def default_station(config: str) -> str:
-    """The station made for ``config`` (``station_<stem>.yaml``), else the sim-shelf station; MakeStation refuses
-    a scene whose shelf differs from the station's."""
-    from slax_drake.station.scenario import DEFAULT_STATION
-    from slax_drake.errors import TrialError
-    from slax_drake.systems.trial import station_for
-
-    try:
-        return station_for(config)
-    except TrialError:
-        from slax_drake.config import REPO_ROOT
-
-        return str(REPO_ROOT / DEFAULT_STATION)
+                               station=opts.station or station_for(opts.config))
 
 
 def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: int | None = None,
@@ -206,7 +193,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     ``meta`` says how many scenes were kept from the folder and how many ran.
 
     ``config``: the protocol scenario YAML (e.g. sim_configs/table1.yaml); ``seed``: protocol seed (default the
-    protocol's); ``densities``: default the protocol's; ``station``: default :func:`default_station`;
+    protocol's); ``densities``: default the protocol's; ``station``: default :func:`slax_drake.station.scenario.station_for`;
     ``profile``: the action model's rule profile for both simulators (default "station": the Drake station is the
     physical tool, whatever the protocol scenario's profile); ``tool_rules``: rule overrides of it for both
     simulators, on top of the station's cup limit
@@ -243,7 +230,10 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     densities = [int(n) for n in (densities or scenario.protocol.densities)]
     if any(n < 1 for n in densities):
         raise PhysicsBenchmarkError(f"--densities must be object counts of at least 1 (got {densities})")
-    station = station or default_station(config)
+    if station is None:
+        from slax_drake.station.scenario import station_for
+
+        station = station_for(config)
     if not Path(station).is_file():
         raise PhysicsBenchmarkError(f"station file not found: {station}")
     out = Path(out)

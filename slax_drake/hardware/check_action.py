@@ -131,19 +131,6 @@ def spec_of(action) -> str:
     return f"suction:{action.name}:{action.dx:+.4f}:{action.dz:+.4f}"
 
 
-def default_station(scene) -> str:
-    """The first shipped station (sim_configs/station_*.yaml) whose scene scenario has the scene's shelf."""
-    from slax_drake.config import REPO_ROOT, load_scenario
-    from slax_drake.scene.sampling import shelf_of
-    from slax_drake.station.scenario import load_station_scenario
-
-    for path in sorted((REPO_ROOT / "sim_configs").glob("station_*.yaml")):
-        if shelf_of(load_scenario(load_station_scenario(path).scene_config)) == scene.shelf:
-            return str(path)
-    raise ActionSpecError(f"no shipped station has the scene's {scene.shelf.width} x {scene.shelf.height} x "
-                          f"{scene.shelf.depth} m shelf; pass --station")
-
-
 def make_checker(scene, station_path: str | None = None) -> Checker:
     """The station's action model (``station`` profile, the station cup's limits, the station's scene scenario's
     geometry and masses) and motion planner for ``scene``."""
@@ -152,10 +139,10 @@ def make_checker(scene, station_path: str | None = None) -> Checker:
     from slax_drake.policies.actions import ActionModel
     from slax_drake.policies.registry import tool_config
     from slax_drake.station.plant import scene_camera
-    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario, station_for
     from slax_drake.systems.trial import station_tool_rules
 
-    station_path = station_path or default_station(scene)
+    station_path = station_path or station_for(shelf=scene.shelf)
     station = load_station_scenario(station_path)
     scene_camera(station, scene)  # SceneMismatchError when the station serves another shelf
     scenario = load_scenario(station.scene_config)
@@ -167,7 +154,7 @@ def make_checker(scene, station_path: str | None = None) -> Checker:
 
 def check_action(scene_path: str | Path, action: str, station: str | None = None) -> ActionCheck:
     """The verdict on ``action`` (``push:OBJECT:D`` or ``suction:OBJECT:DX:DZ``) on the scene JSON at
-    ``scene_path`` with ``station`` (default: :func:`default_station`)."""
+    ``scene_path`` with ``station`` (default: the shipped station with the scene's shelf, :func:`slax_drake.station.scenario.station_for`)."""
     from slax_drake.scene.io import load_scene
 
     spec = parse_action(action)

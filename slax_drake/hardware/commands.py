@@ -99,7 +99,7 @@ def _scene_and_station(traj, scene_path, station_path):
     from slax_drake.errors import TrajectoryFileError
     from slax_drake.scene.io import load_scene, scene_from_dict
     from slax_drake.station.scenario import load_station_scenario
-    from slax_drake.systems.trial import station_for
+    from slax_drake.station.scenario import station_for
 
     if scene_path:
         scene = load_scene(scene_path)
@@ -166,7 +166,7 @@ def _station_frames(data: dict, scene):
     """X_WS (the shelf in the world) and X_WB (the robot's base weld) as 4x4 from the trial's station file."""
     from slax_drake.station.plant import base_pose, shelf_pose
     from slax_drake.station.scenario import load_station_scenario
-    from slax_drake.systems.trial import station_for
+    from slax_drake.station.scenario import station_for
 
     station = load_station_scenario(data.get("station") or station_for(data.get("config") or "sim_configs/sim_shelf.yaml"))
     return shelf_pose(station, scene.camera).GetAsMatrix4(), base_pose(station).GetAsMatrix4()

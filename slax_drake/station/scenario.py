@@ -97,6 +97,40 @@ def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario
     return scenario
 
 
+def station_for(config: str | Path | None = None, shelf=None) -> str:
+    """The path of the station file for a scene scenario ``config`` (a YAML path) or a ``shelf``
+    (slax_drake.scene.model.Shelf), the one lookup every command uses:
+
+    1. ``station_<stem>.yaml`` beside ``config``, else in the repository's ``sim_configs/`` (a station made for
+       that scenario);
+    2. else the first shipped station (``sim_configs/station_*.yaml``, sorted) whose scene scenario has the same
+       shelf as ``shelf`` (default: ``config``'s shelf), since the station welds its own shelf and MakeStation
+       refuses a scene whose shelf differs.
+
+    Raises StationNotFoundError (a user error: pass ``--station``) when neither finds one."""
+    from slax_drake.config import load_scenario
+    from slax_drake.errors import StationNotFoundError
+    from slax_drake.scene.sampling import shelf_of
+
+    if config is None and shelf is None:
+        raise ValueError("station_for needs a config or a shelf")
+    if config is not None:
+        path = Path(config)
+        for candidate in (path.parent / f"station_{path.stem}.yaml",
+                          REPO_ROOT / "sim_configs" / f"station_{path.stem}.yaml"):
+            if candidate.is_file():
+                return str(candidate)
+        if shelf is None:
+            shelf = shelf_of(load_scenario(config))
+    for candidate in sorted((REPO_ROOT / "sim_configs").glob("station_*.yaml")):
+        if shelf_of(load_scenario(load_station_scenario(candidate).scene_config)) == shelf:
+            return str(candidate)
+    what = f"{config}" if config is not None else "the scene"
+    raise StationNotFoundError(f"no station file for {what}: no station_<name>.yaml beside it and no shipped "
+                               f"station has its {shelf.width} x {shelf.height} x {shelf.depth} m shelf; "
+                               "pass --station")
+
+
 def _validate(scenario: StationScenario, source: str) -> None:
     missing = [n for n in robot_model.PLANNED_JOINTS if n not in scenario.observation_configuration]
     unknown = [n for n in scenario.observation_configuration if n not in robot_model.PLANNED_JOINTS]

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 
 import numpy as np
 
@@ -77,17 +76,6 @@ class TrialDiagram:
     # occluder segmentation with the target mask as label n + 1 (at the perception's working resolution)
 
 
-def station_for(config: str) -> str:
-    from slax_drake.config import REPO_ROOT
-
-    path = Path(config)
-    candidate = path.parent / f"station_{path.stem}.yaml"
-    for c in (candidate, REPO_ROOT / "sim_configs" / f"station_{path.stem}.yaml"):
-        if c.is_file():
-            return str(c)
-    raise TrialError(f"no station file for {config} (expected {candidate}); pass --station")
-
-
 def station_tool_rules(station, overrides: dict | None = None, profile: str = "station") -> dict:
     """The rule overrides of ``profile`` a trial on ``station`` plans with: the station cup's limits
     (``suction.max_held_moment`` as ``max_suction_moment`` when finite, ``suction.max_seal_angle_deg`` when under
@@ -114,7 +102,7 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
     from slax_drake.policies.registry import make_policy, tool_config
     from slax_drake.scene.sampling import sample_scene
     from slax_drake.station.plant import shelf_pose
-    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario, station_for
     from slax_drake.perception.belief import make_source
     from slax_drake.scene.model import Scene
     from slax_drake.systems.evaluator import EvaluatorSystem
