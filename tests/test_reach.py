@@ -47,19 +47,10 @@ def test_the_shipped_stations_name_their_committed_maps(station):
     assert station_tool_rules(st)["reach_map"] == st.reach_map
 
 
-def test_the_rule_refuses_a_push_the_map_shows_unreachable(sim_scenario, tmp_path):
+def test_the_rule_refuses_a_push_the_map_shows_unreachable(sim_scenario):
     """A box whose +x push puts the blade where the map reached nothing: without the map the action model offers
-    the push, with it the push is refused with the reach map's reason; the paper profile has no map. The map is the
-    shipped sim-shelf map with its +x blade layer unreached from y = 0.10 m (the placement search left the shipped
-    map unreached only along the side walls, where no box stands on the far side of the blade)."""
-    import json
-
-    shipped = load_reach_map(SIM_MAP)
-    data = shipped.to_dict()
-    data["reach"]["push+x"] = np.where(shipped.ys[:, None] >= 0.10, False, shipped.reach["push+x"]).astype(int).tolist()
-    map_path = tmp_path / "reach.json"
-    map_path.write_text(json.dumps(data))
-    rmap = load_reach_map(str(map_path))
+    the push, with it the push is refused with the reach map's reason; the paper profile has no map."""
+    rmap = load_reach_map(SIM_MAP)
     shelf = shelf_of(sim_scenario)
 
     def pushes(box, **rules):
@@ -76,7 +67,7 @@ def test_the_rule_refuses_a_push_the_map_shows_unreachable(sim_scenario, tmp_pat
             break
     else:
         pytest.fail("no unreached node of the map takes a +x push of a small box")
-    with_map = pushes(box, reach_map=str(map_path))
+    with_map = pushes(box, reach_map=SIM_MAP)
     assert not [a for a in with_map.feasible if a.d > 0]
     assert [r.reason for r in with_map.rejected if r.what == "push b +x"][0].endswith("m (reach map)")
     assert tool_config(sim_scenario, "paper").rules.reach_map == ""
