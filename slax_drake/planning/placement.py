@@ -292,9 +292,7 @@ def search(station_path: str, camera_xs, camera_ys, torsos, coarse_stride: int =
 
     check_grid(camera_xs, camera_ys, torsos, coarse_stride, top, step)
     ps = PlacementSearch(station_path, seed, step)
-    own = dataclasses.replace(ps.evaluate(ps.station_candidate()), is_station=True)
-    if own.q_obs is None:  # the station's own pose, as it stands, is the baseline even without 2 cm clearance
-        own.q_obs, own.why = ps.q_station.copy(), f"(the station's own pose: {own.why})"
+    own = Evaluated(ps.station_candidate(), ps.q_station.copy(), is_station=True)  # the baseline: q_obs as it is
     candidates = [Candidate(float(x), float(y), float(t)) for x, y, t in itertools.product(camera_xs, camera_ys, torsos)]
     evaluated = [ps.evaluate(c) for c in tqdm(candidates, desc="observation poses", disable=not progress)]
     feasible = [own] + [e for e in evaluated if e.q_obs is not None]
