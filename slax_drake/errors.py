@@ -138,6 +138,10 @@ class PlanStepError(UserError):
     """An input of plan-step that cannot be used (exit code 2)."""
 
 
+class PlacementError(UserError):
+    """A placement search that cannot be run as asked (an empty or out-of-range candidate grid; exit code 2)."""
+
+
 class ActionSpecError(UserError):
     """A check-action request that cannot be used: a malformed --action, an unknown object, no station for the
     scene's shelf."""

@@ -43,6 +43,14 @@ def layer_waypoint(layer: str, x: float, y: float, scene, tool):
     return next(w for w in wps if w.label == "seal")
 
 
+def map_grid(shelf, step: float = STEP) -> tuple[np.ndarray, np.ndarray]:
+    """(xs, ys) of a reach map's nodes on ``shelf`` (S, m): a tool-width inside the side walls, from 3 cm behind
+    the opening to ``BACK_INSET`` from the back wall, ``step`` apart."""
+    xs = grid(-shelf.width / 2 + WALL_INSET, shelf.width / 2 - WALL_INSET, step)
+    ys = grid(-shelf.depth / 2 + 0.03, shelf.depth / 2 - BACK_INSET, step)
+    return xs, ys
+
+
 def compute_reach_map(station_path: str, step: float = STEP, progress: bool = True) -> ReachMap:
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
@@ -58,8 +66,7 @@ def compute_reach_map(station_path: str, step: float = STEP, progress: bool = Tr
     scene = Scene(shelf, Camera.from_config(scenario.camera), (), None, 0)
     tool = tool_config(scenario, "station")
     planner = MotionPlanner(station, tool)
-    xs = grid(-shelf.width / 2 + WALL_INSET, shelf.width / 2 - WALL_INSET, step)
-    ys = grid(-shelf.depth / 2 + 0.03, shelf.depth / 2 - BACK_INSET, step)
+    xs, ys = map_grid(shelf, step)
     reach = {}
     t0 = time.perf_counter()
     for layer in LAYERS:
@@ -70,8 +77,12 @@ def compute_reach_map(station_path: str, step: float = STEP, progress: bool = Tr
         reach[layer] = ok
         if progress:
             print(f"{layer}: {int(ok.sum())} of {ok.size} nodes reached ({time.perf_counter() - t0:.0f} s)", flush=True)
-    heights = {"push+x": tool.geometry.blade_height / 2, "push-x": tool.geometry.blade_height / 2, "cup": CUP_HEIGHT}
-    return ReachMap(str(station_path), xs, ys, reach, heights)
+    return ReachMap(str(station_path), xs, ys, reach, layer_heights(tool))
+
+
+def layer_heights(tool) -> dict:
+    """The tool's height (m above the support) per layer of a map."""
+    return {"push+x": tool.geometry.blade_height / 2, "push-x": tool.geometry.blade_height / 2, "cup": CUP_HEIGHT}
 
 
 def reach_png(rmap: ReachMap, shelf) -> bytes:

@@ -1,0 +1,104 @@
+"""How often the action model offers an action the arm cannot execute ("false feasible"): a proxy, without
+physics, for the trials' "no feasible motion" endings.
+
+For K seeded Table I scenes per density (the protocol's scene seeds, ``slax_drake.evaluation.table1.scene_seed``),
+on their initial state: the candidate actions the station's action model deems feasible (``station`` profile with
+the station's rules: the cup's limits and its reach map, as in a Drake trial; the objects known, the target not),
+each planned by the Drake motion planner from the observation pose. Prints, per density and in all, how many
+candidates the model offered, how many the planner rejected (the false-feasible rate) and by which waypoint, how
+many the reach map refused before planning, and the planning time per candidate (median, p90; one process).
+
+    python benchmarks/bench_reach_rule.py --station sim_configs/station_sim_shelf.yaml --scenes 2
+    python benchmarks/bench_reach_rule.py --config sim_configs/table2.yaml \\
+        --station sim_configs/station_physical_shelf.yaml --densities 8 10 12 --scenes 2
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import sys
+import time
+
+import numpy as np
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--config", default="sim_configs/table1.yaml", help="the protocol scenario YAML")
+    parser.add_argument("--station", default="sim_configs/station_sim_shelf.yaml")
+    parser.add_argument("--densities", type=int, nargs="+", default=[6, 8, 10])
+    parser.add_argument("--scenes", type=int, default=2, help="scenes per density (the protocol's first K)")
+    parser.add_argument("--seed", type=int, default=None, help="protocol seed (default: the config's)")
+    parser.add_argument("--json", default=None, help="write the figures here too")
+    args = parser.parse_args(argv)
+    from slax_drake.config import load_scenario
+    from slax_drake.errors import UserError
+    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.hardware.check_action import make_checker
+    from slax_drake.scene.sampling import sample_scene
+
+    try:
+        scenario = load_scenario(args.config)
+        seed = scenario.protocol.seed if args.seed is None else args.seed
+        size = tuple(scenario.target.sizes[0])
+        rows = collections.defaultdict(lambda: collections.Counter())
+        times = collections.defaultdict(list)
+        why = collections.Counter()
+        print(f"{args.station} on {args.config}: {args.scenes} scenes per density, protocol seed {seed}", flush=True)
+        for n in args.densities:
+            for index in range(args.scenes):
+                scene = sample_scene(scenario, n, scene_seed(seed, n, index), target_size=size)
+                checker = make_checker(scene, args.station)
+                cands = checker.candidates()
+                row = rows[n]
+                row["scenes"] += 1
+                row["offered"] += len(cands.feasible)
+                row["reach_refused"] += sum(r.reason.endswith("(reach map)") for r in cands.rejected)
+                for action in cands.feasible:
+                    t0 = time.perf_counter()
+                    result = checker.planner.plan(action, checker.scene)
+                    times[n].append(time.perf_counter() - t0)
+                    if not result.feasible:
+                        row["rejected"] += 1
+                        row[f"rejected_{action.kind}"] += 1
+                        why[result.reason.split(":")[0][:40]] += 1
+                    row[f"offered_{action.kind}"] += 1
+                print(f"  n={n} scene {index}: {len(cands.feasible)} offered, "
+                      f"{row['rejected']} rejected so far at this density", flush=True)
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    summary = {}
+    print(f"{'n':>4} {'offered':>8} {'rejected':>9} {'false feasible':>15} {'push':>9} {'suction':>9} "
+          f"{'reach-map refused':>18} {'plan median s':>14} {'p90 s':>7}")
+    for n in [*args.densities, "all"]:
+        if n == "all":
+            row = sum(rows.values(), collections.Counter())
+            t = np.concatenate([times[k] for k in args.densities])
+        else:
+            row, t = rows[n], np.array(times[n])
+        rate = row["rejected"] / max(1, row["offered"])
+        med, p90 = (float(np.median(t)), float(np.percentile(t, 90))) if len(t) else (float("nan"),) * 2
+        print(f"{n:>4} {row['offered']:>8} {row['rejected']:>9} {rate:>14.1%} "
+              f"{row['rejected_push']:>4}/{row['offered_push']:<4} {row['rejected_suction']:>4}/{row['offered_suction']:<4} "
+              f"{row['reach_refused']:>18} {med:>14.3f} {p90:>7.3f}")
+        summary[str(n)] = {**dict(row), "false_feasible": round(rate, 4), "plan_median_s": round(med, 3),
+                           "plan_p90_s": round(p90, 3)}
+    print("planner rejections by first reason:")
+    for reason, count in why.most_common(8):
+        print(f"  {count:4d}  {reason}")
+    if args.json:
+        from pathlib import Path
+
+        from slax_drake.io import write_text_atomic
+
+        summary["reasons"] = dict(why)
+        summary["station"], summary["config"] = args.station, args.config
+        write_text_atomic(Path(args.json), json.dumps(summary, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
