@@ -317,9 +317,11 @@ class BeliefSearch(Hindsight):
                 log["capped"] = True
                 break
             nxt = []
-            for k in level:
-                kids = self.expansions(worlds, k, self.moves(k.objects), remaining, counter)
-                nxt.extend(kids)
+            for i, k in enumerate(level):
+                if i and time.process_time() - t0 > self.seconds:
+                    log["capped"] = True  # the nodes looked at so far make the next level
+                    break
+                nxt.extend(self.expansions(worlds, k, self.moves(k.objects), remaining, counter))
             level = nxt
         if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
             best = max(seen_nodes, key=lambda k: (k.revealed / max(k.g, 1e-9), -k.value, -k.order))
