@@ -38,6 +38,7 @@ decision's CPU time (the search stops deepening and takes the best plan so far; 
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -81,6 +82,8 @@ class BeliefSearch(Hindsight):
         self._plan: list = []  # the rest of the last decision's plan
         self._expected = None  # the arrangement that plan expects next
         self._distance_cache: dict = {}
+        self._worlds = None  # the worlds (PackedWorlds) of this trial, kept while enough stay consistent
+        self._n_worlds = 0  # how many of them are consistent at this decision
         self.hidden_risk = hidden_risk
         if select not in ("ratio", "value"):
             raise ValueError("select must be 'ratio' or 'value'")
@@ -92,6 +95,23 @@ class BeliefSearch(Hindsight):
         super().reset(scene_or_observation)
         self._plan, self._expected = [], None
         self._blocked, self._last = [], None
+        self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
+
+    def worlds_for(self, template, placements: np.ndarray, seed: int):
+        """(the worlds, (K,) bool: those still consistent with every observation). The worlds drawn at the first
+        decision are kept while at least half of ``samples`` of them stay consistent: the consistent ones are a
+        sample of the belief (the prior conditioned on what was seen, by rejection), and keeping them keeps the
+        plan's values and the occlusion masks from one decision to the next. Then ``samples`` are drawn anew
+        from the consistent placements."""
+        step = self.grid_step
+        if self._worlds is not None:
+            keys = np.round(self._worlds.worlds.centers / step).astype(int)
+            consistent = np.array([(int(i), int(j)) in self._consistent for i, j in keys], dtype=bool)
+            if consistent.sum() >= min(len(placements), max(1, self.samples // 2)):
+                return self._worlds, consistent
+        self._worlds = PackedWorlds(Worlds(template, self.draw(placements, seed), self.target_size(), self.threshold))
+        self._distance_cache = {}
+        return self._worlds, np.ones(self._worlds.count, bool)
 
     # ---- suctions ------------------------------------------------------------------------------------------------
     def placement_box(self, objects, a) -> tuple:
@@ -177,7 +197,7 @@ class BeliefSearch(Hindsight):
                 exactly2 = at2 & ~at3
                 both = _popcount(masks[:, None] & masks[None, :] & exactly2[None, None])  # (n, n, K)
                 pair = seen[None, None] + only[:, None] + only[None, :] + both
-                iu = np.triu_indices(len(masks), 1)
+                iu = _pairs(len(masks))
                 two = (pair[iu[0], iu[1]] >= need[None]).any(axis=0)
             rest = ~(one | two) & (seen < need)
             if rest.any():
@@ -217,14 +237,14 @@ class BeliefSearch(Hindsight):
 
     # ---- search --------------------------------------------------------------------------------------------------
     def child(self, worlds, node: _Node, a, after, c: float, remaining: int, order: int) -> _Node:
-        mass = node.alive.mean()
+        mass = node.alive.sum() / self._n_worlds
         g = node.g + c * mass
         d_before = self.distances(worlds, node.objects)
         alive, lost = node.alive, node.lost
         if isinstance(a, Suction):
             blocked = worlds.blocks(after, a.name) & alive
             if blocked.any():
-                lost = lost + float(((d_before + c) * blocked).sum()) / worlds.count
+                lost = lost + float(((d_before + c) * blocked).sum()) / self._n_worlds
                 alive = alive & ~blocked
         prob = node.prob * (1.0 - self.placement_risk(node.objects, a))
         d = self.distances(worlds, after)
@@ -232,16 +252,32 @@ class BeliefSearch(Hindsight):
         alive = alive & ~shown
         left = remaining - len(node.plan) - 1
         h = np.where(d > left, self.failure_cost, d)
-        value = g + lost + float((h * alive).sum()) / worlds.count + (1.0 - prob) * float(shown.sum()) / worlds.count
-        revealed = node.revealed + prob * float(shown.sum()) / worlds.count
+        n = self._n_worlds
+        value = g + lost + float((h * alive).sum()) / n + (1.0 - prob) * float(shown.sum()) / n
+        revealed = node.revealed + prob * float(shown.sum()) / n
         return _Node(after, node.plan + (a,), g, alive, lost, value, order, revealed, prob)
 
     def expansions(self, worlds, node: _Node, moves, remaining: int, counter) -> list:
-        """The children of ``node`` over ``moves`` ((action, objects after) pairs): every push, and each object's
-        ``placements_per_object`` best suctions."""
+        """The children of ``node`` over ``moves`` ((action, objects after, cost)): every push, and each object's
+        ``placements_per_object`` best suctions (of the placements where the object hides no world's target, only
+        the least risky one is looked at: they lead to the same value but for the risk)."""
         kids = []
         best_suctions: dict = {}
+        aside: dict = {}  # per object, the placement that hides no world's target with the least risk
         for a, after, c in moves:
+            if isinstance(a, Suction):
+                moved = next(o for o in after if o.name == a.name)
+                if worlds.mask(moved) is None:  # such placements differ only in their risk: keep one
+                    risk = self.placement_risk(node.objects, a)
+                    if a.name not in aside or risk < aside[a.name][0]:
+                        aside[a.name] = (risk, a, after, c)
+                    continue
+            kid = self.child(worlds, node, a, after, c, remaining, next(counter))
+            if isinstance(a, Push):
+                kids.append(kid)
+            else:
+                best_suctions.setdefault(a.name, []).append(kid)
+        for risk, a, after, c in aside.values():
             kid = self.child(worlds, node, a, after, c, remaining, next(counter))
             if isinstance(a, Push):
                 kids.append(kid)
@@ -275,14 +311,14 @@ class BeliefSearch(Hindsight):
             return Decision(tuple(cands))
         template = obs.scene_template
         seed = template.seed if template.seed is not None else 0
-        worlds = PackedWorlds(Worlds(template, self.draw(placements, seed), self.target_size(), self.threshold))
-        log["samples"] = worlds.count
-        self._distance_cache = {}
+        worlds, consistent = self.worlds_for(template, placements, seed)
+        self._n_worlds = int(consistent.sum())
+        log["samples"] = self._n_worlds
         remaining = self.horizon - (self._step - 1) if self.horizon is not None else 10 ** 6
         counter = itertools.count()
         root = _Node(known, (), 0.0, np.ones(worlds.count, bool), 0.0, 0.0, -1)
         d0 = self.distances(worlds, known)
-        root.alive = d0 > 0
+        root.alive = consistent & (d0 > 0)
         level = self.expansions(worlds, root, [(a, apply_action(known, a), self.move_cost(known, a)) for a in cands],
                                 remaining, counter)
         # the rest of the last plan, when this is the arrangement it expected: kept in the beam at every depth
@@ -342,6 +378,12 @@ class BeliefSearch(Hindsight):
         return Decision((first, *rest))
 
 
+@functools.lru_cache(maxsize=64)
+def _pairs(n: int):
+    """The index pairs i < j of ``n`` objects (np.triu_indices, cached)."""
+    return np.triu_indices(n, 1)
+
+
 def _popcount(words: np.ndarray) -> np.ndarray:
     """Set bits per row of packed words: (..., W) uint64 -> (...) int."""
     return np.bitwise_count(words).sum(axis=-1, dtype=np.int64)
@@ -375,7 +417,9 @@ class PackedWorlds:
         hx, hy = worlds.size[0] / 2, worlds.size[1] / 2
         corners = [(x + sx * hx, y + sy * hy) for x, y in worlds.centers for sx in (-1, 1) for sy in (-1, 1)]
         # every eye-to-target segment of every world projects inside this hull: an object clear of it hides nothing
-        self.hull = MultiPoint([tuple(worlds.eye[:2])] + corners).convex_hull
+        from shapely.prepared import prep
+
+        self.hull = prep(MultiPoint([tuple(worlds.eye[:2])] + corners).convex_hull)
 
     @staticmethod
     def pack(bits: np.ndarray) -> np.ndarray:
@@ -390,9 +434,13 @@ class PackedWorlds:
         """(K, W) the points of each world's target that ``obj`` alone hides; None when it hides none."""
         hit = self._masks.get(id(obj))
         if hit is None:
+            from shapely.geometry import box
+
             from slax_drake.scene.footprint import Footprint
 
-            if not Footprint.of(obj).polygon(16).intersects(self.hull):
+            fp = Footprint.of(obj)
+            ex, ey = fp.extents()
+            if not self.hull.intersects(box(fp.x - ex, fp.y - ey, fp.x + ex, fp.y + ey)):
                 hit = self._masks[id(obj)] = (obj, None)
             else:
                 m = self.worlds.hidden_by(obj)
