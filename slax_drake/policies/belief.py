@@ -71,11 +71,12 @@ class BeliefSearch(Hindsight):
 
     def __init__(self, *args, samples: int = 64, depth: int = 3, beam: int = 6, placements_per_object: int = 2,
                  failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
-                 hidden_risk: float = 0.5, select: str = "ratio", **kwargs):
+                 hidden_risk: float = 0.7, max_depth: int = 5, select: str = "ratio", **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
         self.depth = depth
+        self.max_depth = max(depth, max_depth)  # deeper while no plan of ``depth`` reveals anything
         self.beam = beam
         self.placements_per_object = placements_per_object
         self.horizon = horizon
@@ -162,15 +163,17 @@ class BeliefSearch(Hindsight):
 
     def placement_risk(self, objects, a) -> float:
         """The probability that suction ``a`` does not place its object as planned: ``hidden_risk`` times the share
-        of its placement box where the target could stand now (hidden space, where an unseen object may stand);
-        0 for a push (the profile never pushes into hidden space)."""
+        of its placement box, widened by half the target, where the target could stand now (hidden space, where an
+        unseen object may stand too); 0 for a push (the profile never pushes into hidden space)."""
         centers = self._hidden_centers
         if not isinstance(a, Suction) or not self.hidden_risk or centers is None or not len(centers):
             return 0.0
         x_lo, x_hi, y_lo, y_hi = self.placement_box(objects, a)
+        hx, hy = self.target_size()[0] / 2, self.target_size()[1] / 2
+        x_lo, x_hi, y_lo, y_hi = x_lo - hx, x_hi + hx, y_lo - hy, y_hi + hy
         inside = ((centers[:, 0] >= x_lo) & (centers[:, 0] <= x_hi) & (centers[:, 1] >= y_lo) & (centers[:, 1] <= y_hi))
         cells = max(1.0, (x_hi - x_lo) * (y_hi - y_lo) / self.grid_step ** 2)
-        return self.hidden_risk * min(1.0, inside.sum() / cells)
+        return self.hidden_risk * min(1.0, 2.0 * inside.sum() / cells)
 
     # ---- per-world distances -----------------------------------------------------------------------------------
     def distances(self, worlds: "PackedWorlds", objects) -> np.ndarray:
@@ -331,7 +334,7 @@ class BeliefSearch(Hindsight):
                 node = kept[i + 1] = self.child(worlds, node, a, after, c, remaining, next(counter))
         seen_nodes = []  # every plan looked at (after merging duplicates)
         first_level = list(level)
-        for depth in range(1, self.depth + 1):
+        for depth in range(1, self.max_depth + 1):
             merged: dict = {}
             for k in level + ([kept[depth]] if depth in kept else []):
                 key = state_key(k.objects)
@@ -347,7 +350,8 @@ class BeliefSearch(Hindsight):
                     beam.append(kept[depth])
             level = beam
             log["expanded"] += len(level)
-            if depth == self.depth or not level:
+            if not level or depth >= self.max_depth or \
+                    (depth >= self.depth and any(k.revealed > 0 for k in seen_nodes)):
                 break
             if time.process_time() - t0 > self.seconds:
                 log["capped"] = True
