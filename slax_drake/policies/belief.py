@@ -1,39 +1,44 @@
-"""slax-belief (ours): a belief-space beam search over short plans that minimises the expected cost of revealing
-the target (issue 19 item 5).
+"""slax-belief (ours): a belief-space beam search over short plans, choosing the plan that reveals the most
+probability mass of the target's placement per unit of expected cost (issue 19 item 5).
 
 With a privileged observation and a known shelf, the only unknown that matters is where the target stands: a
 placement in the hidden region. The belief is the set of lattice placements consistent with every observation of
 the trial (:meth:`~slax_drake.policies.hindsight.Hindsight.placements`: clear of the seen objects, hidden at the
 first observation, seen less than v at each later one), uniform, as the scene generator draws the target. A plan
 (a sequence of actions on the seen objects) reveals a placement when some arrangement along it shows a target
-there at v; the success probability of a plan is the share of placements it reveals. ``samples`` placements
-(stratified, seeded with the scene seed and the step: :meth:`Hindsight.draw`) stand for the belief (the worlds).
+there at v. ``samples`` placements (stratified, seeded with the scene seed and the step: :meth:`Hindsight.draw`)
+stand for the belief (the worlds); they are kept from one decision to the next while at least half of them stay
+consistent (the consistent ones are a rejection sample of the updated belief), then drawn anew.
 
 Why not greedy: revealing the hidden region usually needs several objects moved first, one in front of the
 other, and the first of those moves reveals little. ``slax-hindsight`` scores a world only 0 (seen), 1 (one
 object away) or F (more), so a first move that brings a world from three objects away to two earns nothing, and
-it wanders between small reveals. Here every world keeps its graded distance: the fewest seen objects whose
-removal would show its target (0, 1, 2, or ``cap``; the Oracles' admissible heuristic, per world, computed from
-per-object occlusion masks of the target's surface points, :class:`~slax_drake.policies.hindsight.Worlds`).
+it wanders between small reveals. Here every world keeps a graded distance h_w: the fewest seen objects whose
+removal would show its target (0, 1, 2 exactly; from 3 on the count of a greedy cover), from per-object
+occlusion masks of the target's surface points (:class:`~slax_drake.policies.hindsight.Worlds`, packed as bits).
 
-The value of a plan a_1..a_d from the current arrangement (lower is better) is its expected cost::
+A plan a_1..a_d has an expected cost G = sum_k c(a_k) P(not revealed before step k) (c = 1 for a push, psi for a
+suction), a revealed mass R (the share of worlds some arrangement along it shows, each reveal weighted by the
+probability that the plan's suctions so far were placed as planned), and a value
+V = G + sum_w [w not revealed] h_w(s_d) / K (``failure_cost`` for a world farther than the actions left when
+``horizon`` is given). The beam (``beam`` arrangements per depth, duplicates merged) is ranked by V; the plan
+taken is the one with the largest R / G among all plans looked at (the classic search rule: look first where
+probability per cost is highest), by V when none reveals anything. The search goes ``depth`` actions deep, and
+on to ``max_depth`` while no plan reveals anything.
 
-    V = sum_k c(a_k) P(not revealed before step k) + sum_w p_w [w not revealed after a_d] h_w(s_d)
+Moves: the oracles' coarse action set (each object pushed each way up to its neighbour; suction placements on the
+action model's lattice, the ``placements_per_object`` best per object and state by their value; of the placements
+where the object hides no world's target, only the least risky one). The first move is one of the policy's own
+candidates (Bluction-DAR's corrections: exclusions, no return to an observed arrangement). In the paper profile a
+suction may place its object in hidden space, where an unseen object may stop it: its chance of failing is taken
+as ``hidden_risk`` times the share of hidden placements in its placement box (widened by half the target), and a
+placement that was put back or stopped short marks its box blocked for the rest of the trial.
 
-with c = 1 for a push and psi for a suction, h_w(s_d) the world's distance after the plan (a lower bound on the
-actions it still needs), and ``failure_cost`` for a world whose distance exceeds the actions left (unknown
-horizon: ``horizon`` when given). Where a suction places its object on a world's target, the world leaves the
-plan at that step with its distance before the step, plus the step (the action is wasted there).
-
-Search: a beam search (``beam`` arrangements per depth, duplicates merged, to ``depth`` actions) over the moves of
-the oracles' coarse action set (each object pushed each way up to its neighbour; suction placements on the
-action model's lattice, the ``placements_per_object`` best of each object by their one-step value). The first
-move is chosen among the policy's own candidates (exclusions, no return to an observed arrangement). The first
-action of the plan with the least V is taken; the next decision searches again on the new observation, with the
-rest of the last plan added to the beam (so that the plan is kept unless a better one is found). Deterministic:
-no random number is drawn but from the seeded generator and ties keep enumeration order. ``seconds`` caps a
-decision's CPU time (the search stops deepening and takes the best plan so far; ``decision_log`` records
-``capped``); the default is set so that it does not bind on Table I.
+The first action of the chosen plan is taken; the next decision searches again on the new observation, the rest
+of the last plan kept in the beam at every depth (so it is kept unless a better one is found). Deterministic: no
+random number is drawn but from the seeded generator, and ties keep enumeration order. ``seconds`` caps a
+decision's CPU time (checked per expanded node: the search stops and takes the best plan so far; ``decision_log``
+records ``capped``); the default, 30 s, does not bind on Table I, so results do not depend on the machine.
 """
 
 from __future__ import annotations
@@ -52,7 +57,8 @@ from slax_drake.scene.model import state_key
 
 class _Node:
     """One plan in the beam: its arrangement, actions, accumulated expected cost ``g``, the worlds not yet revealed
-    (``alive``, bool (K,)), the worlds lost to a blocked action with their terminal value, and its value V."""
+    (``alive``, bool (K,)), the terminal value of the worlds lost to a blocked action (``lost``), its value V, the
+    revealed mass R (``revealed``) and the probability that its suctions so far went as planned (``prob``)."""
 
     __slots__ = ("objects", "plan", "g", "alive", "lost", "value", "order", "revealed", "prob")
 
@@ -62,10 +68,11 @@ class _Node:
 
 
 class BeliefSearch(Hindsight):
-    """See the module docstring. Options: ``samples`` (worlds), ``depth`` (plan length searched), ``beam``,
-    ``placements_per_object`` (suction placements kept per object and state), ``cap`` (the largest world distance
-    computed exactly), ``failure_cost``, ``horizon`` (actions per trial, None: unknown), ``safe_suctions``,
-    ``seconds`` (the per-decision CPU cap), ``grid_step``, ``threshold``."""
+    """See the module docstring. Options: ``samples`` (worlds), ``depth`` (plan length searched), ``max_depth``
+    (searched further while nothing is revealed), ``beam``, ``placements_per_object`` (suction placements kept per
+    object and state), ``failure_cost``, ``horizon`` (actions per trial, None: unknown), ``hidden_risk``,
+    ``select`` ("ratio": the most revealed mass per expected cost; "value": the least V), ``seconds`` (the
+    per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's)."""
 
     name = "slax-belief"
 
