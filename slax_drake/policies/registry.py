@@ -51,6 +51,7 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "bluction-dar-cost": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "cost", "corrected": True}),
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
+    "slax-belief": PolicyEntry("slax_drake.policies.belief:BeliefSearch"),
 }
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I

@@ -1,0 +1,462 @@
+"""slax-belief (ours): a belief-space beam search over short plans, choosing the plan that reveals the most
+probability mass of the target's placement per unit of expected cost (issue 19 item 5).
+
+With a privileged observation and a known shelf, the only unknown that matters is where the target stands: a
+placement in the hidden region. The belief is the set of lattice placements consistent with every observation of
+the trial (:meth:`~slax_drake.policies.hindsight.Hindsight.placements`: clear of the seen objects, hidden at the
+first observation, seen less than v at each later one), uniform, as the scene generator draws the target. A plan
+(a sequence of actions on the seen objects) reveals a placement when some arrangement along it shows a target
+there at v. ``samples`` placements (stratified, seeded with the scene seed and the step: :meth:`Hindsight.draw`)
+stand for the belief (the worlds); they are kept from one decision to the next while at least half of them stay
+consistent (the consistent ones are a rejection sample of the updated belief), then drawn anew.
+
+Why not greedy: revealing the hidden region usually needs several objects moved first, one in front of the
+other, and the first of those moves reveals little. ``slax-hindsight`` scores a world only 0 (seen), 1 (one
+object away) or F (more), so a first move that brings a world from three objects away to two earns nothing, and
+it wanders between small reveals. Here every world keeps a graded distance h_w: the fewest seen objects whose
+removal would show its target (0, 1, 2 exactly; from 3 on the count of a greedy cover), from per-object
+occlusion masks of the target's surface points (:class:`~slax_drake.policies.hindsight.Worlds`, packed as bits).
+
+A plan a_1..a_d has an expected cost G = sum_k c(a_k) P(not revealed before step k) (c = 1 for a push, psi for a
+suction), a revealed mass R (the share of worlds some arrangement along it shows, each reveal weighted by the
+probability that the plan's suctions so far were placed as planned), and a value
+V = G + sum_w [w not revealed] h_w(s_d) / K (``failure_cost`` for a world farther than the actions left when
+``horizon`` is given). The beam (``beam`` arrangements per depth, duplicates merged) is ranked by V; the plan
+taken is the one with the largest R / G among all plans looked at (the classic search rule: look first where
+probability per cost is highest), by V when none reveals anything. The search goes ``depth`` actions deep, and
+on to ``max_depth`` while no plan reveals anything.
+
+Moves: the oracles' coarse action set (each object pushed each way up to its neighbour; suction placements on the
+action model's lattice, the ``placements_per_object`` best per object and state by their value; of the placements
+where the object hides no world's target, only the least risky one). The first move is one of the policy's own
+candidates (Bluction-DAR's corrections: exclusions, no return to an observed arrangement). In the paper profile a
+suction may place its object in hidden space, where an unseen object may stop it: its chance of failing is taken
+as ``hidden_risk`` times the share of hidden placements in its placement box (widened by half the target), and a
+placement that was put back or stopped short marks its box blocked for the rest of the trial.
+
+The first action of the chosen plan is taken; the next decision searches again on the new observation, the rest
+of the last plan kept in the beam at every depth (so it is kept unless a better one is found). Deterministic: no
+random number is drawn but from the seeded generator, and ties keep enumeration order. ``seconds`` caps a
+decision's CPU time (checked per expanded node: the search stops and takes the best plan so far; ``decision_log``
+records ``capped``); the default, 30 s, does not bind on Table I, so results do not depend on the machine.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+
+import numpy as np
+
+from slax_drake.policies.actions import Push, Suction, apply_action
+from slax_drake.policies.hindsight import Hindsight, Worlds
+from slax_drake.policies.oracle_search import maximal_pushes_only
+from slax_drake.policies.protocol import Decision
+from slax_drake.scene.model import state_key
+
+
+class _Node:
+    """One plan in the beam: its arrangement, actions, accumulated expected cost ``g``, the worlds not yet revealed
+    (``alive``, bool (K,)), the terminal value of the worlds lost to a blocked action (``lost``), its value V, the
+    revealed mass R (``revealed``) and the probability that its suctions so far went as planned (``prob``)."""
+
+    __slots__ = ("objects", "plan", "g", "alive", "lost", "value", "order", "revealed", "prob")
+
+    def __init__(self, objects, plan, g, alive, lost, value, order, revealed=0.0, prob=1.0):
+        self.objects, self.plan, self.g, self.alive, self.lost = objects, plan, g, alive, lost
+        self.value, self.order, self.revealed, self.prob = value, order, revealed, prob
+
+
+class BeliefSearch(Hindsight):
+    """See the module docstring. Options: ``samples`` (worlds), ``depth`` (plan length searched), ``max_depth``
+    (searched further while nothing is revealed), ``beam``, ``placements_per_object`` (suction placements kept per
+    object and state), ``failure_cost``, ``horizon`` (actions per trial, None: unknown), ``hidden_risk``,
+    ``select`` ("ratio": the most revealed mass per expected cost; "value": the least V), ``seconds`` (the
+    per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's)."""
+
+    name = "slax-belief"
+
+    def __init__(self, *args, samples: int = 64, depth: int = 3, beam: int = 6, placements_per_object: int = 2,
+                 failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
+                 hidden_risk: float = 0.7, max_depth: int = 5, select: str = "ratio", **kwargs):
+        super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
+                         **kwargs)
+        self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
+        self.depth = depth
+        self.max_depth = max(depth, max_depth)  # deeper while no plan of ``depth`` reveals anything
+        self.beam = beam
+        self.placements_per_object = placements_per_object
+        self.horizon = horizon
+        self._plan: list = []  # the rest of the last decision's plan
+        self._expected = None  # the arrangement that plan expects next
+        self._distance_cache: dict = {}
+        self._worlds = None  # the worlds (PackedWorlds) of this trial, kept while enough stay consistent
+        self._n_worlds = 0  # how many of them are consistent at this decision
+        self.hidden_risk = hidden_risk
+        if select not in ("ratio", "value"):
+            raise ValueError("select must be 'ratio' or 'value'")
+        self.select = select
+        self._blocked: list = []  # boxes (x_lo, x_hi, y_lo, y_hi) where a placement failed: an unseen obstacle
+        self._last = None  # (the suction taken last, the pose it predicts for its object)
+
+    def reset(self, scene_or_observation=None) -> None:
+        super().reset(scene_or_observation)
+        self._plan, self._expected = [], None
+        self._blocked, self._last = [], None
+        self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
+
+    def worlds_for(self, template, placements: np.ndarray, seed: int):
+        """(the worlds, (K,) bool: those still consistent with every observation). The worlds drawn at the first
+        decision are kept while at least half of ``samples`` of them stay consistent: the consistent ones are a
+        sample of the belief (the prior conditioned on what was seen, by rejection), and keeping them keeps the
+        plan's values and the occlusion masks from one decision to the next. Then ``samples`` are drawn anew
+        from the consistent placements."""
+        step = self.grid_step
+        if self._worlds is not None:
+            keys = np.round(self._worlds.worlds.centers / step).astype(int)
+            consistent = np.array([(int(i), int(j)) in self._consistent for i, j in keys], dtype=bool)
+            if consistent.sum() >= min(len(placements), max(1, self.samples // 2)):
+                return self._worlds, consistent
+        self._worlds = PackedWorlds(Worlds(template, self.draw(placements, seed), self.target_size(), self.threshold))
+        self._distance_cache = {}
+        return self._worlds, np.ones(self._worlds.count, bool)
+
+    # ---- suctions ------------------------------------------------------------------------------------------------
+    def placement_box(self, objects, a) -> tuple:
+        """The footprint box (x_lo, x_hi, y_lo, y_hi; m) of suction ``a``'s object where ``a`` places it."""
+        from slax_drake.scene.footprint import Footprint
+
+        fp = Footprint.of(next(o for o in objects if o.name == a.name))
+        ex, ey = fp.extents()
+        x = fp.x + a.dx
+        return x - ex, x + ex, a.dz - ey, a.dz + ey
+
+    def note_outcome(self, known) -> None:
+        """When the last suction did not leave its object where it predicted (put back, or stopped early by
+        something unseen), its placement box joins the blocked regions: no later placement overlaps one."""
+        if self._last is None:
+            return
+        (x_lo, x_hi, y_lo, y_hi), name = self._last
+        self._last = None
+        obj = next((o for o in known if o.name == name), None)
+        if obj is None:
+            return
+        x, y = float(obj.center[0]), float(obj.center[1])
+        if abs(x - (x_lo + x_hi) / 2) > 0.005 or abs(y - (y_lo + y_hi) / 2) > 0.005:
+            self._blocked.append((x_lo, x_hi, y_lo, y_hi))
+
+    def placement_allowed(self, objects, a) -> bool:
+        if not self._blocked:
+            return True
+        b = self.placement_box(objects, a)
+        return not any(b[0] < r[1] and r[0] < b[1] and b[2] < r[3] and r[2] < b[3] for r in self._blocked)
+
+    def moves(self, objects) -> list:
+        """(action, objects after, cost) of every move from ``objects`` on the seen objects: each object pushed each
+        way up to its neighbour, and every suction placement of the profile but those overlapping a blocked region;
+        a suction placed (or moved) through hidden space costs ``hidden_risk`` more (an unseen object may stop
+        it), cached for the trial."""
+        key = state_key(objects)
+        hit = self._moves.get(key)
+        if hit is None:
+            found = maximal_pushes_only(self.action_model.enumerate(objects, pushes=True, suctions=True).feasible)
+            hit = self._moves[key] = [(a, apply_action(objects, a)) for a in found]
+        return [(a, after, self.move_cost(objects, a)) for a, after in hit
+                if not isinstance(a, Suction) or self.placement_allowed(objects, a)]
+
+    def move_cost(self, objects, a) -> float:
+        """1 for a push, psi for a suction."""
+        return self.cost(a)
+
+    def placement_risk(self, objects, a) -> float:
+        """The probability that suction ``a`` does not place its object as planned: ``hidden_risk`` times the share
+        of its placement box, widened by half the target, where the target could stand now (hidden space, where an
+        unseen object may stand too); 0 for a push (the profile never pushes into hidden space)."""
+        centers = self._hidden_centers
+        if not isinstance(a, Suction) or not self.hidden_risk or centers is None or not len(centers):
+            return 0.0
+        x_lo, x_hi, y_lo, y_hi = self.placement_box(objects, a)
+        hx, hy = self.target_size()[0] / 2, self.target_size()[1] / 2
+        x_lo, x_hi, y_lo, y_hi = x_lo - hx, x_hi + hx, y_lo - hy, y_hi + hy
+        inside = ((centers[:, 0] >= x_lo) & (centers[:, 0] <= x_hi) & (centers[:, 1] >= y_lo) & (centers[:, 1] <= y_hi))
+        cells = max(1.0, (x_hi - x_lo) * (y_hi - y_lo) / self.grid_step ** 2)
+        return self.hidden_risk * min(1.0, 2.0 * inside.sum() / cells)
+
+    # ---- per-world distances -----------------------------------------------------------------------------------
+    def distances(self, worlds: "PackedWorlds", objects) -> np.ndarray:
+        """(K,) float: per world, the fewest objects of ``objects`` whose removal shows its target at v (0, 1, 2
+        exactly; from 3 on, the count a greedy cover removes, an upper bound; ``failure_cost`` for a world whose
+        target the empty shelf does not show)."""
+        key = tuple(id(o) for o in objects)
+        hit = self._distance_cache.get(key)
+        if hit is not None:
+            return hit[1]
+        need = worlds.need
+        masks = [m for m in (worlds.mask(o) for o in objects) if m is not None]
+        k = worlds.count
+        if masks:
+            masks = np.stack(masks)  # (n, K, W) uint64: the points each object hides
+            at1, at2, at3 = _at_least_three(masks)
+            seen = _popcount(worlds.shown & ~at1)
+            d = np.full(k, 3.0)
+            exactly1 = at1 & ~at2
+            only = _popcount(masks & exactly1[None])  # (n, K) points hidden by that object alone
+            one = (seen[None] + only >= need[None]).any(axis=0)
+            two = np.zeros(k, bool)
+            if len(masks) > 1 and not one.all():
+                exactly2 = at2 & ~at3
+                both = _popcount(masks[:, None] & masks[None, :] & exactly2[None, None])  # (n, n, K)
+                pair = seen[None, None] + only[:, None] + only[None, :] + both
+                iu = _pairs(len(masks))
+                two = (pair[iu[0], iu[1]] >= need[None]).any(axis=0)
+            rest = ~(one | two) & (seen < need)
+            if rest.any():
+                d[rest] = np.maximum(3.0, self.greedy_removals(masks[:, rest], worlds.shown[rest], need[rest]))
+            d = np.where(one, 1.0, np.where(two, 2.0, d))
+        else:
+            seen = _popcount(worlds.shown)
+            d = np.full(k, 3.0)
+        d = np.where(seen >= need, 0.0, d)
+        d = np.where(worlds.n_shown > 0, d, self.failure_cost)
+        self._distance_cache[key] = (tuple(objects), d)  # the objects keep their ids alive
+        return d
+
+    @staticmethod
+    def greedy_removals(masks: np.ndarray, shown: np.ndarray, need: np.ndarray) -> np.ndarray:
+        """(K,) per world, how many objects a greedy cover removes until its target is seen at v (each time the
+        object whose removal shows the most of it; an upper bound on the fewest; ``len(masks) + 1`` when even
+        removing all does not show it). ``masks`` (n, K, W) packed per object, ``shown`` (K, W), ``need`` (K,)."""
+        n, k = masks.shape[0], masks.shape[1]
+        removed = np.zeros((n, k), bool)
+        out = np.full(k, float(n + 1))
+        todo = np.ones(k, bool)
+        for step in range(n + 1):
+            present = np.where(removed[:, :, None], np.uint64(0), masks)
+            at1, at2, _ = _at_least_three(present)
+            seen = _popcount(shown & ~at1)
+            done = todo & (seen >= need)
+            out[done] = step
+            todo &= ~done
+            if not todo.any() or step == n:
+                break
+            gain = _popcount(present & (at1 & ~at2)[None])  # (n, K) shown by removing that one next
+            gain = np.where(removed, -1, gain)
+            pick = gain.argmax(axis=0)
+            removed[pick, np.arange(k)] = True
+        return out
+
+    # ---- search --------------------------------------------------------------------------------------------------
+    def child(self, worlds, node: _Node, a, after, c: float, remaining: int, order: int) -> _Node:
+        mass = node.alive.sum() / self._n_worlds
+        g = node.g + c * mass
+        d_before = self.distances(worlds, node.objects)
+        alive, lost = node.alive, node.lost
+        if isinstance(a, Suction):
+            blocked = worlds.blocks(after, a.name) & alive
+            if blocked.any():
+                lost = lost + float(((d_before + c) * blocked).sum()) / self._n_worlds
+                alive = alive & ~blocked
+        prob = node.prob * (1.0 - self.placement_risk(node.objects, a))
+        d = self.distances(worlds, after)
+        shown = alive & (d == 0)
+        alive = alive & ~shown
+        left = remaining - len(node.plan) - 1
+        h = np.where(d > left, self.failure_cost, d)
+        n = self._n_worlds
+        value = g + lost + float((h * alive).sum()) / n + (1.0 - prob) * float(shown.sum()) / n
+        revealed = node.revealed + prob * float(shown.sum()) / n
+        return _Node(after, node.plan + (a,), g, alive, lost, value, order, revealed, prob)
+
+    def expansions(self, worlds, node: _Node, moves, remaining: int, counter) -> list:
+        """The children of ``node`` over ``moves`` ((action, objects after, cost)): every push, and each object's
+        ``placements_per_object`` best suctions (of the placements where the object hides no world's target, only
+        the least risky one is looked at: they lead to the same value but for the risk)."""
+        kids = []
+        best_suctions: dict = {}
+        aside: dict = {}  # per object, the placement that hides no world's target with the least risk
+        for a, after, c in moves:
+            if isinstance(a, Suction):
+                moved = next(o for o in after if o.name == a.name)
+                if worlds.mask(moved) is None:  # such placements differ only in their risk: keep one
+                    risk = self.placement_risk(node.objects, a)
+                    if a.name not in aside or risk < aside[a.name][0]:
+                        aside[a.name] = (risk, a, after, c)
+                    continue
+            kid = self.child(worlds, node, a, after, c, remaining, next(counter))
+            if isinstance(a, Push):
+                kids.append(kid)
+            else:
+                best_suctions.setdefault(a.name, []).append(kid)
+        for risk, a, after, c in aside.values():
+            kid = self.child(worlds, node, a, after, c, remaining, next(counter))
+            if isinstance(a, Push):
+                kids.append(kid)
+            else:
+                best_suctions.setdefault(a.name, []).append(kid)
+        for group in best_suctions.values():
+            group.sort(key=lambda k: (k.value, k.order))
+            kids.extend(group[: self.placements_per_object])
+        return kids
+
+    def action_model_candidates(self, objects) -> list:
+        """The first moves: the policy's candidates (every suction of the profile; exclusions and no return
+        applied), less the placements overlapping a blocked region."""
+        base = super(Hindsight, self).candidates(objects, True, True)
+        return [a for a in base if not isinstance(a, Suction) or self.placement_allowed(objects, a)]
+
+    def rank(self, obs) -> Decision:
+        import itertools
+
+        t0 = time.process_time()
+        self._step += 1
+        known = tuple(obs.known)
+        self.note_outcome(known)
+        cands = maximal_pushes_only(self.action_model_candidates(known))
+        if not cands:
+            return Decision.stop("no feasible action")
+        placements = self._hidden_centers = self.placements(obs)
+        log = {"placements": int(len(placements)), "samples": 0, "expanded": 0, "capped": False}
+        self.decision_log.append(log)
+        if not len(placements):
+            return Decision(tuple(cands))
+        template = obs.scene_template
+        seed = template.seed if template.seed is not None else 0
+        worlds, consistent = self.worlds_for(template, placements, seed)
+        self._n_worlds = int(consistent.sum())
+        log["samples"] = self._n_worlds
+        remaining = self.horizon - (self._step - 1) if self.horizon is not None else 10 ** 6
+        counter = itertools.count()
+        root = _Node(known, (), 0.0, np.ones(worlds.count, bool), 0.0, 0.0, -1)
+        d0 = self.distances(worlds, known)
+        root.alive = consistent & (d0 > 0)
+        level = self.expansions(worlds, root, [(a, apply_action(known, a), self.move_cost(known, a)) for a in cands],
+                                remaining, counter)
+        # the rest of the last plan, when this is the arrangement it expected: kept in the beam at every depth
+        kept: dict = {}
+        if self._plan and self._expected == state_key(known) and self._plan[0] in cands:
+            node = root
+            for i, a in enumerate(self._plan[: self.depth]):
+                after = apply_action(node.objects, a)
+                c = self.move_cost(node.objects, a)
+                node = kept[i + 1] = self.child(worlds, node, a, after, c, remaining, next(counter))
+        seen_nodes = []  # every plan looked at (after merging duplicates)
+        first_level = list(level)
+        for depth in range(1, self.max_depth + 1):
+            merged: dict = {}
+            for k in level + ([kept[depth]] if depth in kept else []):
+                key = state_key(k.objects)
+                old = merged.get(key)
+                if old is None or (k.value, k.order) < (old.value, old.order):
+                    merged[key] = k
+            level = sorted(merged.values(), key=lambda k: (k.value, k.order))
+            seen_nodes.extend(level)
+            level = [k for k in level if k.alive.any()]
+            beam = level[: self.beam]
+            if depth in kept and kept[depth].alive.any() and all(k is not kept[depth] for k in beam):
+                if merged.get(state_key(kept[depth].objects)) is kept[depth]:
+                    beam.append(kept[depth])
+            level = beam
+            log["expanded"] += len(level)
+            if not level or depth >= self.max_depth or \
+                    (depth >= self.depth and any(k.revealed > 0 for k in seen_nodes)):
+                break
+            if time.process_time() - t0 > self.seconds:
+                log["capped"] = True
+                break
+            nxt = []
+            for i, k in enumerate(level):
+                if i and time.process_time() - t0 > self.seconds:
+                    log["capped"] = True  # the nodes looked at so far make the next level
+                    break
+                nxt.extend(self.expansions(worlds, k, self.moves(k.objects), remaining, counter))
+            level = nxt
+        if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
+            best = max(seen_nodes, key=lambda k: (k.revealed / max(k.g, 1e-9), -k.value, -k.order))
+        else:
+            best = min(seen_nodes, key=lambda k: (k.value, len(k.plan), k.order))
+        log["revealed"] = round(best.revealed, 4)
+        log["value"] = round(best.value, 4)
+        log["plan"] = [a.describe() for a in best.plan]
+        log["seconds"] = round(time.process_time() - t0, 3)
+        first = best.plan[0]
+        if isinstance(first, Suction):
+            self._last = (self.placement_box(known, first), first.name)
+        self._plan = list(best.plan[1:])
+        self._expected = state_key(apply_action(known, first))
+        ranked = sorted(first_level, key=lambda k: (k.value, k.order))
+        rest = [k.plan[0] for k in ranked if k.plan[0] != first]
+        rest += [a for a in cands if a != first and a not in rest]
+        return Decision((first, *rest))
+
+
+@functools.lru_cache(maxsize=64)
+def _pairs(n: int):
+    """The index pairs i < j of ``n`` objects (np.triu_indices, cached)."""
+    return np.triu_indices(n, 1)
+
+
+def _popcount(words: np.ndarray) -> np.ndarray:
+    """Set bits per row of packed words: (..., W) uint64 -> (...) int."""
+    return np.bitwise_count(words).sum(axis=-1, dtype=np.int64)
+
+
+def _at_least_three(masks: np.ndarray):
+    """(at least one, at least two, at least three) of the packed ``masks`` (n, ..., W) set, bit by bit."""
+    at1 = np.zeros(masks.shape[1:], np.uint64)
+    at2 = at1.copy()
+    at3 = at1.copy()
+    for m in masks:
+        at3 |= at2 & m
+        at2 |= at1 & m
+        at1 |= m
+    return at1, at2, at3
+
+
+class PackedWorlds:
+    """:class:`~slax_drake.policies.hindsight.Worlds` with each world's target points packed as bits (uint64 words),
+    and each object's occlusion masks cached by the object itself (objects are immutable)."""
+
+    def __init__(self, worlds: Worlds):
+        self.worlds = worlds
+        self.count = worlds.count
+        self.n_shown = worlds.n_shown
+        self.need = worlds.threshold * worlds.n_shown - 1e-9
+        self.shown = self.pack(worlds.shown)
+        self._masks: dict = {}
+        from shapely.geometry import MultiPoint
+
+        hx, hy = worlds.size[0] / 2, worlds.size[1] / 2
+        corners = [(x + sx * hx, y + sy * hy) for x, y in worlds.centers for sx in (-1, 1) for sy in (-1, 1)]
+        # every eye-to-target segment of every world projects inside this hull: an object clear of it hides nothing
+        from shapely.prepared import prep
+
+        self.hull = prep(MultiPoint([tuple(worlds.eye[:2])] + corners).convex_hull)
+
+    @staticmethod
+    def pack(bits: np.ndarray) -> np.ndarray:
+        """(K, P) bool -> (K, W) uint64."""
+        k, p = bits.shape
+        w = max(1, -(-p // 64))
+        padded = np.zeros((k, w * 64), bool)
+        padded[:, :p] = bits
+        return np.packbits(padded, axis=1).view(np.uint64)
+
+    def mask(self, obj):
+        """(K, W) the points of each world's target that ``obj`` alone hides; None when it hides none."""
+        hit = self._masks.get(id(obj))
+        if hit is None:
+            from shapely.geometry import box
+
+            from slax_drake.scene.footprint import Footprint
+
+            fp = Footprint.of(obj)
+            ex, ey = fp.extents()
+            if not self.hull.intersects(box(fp.x - ex, fp.y - ey, fp.x + ex, fp.y + ey)):
+                hit = self._masks[id(obj)] = (obj, None)
+            else:
+                m = self.worlds.hidden_by(obj)
+                hit = self._masks[id(obj)] = (obj, self.pack(m) if m.any() else None)
+        return hit[1]
+
+    def blocks(self, objects, name: str) -> np.ndarray:
+        return self.worlds.blocks(objects, name)

@@ -1,0 +1,105 @@
+"""Issue 19 item 5: slax-belief, the belief-space beam search (slax_drake/policies/belief.py): it plans the two moves
+a stacked occlusion needs, rolls out deterministically, keeps to its per-decision CPU cap, and its per-world
+distances agree with a brute-force count."""
+
+import itertools
+
+import numpy as np
+import pytest
+
+from slax_drake.config import load_scenario
+from slax_drake.policies.belief import BeliefSearch, PackedWorlds
+from slax_drake.policies.hindsight import Worlds
+from slax_drake.policies.registry import make_policy
+from slax_drake.policies.simulator import execute, observation_for, run_trial
+from slax_drake.scene import Camera
+from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
+from slax_drake.scene.sampling import sample_scene, target_visible_fraction
+
+TARGET = (0.06, 0.06, 0.06)
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return load_scenario("sim_configs/table1.yaml")
+
+
+def box(name, x, y, sx, sy, sz):
+    return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, 0.0))
+
+
+def stacked_scene(paper):
+    """A wide low box in front, a wide tall one behind it, the target behind both: the tall one cannot be pushed
+    while the front one hides the space beside it, so the front one must move first, then the tall one."""
+    objects = (box("front", 0.0, -0.20, 0.24, 0.06, 0.12), box("middle", 0.0, 0.02, 0.20, 0.06, 0.25))
+    target = Target(TARGET, planar_pose(0.0, 0.20, 0.03, 0.0))
+    return Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), objects, target, 7)
+
+
+def test_belief_moves_the_front_object_first_and_plans_the_second_move(paper):
+    scene = stacked_scene(paper)
+    assert target_visible_fraction(scene) < 0.8
+    policy = make_policy("slax-belief", paper, horizon=4)
+    policy.reset(scene)
+    best = policy.decide(observation_for(policy, scene)).best
+    log = policy.decision_log[-1]
+    assert best.name == "front"
+    assert [a.split()[1] for a in log["plan"][:2]] == ["front", "middle"]
+    assert not log["capped"] and log["samples"] == policy.samples
+    after, note = execute(scene, best, policy.action_model)
+    assert note == "" and target_visible_fraction(after) < 0.8  # the first move alone does not show it
+    result = run_trial(scene, make_policy("slax-belief", paper, horizon=4), 4)
+    assert result.success and result.steps == 2 and result.actions[0].split()[1] == "front"
+
+
+def test_belief_rolls_out_the_same_actions_twice(paper):
+    scene = sample_scene(paper, 6, 11, target_size=TARGET)
+    runs = [run_trial(scene, make_policy("slax-belief", paper, horizon=4), 4) for _ in range(2)]
+    assert runs[0].actions == runs[1].actions and len(runs[0].actions) >= 1
+
+
+def test_belief_stops_deepening_at_its_cpu_cap_and_still_acts(paper):
+    scene = stacked_scene(paper)
+    capped = make_policy("slax-belief", paper, horizon=4, policy_options={"seconds": 0.0})
+    capped.reset(scene)
+    decision = capped.decide(observation_for(capped, scene))
+    assert decision.best is not None
+    log = capped.decision_log[-1]
+    assert log["capped"] and log["expanded"] <= capped.beam  # the first level only
+    assert len(log["plan"]) == 1
+
+
+def test_distances_match_a_brute_force_count(paper):
+    """The packed per-world distance (fewest objects whose removal shows the target) equals a count over subsets
+    of the unpacked masks, for 0, 1 and 2 (and >= 3 where neither)."""
+    scene = sample_scene(paper, 10, 100070, target_size=TARGET)
+    policy = make_policy("slax-belief", paper, horizon=20)
+    policy.reset(scene)
+    obs = observation_for(policy, scene)
+    centers = policy.draw(policy.placements(obs), 0)
+    raw = Worlds(obs.scene_template, centers, TARGET, policy.threshold)
+    d = policy.distances(PackedWorlds(raw), tuple(obs.known))
+    masks = [raw.hidden_by(o) for o in obs.known]
+    need = policy.threshold * raw.n_shown - 1e-9
+
+    def shown_without(removed):
+        hidden = np.zeros_like(raw.shown)
+        for i, m in enumerate(masks):
+            if i not in removed:
+                hidden |= m
+        return (raw.shown & ~hidden).sum(axis=1) >= need
+
+    brute = np.full(raw.count, 3.0)
+    for k in (2, 1, 0):
+        for removed in itertools.combinations(range(len(masks)), k):
+            brute[shown_without(set(removed))] = k
+    exact = brute < 3
+    assert exact.any() and (~exact).any()  # the scene has worlds of both kinds
+    assert np.array_equal(d[exact & (raw.n_shown > 0)], brute[exact & (raw.n_shown > 0)])
+    assert (d[~exact] >= 3).all()
+
+
+def test_belief_rejects_an_unknown_selection(paper):
+    policy = make_policy("slax-belief", paper)
+    with pytest.raises(ValueError):
+        BeliefSearch(policy.action_model, policy.distribution, select="greedy")
