@@ -7,6 +7,10 @@ the station's rules: the cup's limits and its reach map, as in a Drake trial; th
 each planned by the Drake motion planner from the observation pose. Prints, per density and in all, how many
 candidates the model offered, how many the planner rejected (the false-feasible rate) and by which waypoint, how
 many the reach map refused before planning, and the planning time per candidate (median, p90; one process).
+With ``--baseline RULE=VALUE`` (repeatable, e.g. ``push_tube_check=false``) the candidates the model offers with
+those rule values but not with the station's (the ones the station's rules remove before planning) are planned
+too: "removed" counts them and "removed plannable" those the planner would have planned (a conservative rule
+removes none); the rejected rate of the baseline model is printed beside.
 
     python benchmarks/bench_reach_rule.py --station sim_configs/station_sim_shelf.yaml --scenes 2
     python benchmarks/bench_reach_rule.py --config sim_configs/table2.yaml \\
@@ -17,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import dataclasses
 import json
 import sys
 import time
@@ -32,15 +37,20 @@ def main(argv=None) -> int:
     parser.add_argument("--scenes", type=int, default=2, help="scenes per density (the protocol's first K)")
     parser.add_argument("--seed", type=int, default=None, help="protocol seed (default: the config's)")
     parser.add_argument("--json", default=None, help="write the figures here too")
+    parser.add_argument("--baseline", nargs="+", default=[], metavar="RULE=VALUE",
+                        help="rule values of a baseline model whose extra candidates are planned too")
     args = parser.parse_args(argv)
     from slax_drake.config import load_scenario
     from slax_drake.errors import UserError
     from slax_drake.evaluation.table1 import scene_seed
     from slax_drake.hardware.check_action import make_checker
+    from slax_drake.policies.actions import ActionModel
+    from slax_drake.policies.registry import parse_tool_rules
     from slax_drake.scene.sampling import sample_scene
 
     try:
         scenario = load_scenario(args.config)
+        baseline = parse_tool_rules(args.baseline) if args.baseline else None
         seed = scenario.protocol.seed if args.seed is None else args.seed
         size = tuple(scenario.target.sizes[0])
         rows = collections.defaultdict(lambda: collections.Counter())
@@ -52,6 +62,13 @@ def main(argv=None) -> int:
                 scene = sample_scene(scenario, n, scene_seed(seed, n, index), target_size=size)
                 checker = make_checker(scene, args.station)
                 cands = checker.candidates()
+                removed = []
+                if baseline is not None:
+                    tool = checker.model.tool
+                    base_tool = dataclasses.replace(tool, rules=dataclasses.replace(tool.rules, **baseline))
+                    base = ActionModel(checker.scene.shelf, checker.scene.camera.position[:2], base_tool)
+                    offered = set(cands.feasible)
+                    removed = [a for a in base.enumerate(checker.scene.objects).feasible if a not in offered]
                 row = rows[n]
                 row["scenes"] += 1
                 row["offered"] += len(cands.feasible)
@@ -65,8 +82,17 @@ def main(argv=None) -> int:
                         row[f"rejected_{action.kind}"] += 1
                         why[result.reason.split(":")[0][:40]] += 1
                     row[f"offered_{action.kind}"] += 1
+                for action in removed:
+                    result = checker.planner.plan(action, checker.scene)
+                    row["removed"] += 1
+                    row[f"removed_{action.kind}"] += 1
+                    if result.feasible:
+                        row["removed_plannable"] += 1
+                        print(f"    removed but plannable: {action}", flush=True)
                 print(f"  n={n} scene {index}: {len(cands.feasible)} offered, "
-                      f"{row['rejected']} rejected so far at this density", flush=True)
+                      f"{row['rejected']} rejected so far at this density"
+                      + (f"; {len(removed)} removed by the rules beyond the baseline" if baseline is not None else ""),
+                      flush=True)
     except UserError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -86,6 +112,16 @@ def main(argv=None) -> int:
               f"{row['reach_refused']:>18} {med:>14.3f} {p90:>7.3f}")
         summary[str(n)] = {**dict(row), "false_feasible": round(rate, 4), "plan_median_s": round(med, 3),
                            "plan_p90_s": round(p90, 3)}
+    if args.baseline:
+        row = sum(rows.values(), collections.Counter())
+        base_offered = row["offered"] + row["removed"]
+        base_rejected = row["rejected"] + row["removed"] - row["removed_plannable"]
+        print(f"baseline ({' '.join(args.baseline)}): {base_offered} offered, {base_rejected} rejected "
+              f"({base_rejected / max(1, base_offered):.1%}); the station's rules remove {row['removed']} of them "
+              f"(push {row['removed_push']}, suction {row['removed_suction']}), {row['removed_plannable']} of which "
+              "the planner would have planned")
+        summary["baseline"] = {"rules": args.baseline, "offered": base_offered, "rejected": base_rejected,
+                               "removed": row["removed"], "removed_plannable": row["removed_plannable"]}
     print("planner rejections by first reason:")
     for reason, count in why.most_common(8):
         print(f"  {count:4d}  {reason}")

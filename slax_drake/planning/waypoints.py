@@ -32,7 +32,7 @@ import dataclasses
 
 import numpy as np
 
-from slax_drake.policies.actions import Push, Suction
+from slax_drake.policies.actions import BLADE_LIFT, TUBE_STANDOFF, Push, Suction
 from slax_drake.policies.rules import ToolConfig
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf
@@ -45,8 +45,8 @@ APPROACH_MARGINS = (APPROACH_MARGIN, 0.01)
 BLADE_HALF_LENGTH = 0.0325  # blade_face_frame to the blade's tip along the tube (m, URDF)
 BLADE_HALF_THICKNESS = 0.002  # m (URDF)
 TUBE_RADIUS = 0.015  # m (URDF); the tube runs along the blade's upper edge, centred on the blade's plane
-PUSH_STANDOFF = TUBE_RADIUS + 0.004 - BLADE_HALF_THICKNESS  # blade face to the object's extreme (m): the tube clears it
-BLADE_LIFT = 0.008  # blade's lower edge above the support surface (m)
+PUSH_STANDOFF = TUBE_RADIUS + TUBE_STANDOFF - BLADE_HALF_THICKNESS  # blade face to the object's extreme (m): the tube clears it
+# BLADE_LIFT (the blade's lower edge above the support, m) is the action model's, whose push_tube_check reads it
 SEAL_PRESS = 0.001  # cup pressed this far into the face (m)
 CUP_STANDOFF = 0.01  # m before the face, then the cup moves in with suction on
 LIFT = 0.01  # m

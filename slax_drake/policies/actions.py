@@ -62,6 +62,13 @@ FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
 CONTACT_INSET = 0.01  # the blade's tip this far past the point where it meets the object (m)
 BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
 REACH_MARGIN = 0.015  # m: the reach map refuses a tool position only when every grid node this near it is unreached
+# Where the planner puts the blade for a push (slax_drake.planning.waypoints reads these): the tube's surface
+# TUBE_STANDOFF beside the pushed object's extreme x (the blade's plane a tube radius farther), the blade's lower
+# edge BLADE_LIFT above the support; the tube runs along the blade's upper edge, centred on its plane.
+TUBE_STANDOFF = 0.004  # m
+BLADE_LIFT = 0.008  # m
+TUBE_CHECK_SLACK = 0.004  # m: how far the planned tool may stray from its straight segment (the planner's
+# DEVIATION_TOLERANCE); the push_tube_check corridor is narrowed and lowered by it, so it refuses only sure hits
 
 
 @dataclasses.dataclass(frozen=True)
@@ -194,6 +201,11 @@ class ActionModel:
                     where = "gap" if k_r == 0 else "shaft's way in"
                     rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
                     return
+        if t.rules.push_tube_check:
+            blocker = self.push_tube_blocker(ctx, i, sign)
+            if blocker is not None:
+                rejected.append(Rejected(what, f"the tube's way in {side} of {obj.name} is blocked by {blocker}"))
+                return
         n = int(math.ceil(shelf.width / t.grid.cell)) + 1
         k = np.arange(1, n + 1)
         xs = x + sign * k * t.grid.cell
@@ -406,6 +418,36 @@ class ActionModel:
             self._raster_cache.clear()
         self._raster_cache[key] = (grid.footprint_mask(fp), shadow)
         return self._raster_cache[key]
+
+    def push_tube_corridor(self, fp: Footprint, sign: int) -> tuple[float, float, float, float, float] | None:
+        """Where the tube surely passes on its straight way in to push ``fp`` toward ``sign`` x: (centre x,
+        centre y, half x, half y) of the floor rectangle its axis sweeps from the opening to the blade's tip at
+        the blade's plane (``TUBE_STANDOFF`` + a tube radius beside the object's extreme x, where the planner puts
+        it), ``tube_diameter`` wide, narrowed by ``TUBE_CHECK_SLACK`` on every side; and the height (m) above
+        which an object surely meets the tube (its underside, on the blade's upper edge, plus the slack)."""
+        t = self.tool
+        ex, _ = fp.extents()
+        tube_r = t.geometry.tube_diameter / 2
+        plane_x = (fp.x - ex - tube_r - TUBE_STANDOFF) if sign > 0 else (fp.x + ex + tube_r + TUBE_STANDOFF)
+        y0 = -self.shelf.depth / 2 + TUBE_CHECK_SLACK
+        y1 = self.blade_depth(fp, sign) - TUBE_CHECK_SLACK
+        if tube_r <= TUBE_CHECK_SLACK or y1 <= y0:
+            return None
+        underside = BLADE_LIFT + t.geometry.blade_height - tube_r
+        return plane_x, (y0 + y1) / 2, tube_r - TUBE_CHECK_SLACK, (y1 - y0) / 2, underside + TUBE_CHECK_SLACK
+
+    def push_tube_blocker(self, ctx, i: int, sign: int) -> str | None:
+        """The name of an object that the tube surely meets on its way in to push object i toward ``sign`` x
+        (one taller than :meth:`push_tube_corridor`'s height whose footprint overlaps its rectangle), or None."""
+        corridor = self.push_tube_corridor(ctx.fps[i], sign)
+        if corridor is None:
+            return None
+        cx, cy, hx, hy, height = corridor
+        for j in ctx.others(i):
+            if ctx.all_heights[j] > height and not clear_of("box", np.array([[cx, cy]]), 0.0, (hx, hy),
+                                                           ctx.all_fps[j], 0.0)[0]:
+                return ctx.all_names[j]
+        return None
 
     def push_swept_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
         """The parts of :meth:`push_tool_rects` the model requires to be free (and drags along the push):
