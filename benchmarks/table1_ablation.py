@@ -41,12 +41,17 @@ VARIANTS = {
     # docstrings quote the line each reads), each alone on top of the paper profile.
     "paper-contact": ("paper + a push stops against its neighbour (push_stop exact, clearance 0)", "paper",
                       {"push_stop": "exact", "clearance": 0.0}, {}),
+    "paper-exact-stop": ("paper + a push stops exactly clearance (2 mm) before its neighbour (push_stop exact)",
+                         "paper", {"push_stop": "exact"}, {}),
     "paper-push-hidden-end": ("paper + a push may cross hidden space, not come to rest in it", "paper",
                               {"push_hidden_extent": "end"}, {}),
     "paper-target-first": ("paper + the target placed first, the occluders around it", "paper", {},
                            {"target.placement": "first"}),
     "paper-n-includes-target": ("paper + n counts the target (n - 1 occluders, H = 2n)", "paper", {},
                                 {"protocol.count_includes_target": True}),
+    "paper-readings-combined": ("paper + boxes square to the walls + a push may cross hidden space, not rest in "
+                                "it + n counts the target", "paper", {"push_hidden_extent": "end"},
+                                {"objects.box_yaw": "aligned", "protocol.count_includes_target": True}),
     "paper-horizon-4n": ("paper + H = 4n (a horizon that does not bind)", "paper", {},
                          {"protocol.horizon_per_object": 4}),
 }
