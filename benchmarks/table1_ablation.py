@@ -49,9 +49,9 @@ VARIANTS = {
                            {"target.placement": "first"}),
     "paper-n-includes-target": ("paper + n counts the target (n - 1 occluders, H = 2n)", "paper", {},
                                 {"protocol.count_includes_target": True}),
-    "paper-readings-combined": ("paper + boxes square to the walls + a push may cross hidden space, not rest in "
-                                "it + n counts the target", "paper", {"push_hidden_extent": "end"},
-                                {"objects.box_yaw": "aligned", "protocol.count_includes_target": True}),
+    "paper-readings-combined": ("paper + boxes square to the walls + a push stops exactly 2 mm before its "
+                                "neighbour (the two readings of the paper's text that do not contradict it)",
+                                "paper", {"push_stop": "exact"}, {"objects.box_yaw": "aligned"}),
     "paper-horizon-4n": ("paper + H = 4n (a horizon that does not bind)", "paper", {},
                          {"protocol.horizon_per_object": 4}),
 }
