@@ -16,8 +16,8 @@ from slax_drake.errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CONFIG = "sim_configs/sim_shelf.yaml"
-PROFILES = ("paper", "station")
-TARGET_PLACEMENTS = ("after-objects", "first")  # target.placement  # the action model's rule profiles (slax_drake.policies.rules.PROFILES)
+PROFILES = ("paper", "station")  # the action model's rule profiles (slax_drake.policies.rules.PROFILES)
+TARGET_PLACEMENTS = ("after-objects", "first")  # target.placement
 
 
 @dataclasses.dataclass

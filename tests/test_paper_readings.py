@@ -65,7 +65,7 @@ def test_exact_push_stop_keeps_the_clearance_it_is_given():
     assert longest(model, (A,), "a", -1) == pytest.approx(0.30 - 0.04 - 0.10 - 0.002, abs=2e-6)
 
 
-# ---- push_hidden_extent -----------------------------------------------------------------------------------------------
+# ---- push_hidden_extent ---------------------------------------------------------------------------------------------
 # a tall narrow box in front hides a strip of floor behind it; m stands left of that strip and is pushed right
 WALL, M = box("w", 0.0, -0.20, sx=0.10, sy=0.04, sz=0.30), box("m", -0.20, 0.10, sx=0.06, sy=0.06)
 

@@ -8,9 +8,10 @@ cylinder stands on its flat face. Positions are uniform over the bay and rejecte
 Positions are tried in batches of 32; an object that finds no free position in its batch is redrawn (shape,
 size, pose), so dense scenes lean toward smaller objects, as any sequential placement must.
 
-Target (``target.placement`` "after-objects", the paper's order): yaw aligned with the shelf, resting on the support
-surface, its position uniform over the free floor, kept only if no ray from the camera reaches any of the points sampled on its surface (every face but the
-bottom, ``target.surface_point_spacing`` apart), with the shelf's walls, top and back counted as occluders.
+Target (``target.placement`` "after-objects", the paper's order): yaw aligned with the shelf, resting on the
+support surface, its position uniform over the free floor, kept only if no ray from the camera reaches any of the
+points sampled on its surface (every face but the bottom, ``target.surface_point_spacing`` apart), with the shelf's
+walls, top and back counted as occluders.
 A coarse point set screens candidates in batches; the dense set decides. With ``target.placement`` "first" the
 target is drawn uniformly on the empty floor before the occluders, which are placed clear of it, and the scene is
 kept only when the target is then fully hidden (the same dense test).
