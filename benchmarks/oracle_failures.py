@@ -4,7 +4,10 @@ says about pushing it either way in the initial state (the longest push and what
 refuses it); optionally a top-down picture of each scene. Prints Markdown.
 
     python benchmarks/oracle_failures.py results/table1 [--policy oracle-p] [--densities 8,10]
-        [--config sim_configs/table1.yaml] [--pictures docs/results/oracle_p_failures]
+        [--config sim_configs/table1.yaml] [--pictures docs/results/oracle_p_failures] [--variant NAME]
+
+``--variant``: a folder made by benchmarks/table1_ablation.py under one of its variants (OUT/<variant>): the
+variant's scenario changes are applied before the scenes are drawn again (its rules come from the trial files).
 """
 
 from __future__ import annotations
@@ -44,8 +47,14 @@ def main():
     ap.add_argument("--densities", default="8,10")
     ap.add_argument("--config", default="sim_configs/table1.yaml")
     ap.add_argument("--pictures", default=None, help="write a top-down PNG of each failing scene here")
+    ap.add_argument("--variant", default=None,
+                    help="the folder is a variant of benchmarks/table1_ablation.py: apply its scenario changes")
     args = ap.parse_args()
     scenario = load_scenario(args.config)
+    if args.variant:
+        from table1_ablation import VARIANTS, scenario_with  # this folder's script (run as a script: on sys.path)
+
+        scenario = scenario_with(scenario, VARIANTS[args.variant][3])
     densities = [int(v) for v in args.densities.split(",")]
     folder = Path(args.folder) / "trials" / args.policy
     for path in sorted(folder.glob("*.json")):
@@ -56,7 +65,7 @@ def main():
         model = ActionModel(shelf_of(scenario), scenario.camera.position,
                             tool_config(scenario, profile, **(trial.get("tool_rules") or {})))
         n, index = trial["density"], trial["index"]
-        scene = sample_scene(scenario, n, scene_seed(scenario.protocol.seed, n, index),
+        scene = sample_scene(scenario, scenario.protocol.occluders(n), scene_seed(scenario.protocol.seed, n, index),
                              target_size=tuple(scenario.target.sizes[0]))
         occlusion = TargetOcclusion(scene, threshold=scenario.target.visibility_threshold)
         fixed = (scene.target.as_object(),)

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import argparse
 import copy
+import shlex
+import sys
 import time
 
 from slax_drake.config import load_scenario
@@ -35,6 +37,23 @@ VARIANTS = {
                                 {"push_hidden_check": False}, {}),
     "station-camera-1.5m": ("station + camera 1.5 m from the shelf, alone", "station", {},
                             {"camera.position": [0.0, -1.5, 0.20]}),
+    # Readings of the paper's text that the paper profile does not take (issue 19, item 4; rules.py and config.py
+    # docstrings quote the line each reads), each alone on top of the paper profile.
+    "paper-contact": ("paper + a push stops against its neighbour (push_stop exact, clearance 0)", "paper",
+                      {"push_stop": "exact", "clearance": 0.0}, {}),
+    "paper-exact-stop": ("paper + a push stops exactly clearance (2 mm) before its neighbour (push_stop exact)",
+                         "paper", {"push_stop": "exact"}, {}),
+    "paper-push-hidden-end": ("paper + a push may cross hidden space, not come to rest in it", "paper",
+                              {"push_hidden_extent": "end"}, {}),
+    "paper-target-first": ("paper + the target placed first, the occluders around it", "paper", {},
+                           {"target.placement": "first"}),
+    "paper-n-includes-target": ("paper + n counts the target (n - 1 occluders, H = 2n)", "paper", {},
+                                {"protocol.count_includes_target": True}),
+    "paper-readings-combined": ("paper + boxes square to the walls + a push stops exactly 2 mm before its "
+                                "neighbour (the two readings of the paper's text that do not contradict it)",
+                                "paper", {"push_stop": "exact"}, {"objects.box_yaw": "aligned"}),
+    "paper-horizon-4n": ("paper + H = 4n (a horizon that does not bind)", "paper", {},
+                         {"protocol.horizon_per_object": 4}),
 }
 
 
@@ -51,8 +70,10 @@ def cell(per: dict, densities) -> str:
     rates = [per[str(d)]["success_rate"] for d in densities]
     counts = "/".join(f"{round(r * per[str(d)]['trials'])}" for r, d in zip(rates, densities))
     text = f"{100 * per['all']['success_rate']:.0f} ({counts} of {per[str(densities[0])]['trials']})"
-    cut = (per["all"].get("oracle_status") or {}).get("cut by time")
-    return text + (f", {cut} cut" if cut else "")
+    status = per["all"].get("oracle_status") or {}
+    proven = status.get("infeasible")
+    cut = status.get("cut by time")
+    return text + (f", {proven} infeasible" if proven else "") + (f", {cut} cut" if cut else "")
 
 
 def main():
@@ -82,9 +103,12 @@ def main():
         seconds = [table["policies"][p]["all"]["mean_trial_seconds"] for p in policies]
         rows.append((name, what, [cell(table["policies"][p], densities) for p in policies], seconds,
                      time.perf_counter() - t0))
+    print("Made by `python " + " ".join(shlex.quote(a) for a in sys.argv) + "`.")
+    print()
     print(f"First {args.scenes} Table I scenes per density ({'/'.join(map(str, densities))} objects; protocol seed "
           f"{base.protocol.seed}), ground-truth distributions, oracle time limit {args.oracle_seconds:g} s per "
-          f"decision. Success % overall (successes per density); 'cut': oracle trials whose search hit the limit.")
+          f"decision. Success % overall (successes per density); 'infeasible': oracle trials whose search proved "
+          "that no plan exists within H; 'cut': oracle trials whose search hit the limit.")
     print()
     print("| variant | rules | " + " | ".join(policies) + " | s per trial |")
     print("|---|---|" + "---|" * len(policies) + "---|")

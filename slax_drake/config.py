@@ -17,6 +17,7 @@ from slax_drake.errors import ConfigError
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CONFIG = "sim_configs/sim_shelf.yaml"
 PROFILES = ("paper", "station")  # the action model's rule profiles (slax_drake.policies.rules.PROFILES)
+TARGET_PLACEMENTS = ("after-objects", "first")  # target.placement
 
 
 @dataclasses.dataclass
@@ -102,6 +103,11 @@ class TargetConfig:
     )
     surface_point_spacing: float = 0.005
     visibility_threshold: float = 0.80
+    # How the target's place is drawn (slax_drake.scene.sampling): "after-objects" (the paper's Fig. 3 and Sec.
+    # V-A: the occluders are placed first, then the target uniformly over the fully hidden placements they leave)
+    # or "first" (a reading to measure: the target uniformly on the free floor first, the occluders placed
+    # around it, the scene kept when the target is fully hidden: arrangements that hide more weigh more).
+    placement: str = "after-objects"
 
 
 @dataclasses.dataclass
@@ -122,6 +128,14 @@ class ProtocolConfig:
     horizon_per_object: int = 2
     suction_cost: float = 1.3
     seed: int = 0
+    # Whether a density n counts the target among its n objects (n - 1 occluders and the target, H = 2n still): a
+    # reading to measure of the paper's "H = 2n, where n is the number of objects" (Sec. VI-A). False (the
+    # default, the paper's own Table I caption: "4, 6, 8, and 10 occluding objects"): n occluders and the target.
+    count_includes_target: bool = False
+
+    def occluders(self, density: int) -> int:
+        """The number of occluding objects in a scene of ``density`` objects (see ``count_includes_target``)."""
+        return int(density) - 1 if self.count_includes_target else int(density)
 
 
 @dataclasses.dataclass
@@ -227,6 +241,12 @@ def validate_scenario(scenario: Scenario, source: str = "<scenario>") -> None:
     positive("camera.near", camera.near)
     if not camera.far > camera.near:
         fail("camera.far", camera.far, "must exceed camera.near")
+
+    if scenario.target.placement not in TARGET_PLACEMENTS:
+        fail("target.placement", scenario.target.placement, f"must be one of {', '.join(map(repr, TARGET_PLACEMENTS))}")
+    if scenario.protocol.count_includes_target and min(scenario.protocol.densities or [2]) < 2:
+        fail("protocol.densities", scenario.protocol.densities,
+             "with protocol.count_includes_target every density must be at least 2 (one occluder and the target)")
 
     objects = scenario.objects
     positive("objects.min_size", objects.min_size)

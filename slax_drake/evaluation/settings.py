@@ -25,12 +25,22 @@ SETTINGS_FILE = "settings.json"  # the Table I benchmark's record
 PHYSICS_SETTINGS_FILE = "physics_settings.json"  # the physics benchmark's, beside it in the same folder
 
 
+# Scenario fields added after folders were recorded, with their defaults (today's behaviour): left out of the digest
+# while they hold the default, so that a folder recorded before they existed still resumes; any other value is
+# hashed like every field.
+LATER_SCENARIO_FIELDS = {("target", "placement"): "after-objects", ("protocol", "count_includes_target"): False}
+
+
 def scenario_digest(scenario) -> str:
     """SHA-256 of ``scenario`` (a slax_drake.config.Scenario) as canonical JSON, less the protocol fields that only
-    choose which trials run (seed, densities, scenes per density)."""
+    choose which trials run (seed, densities, scenes per density) and the later fields at their defaults
+    (:data:`LATER_SCENARIO_FIELDS`)."""
     d = dataclasses.asdict(scenario)
     for key in ("seed", "densities", "scenes_per_density"):
         d["protocol"].pop(key, None)
+    for (section, key), default in LATER_SCENARIO_FIELDS.items():
+        if d[section].get(key) == default:
+            d[section].pop(key, None)
     return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()
 
 

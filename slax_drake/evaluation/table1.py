@@ -73,7 +73,7 @@ def _run_one(job) -> dict:
     from slax_drake.scene.sampling import sample_scene
 
     size = tuple(scenario.target.sizes[0])
-    scene = sample_scene(scenario, density, seed, target_size=size)
+    scene = sample_scene(scenario, scenario.protocol.occluders(density), seed, target_size=size)
     horizon = scenario.protocol.horizon_per_object * density
     oracle_options = {"seconds": oracle_seconds} if policy_name.startswith("oracle") and oracle_seconds else None
     policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules,

@@ -51,6 +51,7 @@ import numpy as np
 from slax_drake.policies.rules import RULES, ToolConfig, tool_config_problem
 from slax_drake.policies.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
+    push_end_hidden,
 )
 from slax_drake.policies.reach import load_reach_map
 from slax_drake.scene import mass as scene_mass
@@ -221,10 +222,17 @@ class ActionModel:
             bad = _first_false(clear)
             if bad < first_bad:
                 first_bad, stopper = bad, ctx.all_names[j]
-        hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign) if t.rules.push_hidden_check \
-            else first_bad
-        if hidden_cells < first_bad:
-            first_bad, stopper = hidden_cells, "hidden space"
+        end_ok = None  # push_hidden_extent "end": per step 1..first_bad, whether the object may stop there
+        if t.rules.push_hidden_check and t.rules.push_hidden_extent == "end":
+            end_ok = ~push_end_hidden(ctx.masks[i], ctx.hidden_others(i), sign, first_bad)
+            last_ok = int(np.flatnonzero(end_ok)[-1]) + 1 if end_ok.any() else 0
+            if last_ok < first_bad:
+                first_bad, stopper = last_ok, "hidden space"
+                end_ok = end_ok[:first_bad]
+        elif t.rules.push_hidden_check:
+            hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign)
+            if hidden_cells < first_bad:
+                first_bad, stopper = hidden_cells, "hidden space"
         d_max = first_bad * t.grid.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
         step = t.grid.push_resolution
         q = (lane_x, self.blade_depth(fp, sign), t.geometry.blade_height / 2)
@@ -240,17 +248,49 @@ class ActionModel:
             if k_reach < first_bad:
                 first_bad, stopper = k_reach, "the arm's reach"
                 d_max = first_bad * t.grid.cell
+        if t.rules.push_stop == "exact" and first_bad < n and stopper not in ("hidden space", "the arm's reach"):
+            d_max = self._exact_stop(fp, sign, rects, [ctx.all_fps[j] for j in band], d_max, t.grid.cell)
         if d_max < t.grid.min_push - 1e-12:
             rejected.append(Rejected(what, f"no room: {obj.name} is stopped by {stopper} at once"))
             return
         ds = list(np.arange(1, int(d_max / step + 1e-9) + 1) * step)
-        if not ds or d_max - ds[-1] > t.grid.cell / 2:
+        if end_ok is not None:  # only the lattice distances at which the object may come to rest
+            ds = [d for d in ds if end_ok[int(round(d / t.grid.cell)) - 1]]
+        if not ds or d_max - ds[-1] > (1e-9 if t.rules.push_stop == "exact" else t.grid.cell / 2):
             ds.append(d_max)
         for d in ds:
             feasible.append(Push(obj.name, q, round(float(sign * d), 6)))
         d = (int(d_max / step + 1e-9) + 1) * step
         if d < shelf.width:
             rejected.append(Rejected(f"{what} by {d:.3f}", f"{obj.name} would hit {stopper} after {d_max:.3f} m"))
+
+    def _exact_stop(self, fp: Footprint, sign: int, rects, others, d_ok: float, step: float) -> float:
+        """The longest push distance (m, floored to 1 micrometre) in [d_ok, d_ok + step) at which ``fp`` keeps
+        ``clearance`` from ``others`` and the walls and the dragged tool ``rects`` touch none of ``others``
+        (``push_stop`` "exact"): bisection, given that ``d_ok`` is clear and ``d_ok + step`` is not."""
+        t, shelf = self.tool, self.shelf
+        ex = fp.extents()[0]
+
+        def clear(d: float) -> bool:
+            x = fp.x + sign * d
+            if abs(x) + ex > shelf.width / 2 - t.physics.clearance + 1e-12:
+                return False
+            centre = np.array([[x, fp.y]])
+            for other in others:
+                if not clear_of(fp.shape, centre, fp.yaw, (fp.half_x, fp.half_y), other, t.physics.clearance)[0]:
+                    return False
+                for rx, ry, hx, hy in rects:
+                    if not clear_of("box", np.array([[rx + sign * d, ry]]), 0.0, (hx, hy), other,
+                                    BLADE_CONTACT_CLEARANCE)[0]:
+                        return False
+            return True
+
+        lo, hi = d_ok, d_ok + step
+        while hi - lo > 1e-7:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if clear(mid) else (lo, mid)
+        d = math.floor(lo * 1e6) / 1e6
+        return d if d >= d_ok and clear(d) else d_ok
 
     # ----------------------------------------------------------------------------------------------------
     def _suctions(self, ctx, i, feasible, rejected):

@@ -127,6 +127,27 @@ def free_push_cells(footprint: np.ndarray, hidden: np.ndarray, sign: int) -> int
     return int(min(gaps.min(), NOT_FOUND))
 
 
+def push_end_hidden(footprint: np.ndarray, hidden: np.ndarray, sign: int, steps: int) -> np.ndarray:
+    """Per step k = 1 .. ``steps`` (cells along x, sign +1 right, -1 left), whether the footprint mask moved by k
+    newly covers a hidden cell where it comes to rest (bool (steps,)); cells moved past the raster's edge do not
+    count (the walls stop the push first). The ``push_hidden_extent`` "end" reading; :func:`free_push_cells` is
+    the "path" one."""
+    out = np.zeros(max(0, int(steps)), dtype=bool)
+    rows = np.flatnonzero(footprint.any(axis=1))
+    if len(rows) == 0 or len(out) == 0:
+        return out
+    f, h = footprint[rows], hidden[rows]
+    nx = f.shape[1]
+    for k in range(1, min(len(out), nx - 1) + 1):
+        moved = np.zeros_like(f)
+        if sign > 0:
+            moved[:, k:] = f[:, :nx - k]
+        else:
+            moved[:, :nx - k] = f[:, k:]
+        out[k - 1] = bool((moved & ~f & h).any())
+    return out
+
+
 def column_extents(footprint: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Columns the footprint covers, and per such column its first and last covered row."""
     cols = np.flatnonzero(footprint.any(axis=0))

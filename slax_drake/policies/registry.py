@@ -117,10 +117,11 @@ def tool_config(scenario: Scenario, profile: str | None = None, **overrides) -> 
     """The action model's configuration for ``scenario``: its profile (or ``profile``), its objects' density,
     clearance and mass model, and single ``overrides`` (flat names, see ToolConfig.build)."""
     physics = scenario.physics
-    return ToolConfig.build(scenario_profile(scenario, profile), object_density=scenario.objects.density,
-                            clearance=scenario.objects.clearance, mass_model=physics.mass_model,
-                            box_masses=tuple(tuple(r) for r in physics.box_masses),
-                            cylinder_masses=tuple(tuple(r) for r in physics.cylinder_masses), **overrides)
+    fields = dict(object_density=scenario.objects.density, clearance=scenario.objects.clearance,
+                  mass_model=physics.mass_model, box_masses=tuple(tuple(r) for r in physics.box_masses),
+                  cylinder_masses=tuple(tuple(r) for r in physics.cylinder_masses))
+    fields.update(overrides)  # e.g. --tool-rule clearance=0: the action model's, not the scene sampler's
+    return ToolConfig.build(scenario_profile(scenario, profile), **fields)
 
 
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,

@@ -154,6 +154,31 @@ class PushHiddenCheck(Rule):
 
 
 @register
+class PushHiddenExtent(Rule):
+    """With ``push_hidden_check`` on: which cells the pushed object may not newly cover if hidden. "path" (both
+    profiles): every cell it passes over on its way (it stops at the edge of hidden space). "end": only the
+    cells it covers where it comes to rest, a second reading of the paper's "objects may not be pushed *behind*
+    other objects" (Sec. VI-A) as a rule on where the object is left: it may cross hidden space on its way (the
+    FOSS's "actions do not ... move multiple objects simultaneously", Sec. III, then says nothing unseen stands
+    in the swept lane) but not stop in it. A reading measured by benchmarks/table1_ablation.py, not a profile's."""
+
+    name, type, paper, station, choices = "push_hidden_extent", str, "path", "path", ("path", "end")
+
+
+@register
+class PushStop(Rule):
+    """Where the longest push of an object stops before what stops it (a neighbour, the wall, the dragged blade
+    meeting an object). "lattice" (both profiles): at the last step of ``cell`` (5 mm) that keeps ``clearance``
+    (2 mm): 2-7 mm short of its stopper. "exact": at the exact distance (to 1 micrometre) at which it comes
+    within ``clearance``; with ``clearance`` 0 (a ``--tool-rule clearance=0``), the object ends *against* its
+    neighbour, a reading of the paper's "an object can only be pushed next to the closest object on its left or
+    right" (Sec. V-C). Pushes stopped by hidden space or the arm's reach stay on the lattice (both are rasters).
+    A reading measured by benchmarks/table1_ablation.py, not a profile's."""
+
+    name, type, paper, station, choices = "push_stop", str, "lattice", "lattice", ("lattice", "exact")
+
+
+@register
 class HiddenSpace(Rule):
     """Which space counts as hidden, for the pushes' (and suction placements') hidden-space rule: "3d", a cell
     whose point ``hidden_probe_height`` above it is not seen by the camera (an unseen object at least that tall

@@ -8,10 +8,13 @@ cylinder stands on its flat face. Positions are uniform over the bay and rejecte
 Positions are tried in batches of 32; an object that finds no free position in its batch is redrawn (shape,
 size, pose), so dense scenes lean toward smaller objects, as any sequential placement must.
 
-Target: yaw aligned with the shelf, resting on the support surface, its position uniform over the free floor,
-kept only if no ray from the camera reaches any of the points sampled on its surface (every face but the
-bottom, ``target.surface_point_spacing`` apart), with the shelf's walls, top and back counted as occluders.
-A coarse point set screens candidates in batches; the dense set decides.
+Target (``target.placement`` "after-objects", the paper's order): yaw aligned with the shelf, resting on the
+support surface, its position uniform over the free floor, kept only if no ray from the camera reaches any of the
+points sampled on its surface (every face but the bottom, ``target.surface_point_spacing`` apart), with the shelf's
+walls, top and back counted as occluders.
+A coarse point set screens candidates in batches; the dense set decides. With ``target.placement`` "first" the
+target is drawn uniformly on the empty floor before the occluders, which are placed clear of it, and the scene is
+kept only when the target is then fully hidden (the same dense test).
 
 Determinism: everything is drawn from ``numpy.random.default_rng(seed)`` in a fixed order, and the returned
 scene is rounded to 1e-10 m so that its JSON is byte-identical on any machine.
@@ -61,12 +64,18 @@ def sample_scene(
     if target_size is None:
         sizes = scenario.target.sizes
         target_size = tuple(float(v) for v in sizes[int(rng.integers(len(sizes)))])
+    first = scenario.target.placement == "first"
     for _ in range(scenario.sampling.scene_attempts):
-        objects = _place_objects(scenario, shelf, num_objects, rng)
+        target = _draw_target(scenario, shelf, target_size, rng) if first else None
+        objects = _place_objects(scenario, shelf, num_objects, rng,
+                                 placed=[Footprint.of(target.as_object())] if target is not None else ())
         if objects is None:
             continue
         scene = Scene(shelf=shelf, camera=camera, objects=tuple(objects), target=None, seed=seed)
-        target = _place_hidden_target(scenario, scene, target_size, rng)
+        if first:
+            target = target if _fully_hidden(scenario, scene, target) else None
+        else:
+            target = _place_hidden_target(scenario, scene, target_size, rng)
         if target is not None:
             objects = sample_masses(tuple(_rounded_object(o) for o in scene.objects), scenario.physics, seed)
             return Scene(shelf, camera, objects, _rounded_target(target), seed)
@@ -109,8 +118,11 @@ def _random_object(scenario: Scenario, rng: np.random.Generator) -> tuple[str, t
     return "cylinder", (float(dims[0]), float(dims[0]), float(dims[2])), 0.0
 
 
-def _place_objects(scenario: Scenario, shelf: Shelf, count: int, rng: np.random.Generator):
+def _place_objects(scenario: Scenario, shelf: Shelf, count: int, rng: np.random.Generator, placed=()):
+    """``count`` occluders placed one by one clear of each other and of ``placed`` (footprints already there: the
+    target, with ``target.placement`` "first"); None when one finds no place."""
     clearance = scenario.objects.clearance
+    fixed = list(placed)
     placed: list[Footprint] = []
     objects: list[SceneObject] = []
     for i in range(count):
@@ -125,7 +137,7 @@ def _place_objects(scenario: Scenario, shelf: Shelf, count: int, rng: np.random.
                 continue
             centers = np.column_stack([rng.uniform(-x_max, x_max, OBJECT_BATCH), rng.uniform(-y_max, y_max, OBJECT_BATCH)])
             ok = np.ones(OBJECT_BATCH, dtype=bool)
-            for other in placed:
+            for other in fixed + placed:
                 ok &= clear_of(shape, centers, yaw, half, other, clearance)
             if ok.any():
                 position = centers[int(np.argmax(ok))]
@@ -172,6 +184,27 @@ def _place_hidden_target(scenario: Scenario, scene: Scene, size: tuple, rng: np.
             if not raycaster.visible(eye, dense + offset).any():
                 return Target(size=tuple(size), X_ST=planar_pose(offset[0], offset[1], z, 0.0))
     return None
+
+
+def _draw_target(scenario: Scenario, shelf: Shelf, size: tuple, rng: np.random.Generator) -> Target | None:
+    """``target.placement`` "first": the target, shelf-aligned, uniformly on the empty floor (None when it does not
+    fit the bay)."""
+    clearance = scenario.objects.clearance
+    x_max = shelf.width / 2.0 - clearance - size[0] / 2.0
+    y_max = shelf.depth / 2.0 - clearance - size[1] / 2.0
+    if x_max < 0 or y_max < 0:
+        return None
+    x, y = float(rng.uniform(-x_max, x_max)), float(rng.uniform(-y_max, y_max))
+    return Target(size=tuple(size), X_ST=planar_pose(x, y, size[2] / 2.0, 0.0))
+
+
+def _fully_hidden(scenario: Scenario, scene: Scene, target: Target | None) -> bool:
+    """Whether no ray from the camera reaches any of the target's surface points (the dense set of
+    :func:`_place_hidden_target`) in ``scene`` (its occluders, no target)."""
+    if target is None:
+        return False
+    dense, _ = box_surface_points(tuple(target.size), scenario.target.surface_point_spacing)
+    return not SceneRaycaster(scene).visible(scene.camera.position, dense + target.center).any()
 
 
 def target_visible_fraction(scene: Scene, spacing: float = 0.005) -> float:
