@@ -37,6 +37,8 @@ def main(argv=None) -> int:
     parser.add_argument("--scenes", type=int, default=2, help="scenes per density (the protocol's first K)")
     parser.add_argument("--seed", type=int, default=None, help="protocol seed (default: the config's)")
     parser.add_argument("--json", default=None, help="write the figures here too")
+    parser.add_argument("--list-rejected", action="store_true",
+                        help="print every candidate the planner rejects, with its full reason")
     parser.add_argument("--baseline", nargs="+", default=[], metavar="RULE=VALUE",
                         help="rule values of a baseline model whose extra candidates are planned too")
     args = parser.parse_args(argv)
@@ -81,6 +83,8 @@ def main(argv=None) -> int:
                         row["rejected"] += 1
                         row[f"rejected_{action.kind}"] += 1
                         why[result.reason.split(":")[0][:40]] += 1
+                        if args.list_rejected:
+                            print(f"    rejected {action}: {result.reason}", flush=True)
                     row[f"offered_{action.kind}"] += 1
                 for action in removed:
                     result = checker.planner.plan(action, checker.scene)

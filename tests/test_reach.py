@@ -105,3 +105,86 @@ def test_the_rule_agrees_with_the_planner_on_a_sample_of_poses(sim_scenario):
             assert planner.reaches(scene, layer_waypoint(layer, x, y, scene, tool)) == expected, (layer, x, y)
             checked["refused" if not expected else "accepted"] += 1
     assert checked == {"refused": 9, "accepted": 9}
+
+
+def _turned_map(refused_layers):
+    """The toy grid with every turned-cup layer: the layers in ``refused_layers`` reach nothing, the others all."""
+    from slax_drake.policies.reach import turned_cup_layers, turned_cup_params
+
+    xs, ys = np.array([0.0, 0.1, 0.2]), np.array([0.0, 0.1])
+    reach = {n: np.full((2, 3), n not in refused_layers) for n in ("cup",) + turned_cup_layers()}
+    reach["push+x"] = reach["push-x"] = np.ones((2, 3), bool)
+    heights = {n: (turned_cup_params(n)[1] if n.startswith("cup@") else 0.1) for n in reach}
+    return ReachMap("toy", xs, ys, reach, heights)
+
+
+def test_a_turned_suction_is_refused_only_where_every_layer_around_refuses():
+    rad = np.radians
+    low = {"cup@-20/3cm", "cup@-30/3cm", "cup@-20/6cm", "cup@-30/6cm"}
+    m = _turned_map(low)
+    assert m.refuses_cup(0.1, 0.05, 0.045, rad(-25.0))  # the four layers around refuse
+    assert m.refuses_cup(0.1, 0.05, 0.03, rad(-20.0))  # on a yaw node and a height node
+    assert not m.refuses_cup(0.1, 0.05, 0.045, rad(-15.0))  # cup@-10 reaches
+    assert not m.refuses_cup(0.1, 0.05, 0.08, rad(-25.0))  # the 10 cm layers reach
+    assert not m.refuses_cup(0.1, 0.05, 0.02, rad(-25.0)) and not m.refuses_cup(0.1, 0.05, 0.15, rad(-25.0))
+    assert not m.refuses_cup(0.1, 0.05, 0.045, rad(-35.0))  # beyond the layers' yaws
+    assert not m.refuses_cup(0.5, 0.05, 0.045, rad(-25.0))  # off the grid
+    # near yaw 0 the cup layer (one height, 10 cm) is a node: below 10 cm there is no yaw-0 layer to agree
+    assert not _turned_map(low | {"cup", "cup@-10/3cm", "cup@-10/6cm"}).refuses_cup(0.1, 0.05, 0.045, rad(-5.0))
+    assert _turned_map({"cup", "cup@-10/10cm"}).refuses_cup(0.1, 0.05, 0.10, rad(-5.0))
+    assert _turned_map({"cup"}).refuses_cup(0.1, 0.05, 0.045, 0.0)  # yaw 0 reads the cup layer, as before
+    plain = _toy_map()  # no turned layers: a turned suction is never refused
+    assert not plain.refuses_cup(0.25, 0.05, 0.1, rad(-25.0)) and plain.refuses_cup(0.25, 0.05, 0.1, 0.0)
+    again = ReachMap.from_dict(m.to_dict())
+    assert again.refuses_cup(0.1, 0.05, 0.045, rad(-25.0)) and not again.refuses_cup(0.1, 0.05, 0.045, rad(-15.0))
+
+
+def test_the_sim_map_holds_the_turned_cup_layers():
+    from slax_drake.policies.reach import turned_cup_layers
+
+    rmap = load_reach_map(SIM_MAP)
+    for name in turned_cup_layers():
+        layer = rmap.reach[name]
+        assert layer.shape == rmap.reach["cup"].shape and layer[0].any() and not layer.all()
+
+
+@pytest.mark.slow
+def test_the_turned_cup_layers_agree_with_the_planner_on_a_sample_of_poses(sim_scenario):
+    """Seeded random contacts, heights and yaws (within the tool's 30 deg): each one the turned layers refuse has
+    no collision-free IK solution of the cup at the seal from the observation pose; each one whose four grid
+    nodes are reached in every layer around it has one."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.planning.reach import cup_waypoint
+    from slax_drake.policies.reach import TURNED_CUP_HEIGHTS, TURNED_CUP_YAWS_DEG, turned_cup_layer
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    rmap = load_reach_map(station.reach_map)
+    tool = tool_config(sim_scenario, "station")
+    planner = MotionPlanner(station, tool)
+    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    yaws, heights = TURNED_CUP_YAWS_DEG, TURNED_CUP_HEIGHTS
+    rng = np.random.default_rng(23)
+    refused, accepted = [], []
+    for _ in range(20000):
+        if len(refused) >= 6 and len(accepted) >= 6:
+            break
+        x, y = rng.uniform(rmap.xs[0], rmap.xs[-1]), rng.uniform(rmap.ys[0], rmap.ys[-1])
+        deg, z = rng.uniform(-30.0, 30.0), rng.uniform(heights[0], heights[-1])
+        if abs(deg) < 10.0:  # the accepted ones need turned layers on both sides
+            continue
+        i = min(len(rmap.xs) - 2, int(np.searchsorted(rmap.xs, x)) - 1)
+        j = min(len(rmap.ys) - 2, int(np.searchsorted(rmap.ys, y)) - 1)
+        layers = [turned_cup_layer(d, h) for d in {max(n for n in yaws if n <= deg), min(n for n in yaws if n >= deg)}
+                  for h in {max(n for n in heights if n <= z), min(n for n in heights if n >= z)}]
+        if rmap.refuses_cup(x, y, z, np.radians(deg), 0.015):
+            if len(refused) < 6:
+                refused.append((x, y, z, deg))
+        elif all(rmap.reach[k][j:j + 2, i:i + 2].all() for k in layers) and len(accepted) < 6:
+            accepted.append((x, y, z, deg))
+    assert len(refused) == 6 and len(accepted) == 6
+    for (x, y, z, deg), expected in [(p, False) for p in refused] + [(p, True) for p in accepted]:
+        got = planner.reaches(scene, cup_waypoint(x, y, np.radians(deg), scene, tool, z))
+        assert got == expected, (x, y, z, deg)

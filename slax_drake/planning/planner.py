@@ -26,7 +26,8 @@
 5. Ruckig times the chain rest to rest (:mod:`slax_drake.planning.timing`), with dwells at rest where the
    waypoints ask for them; the suction command is on during the segments that carry the object.
 
-When the waypoints in front of the opening fail (out of reach, no free way), the action is planned again with
+When the waypoints in front of the opening fail (out of reach, no free way) or a straight segment cannot be kept
+(``STRAIGHT_SEGMENT_FAILURES``), the action is planned again with
 the tool's tip 1 cm in front of the opening (``APPROACH_MARGINS``); when a carried segment fails, a suctioned
 object is carried across at shallower depths inside the shelf (:func:`slax_drake.planning.waypoints.
 pull_out_options`). IK solves and free paths are memoised per planning world (one decision's candidates share
@@ -69,6 +70,10 @@ MARGIN_DEPENDENT = ("pre-approach", "retract", "segment to pre-approach", "segme
 # Rejections that carrying a suctioned object across at another depth (hence, perhaps, lifted less) may avoid
 PULL_DEPENDENT = ("lift", "pull out", "translate", "push in", "lower", "segment to lift", "segment to pull out",
                   "segment to translate", "segment to push in", "segment to lower")
+# Rejections of a straight tool segment (the joint-space line between two IK solutions leaves it and the midpoints
+# cannot bring it back: the solutions lie on different branches) depend on the solutions the chain took, which
+# another carrying depth or approach margin changes: they let the next variant be tried, as the ones above do.
+STRAIGHT_SEGMENT_FAILURES = ("leaves its straight segment", "a point of the straight segment is out of reach")
 MAX_REANCHORS = 2  # waypoints re-solved from the seed library (and the path before them backward) per plan
 FREE_PATH_SEED = 0
 # IK tolerances while the cup holds the object (seal to release): the object turns and shifts with the tool, and
@@ -171,9 +176,9 @@ class MotionPlanner:
                     where = f"approach margin {margin * 100:.0f} cm" + (f", carried across at y = {pull:+.3f}"
                                                                         if len(pulls) > 1 else "")
                     reasons.append((where, str(e)))
-                    if not str(e).startswith(PULL_DEPENDENT):
+                    if not _may_differ(str(e), PULL_DEPENDENT):
                         break
-            if motion is not None or not reasons[-1][1].startswith(MARGIN_DEPENDENT):
+            if motion is not None or not _may_differ(reasons[-1][1], MARGIN_DEPENDENT):
                 break
         if motion is None:
             timings["total_s"] = time.perf_counter() - t_all
@@ -466,6 +471,12 @@ class MotionPlanner:
         left, d1 = self._refine(world, qa, Xa, q_mid, X_mid, wp, timings, depth + 1)
         right, d2 = self._refine(world, q_mid, X_mid, qb, Xb, wp, timings, depth + 1)
         return left + [q_mid] + right, max(d1, d2)
+
+
+def _may_differ(reason: str, dependent: tuple) -> bool:
+    """Whether another planning variant may avoid the rejection ``reason``: it names a waypoint of ``dependent``
+    or is a straight-segment failure (``STRAIGHT_SEGMENT_FAILURES``)."""
+    return reason.startswith(dependent) or any(f in reason for f in STRAIGHT_SEGMENT_FAILURES)
 
 
 def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q) -> None:

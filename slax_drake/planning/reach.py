@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from slax_drake.policies.reach import LAYERS, ReachMap, grid
+from slax_drake.policies.reach import LAYERS, ReachMap, grid, turned_cup_layers, turned_cup_params
 
 CUP_HEIGHT = 0.10  # m, the cup layer's contact height (contacts sit 1.5-18.5 cm high)
 STEP = 0.05  # m
@@ -39,7 +39,21 @@ def layer_waypoint(layer: str, x: float, y: float, scene, tool):
         d = 0.05 if layer == "push+x" else -0.05
         wps = action_waypoints(Push(dummy.name, (x, y, tool.geometry.blade_height / 2), d), (dummy,), scene.shelf, tool)
         return next(w for w in wps if w.label == "insert")
-    wps = action_waypoints(Suction(dummy.name, (x, y, CUP_HEIGHT), 0.0, y + 0.03), (dummy,), scene.shelf, tool)
+    if layer == "cup":
+        return cup_waypoint(x, y, 0.0, scene, tool)
+    yaw, height = turned_cup_params(layer)  # "cup@+20/6cm": turned 20 deg, the contact 6 cm high
+    return cup_waypoint(x, y, yaw, scene, tool, height)
+
+
+def cup_waypoint(x: float, y: float, yaw: float, scene, tool, height: float = CUP_HEIGHT):
+    """The cup at the seal of a suction whose contact is (x, y, ``height``) (S, m) with the tool turned ``yaw``
+    (rad) about S z."""
+    from slax_drake.planning.waypoints import action_waypoints
+    from slax_drake.policies.actions import Suction
+    from slax_drake.scene.model import SceneObject, planar_pose
+
+    dummy = SceneObject("reach_probe", "box", (0.06, 0.06, 0.06), planar_pose(x, y + 0.03, 0.03, 0.0))
+    wps = action_waypoints(Suction(dummy.name, (x, y, height), 0.0, y + 0.03, yaw), (dummy,), scene.shelf, tool)
     return next(w for w in wps if w.label == "seal")
 
 
@@ -51,7 +65,10 @@ def map_grid(shelf, step: float = STEP) -> tuple[np.ndarray, np.ndarray]:
     return xs, ys
 
 
-def compute_reach_map(station_path: str, step: float = STEP, progress: bool = True) -> ReachMap:
+def compute_reach_map(station_path: str, step: float = STEP, progress: bool = True, layers=LAYERS,
+                      base: ReachMap | None = None) -> ReachMap:
+    """The reach map of ``layers`` on the station's empty shelf; with ``base``, its grid and layers are kept and
+    ``layers`` computed on that grid and added (e.g. the turned-cup layers)."""
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.policies.registry import tool_config
@@ -66,10 +83,10 @@ def compute_reach_map(station_path: str, step: float = STEP, progress: bool = Tr
     scene = Scene(shelf, Camera.from_config(scenario.camera), (), None, 0)
     tool = tool_config(scenario, "station")
     planner = MotionPlanner(station, tool)
-    xs, ys = map_grid(shelf, step)
-    reach = {}
+    xs, ys = map_grid(shelf, step) if base is None else (base.xs, base.ys)
+    reach = {} if base is None else dict(base.reach)
     t0 = time.perf_counter()
-    for layer in LAYERS:
+    for layer in layers:
         ok = np.zeros((len(ys), len(xs)), bool)
         for j, y in enumerate(ys):
             for i, x in enumerate(xs):
@@ -77,12 +94,14 @@ def compute_reach_map(station_path: str, step: float = STEP, progress: bool = Tr
         reach[layer] = ok
         if progress:
             print(f"{layer}: {int(ok.sum())} of {ok.size} nodes reached ({time.perf_counter() - t0:.0f} s)", flush=True)
-    return ReachMap(str(station_path), xs, ys, reach, layer_heights(tool))
+    heights = {layer: layer_heights(tool)[layer] for layer in reach}
+    return ReachMap(str(station_path) if base is None else base.station, xs, ys, reach, heights)
 
 
 def layer_heights(tool) -> dict:
     """The tool's height (m above the support) per layer of a map."""
-    return {"push+x": tool.geometry.blade_height / 2, "push-x": tool.geometry.blade_height / 2, "cup": CUP_HEIGHT}
+    cups = {layer: turned_cup_params(layer)[1] for layer in turned_cup_layers()}
+    return {"push+x": tool.geometry.blade_height / 2, "push-x": tool.geometry.blade_height / 2, "cup": CUP_HEIGHT, **cups}
 
 
 def reach_png(rmap: ReachMap, shelf) -> bytes:
@@ -95,9 +114,15 @@ def reach_png(rmap: ReachMap, shelf) -> bytes:
 
     from slax_drake.io import figure_png
 
-    fig, axes = plt.subplots(1, len(LAYERS), figsize=(4.2 * len(LAYERS), 4.6))
+    layers = list(rmap.reach)  # LAYERS, then any turned-cup layers
+    cols = min(len(layers), 5)
+    rows = -(-len(layers) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.6 * rows), squeeze=False)
+    for ax in axes.flat[len(layers):]:
+        ax.set_visible(False)
+    axes = axes.flat
     X, Y = np.meshgrid(rmap.xs, rmap.ys)
-    for ax, layer in zip(axes, LAYERS):
+    for ax, layer in zip(axes, layers):
         ok = rmap.reach[layer]
         ax.add_patch(Rectangle((-shelf.width / 2, -shelf.depth / 2), shelf.width, shelf.depth, fill=False))
         ax.scatter(X[ok], Y[ok], c="#2ca02c", s=18, label="reached")
@@ -125,8 +150,17 @@ def main(argv=None) -> int:
     parser.add_argument("--out", required=True, help="reach map JSON")
     parser.add_argument("--png", default=None)
     parser.add_argument("--step", type=float, default=STEP)
+    parser.add_argument("--add-turned-cup", action="store_true",
+                        help="read the map at --out and add the turned-cup layers it lacks, on its grid")
     args = parser.parse_args(argv)
-    rmap = compute_reach_map(args.station, args.step)
+    if args.add_turned_cup:
+        from slax_drake.policies.reach import load_reach_map
+
+        base = load_reach_map(args.out)
+        layers = tuple(layer for layer in turned_cup_layers() if layer not in base.reach)
+        rmap = compute_reach_map(args.station, layers=layers, base=base)
+    else:
+        rmap = compute_reach_map(args.station, args.step)
     write_text_atomic(Path(args.out), json.dumps(rmap.to_dict()) + "\n")
     if args.png:
         shelf = shelf_of(load_scenario(load_station_scenario(args.station).scene_config))

@@ -324,9 +324,10 @@ class ActionModel:
         if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, (cy - (-shelf.depth / 2)) / math.cos(yaw)):
             rejected.append(Rejected(what, f"{obj.name}'s face is beyond the tube's reach"))
             return
-        if self.reach is not None and yaw == 0.0 and self.reach.refuses("cup", cx, cy, REACH_MARGIN):
-            rejected.append(Rejected(what, f"the arm cannot reach the cup at {obj.name}'s face ({cx:+.2f}, {cy:+.2f}) "
-                                           "m (reach map)"))
+        if self.reach is not None and self.reach.refuses_cup(cx, cy, cz, yaw, REACH_MARGIN):
+            turned = f" turned {math.degrees(yaw):+.0f} deg" if yaw else ""
+            rejected.append(Rejected(what, f"the arm cannot reach the cup{turned} at {obj.name}'s face "
+                                           f"({cx:+.2f}, {cy:+.2f}) m (reach map)"))
             return
         tube_r = t.geometry.tube_diameter / 2
         # the tube's straight way in along its (turned) axis, from in front of the opening to the contact

@@ -7,7 +7,12 @@ collision-free IK solution from the observation pose, on the empty shelf, for ea
 - ``push+x`` / ``push-x``: the blade inserted for a push toward +x / -x whose action parameter q is (x, y) (the
   blade lane's centre and the blade tip's depth; the action model's Push.q);
 - ``cup``: the cup at the seal of a suction with the tube along y (yaw 0) whose contact is (x, y), at the height
-  ``heights["cup"]``.
+  ``heights["cup"]``;
+- optional turned-cup layers ``cup@-30/3cm`` ... ``cup@+30/10cm`` (:data:`TURNED_CUP_YAWS_DEG` x
+  :data:`TURNED_CUP_HEIGHTS`): the same with the tool turned that many degrees about S z (the action's yaw), the
+  contact at that height. :meth:`ReachMap.refuses_cup` refuses a turned suction only when the layers of every
+  yaw node and every height node around its yaw and contact height (the yaw-0 node is ``cup``, at its one height)
+  exist and refuse its contact.
 
 :meth:`ReachMap.refuses` is conservative: a point is refused only when every grid node of every cell within
 ``margin`` of it (the cells its neighbourhood touches) is unreachable, so a refused point lies inside a region
@@ -25,6 +30,23 @@ from pathlib import Path
 import numpy as np
 
 LAYERS = ("push+x", "push-x", "cup")
+TURNED_CUP_YAWS_DEG = (-30, -20, -10, 10, 20, 30)  # the tool's yaw of the optional turned-cup layers (deg)
+TURNED_CUP_HEIGHTS = (0.03, 0.06, 0.10)  # their contact heights (m above the support)
+
+
+def turned_cup_layer(yaw_deg: int, height: float) -> str:
+    """The name of the turned-cup layer at ``yaw_deg`` (deg, not 0) and contact ``height`` (m)."""
+    return f"cup@{yaw_deg:+d}/{round(height * 100):d}cm"
+
+
+def turned_cup_params(layer: str) -> tuple[float, float]:
+    """(yaw in rad, contact height in m) of a turned-cup layer's name."""
+    yaw, height = layer[len("cup@"):].split("/")
+    return math.radians(float(yaw)), float(height[:-2]) / 100.0
+
+
+def turned_cup_layers() -> tuple[str, ...]:
+    return tuple(turned_cup_layer(d, h) for d in TURNED_CUP_YAWS_DEG for h in TURNED_CUP_HEIGHTS)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,6 +71,31 @@ class ReachMap:
         j0 = max(0, int(np.searchsorted(ys, y - margin - 1e-9, side="right")) - 1)
         j1 = min(len(ys) - 1, int(np.searchsorted(ys, y + margin + 1e-9, side="left")))
         return not bool(self.reach[layer][j0:j1 + 1, i0:i1 + 1].any())
+
+    def refuses_cup(self, x: float, y: float, z: float, yaw: float, margin: float = 0.0) -> bool:
+        """A suction's cup at contact (x, y, z) with the tool turned ``yaw`` (rad): at yaw 0 the ``cup`` layer's
+        verdict (at its one height, as the push layers); turned, True only when the map holds the layers of every
+        yaw node and height node around (``yaw``, z) (one node where it is on one; the yaw-0 node is ``cup`` at
+        its height) and each refuses (x, y); False beyond the nodes or where a layer is missing."""
+        deg = math.degrees(yaw)
+        if abs(deg) < 1e-9:
+            return self.refuses("cup", x, y, margin)
+        yaws, heights = sorted((0,) + TURNED_CUP_YAWS_DEG), TURNED_CUP_HEIGHTS
+        if not (yaws[0] - 1e-9 <= deg <= yaws[-1] + 1e-9 and heights[0] - 1e-9 <= z <= heights[-1] + 1e-9):
+            return False
+        around_yaw = {max(n for n in yaws if n <= deg + 1e-9), min(n for n in yaws if n >= deg - 1e-9)}
+        around_z = {max(h for h in heights if h <= z + 1e-9), min(h for h in heights if h >= z - 1e-9)}
+        for d in around_yaw:
+            for h in around_z:
+                if d == 0:
+                    if abs(self.heights.get("cup", math.nan) - h) > 1e-9:
+                        return False
+                    layer = "cup"
+                else:
+                    layer = turned_cup_layer(d, h)
+                if layer not in self.reach or not self.refuses(layer, x, y, margin):
+                    return False
+        return True
 
     def to_dict(self) -> dict:
         return {"station": self.station, "xs": [round(float(v), 6) for v in self.xs],

@@ -317,7 +317,8 @@ class ReachMapRule(Rule):
     whose blade, inserted or at the push's end, and a suction with the tube along y whose cup at the seal, lies
     where the motion planner found no IK solution from the observation pose on the empty shelf (every grid node
     around it unreached) is refused before the planner tries. Conservative: only what the map shows unreachable
-    all around; turned suctions are not checked (the map has only the yaw-0 cup). The map belongs to a station
+    all around; a turned suction is refused only where the map's turned-cup layers of both yaw nodes around its
+    yaw refuse it (:meth:`slax_drake.policies.reach.ReachMap.refuses_cup`; not checked without those layers). The map belongs to a station
     (the robot's placement): both profiles' value is "", and a Drake trial's station sets it (the station YAML's
     ``reach_map``, through ``station_tool_rules``)."""
 
