@@ -119,8 +119,8 @@ def main():
                      time.perf_counter() - t0))
     print("Made by `python " + " ".join(shlex.quote(a) for a in sys.argv) + "`.")
     print()
-    print(f"First {args.scenes} Table I scenes per density ({'/'.join(map(str, densities))} objects; protocol seed "
-          f"{base.protocol.seed}), ground-truth distributions, oracle time limit {args.oracle_seconds:g} s per "
+    print(f"First {args.scenes} scenes per density of {args.config} ({'/'.join(map(str, densities))} objects; "
+          f"protocol seed {base.protocol.seed}), ground-truth distributions, oracle time limit {args.oracle_seconds:g} s per "
           f"decision. Success % overall (successes per density); 'infeasible': oracle trials whose search proved "
           "that no plan exists within H; 'cut': oracle trials whose search hit the limit.")
     print()
