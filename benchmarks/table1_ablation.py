@@ -54,6 +54,20 @@ VARIANTS = {
                                 "paper", {"push_stop": "exact"}, {"objects.box_yaw": "aligned"}),
     "paper-horizon-4n": ("paper + H = 4n (a horizon that does not bind)", "paper", {},
                          {"protocol.horizon_per_object": 4}),
+    # What the Drake station's own limits cost in the shelf simulator (issue 17's Table II): the physical-shelf
+    # station's cup limits and reach map (sim_configs/station_physical_shelf.yaml, station_table2.yaml), which a
+    # Drake trial on that station adds to the station profile (systems.trial.station_tool_rules); run with
+    # --config sim_configs/table2.yaml.
+    "station-cup-moment": ("station + the cup's holding limit (max_suction_moment 0.4 N m), alone", "station",
+                           {"max_suction_moment": 0.4}, {}),
+    "station-seal-angle": ("station + the cup's seal angle (max_seal_angle_deg 10), alone", "station",
+                           {"max_seal_angle_deg": 10.0}, {}),
+    "station-physical-reach": ("station + the physical-shelf station's reach map, alone", "station",
+                               {"reach_map": "models/reach/station_physical_shelf.json"}, {}),
+    "station-physical-drake": ("station + every limit of the physical-shelf station (cup moment, seal angle, reach "
+                               "map): what a Drake trial on it plans with", "station",
+                               {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0,
+                                "reach_map": "models/reach/station_physical_shelf.json"}, {}),
 }
 
 
@@ -105,8 +119,8 @@ def main():
                      time.perf_counter() - t0))
     print("Made by `python " + " ".join(shlex.quote(a) for a in sys.argv) + "`.")
     print()
-    print(f"First {args.scenes} Table I scenes per density ({'/'.join(map(str, densities))} objects; protocol seed "
-          f"{base.protocol.seed}), ground-truth distributions, oracle time limit {args.oracle_seconds:g} s per "
+    print(f"First {args.scenes} scenes per density of {args.config} ({'/'.join(map(str, densities))} objects; "
+          f"protocol seed {base.protocol.seed}), ground-truth distributions, oracle time limit {args.oracle_seconds:g} s per "
           f"decision. Success % overall (successes per density); 'infeasible': oracle trials whose search proved "
           "that no plan exists within H; 'cut': oracle trials whose search hit the limit.")
     print()
