@@ -56,7 +56,7 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
 LITERAL_POLICIES = ("dar-literal", "bluction-dar-literal")  # the paper's text without the corrections
-OUR_POLICIES = ("bluction-la2", "slax-hindsight")  # the project's own
+OUR_POLICIES = ("bluction-la2", "slax-hindsight", "slax-belief")  # the project's own (slax-belief: our best)
 DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
 
 
