@@ -103,3 +103,10 @@ def test_belief_rejects_an_unknown_selection(paper):
     policy = make_policy("slax-belief", paper)
     with pytest.raises(ValueError):
         BeliefSearch(policy.action_model, policy.distribution, select="greedy")
+
+
+def test_registry_passes_the_protocol_horizon_to_slax_belief_only(paper):
+    assert make_policy("slax-belief", paper, horizon=7).horizon == 7
+    assert make_policy("slax-belief", paper).horizon is None  # no horizon given: planned as unknown
+    assert make_policy("slax-belief", paper, horizon=7, policy_options={"horizon": 3}).horizon == 3
+    assert not hasattr(make_policy("slax-hindsight", paper, horizon=7), "horizon")

@@ -102,7 +102,8 @@ def test_without_policies_the_benchmark_runs_the_papers_five_and_ours(monkeypatc
 
     monkeypatch.setattr(table1, "run_benchmark", fake)
     assert bench(tmp_path / "o") == 0
-    assert seen["policies"] == ["oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar", "bluction-la2", "slax-hindsight"]
+    assert seen["policies"] == ["oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar", "bluction-la2", "slax-hindsight",
+                                "slax-belief"]
 
 
 def test_version(capsys):

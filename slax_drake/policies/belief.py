@@ -21,7 +21,11 @@ A plan a_1..a_d has an expected cost G = sum_k c(a_k) P(not revealed before step
 suction), a revealed mass R (the share of worlds some arrangement along it shows, each reveal weighted by the
 probability that the plan's suctions so far were placed as planned), and a value
 V = G + sum_w [w not revealed] h_w(s_d) / K (``failure_cost`` for a world farther than the actions left when
-``horizon`` is given). The beam (``beam`` arrangements per depth, duplicates merged) is ranked by V; the plan
+``horizon`` is given). The horizon H (actions per trial) is the protocol's, passed by the registry as the
+oracles get it: the experimenter fixes it before the trial, so it is not knowledge of the scene's content. The
+paper's distribution policies (DAR, DER-3, Bluction-DAR) have no use for it (they are greedy and stop only at H);
+ours plans to it. Note that Table I's H = 2n also tells the object count n; this policy uses H only as the actions
+left. The beam (``beam`` arrangements per depth, duplicates merged) is ranked by V; the plan
 taken is the one with the largest R / G among all plans looked at (the classic search rule: look first where
 probability per cost is highest), by V when none reveals anything. The search goes ``depth`` actions deep, and
 on to ``max_depth`` while no plan reveals anything.
@@ -75,10 +79,11 @@ class BeliefSearch(Hindsight):
     per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's)."""
 
     name = "slax-belief"
+    uses_horizon = True  # the registry passes the protocol's H (see the module docstring)
 
     def __init__(self, *args, samples: int = 64, depth: int = 3, beam: int = 6, placements_per_object: int = 2,
                  failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
-                 hidden_risk: float = 0.7, max_depth: int = 5, select: str = "ratio", **kwargs):
+                 hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)

@@ -1,7 +1,8 @@
 """Policies by name, built for a scenario: the one place that maps a command-line name to a policy object.
 
 :data:`POLICY_TABLE` is the table: name -> (class, options). A distribution policy's class is called as
-``cls(action_model, distribution_model, psi=psi, **options)``, an oracle's (``needs_true_scene``) as
+``cls(action_model, distribution_model, psi=psi, **options)`` (plus ``horizon=horizon`` for a class with
+``uses_horizon``), an oracle's (``needs_true_scene``) as
 ``cls(action_model, psi=psi, horizon=horizon, threshold=v, **options)``. Every class implements
 :class:`slax_drake.policies.protocol.Policy`. Classes are named by import path so that listing the names imports
 nothing heavy. A new policy is one class and one line here.
@@ -56,7 +57,7 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
 LITERAL_POLICIES = ("dar-literal", "bluction-dar-literal")  # the paper's text without the corrections
-OUR_POLICIES = ("bluction-la2", "slax-hindsight")  # the project's own
+OUR_POLICIES = ("bluction-la2", "slax-hindsight", "slax-belief")  # the project's own (slax-belief: our best)
 DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
 
 
@@ -151,6 +152,8 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
         options = dict(entry.options, **(policy_options or {}))
         if getattr(cls, "uses_visibility_threshold", False):  # a policy that plans for the success test itself
             options.setdefault("threshold", scenario.target.visibility_threshold)
+        if getattr(cls, "uses_horizon", False):  # a policy that plans to the protocol's deadline H, as the oracles
+            options.setdefault("horizon", horizon)
         policy = cls(model, make_distribution_model(perception, size), psi=psi, **options)
     policy.name = name  # the table's row name (one class may serve several rows, e.g. "dar" and "dar-literal")
     return policy
