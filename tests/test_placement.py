@@ -5,7 +5,6 @@ placement whose reach map covers more of the bay."""
 import numpy as np
 import pytest
 
-from slax_drake.errors import PlacementError
 from slax_drake.planning.placement import Candidate, Evaluated, choose, main, subgrid
 from slax_drake.policies.reach import LAYERS
 
