@@ -61,7 +61,8 @@ def main(argv=None) -> int:
         print(f"{args.station} on {args.config}: {args.scenes} scenes per density, protocol seed {seed}", flush=True)
         for n in args.densities:
             for index in range(args.scenes):
-                scene = sample_scene(scenario, n, scene_seed(seed, n, index), target_size=size)
+                scene = sample_scene(scenario, scenario.protocol.occluders(n), scene_seed(seed, n, index),
+                                     target_size=size)
                 checker = make_checker(scene, args.station)
                 cands = checker.candidates()
                 removed = []

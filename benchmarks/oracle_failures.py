@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from slax_drake.config import load_scenario
@@ -54,6 +55,10 @@ def main():
     if args.variant:
         from table1_ablation import VARIANTS, scenario_with  # this folder's script (run as a script: on sys.path)
 
+        if args.variant not in VARIANTS:
+            print(f"error: --variant {args.variant!r} is not a variant of benchmarks/table1_ablation.py (known: "
+                  f"{', '.join(VARIANTS)})", file=sys.stderr)
+            raise SystemExit(2)
         scenario = scenario_with(scenario, VARIANTS[args.variant][3])
     densities = [int(v) for v in args.densities.split(",")]
     folder = Path(args.folder) / "trials" / args.policy

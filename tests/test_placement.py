@@ -5,7 +5,6 @@ placement whose reach map covers more of the bay."""
 import numpy as np
 import pytest
 
-from slax_drake.errors import PlacementError
 from slax_drake.planning.placement import Candidate, Evaluated, choose, main, subgrid
 from slax_drake.policies.reach import LAYERS
 
@@ -51,6 +50,22 @@ def test_a_bad_grid_is_one_line_and_exit_2(args, message, capsys):
     assert main(["--station", STATION, *args, "--no-progress"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0]
+
+
+def test_the_winners_map_holds_the_heights_of_its_own_layers_only():
+    """The map --out-map writes has the three measured layers and their heights (not the turned-cup layers' heights,
+    which it does not hold)."""
+    from types import SimpleNamespace
+
+    from slax_drake.planning.placement import PlacementSearch
+    from slax_drake.config import load_scenario
+    from slax_drake.policies.registry import tool_config
+
+    tool = tool_config(load_scenario("sim_configs/table1.yaml"), "station")
+    fake = SimpleNamespace(station_path=STATION, xs=np.array([0.0, 0.1, 0.2]), ys=np.array([0.0, 0.1, 0.2]), tool=tool)
+    rmap = PlacementSearch.reach_map(fake, _measured(Candidate(0.4, 0.2, 0.05), 2))
+    assert set(rmap.reach) == set(rmap.heights) == set(LAYERS)
+    assert rmap.reach["cup"][:2].all() and not rmap.reach["cup"][2].any()  # rows j < 2 reached
 
 
 def test_a_missing_station_is_one_line_and_exit_2(capsys, tmp_path):

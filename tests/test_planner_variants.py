@@ -3,7 +3,6 @@ a Table I suction whose first carrying depths fail and whose last one failed on 
 (the reason that used to end the search) is planned, and its trajectory passes the hardware checker's limits and
 the planning world's collision check."""
 
-import numpy as np
 import pytest
 
 from slax_drake.planning.planner import STRAIGHT_SEGMENT_FAILURES, _may_differ

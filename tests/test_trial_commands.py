@@ -20,6 +20,16 @@ def test_benchmark_scene_gives_the_protocols_seed_target_horizon_and_station():
     assert (plain.objects, plain.seed) == (DEFAULT_OBJECTS, DEFAULT_SEED)
 
 
+
+def test_benchmark_scene_counts_the_target_among_n_when_the_protocol_does(tmp_path):
+    """With ``protocol.count_includes_target`` the Drake trial of scene N:INDEX holds N - 1 occluders, as the
+    Table I benchmark's scene of that seed does (slax_drake.evaluation.table1), and H stays 2N."""
+    text = open("sim_configs/table1.yaml").read().replace("protocol:\n", "protocol:\n  count_includes_target: true\n")
+    config = tmp_path / "table1.yaml"
+    config.write_text(text)
+    opts = benchmark_scene_options(TrialOptions(config=str(config)), "8:1")
+    assert (opts.objects, opts.seed, opts.horizon) == (7, scene_seed(0, 8, 1), 16)
+
 @pytest.mark.parametrize("argv, message", [
     (["--benchmark-scene", "8-1"], "N:INDEX"),
     (["--benchmark-scene", "0:1"], "N >= 1"),

@@ -131,7 +131,7 @@ def _run_scene(job) -> dict:
     opts = protocol_trial(TrialOptions(config=config, station=station, policy=policy_name, out=None, sleep=sleep,
                                        sensor_noise=sensor_noise,
                                        tool_rules=tool_rules, profile=profile), scenario, density, seed)
-    scene = sample_scene(scenario, density, seed, target_size=opts.target_size)
+    scene = sample_scene(scenario, opts.objects, seed, target_size=opts.target_size)
     policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=opts.horizon,
                          tool_overrides=tool_rules, profile=profile)
     shelf = run_shelf_trial(scene, policy, opts.horizon, threshold=scenario.target.visibility_threshold,
@@ -172,12 +172,13 @@ def _run_scene(job) -> dict:
 
 def protocol_trial(opts, scenario, density: int, seed: int):
     """``opts`` (TrialOptions) set to the protocol scene of ``density`` objects and scene seed ``seed`` of
-    ``scenario`` (loaded from ``opts.config``): the protocol's first target size, H = horizon_per_object * density
+    ``scenario`` (loaded from ``opts.config``): ``scenario.protocol.occluders(density)`` occluders (the Table I
+    benchmark's scene), the protocol's first target size, H = horizon_per_object * density
     and, unless ``opts`` names a station, :func:`slax_drake.station.scenario.station_for`. The one definition of a protocol scene's Drake
     trial, shared by this benchmark and ``slax-drake trial --benchmark-scene``."""
     from slax_drake.station.scenario import station_for
 
-    return dataclasses.replace(opts, objects=density, seed=seed,
+    return dataclasses.replace(opts, objects=scenario.protocol.occluders(density), seed=seed,
                                target_size=tuple(float(v) for v in scenario.target.sizes[0]),
                                horizon=scenario.protocol.horizon_per_object * density,
                                station=opts.station or station_for(opts.config))

@@ -256,11 +256,13 @@ class PlacementSearch:
                 bar.update(1)
 
     def reach_map(self, ev: Evaluated) -> ReachMap:
+        """The full-grid reach map of a measured candidate (its push and yaw-0 cup layers, the heights of those)."""
         from slax_drake.planning.reach import layer_heights
 
         reach = {layer: np.array([[ev.nodes[(layer, i, j)] for i in range(len(self.xs))] for j in range(len(self.ys))])
                  for layer in LAYERS}
-        return ReachMap(self.station_path, self.xs, self.ys, reach, layer_heights(self.tool))
+        heights = {layer: h for layer, h in layer_heights(self.tool).items() if layer in reach}
+        return ReachMap(self.station_path, self.xs, self.ys, reach, heights)
 
 
 def subgrid(n_x: int, n_y: int, stride: int) -> list:

@@ -29,7 +29,7 @@ BACK_INSET = 0.05  # m: the deepest node from the back wall
 def layer_waypoint(layer: str, x: float, y: float, scene, tool):
     """The tool waypoint of ``layer`` at the action parameter (x, y) (S, m)."""
     from slax_drake.planning.waypoints import action_waypoints
-    from slax_drake.policies.actions import Push, Suction
+    from slax_drake.policies.actions import Push
     from slax_drake.scene.model import SceneObject, planar_pose
 
     # action_waypoints reads the moved object's footprint (for a suction's carry); a small box behind the

@@ -158,9 +158,10 @@ class BeliefSearch(Hindsight):
 
     def moves(self, objects) -> list:
         """(action, objects after, cost) of every move from ``objects`` on the seen objects: each object pushed each
-        way up to its neighbour, and every suction placement of the profile but those overlapping a blocked region;
-        a suction placed (or moved) through hidden space costs ``hidden_risk`` more (an unseen object may stop
-        it), cached for the trial."""
+        way up to its neighbour, and every suction placement of the profile but those overlapping a blocked region
+        (the enumeration cached per arrangement for the trial); the cost is :meth:`move_cost`'s (a placement's risk
+        of meeting something unseen is not a cost: :meth:`child` weighs the reveals after it by
+        :meth:`placement_risk`)."""
         key = state_key(objects)
         hit = self._moves.get(key)
         if hit is None:
@@ -292,12 +293,8 @@ class BeliefSearch(Hindsight):
                 kids.append(kid)
             else:
                 best_suctions.setdefault(a.name, []).append(kid)
-        for risk, a, after, c in aside.values():
-            kid = self.child(worlds, node, a, after, c, remaining, next(counter))
-            if isinstance(a, Push):
-                kids.append(kid)
-            else:
-                best_suctions.setdefault(a.name, []).append(kid)
+        for risk, a, after, c in aside.values():  # suctions only
+            best_suctions.setdefault(a.name, []).append(self.child(worlds, node, a, after, c, remaining, next(counter)))
         for group in best_suctions.values():
             group.sort(key=lambda k: (k.value, k.order))
             kids.extend(group[: self.placements_per_object])

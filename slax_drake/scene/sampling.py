@@ -68,7 +68,7 @@ def sample_scene(
     for _ in range(scenario.sampling.scene_attempts):
         target = _draw_target(scenario, shelf, target_size, rng) if first else None
         objects = _place_objects(scenario, shelf, num_objects, rng,
-                                 placed=[Footprint.of(target.as_object())] if target is not None else ())
+                                 fixed=[Footprint.of(target.as_object())] if target is not None else ())
         if objects is None:
             continue
         scene = Scene(shelf=shelf, camera=camera, objects=tuple(objects), target=None, seed=seed)
@@ -118,11 +118,11 @@ def _random_object(scenario: Scenario, rng: np.random.Generator) -> tuple[str, t
     return "cylinder", (float(dims[0]), float(dims[0]), float(dims[2])), 0.0
 
 
-def _place_objects(scenario: Scenario, shelf: Shelf, count: int, rng: np.random.Generator, placed=()):
-    """``count`` occluders placed one by one clear of each other and of ``placed`` (footprints already there: the
+def _place_objects(scenario: Scenario, shelf: Shelf, count: int, rng: np.random.Generator, fixed=()):
+    """``count`` occluders placed one by one clear of each other and of ``fixed`` (footprints already there: the
     target, with ``target.placement`` "first"); None when one finds no place."""
     clearance = scenario.objects.clearance
-    fixed = list(placed)
+    fixed = list(fixed)
     placed: list[Footprint] = []
     objects: list[SceneObject] = []
     for i in range(count):
