@@ -42,8 +42,8 @@ The first action of the chosen plan is taken; the next decision searches again o
 of the last plan kept in the beam at every depth (so it is kept unless a better one is found). Deterministic: no
 random number is drawn but from the seeded generator, and ties keep enumeration order. ``seconds`` caps a
 decision's CPU time (checked per expanded node: the search stops and takes the best plan so far; ``decision_log``
-records ``capped``); the default, 30 s, bound in none of the
-README's runs (the longest decision took 6 s of wall time), so those results do not depend on the machine.
+records ``capped``); the default, 30 s, bound in none of the README's runs (the longest decision took 6 s of wall
+time), so those results do not depend on the machine.
 """
 
 from __future__ import annotations
