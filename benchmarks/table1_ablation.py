@@ -105,7 +105,7 @@ def main():
     variants = [v.strip() for v in args.variants.split(",") if v.strip()]
     unknown = [v for v in variants if v not in VARIANTS]
     if unknown:
-        raise SystemExit(f"unknown variant(s) {unknown} (known: {', '.join(VARIANTS)})")
+        ap.error(f"unknown variant(s) {unknown} (known: {', '.join(VARIANTS)})")  # one line, exit 2
     densities = list(base.protocol.densities)
     rows = []
     for name in variants:

@@ -188,3 +188,19 @@ def test_the_turned_cup_layers_agree_with_the_planner_on_a_sample_of_poses(sim_s
     for (x, y, z, deg), expected in [(p, False) for p in refused] + [(p, True) for p in accepted]:
         got = planner.reaches(scene, cup_waypoint(x, y, np.radians(deg), scene, tool, z))
         assert got == expected, (x, y, z, deg)
+
+
+def test_a_map_whose_turned_layer_has_the_wrong_shape_is_one_config_error(tmp_path):
+    """A hand-edited map with a truncated turned-cup layer is refused by name, not with a traceback later."""
+    import json
+
+    from slax_drake.config import REPO_ROOT
+    from slax_drake.errors import ConfigError
+
+    data = json.loads((REPO_ROOT / "models/reach/station_sim_shelf.json").read_text())
+    turned = next(k for k in data["reach"] if k not in LAYERS)
+    data["reach"][turned] = data["reach"][turned][:-1]  # one row short
+    path = tmp_path / "bad_map.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ConfigError, match=f"layer '{turned}' is"):
+        load_reach_map(str(path))

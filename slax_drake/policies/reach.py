@@ -123,8 +123,12 @@ def load_reach_map(path: str) -> ReachMap:
     except (OSError, ValueError, KeyError, TypeError) as e:
         raise ConfigError(f"{path}: not a reach map ({e})") from None
     for layer in LAYERS:
-        if layer not in rmap.reach or rmap.reach[layer].shape != (len(rmap.ys), len(rmap.xs)):
+        if layer not in rmap.reach:
             raise ConfigError(f"{path}: reach map without a {len(rmap.ys)} x {len(rmap.xs)} layer {layer!r}")
+    for layer, values in rmap.reach.items():  # the turned-cup layers too
+        if values.shape != (len(rmap.ys), len(rmap.xs)):
+            raise ConfigError(f"{path}: reach map layer {layer!r} is {' x '.join(map(str, values.shape))}, not "
+                              f"{len(rmap.ys)} x {len(rmap.xs)}")
     return rmap
 
 
