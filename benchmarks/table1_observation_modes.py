@@ -16,7 +16,7 @@ import json
 import sys
 from pathlib import Path
 
-from table1_readme import replace_section  # beside this script
+from table1_readme import print_or_write  # beside this script
 
 BEGIN, END = "<!-- observation-modes:begin -->", "<!-- observation-modes:end -->"
 KEYS = ["4", "6", "8", "10", "all"]
@@ -72,10 +72,7 @@ def main() -> int:
     if len(args.folders) % 2:
         parser.error("the folders come in pairs: PRIVILEGED CAMERA [PRIVILEGED CAMERA ...]")
     text = comparison(args.folders)
-    if args.write is None:
-        print(text, end="")
-        return 0
-    return replace_section(args.write, BEGIN, END, text)
+    return print_or_write(text, args.write, BEGIN, END)
 
 
 if __name__ == "__main__":
