@@ -166,6 +166,13 @@ class Hindsight(BluctionDAR):
                 best_rest = min(best_rest, c + (1.0 - p_b) * self.failure_cost)
             entry[0] = self.cost(a) + (1.0 - p) * best_rest
             log["scored"] += 1
+        return self._ranked(scored, log, t0, cands)
+
+    @staticmethod
+    def _ranked(scored, log: dict, t0: float, cands) -> Decision:
+        """The decision from ``scored`` ([score, tie-break, action] entries, the first ``log["scored"]`` of them
+        scored): the best scored action first, then every other candidate in its order; records the decision's CPU
+        seconds since ``t0`` in ``log``."""
         top = scored[: max(log["scored"], 1)]
         top.sort(key=lambda e: e[:2])
         log["seconds"] = round(time.process_time() - t0, 3)
@@ -205,11 +212,7 @@ class Hindsight(BluctionDAR):
                     best = np.minimum(best, c + self.leaf(worlds, after_b, b, v + c))
             entry[0] = self.cost(a) + float(best.mean())
             log["scored"] += 1
-        top = scored[: max(log["scored"], 1)]
-        top.sort(key=lambda e: e[:2])
-        log["seconds"] = round(time.process_time() - t0, 3)
-        best_action = top[0][2]
-        return Decision((best_action, *(x for x in cands if x != best_action)))
+        return self._ranked(scored, log, t0, cands)
 
     def safe_suctions(self, objects) -> set | None:
         """The suctions whose ways out and in and whose placement stay in space the camera has seen (None: every
