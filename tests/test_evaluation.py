@@ -68,6 +68,25 @@ def test_another_config_content_is_refused_but_the_same_content_elsewhere_is_not
     assert "kept 1 trials" in capsys.readouterr().out
 
 
+def test_a_reach_map_is_recorded_by_content_not_path(tmp_path, capsys):
+    """The same --tool-rule reach_map path holding another map is another setting (a map is regenerated in place)."""
+    shipped = Path(slax_drake.__file__).parent.parent / "models" / "reach" / "station_sim_shelf.json"
+    rmap = tmp_path / "map.json"
+    rmap.write_text(shipped.read_text())
+    out = tmp_path / "out"
+    argv = ["--policies", "dar", "--seed", "0", "--profile", "station", "--tool-rule", f"reach_map={rmap}"]
+    assert bench(out, *argv) == 0
+    recorded = json.loads((out / "settings.json").read_text())["reach_map_sha256"]
+    data = json.loads(rmap.read_text())
+    data["station"] = data["station"] + " (moved)"  # any change of content
+    rmap.write_text(json.dumps(data))
+    assert bench(out, *argv) == 2
+    assert "made with another reach map" in capsys.readouterr().err
+    rmap.write_text(shipped.read_text())
+    assert bench(out, *argv) == 0 and "kept 1 trials" in capsys.readouterr().out
+    assert json.loads((out / "settings.json").read_text())["reach_map_sha256"] == recorded
+
+
 def test_the_table_covers_every_policy_in_the_folder_and_resumes_say_what_they_kept(made, tmp_path, capsys):
     out = copy_of(made, tmp_path)
     assert bench(out, "--policies", "bluction-dar", "--seed", "0") == 0

@@ -5,7 +5,7 @@ Every setting that changes a trial's outcome goes into ``<out>/settings.json`` (
 ``<out>/physics_settings.json``) before the first trial runs: the
 scenario's content (a SHA-256 of the parsed scenario, less the fields that only choose *which* trials run: the
 protocol's seed, densities and scenes per density), the protocol seed, the distribution model (perception), the
-target size, the observation mode (privileged or camera, with its segmentation and sensor noise), the horizon per object, the suction cost, the visibility threshold, the action-model rules and, per
+target size, the observation mode (privileged or camera, with its segmentation and sensor noise), the horizon per object, the suction cost, the visibility threshold, the action-model rules (and the content of a reach map they name) and, per
 policy, its class and constructor options (the physics benchmark adds the station file's content and object
 sleep). A run into a folder recorded with other values is refused before anything runs, with one line naming the
 first setting that differs; a policy new to the folder is added to the record.
@@ -62,7 +62,7 @@ def protocol_settings(scenario, config: str, seed: int, perception: str, tool_ru
     for the reader; its content is what is compared. ``camera``: the camera observation mode
     (slax_drake.evaluation.table1.CameraMode) or None (privileged); ``profile``: the action model's rule profile;
     ``oracle_seconds``: the oracles' time limit per decision (None: the Oracle's default)."""
-    return {
+    settings = {
         "observation": "privileged" if camera is None else "camera",
         "camera": None if camera is None else dataclasses.asdict(camera),
         "config": str(config),
@@ -78,6 +78,11 @@ def protocol_settings(scenario, config: str, seed: int, perception: str, tool_ru
         "oracle_seconds": oracle_seconds,
         "policies": policy_settings(policies),
     }
+    if tool_rules.get("reach_map"):  # the rule names a file: its content is what decides, not its path
+        from slax_drake.policies.reach import reach_map_file
+
+        settings["reach_map_sha256"] = file_digest(reach_map_file(tool_rules["reach_map"]))
+    return settings
 
 
 # What a mismatch is called in the message, in the order the check reports them (the specific settings before the
@@ -90,12 +95,14 @@ LABELS = {
     "visibility_threshold": "visibility threshold (scenario target.visibility_threshold)",
     "profile": "--profile (or the scenario's profile)", "oracle_seconds": "--oracle-seconds",
     "drake_observation": "Drake-trial observation (--sensor-noise, or an older version's trial diagram)",
-    "tool_rules": "--tool-rule", "station_sha256": "station (the --station file's content)", "sleep": "--sleep",
+    "tool_rules": "--tool-rule", "reach_map_sha256": "reach map (the reach_map rule's file content)",
+    "station_sha256": "station (the --station file's content)", "sleep": "--sleep",
     "scenario_sha256": "scenario (the --config file's content)",
 }
 INFORMATIONAL = ("config", "station")
 # What a record made before a setting existed holds for it (folders made before --observation were privileged).
 RECORDED_DEFAULTS = {"observation": "privileged", "camera": None, "profile": "station", "oracle_seconds": None,
+                     "reach_map_sha256": None,
                      "drake_observation": "privileged (true poses; before perception was in the loop)"}
 
 

@@ -108,15 +108,20 @@ class ReachMap:
                         {k: np.array(v, bool) for k, v in data["reach"].items()}, dict(data["heights"]))
 
 
+def reach_map_file(path: str) -> Path:
+    """The file a reach map path names: as given when it exists, else relative to the repository root."""
+    from slax_drake.config import REPO_ROOT
+
+    p = Path(path)
+    return p if p.is_absolute() or p.is_file() else REPO_ROOT / p
+
+
 @functools.lru_cache(maxsize=8)
 def load_reach_map(path: str) -> ReachMap:
     """The reach map JSON at ``path`` (relative paths from the repository root), read once per process."""
-    from slax_drake.config import REPO_ROOT
     from slax_drake.errors import ConfigError
 
-    p = Path(path)
-    if not p.is_absolute() and not p.is_file():
-        p = REPO_ROOT / p
+    p = reach_map_file(path)
     try:
         data = json.loads(p.read_text())
         rmap = ReachMap.from_dict(data)

@@ -327,10 +327,9 @@ class ReachMapRule(Rule):
     def problem(self, value) -> str | None:
         if not value:
             return None
-        from slax_drake.config import REPO_ROOT
-        from pathlib import Path
+        from slax_drake.policies.reach import reach_map_file
 
-        return None if Path(value).is_file() or (REPO_ROOT / value).is_file() else "no such reach map file"
+        return None if reach_map_file(value).is_file() else "no such reach map file"
 
 
 # --------------------------------------------------------------------------------------------------------------
