@@ -87,6 +87,18 @@ def test_a_reach_map_is_recorded_by_content_not_path(tmp_path, capsys):
     assert json.loads((out / "settings.json").read_text())["reach_map_sha256"] == recorded
 
 
+def test_our_policies_trial_files_keep_their_decision_logs(tmp_path):
+    out = tmp_path / "out"
+    assert bench(out, "--policies", "slax-belief,dar", "--seed", "0", "--profile", "paper",
+                 "--observation", "privileged") == 0
+    belief = json.loads(next((out / "trials" / "slax-belief").glob("*.json")).read_text())
+    assert len(belief["decision_log"]) == belief["steps"] >= 1  # one entry per decision taken
+    assert all({"placements", "samples", "capped", "plan"} <= set(d) for d in belief["decision_log"])
+    assert belief["decision_log"][0]["plan"][0] == belief["actions"][0]  # the plan whose first action was taken
+    dar = json.loads(next((out / "trials" / "dar").glob("*.json")).read_text())
+    assert "decision_log" not in dar  # the paper's policies keep none
+
+
 def test_the_table_covers_every_policy_in_the_folder_and_resumes_say_what_they_kept(made, tmp_path, capsys):
     out = copy_of(made, tmp_path)
     assert bench(out, "--policies", "bluction-dar", "--seed", "0") == 0

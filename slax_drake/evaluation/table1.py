@@ -93,6 +93,9 @@ def _run_one(job) -> dict:
     result["profile"] = profile
     if tool_rules:
         result["tool_rules"] = tool_rules
+    decisions = getattr(policy, "decision_log", None)
+    if decisions is not None:  # ours (slax-hindsight, slax-belief): per decision, what the search looked at and chose
+        result["decision_log"] = json.loads(json.dumps(decisions, default=lambda v: v.item()))  # numpy scalars
     searches = getattr(policy, "search_log", None)
     if searches is not None:  # the oracles: how each search ended (proven optimal, infeasible, cut by time)
         result["oracle_searches"] = searches
