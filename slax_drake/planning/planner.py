@@ -47,7 +47,7 @@ from slax_drake.planning.free_path import free_path
 from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
-from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, pull_out_options
+from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
 from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import Suction
 from slax_drake.policies.rules import ToolConfig
@@ -160,21 +160,24 @@ class MotionPlanner:
         reasons = []
         motion = None
         for margin in APPROACH_MARGINS:
-            pulls = [None]
+            pulls = [(None, 0.0)]
             if isinstance(action, Suction):
                 obj = next(o for o in scene.objects if o.name == action.name)
-                pulls = pull_out_options(action, obj, scene.shelf, scene.target, margin)
-            for pull in pulls:
+                x_robot = world.X_WS.inverse().translation()[0]  # the robot's base (W origin) in S
+                pulls = carry_options(action, obj, scene.shelf, scene.target, margin,
+                                      wrist_side=action.q[0] - x_robot)
+            for pull, carry_yaw in pulls:
                 self._anchor_failed = set()
                 try:
                     waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool, approach_margin=margin,
-                                                 pull_to=pull)
+                                                 pull_to=pull, carry_yaw=carry_yaw)
                     motion = self._plan(world, action, waypoints, q_start, timings)
                     break
                 except _Reject as e:
                     world.allow_tool_contact(action.name, False)
                     where = f"approach margin {margin * 100:.0f} cm" + (f", carried across at y = {pull:+.3f}"
-                                                                        if len(pulls) > 1 else "")
+                                                                        if len(pulls) > 1 else "") + (
+                        f" turned {np.degrees(carry_yaw):+.0f} deg" if carry_yaw else "")
                     reasons.append((where, str(e)))
                     if not _may_differ(str(e), PULL_DEPENDENT):
                         break
@@ -463,6 +466,7 @@ class MotionPlanner:
         if depth >= MAX_REFINE_DEPTH:
             raise _Reject(f"{wp.label}: the tool leaves its straight segment by {dev * 1000:.1f} mm")
         X_mid = Xa.copy()
+        X_mid[:3, :3] = _midway_rotation(Xa[:3, :3], Xb[:3, :3])
         X_mid[:3, 3] = (pa + pb) / 2.0
         mid = dataclasses.replace(wp, X_SF=X_mid, label=wp.label)
         q_mid = self._ik(world, mid, (qa + qb) / 2.0, timings)
@@ -517,6 +521,19 @@ def _carried_hits(world, qa, qb) -> str | None:
                                                     or X[1, 3] + ey + m > shelf.depth / 2):
             names.append("the shelf")
     return ", ".join(names) if names else "the robot"
+
+
+def _midway_rotation(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
+    """The rotation halfway from Ra to Rb (about the axis of Rb Ra^T, half its angle; Ra when they are equal):
+    the tool's orientation at a segment's midpoint when it turns along the segment (a turned carry)."""
+    R = Rb @ Ra.T
+    angle = float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
+    if np.array_equal(Ra, Rb) or angle < 1e-6:
+        return Ra.copy()
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / (2.0 * np.sin(angle))
+    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    half = angle / 2.0
+    return (np.eye(3) + np.sin(half) * K + (1.0 - np.cos(half)) * K @ K) @ Ra
 
 
 def _distance_to_segment(p, a, b) -> float:
