@@ -13,7 +13,8 @@
    are solved again backward from there (at most ``MAX_REANCHORS`` times);
 3. each straight tool segment is refined: where the joint-space straight line between two solutions moves the
    tool more than ``deviation_tolerance`` (``CARRIED_DEVIATION_TOLERANCE`` while carrying an object) from the
-   Cartesian segment, the midpoint is solved and inserted;
+   Cartesian segment, the midpoint is solved (warm-started from the joint-space midpoint, else from either end)
+   and inserted;
 4. the free segments from the start to the first waypoint and from the last one back to the observation pose
    are straight when that is collision-free; the way back then tries the way it came (last waypoint, first
    waypoint, the way from the start reversed); else :func:`slax_drake.planning.free_path.free_path`
@@ -29,8 +30,9 @@
 When the waypoints in front of the opening fail (out of reach, no free way) or a straight segment cannot be kept
 (``STRAIGHT_SEGMENT_FAILURES``), the action is planned again with
 the tool's tip 1 cm in front of the opening (``APPROACH_MARGINS``); when a carried segment fails, a suctioned
-object is carried across at shallower depths inside the shelf (:func:`slax_drake.planning.waypoints.
-pull_out_options`). IK solves and free paths are memoised per planning world (one decision's candidates share
+object is carried across at shallower depths inside the shelf and then, pulled all the way out, with the tool
+turned ``CARRY_YAWS`` each way about the cup's vertical axis (:func:`slax_drake.planning.waypoints.carry_options`:
+straight ahead of the shoulder the arm cannot hold the tube along S y that close to the robot; turned it can). IK solves and free paths are memoised per planning world (one decision's candidates share
 their approach waypoints). Any failure returns a :class:`Rejection` with a reason naming the waypoint (and the
 colliding body, or what the carried object meets); the reason of the last variant tried leads, the others
 follow in brackets. Timings of each stage are kept (seconds of wall clock) for the benchmark.
@@ -469,7 +471,11 @@ class MotionPlanner:
         X_mid[:3, :3] = _midway_rotation(Xa[:3, :3], Xb[:3, :3])
         X_mid[:3, 3] = (pa + pb) / 2.0
         mid = dataclasses.replace(wp, X_SF=X_mid, label=wp.label)
-        q_mid = self._ik(world, mid, (qa + qb) / 2.0, timings)
+        q_mid = None
+        for guess in ((qa + qb) / 2.0, qa, qb):  # the joint-space midpoint, else either end's branch
+            q_mid = self._ik(world, mid, guess, timings)
+            if q_mid is not None:
+                break
         if q_mid is None:
             raise _Reject(f"{wp.label}: a point of the straight segment is out of reach")
         left, d1 = self._refine(world, qa, Xa, q_mid, X_mid, wp, timings, depth + 1)

@@ -17,7 +17,8 @@ Suction (q, d_x, d_z, yaw): q = the contact point on the camera-facing side. The
 along a turned face's normal) approaches along its axis to 1 cm before the face, seals (suction on, pressing
 ``SEAL_PRESS`` in along the axis), and, keeping its yaw, lifts ``LIFT`` (about 1 cm), pulls the object out of the shelf
 toward the camera (by default until its back is out of the shelf; the planner may carry it across shallower,
-:func:`pull_out_options`), translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
+:func:`pull_out_options`, or turned about the cup's vertical axis on the way out and back on the way in,
+:func:`carry_options`), translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
 (suction off), backs off along its axis and retracts. The lift is ``LIFT`` unless the carried object's straight way out, across
 and in (its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above
 the tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones). The segments
