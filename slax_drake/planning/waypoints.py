@@ -19,9 +19,11 @@ along a turned face's normal) approaches along its axis to 1 cm before the face,
 toward the camera (by default until its back is out of the shelf; the planner may carry it across shallower,
 :func:`pull_out_options`, or turned about the cup's vertical axis on the way out and back on the way in,
 :func:`carry_options`), translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
-(suction off), backs off along its axis and retracts. The lift is ``LIFT`` unless the carried object's straight way out, across
-and in (its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above
-the tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones). The segments
+(suction off), backs off along its axis and retracts. The lift is ``LIFT`` unless the carried object's way
+(its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above the
+tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones); the lift on the
+way out clears the ways out and across, the height at which it is pushed in the ways across and in, and the
+translation rises or falls between the two (the arm reaches a low pull-out near the robot more easily). The segments
 arriving at "pull out", "translate" and "push in" carry the object clear of the support (``carried``): the
 planner checks the object with the tool there ("clear"); on the lift and the lowering ("resting") it checks the
 object less its bottom ``LIFT``, which touches the support at one end of the segment.
@@ -138,7 +140,11 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         y_place = cy + (action.dz - oy)
         y_pre = y_open - approach_margin
         y_far = full_pull_out(action, obj, shelf, approach_margin) if pull_to is None else pull_to
-        lift = carry_lift(obj, objects, carry_offsets(action, y_far, y_place, carry_yaw), pivot=action.q[:2])
+        # Lifted on the way out as high as the way out and across needs, pushed in as high as the way across and in
+        # needs: the translation between them rises or falls, above what it crosses at both ends.
+        way = carry_offsets(action, y_far, y_place, carry_yaw)
+        lift_out = carry_lift(obj, objects, way[:3], pivot=action.q[:2])
+        lift_in = carry_lift(obj, objects, way[1:], pivot=action.q[:2])
         # The tube comes in along its axis a (turned by the action's yaw toward the face's normal): the
         # pre-approach is on that axis in front of the opening, the cup meets the face along it and presses in;
         # once sealed the tool keeps its yaw and carries the object along S y and x; it backs off along -a.
@@ -155,10 +161,10 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
             ToolWaypoint("pre-approach", f, _pose(R, (cx - back * ax, y_pre, cz)), s),
             ToolWaypoint("approach", f, _pose(R, (cx - CUP_STANDOFF * ax, cy - CUP_STANDOFF * ay, cz)), s),
             ToolWaypoint("seal", f, _pose(R, (px, py, cz)), s, contact=True, suction=True, dwell=DWELL),
-            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift)), s, carried="resting", **on),
-            ToolWaypoint("pull out", f, _pose(R_across, (px, y_far, cz + lift)), s, carried="clear", **on),
-            ToolWaypoint("translate", f, _pose(R_across, (x2, y_far, cz + lift)), s, carried="clear", **on),
-            ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz + lift)), s, carried="clear", **on),
+            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift_out)), s, carried="resting", **on),
+            ToolWaypoint("pull out", f, _pose(R_across, (px, y_far, cz + lift_out)), s, carried="clear", **on),
+            ToolWaypoint("translate", f, _pose(R_across, (x2, y_far, cz + lift_in)), s, carried="clear", **on),
+            ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz + lift_in)), s, carried="clear", **on),
             ToolWaypoint("lower", f, _pose(R, (x2, y_in, cz)), s, carried="resting", **on),
             ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),
             ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
