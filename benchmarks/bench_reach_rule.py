@@ -10,7 +10,9 @@ many the reach map refused before planning, and the planning time per candidate 
 With ``--baseline RULE=VALUE`` (repeatable, e.g. ``push_tube_check=false``) the candidates the model offers with
 those rule values but not with the station's (the ones the station's rules remove before planning) are planned
 too: "removed" counts them and "removed plannable" those the planner would have planned (a conservative rule
-removes none); the rejected rate of the baseline model is printed beside.
+removes none); the rejected rate of the baseline model is printed beside. The JSON holds every planned candidate
+(verdict, planning seconds); ``--compare EARLIER.json`` prints the candidates whose verdict changed since that run
+and the planning times of those both runs planned.
 
     python benchmarks/bench_reach_rule.py --station sim_configs/station_sim_shelf.yaml --scenes 2
     python benchmarks/bench_reach_rule.py --config sim_configs/table2.yaml \\
@@ -41,6 +43,8 @@ def main(argv=None) -> int:
                         help="print every candidate the planner rejects, with its full reason")
     parser.add_argument("--baseline", nargs="+", default=[], metavar="RULE=VALUE",
                         help="rule values of a baseline model whose extra candidates are planned too")
+    parser.add_argument("--compare", default=None, metavar="EARLIER.json",
+                        help="an earlier run's --json: list the candidates whose verdict changed")
     args = parser.parse_args(argv)
     from slax_drake.config import load_scenario
     from slax_drake.errors import UserError
@@ -58,6 +62,7 @@ def main(argv=None) -> int:
         rows = collections.defaultdict(lambda: collections.Counter())
         times = collections.defaultdict(list)
         why = collections.Counter()
+        planned = []  # every offered candidate: density, scene index, action, verdict, planning seconds
         print(f"{args.station} on {args.config}: {args.scenes} scenes per density, protocol seed {seed}", flush=True)
         for n in args.densities:
             for index in range(args.scenes):
@@ -80,6 +85,9 @@ def main(argv=None) -> int:
                     t0 = time.perf_counter()
                     result = checker.planner.plan(action, checker.scene)
                     times[n].append(time.perf_counter() - t0)
+                    planned.append({"n": n, "scene": index, "action": str(action), "kind": action.kind,
+                                    "feasible": bool(result.feasible), "plan_s": round(times[n][-1], 4),
+                                    "reason": "" if result.feasible else result.reason})
                     if not result.feasible:
                         row["rejected"] += 1
                         row[f"rejected_{action.kind}"] += 1
@@ -130,6 +138,8 @@ def main(argv=None) -> int:
     print("planner rejections by first reason:")
     for reason, count in why.most_common(8):
         print(f"  {count:4d}  {reason}")
+    if args.compare:
+        _compare(json.loads(open(args.compare).read()).get("candidates", []), planned)
     if args.json:
         from pathlib import Path
 
@@ -137,8 +147,28 @@ def main(argv=None) -> int:
 
         summary["reasons"] = dict(why)
         summary["station"], summary["config"] = args.station, args.config
+        summary["candidates"] = planned
         write_text_atomic(Path(args.json), json.dumps(summary, indent=1) + "\n")
     return 0
+
+
+def _compare(earlier: list, planned: list) -> None:
+    """Prints the candidates whose verdict differs from ``earlier`` (records of an earlier --json), and the median
+    and p90 planning seconds, in each run, of the candidates both runs planned and of those both rejected."""
+    before = {(c["n"], c["scene"], c["action"]): c for c in earlier}
+    both = [(before[(c["n"], c["scene"], c["action"])], c) for c in planned
+            if (c["n"], c["scene"], c["action"]) in before]
+    print(f"compared with the earlier run: {len(both)} of {len(planned)} candidates in both")
+    for old, new in both:
+        if old["feasible"] != new["feasible"]:
+            verdict = "now planned" if new["feasible"] else "now rejected: " + new["reason"].split(" [")[0]
+            print(f"  n={new['n']} scene {new['scene']} {new['action']}: {verdict} ({new['plan_s']:.2f} s)")
+    for label, keep in (("planned in both", True), ("rejected in both", False)):
+        pairs = [(o["plan_s"], c["plan_s"]) for o, c in both if o["feasible"] == keep and c["feasible"] == keep]
+        if pairs:
+            t = np.array(pairs)
+            print(f"  {label} ({len(pairs)}): median {np.median(t[:, 0]):.3f} -> {np.median(t[:, 1]):.3f} s, "
+                  f"p90 {np.percentile(t[:, 0], 90):.3f} -> {np.percentile(t[:, 1], 90):.3f} s")
 
 
 if __name__ == "__main__":

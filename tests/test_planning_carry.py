@@ -114,3 +114,22 @@ def test_rest_gap_sees_walls_and_neighbours(two_boxes):
     assert rest_gap(a, scene) == pytest.approx(0.06, abs=1e-6)  # to the left wall (0.06) and to B (0.11)
     touching = _box("object_0", -0.3 + 0.04, -0.15, (0.08, 0.08, 0.12))  # against the left wall
     assert abs(rest_gap(touching, scene.with_objects((touching, b)))) < 1e-9
+
+
+def test_the_way_out_is_lifted_only_as_high_as_it_needs(two_boxes):
+    """A is carried out (nothing in its way), across in front of the shelf and pushed in over B's spot: it leaves
+    at the plain lift, and the translation rises to B's height plus the clearance before it is pushed in."""
+    scene, _, a, b = two_boxes
+    waypoints = action_waypoints(Suction(a.name, (-0.2, -0.19, 0.1), 0.2, -0.15), scene.objects, scene.shelf)
+    z = {w.label: w.position[2] for w in waypoints}
+    assert z["lift"] - z["seal"] == pytest.approx(LIFT)
+    assert z["pull out"] - z["seal"] == pytest.approx(LIFT)
+    assert z["translate"] - z["seal"] == pytest.approx(b.size[2] + LIFT_CLEARANCE)
+    assert z["push in"] == pytest.approx(z["translate"])
+    # C behind B, pulled out over B and pushed in at the free lane between A and B: high out, low in
+    c = _box("object_2", 0.0, 0.05, (0.08, 0.08, 0.12))
+    behind = scene.with_objects((a, b, c))
+    z = {w.label: w.position[2] for w in action_waypoints(Suction(c.name, (0.0, 0.01, 0.1), -0.1, 0.05),
+                                                             behind.objects, behind.shelf)}
+    assert z["pull out"] - z["seal"] == pytest.approx(b.size[2] + LIFT_CLEARANCE)
+    assert z["push in"] - z["seal"] == pytest.approx(LIFT)

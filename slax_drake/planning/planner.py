@@ -13,7 +13,8 @@
    are solved again backward from there (at most ``MAX_REANCHORS`` times);
 3. each straight tool segment is refined: where the joint-space straight line between two solutions moves the
    tool more than ``deviation_tolerance`` (``CARRIED_DEVIATION_TOLERANCE`` while carrying an object) from the
-   Cartesian segment, the midpoint is solved and inserted;
+   Cartesian segment, the midpoint is solved (warm-started from the joint-space midpoint, else from either end)
+   and inserted;
 4. the free segments from the start to the first waypoint and from the last one back to the observation pose
    are straight when that is collision-free; the way back then tries the way it came (last waypoint, first
    waypoint, the way from the start reversed); else :func:`slax_drake.planning.free_path.free_path`
@@ -29,8 +30,9 @@
 When the waypoints in front of the opening fail (out of reach, no free way) or a straight segment cannot be kept
 (``STRAIGHT_SEGMENT_FAILURES``), the action is planned again with
 the tool's tip 1 cm in front of the opening (``APPROACH_MARGINS``); when a carried segment fails, a suctioned
-object is carried across at shallower depths inside the shelf (:func:`slax_drake.planning.waypoints.
-pull_out_options`). IK solves and free paths are memoised per planning world (one decision's candidates share
+object is carried across at shallower depths inside the shelf and then, pulled all the way out, with the tool
+turned ``CARRY_YAWS`` each way about the cup's vertical axis (:func:`slax_drake.planning.waypoints.carry_options`:
+straight ahead of the shoulder the arm cannot hold the tube along S y that close to the robot; turned it can). IK solves and free paths are memoised per planning world (one decision's candidates share
 their approach waypoints). Any failure returns a :class:`Rejection` with a reason naming the waypoint (and the
 colliding body, or what the carried object meets); the reason of the last variant tried leads, the others
 follow in brackets. Timings of each stage are kept (seconds of wall clock) for the benchmark.
@@ -47,7 +49,7 @@ from slax_drake.planning.free_path import free_path
 from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
-from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, pull_out_options
+from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
 from slax_drake.planning.world import PlanningWorld
 from slax_drake.policies.actions import Suction
 from slax_drake.policies.rules import ToolConfig
@@ -160,21 +162,24 @@ class MotionPlanner:
         reasons = []
         motion = None
         for margin in APPROACH_MARGINS:
-            pulls = [None]
+            pulls = [(None, 0.0)]
             if isinstance(action, Suction):
                 obj = next(o for o in scene.objects if o.name == action.name)
-                pulls = pull_out_options(action, obj, scene.shelf, scene.target, margin)
-            for pull in pulls:
+                x_robot = world.X_WS.inverse().translation()[0]  # the robot's base (W origin) in S
+                pulls = carry_options(action, obj, scene.shelf, scene.target, margin,
+                                      wrist_side=action.q[0] - x_robot)
+            for pull, carry_yaw in pulls:
                 self._anchor_failed = set()
                 try:
                     waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool, approach_margin=margin,
-                                                 pull_to=pull)
+                                                 pull_to=pull, carry_yaw=carry_yaw)
                     motion = self._plan(world, action, waypoints, q_start, timings)
                     break
                 except _Reject as e:
                     world.allow_tool_contact(action.name, False)
                     where = f"approach margin {margin * 100:.0f} cm" + (f", carried across at y = {pull:+.3f}"
-                                                                        if len(pulls) > 1 else "")
+                                                                        if len(pulls) > 1 else "") + (
+                        f" turned {np.degrees(carry_yaw):+.0f} deg" if carry_yaw else "")
                     reasons.append((where, str(e)))
                     if not _may_differ(str(e), PULL_DEPENDENT):
                         break
@@ -463,9 +468,14 @@ class MotionPlanner:
         if depth >= MAX_REFINE_DEPTH:
             raise _Reject(f"{wp.label}: the tool leaves its straight segment by {dev * 1000:.1f} mm")
         X_mid = Xa.copy()
+        X_mid[:3, :3] = _midway_rotation(Xa[:3, :3], Xb[:3, :3])
         X_mid[:3, 3] = (pa + pb) / 2.0
         mid = dataclasses.replace(wp, X_SF=X_mid, label=wp.label)
-        q_mid = self._ik(world, mid, (qa + qb) / 2.0, timings)
+        q_mid = None
+        for guess in ((qa + qb) / 2.0, qa, qb):  # the joint-space midpoint, else either end's branch
+            q_mid = self._ik(world, mid, guess, timings)
+            if q_mid is not None:
+                break
         if q_mid is None:
             raise _Reject(f"{wp.label}: a point of the straight segment is out of reach")
         left, d1 = self._refine(world, qa, Xa, q_mid, X_mid, wp, timings, depth + 1)
@@ -517,6 +527,19 @@ def _carried_hits(world, qa, qb) -> str | None:
                                                     or X[1, 3] + ey + m > shelf.depth / 2):
             names.append("the shelf")
     return ", ".join(names) if names else "the robot"
+
+
+def _midway_rotation(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
+    """The rotation halfway from Ra to Rb (about the axis of Rb Ra^T, half its angle; Ra when they are equal):
+    the tool's orientation at a segment's midpoint when it turns along the segment (a turned carry)."""
+    R = Rb @ Ra.T
+    angle = float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
+    if np.array_equal(Ra, Rb) or angle < 1e-6:
+        return Ra.copy()
+    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / (2.0 * np.sin(angle))
+    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    half = angle / 2.0
+    return (np.eye(3) + np.sin(half) * K + (1.0 - np.cos(half)) * K @ K) @ Ra
 
 
 def _distance_to_segment(p, a, b) -> float:

@@ -17,10 +17,13 @@ Suction (q, d_x, d_z, yaw): q = the contact point on the camera-facing side. The
 along a turned face's normal) approaches along its axis to 1 cm before the face, seals (suction on, pressing
 ``SEAL_PRESS`` in along the axis), and, keeping its yaw, lifts ``LIFT`` (about 1 cm), pulls the object out of the shelf
 toward the camera (by default until its back is out of the shelf; the planner may carry it across shallower,
-:func:`pull_out_options`), translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
-(suction off), backs off along its axis and retracts. The lift is ``LIFT`` unless the carried object's straight way out, across
-and in (its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above
-the tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones). The segments
+:func:`pull_out_options`, or turned about the cup's vertical axis on the way out and back on the way in,
+:func:`carry_options`), translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
+(suction off), backs off along its axis and retracts. The lift is ``LIFT`` unless the carried object's way
+(its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above the
+tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones); the lift on the
+way out clears the ways out and across, the height at which it is pushed in the ways across and in, and the
+translation rises or falls between the two (the arm reaches a low pull-out near the robot more easily). The segments
 arriving at "pull out", "translate" and "push in" carry the object clear of the support (``carried``): the
 planner checks the object with the tool there ("clear"); on the lift and the lowering ("resting") it checks the
 object less its bottom ``LIFT``, which touches the support at one end of the segment.
@@ -52,6 +55,10 @@ CUP_STANDOFF = 0.01  # m before the face, then the cup moves in with suction on
 LIFT = 0.01  # m
 LIFT_CLEARANCE = 0.01  # the carried object's bottom this far above the tallest object it passes over (m)
 PULL_STEP = 0.04  # m between the pull-out depths the planner tries
+# Turns of the tool about the cup's vertical axis (rad) while it carries an object pulled all the way out, tried
+# (each way round) when no depth of the straight carry plans (:func:`carry_options`). At 30 deg every pull-out
+# and translate pose of the Table I carries the arm could not reach straight has an IK solution.
+CARRY_YAWS = (np.radians(30.0),)
 TARGET_CLEARANCE = 0.005  # m, an object carried across inside the shelf keeps this far from the target
 SWEEP_STEP = 0.005  # m between footprints of the carried object's sweep when looking for objects it crosses
 OUT_MARGIN = 0.01  # the carried object's back this far in front of the opening (m)
@@ -99,10 +106,13 @@ def _pose(R: np.ndarray, p) -> np.ndarray:
 
 
 def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, tool: ToolConfig = ToolConfig(),
-                     approach_margin: float = APPROACH_MARGIN, pull_to: float | None = None):
+                     approach_margin: float = APPROACH_MARGIN, pull_to: float | None = None, carry_yaw: float = 0.0):
     """The tool waypoints of ``action`` (Push or Suction) on the objects as they stand; the tool's tip is
     ``approach_margin`` in front of the opening at the pre-approach and retract waypoints. ``pull_to``: the
-    cup's y (S) while a suctioned object is carried across (default :func:`full_pull_out`)."""
+    cup's y (S) while a suctioned object is carried across (default :func:`full_pull_out`). ``carry_yaw`` (rad,
+    about S z): the tool, and the object with it, turns by this much about the cup's vertical axis on the way
+    out (lift to pull out) and back on the way in (push in), so it is carried across turned; the seal, the
+    lowering and the release keep the action's yaw, so the object ends where the action puts it."""
     obj = next((o for o in objects if o.name == action.name), None)
     if obj is None:
         raise ValueError(f"no object named {action.name!r}")
@@ -130,8 +140,11 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         y_place = cy + (action.dz - oy)
         y_pre = y_open - approach_margin
         y_far = full_pull_out(action, obj, shelf, approach_margin) if pull_to is None else pull_to
-        lift = carry_lift(obj, objects, [(0.0, 0.0), (0.0, y_far - cy), (action.dx, y_far - cy),
-                                         (action.dx, y_place - cy)])
+        # Lifted on the way out as high as the way out and across needs, pushed in as high as the way across and in
+        # needs: the translation between them rises or falls, above what it crosses at both ends.
+        way = carry_offsets(action, y_far, y_place, carry_yaw)
+        lift_out = carry_lift(obj, objects, way[:3], pivot=action.q[:2])
+        lift_in = carry_lift(obj, objects, way[1:], pivot=action.q[:2])
         # The tube comes in along its axis a (turned by the action's yaw toward the face's normal): the
         # pre-approach is on that axis in front of the opening, the cup meets the face along it and presses in;
         # once sealed the tool keeps its yaw and carries the object along S y and x; it backs off along -a.
@@ -141,16 +154,17 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         x2 = px + action.dx
         y_in = py + (y_place - cy)  # the cup with the object at its placement
         R, f, s = suction_rotation(action.yaw), robot_model.CUP_TIP_FRAME, robot_model.SHAFT_BLADE_UP
+        R_across = suction_rotation(action.yaw + carry_yaw)
         on = dict(contact=True, suction=True)
         x_off, y_off = x2 - (RELEASE_BACKOFF + SEAL_PRESS) * ax, y_in - (RELEASE_BACKOFF + SEAL_PRESS) * ay
         return [
             ToolWaypoint("pre-approach", f, _pose(R, (cx - back * ax, y_pre, cz)), s),
             ToolWaypoint("approach", f, _pose(R, (cx - CUP_STANDOFF * ax, cy - CUP_STANDOFF * ay, cz)), s),
             ToolWaypoint("seal", f, _pose(R, (px, py, cz)), s, contact=True, suction=True, dwell=DWELL),
-            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift)), s, carried="resting", **on),
-            ToolWaypoint("pull out", f, _pose(R, (px, y_far, cz + lift)), s, carried="clear", **on),
-            ToolWaypoint("translate", f, _pose(R, (x2, y_far, cz + lift)), s, carried="clear", **on),
-            ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz + lift)), s, carried="clear", **on),
+            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift_out)), s, carried="resting", **on),
+            ToolWaypoint("pull out", f, _pose(R_across, (px, y_far, cz + lift_out)), s, carried="clear", **on),
+            ToolWaypoint("translate", f, _pose(R_across, (x2, y_far, cz + lift_in)), s, carried="clear", **on),
+            ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz + lift_in)), s, carried="clear", **on),
             ToolWaypoint("lower", f, _pose(R, (x2, y_in, cz)), s, carried="resting", **on),
             ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),
             ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
@@ -197,24 +211,81 @@ def pull_out_options(action, obj: SceneObject, shelf: Shelf, target=None,
     return options
 
 
-def carry_lift(obj: SceneObject, objects, offsets) -> float:
-    """How high (m) to lift ``obj`` for its carried way: the polyline of centre offsets (dx, dy) from where it
-    stands, in S. ``LIFT``, or ``LIFT_CLEARANCE`` above the tallest other object whose footprint the swept
-    footprint (``SWEEP_STEP`` apart, no clearance) overlaps."""
+def carry_options(action, obj: SceneObject, shelf: Shelf, target=None, approach_margin: float = APPROACH_MARGIN,
+                  wrist_side: float = 1.0) -> list[tuple[float, float]]:
+    """(pull_to, carry_yaw) of the ways to carry a suctioned object across, in the order to try: the depths of
+    :func:`pull_out_options` with the tool keeping its yaw, then the full pull-out with the tool turned by
+    ``CARRY_YAWS`` about the cup's vertical axis while it carries (:func:`action_waypoints`), each magnitude with
+    the sign that swings the wrist toward ``wrist_side`` (+1: S +x; the side away from the shoulder) first. Near
+    the robot the arm cannot hold the tube straight along S y (the wrist folds into the shoulder: the elbow and
+    the torso are at their limits), turned it can. A turned way is left out when its footprints, turning about
+    the cup, would come within ``TARGET_CLEARANCE`` of the target's (the planning world does not hold it)."""
+    options = [(y, 0.0) for y in pull_out_options(action, obj, shelf, target, approach_margin)]
+    y_full = options[0][0]
+    y_place = action.q[1] + (action.dz - float(obj.center[1]))
+    first = 1.0 if wrist_side >= 0 else -1.0
+    for magnitude in CARRY_YAWS:
+        for sign in (first, -first):
+            yaw = sign * magnitude
+            if target is not None:
+                sweep = carried_sweep(obj, carry_offsets(action, y_full, y_place, yaw), pivot=action.q[:2])
+                if not sweep_clear_of(obj, sweep, target.as_object(), TARGET_CLEARANCE):
+                    continue
+            options.append((y_full, yaw))
+    return options
+
+
+def carry_offsets(action, y_far: float, y_place: float, carry_yaw: float = 0.0) -> list[tuple[float, float, float]]:
+    """The carried way of a suction as a polyline of (dx, dy, dyaw) of the cup from the contact (m, m, rad, S):
+    pulled out to cup y ``y_far`` (turning by ``carry_yaw``), across by the action's dx, in until the object's
+    centre is at ``y_place`` (turning back)."""
+    cy = action.q[1]
+    return [(0.0, 0.0, 0.0), (0.0, y_far - cy, carry_yaw), (action.dx, y_far - cy, carry_yaw),
+            (action.dx, y_place - cy, 0.0)]
+
+
+def carried_sweep(obj: SceneObject, offsets, pivot=None) -> list[tuple[np.ndarray, float]]:
+    """The footprints of ``obj`` along its carried way, as (centres (K, 2), yaw) groups in S: ``offsets`` is a
+    polyline of (dx, dy) or (dx, dy, dyaw) of the cup from where it holds the object (``pivot``, its (x, y) in S;
+    the object turns by dyaw about the cup's vertical axis there), sampled so that no point of the footprint
+    moves more than ``SWEEP_STEP`` between samples."""
+    fp = Footprint.of(obj)
+    c0 = np.array([float(obj.center[0]), float(obj.center[1])])
+    p0 = c0 if pivot is None else np.asarray(pivot, float)[:2]
+    arm = c0 - p0
+    reach = float(np.linalg.norm(arm)) + float(np.hypot(fp.half_x, fp.half_y))  # farthest footprint point, m
+    points = [(float(o[0]), float(o[1]), float(o[2]) if len(o) > 2 else 0.0) for o in offsets]
+    groups = {}
+    for (ax, ay, aw), (bx, by, bw) in zip(points[:-1], points[1:]):
+        n = max(1, int(np.ceil(max(np.hypot(bx - ax, by - ay), abs(bw - aw) * reach) / SWEEP_STEP)))
+        for t in np.linspace(0.0, 1.0, n + 1):
+            w = aw + t * (bw - aw)
+            c, s_ = np.cos(w), np.sin(w)
+            centre = p0 + np.array([ax + t * (bx - ax), ay + t * (by - ay)]) + np.array([c * arm[0] - s_ * arm[1],
+                                                                                        s_ * arm[0] + c * arm[1]])
+            groups.setdefault(round(w, 9), []).append(centre)
+    return [(np.array(centres), fp.yaw + w) for w, centres in groups.items()]
+
+
+def sweep_clear_of(obj: SceneObject, sweep, other: SceneObject, clearance: float = 0.0) -> bool:
+    """Whether every footprint of ``sweep`` (:func:`carried_sweep`) is ``clearance`` clear of ``other``'s."""
     from slax_drake.scene.footprint import clear_of
 
-    fp = Footprint.of(obj)
-    x0, y0 = float(obj.center[0]), float(obj.center[1])
-    centres = []
-    for (ax, ay), (bx, by) in zip(offsets[:-1], offsets[1:]):
-        n = max(1, int(np.ceil(np.hypot(bx - ax, by - ay) / SWEEP_STEP)))
-        s = np.linspace(0.0, 1.0, n + 1)
-        centres.append(np.column_stack([x0 + ax + s * (bx - ax), y0 + ay + s * (by - ay)]))
-    centres = np.vstack(centres)
+    fp, fo = Footprint.of(obj), Footprint.of(other)
+    return all(bool(clear_of(fp.shape, centres, yaw, (fp.half_x, fp.half_y), fo, clearance).all())
+               for centres, yaw in sweep)
+
+
+def carry_lift(obj: SceneObject, objects, offsets, pivot=None) -> float:
+    """How high (m) to lift ``obj`` for its carried way: the polyline ``offsets`` of :func:`carried_sweep`
+    ((dx, dy) of its centre, or (dx, dy, dyaw) of the cup at ``pivot``), in S. ``LIFT``, or ``LIFT_CLEARANCE``
+    above the tallest other object whose footprint the swept footprint (``SWEEP_STEP`` apart, no clearance)
+    overlaps."""
+    sweep = carried_sweep(obj, offsets, pivot)
     tallest = 0.0
     for other in objects:
         if other.name == obj.name:
             continue
-        if not clear_of(fp.shape, centres, fp.yaw, (fp.half_x, fp.half_y), Footprint.of(other), 0.0).all():
+        if not sweep_clear_of(obj, sweep, other):
             tallest = max(tallest, float(other.size[2]))
     return LIFT if tallest == 0.0 else max(LIFT, tallest + LIFT_CLEARANCE)
