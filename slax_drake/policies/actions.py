@@ -62,6 +62,7 @@ GRAVITY = 9.81  # m/s^2
 FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
 CONTACT_INSET = 0.01  # the blade's tip this far past the point where it meets the object (m)
 BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
+PAIR_CACHE_SIZE = 20_000  # entries of an ActionModel's cache of pairwise collision tests (ActionModel._pair)
 REACH_MARGIN = 0.015  # m: the reach map refuses a tool position only when every grid node this near it is unreached
 # Where the planner puts the blade for a push (slax_drake.planning.waypoints reads these): the tube's surface
 # TUBE_STANDOFF beside the pushed object's extreme x (the blade's plane a tube radius farther), the blade's lower
@@ -159,6 +160,8 @@ class ActionModel:
         self.grid = FloorGrid(shelf, tool.grid.cell)
         self.y_front = -shelf.depth / 2 - FRONT_MARGIN
         self._raster_cache: dict = {}
+        self._push_rects_cache: dict = {}  # (footprint, sign) -> (tool rects, swept rects); the tool never changes
+        self._pair_cache: dict = {}  # collision tests of one moved footprint against one other (see _pair)
         self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
     # ----------------------------------------------------------------------------------------------------
@@ -180,6 +183,18 @@ class ActionModel:
         return Candidates(feasible, rejected)
 
     # ----------------------------------------------------------------------------------------------------
+    def _pair(self, key: tuple, compute):
+        """``compute()``, cached under ``key``: a collision test of one object's motion against one other
+        footprint. Such a test depends only on the two footprints, the direction and the tool (which never
+        changes), and a search meets the same pairs in thousands of states, so the cache returns exactly what
+        ``compute()`` would. The cache is emptied when it holds ``PAIR_CACHE_SIZE`` entries."""
+        hit = self._pair_cache.get(key)
+        if hit is None:
+            if len(self._pair_cache) >= PAIR_CACHE_SIZE:
+                self._pair_cache.clear()
+            hit = self._pair_cache[key] = compute()
+        return hit
+
     def _pushes(self, ctx, i, sign, feasible, rejected):
         t, shelf = self.tool, self.shelf
         obj, fp = ctx.objects[i], ctx.fps[i]
@@ -196,12 +211,19 @@ class ActionModel:
         y_lo = min([y - ey] + [r[1] - r[3] for r in rects]) - t.physics.clearance - 1e-6
         y_hi = max([y + ey] + [r[1] + r[3] for r in rects]) + t.physics.clearance + 1e-6
         band = ctx.others_in_band(i, 1, y_lo, y_hi)
-        for j in band:
+        def lane_blocked(other: Footprint):
+            """The index of the first of ``rects`` that meets ``other`` (None when none does)."""
             for k_r, (rx, ry, hx, hy) in enumerate(rects):
-                if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
-                    where = "gap" if k_r == 0 else "shaft's way in"
-                    rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
-                    return
+                if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)[0]:
+                    return k_r
+            return -1
+
+        for j in band:
+            k_r = self._pair(("lane", fp, sign, ctx.all_fps[j]), lambda: lane_blocked(ctx.all_fps[j]))
+            if k_r >= 0:
+                where = "gap" if k_r == 0 else "shaft's way in"
+                rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
+                return
         if t.rules.push_tube_check:
             blocker = self.push_tube_blocker(ctx, i, sign)
             if blocker is not None:
@@ -212,14 +234,18 @@ class ActionModel:
         xs = x + sign * k * t.grid.cell
         ok = np.abs(xs) + ex <= shelf.width / 2 - t.physics.clearance + 1e-12
         first_bad, stopper = _first_false(ok), "the wall"
-        centers = np.column_stack([xs, np.full(n, y)])
-        for j in band:
-            other = ctx.all_fps[j]
+
+        def first_step_hitting(other: Footprint) -> int:
+            """The first step (index into k) at which the pushed footprint or the dragged tool meets ``other``."""
+            centers = np.column_stack([xs, np.full(n, y)])
             clear = clear_of(fp.shape, centers, fp.yaw, (fp.half_x, fp.half_y), other, t.physics.clearance)
             for rx, ry, hx, hy in rects:
                 tool = np.column_stack([rx + sign * k * t.grid.cell, np.full(n, ry)])
                 clear &= clear_of("box", tool, 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)
-            bad = _first_false(clear)
+            return _first_false(clear)
+
+        for j in band:
+            bad = self._pair(("sweep", fp, sign, ctx.all_fps[j]), lambda: first_step_hitting(ctx.all_fps[j]))
             if bad < first_bad:
                 first_bad, stopper = bad, ctx.all_names[j]
         end_ok = None  # push_hidden_extent "end": per step 1..first_bad, whether the object may stop there
@@ -337,7 +363,8 @@ class ActionModel:
         for j in (ctx.others(i) if t.rules.tube_approach_check else ()):
             if ctx.all_heights[j] <= cz - tube_r:
                 continue  # the tube passes over it
-            if not clear_of("box", corridor, yaw, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
+            if not self._pair(("approach", fp, tuple(obj.size), ctx.all_fps[j]), lambda: bool(
+                    clear_of("box", corridor, yaw, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0])):
                 rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
                 return
         ex, ey = fp.extents()
@@ -349,7 +376,8 @@ class ActionModel:
         for j in ctx.others_in_band(i, 0, fp.x - ex - t.physics.clearance - 1e-6, fp.x + ex + t.physics.clearance + 1e-6):
             if j not in blocking:
                 continue
-            if not clear_of(fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all():
+            if not self._pair(("out", fp, ctx.all_fps[j]), lambda: bool(clear_of(
+                    fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all())):
                 rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
                 return
         cols, first_rows, last_rows = column_extents(ctx.masks[i])
@@ -379,8 +407,9 @@ class ActionModel:
         xs = fp.x + a_all * res
         grid_c = np.column_stack([np.repeat(xs, n_in), np.tile(steps, len(xs))])
         clear = np.ones(len(grid_c), dtype=bool)
-        for j in blocking:
-            clear &= clear_of(fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance)
+        for j in blocking:  # (the lattice and the way in depend on fp alone: cached per pair of footprints)
+            clear &= self._pair(("in", fp, ctx.all_fps[j]), lambda: clear_of(
+                fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance))
         clear = clear.reshape(len(xs), n_in)
         first_bad = np.where(clear.all(axis=1), n_in, np.argmin(clear, axis=1))
         y_reach_exact = np.where(
@@ -392,9 +421,15 @@ class ActionModel:
         first_h = first_hidden_row(hidden_in)
         prefix = np.vstack([np.zeros((1, self.grid.nx), dtype=np.int32), np.cumsum(hidden_in, axis=0, dtype=np.int32)])
         passed_over = [j for j in ctx.others(i) if j not in blocking]
+
+        def placements_clear_of(other: Footprint) -> np.ndarray:
+            """(len(a_all), len(b_all)): whether the object placed at each lattice point is clear of ``other``."""
+            placed = np.column_stack([np.repeat(xs, len(b_all)), np.tile(fp.y + b_all * res, len(xs))])
+            return clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), other,
+                            t.physics.clearance).reshape(len(xs), len(b_all))
         ny = self.grid.ny
         n_found = 0
-        for a, x_new, y_ex in zip(a_all, xs, y_reach_exact):
+        for a_index, (a, x_new, y_ex) in enumerate(zip(a_all, xs, y_reach_exact)):
             shifted_cols = cols + a * cells_per
             inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
             if not inside.any():
@@ -416,10 +451,10 @@ class ActionModel:
                 hidden_count = (prefix[r1, c_in[None, :]] - prefix[r0, c_in[None, :]]).sum(axis=1)
                 bs = bs[hidden_count == 0]
             if passed_over and len(bs):
-                placed = np.column_stack([np.full(len(bs), x_new), fp.y + bs * res])
                 ok = np.ones(len(bs), dtype=bool)
                 for j in passed_over:
-                    ok &= clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance)
+                    ok &= self._pair(("placed", fp, ctx.all_fps[j]), lambda: placements_clear_of(
+                        ctx.all_fps[j]))[a_index, bs - b_all[0]]
                 bs = bs[ok]
             for b in bs:
                 y_new = fp.y + b * res
@@ -429,7 +464,25 @@ class ActionModel:
         if n_found == 0:
             rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
 
+    def _push_rects(self, fp: Footprint, sign: int):
+        """(:meth:`push_tool_rects`, :meth:`push_swept_rects`) of ``fp``, cached by footprint and direction: they
+        depend on nothing else (the tool is fixed), and a search asks for them thousands of times."""
+        key = (fp, sign)
+        hit = self._push_rects_cache.get(key)
+        if hit is None:
+            tool_rects = tuple(self._tool_rects(fp, sign))
+            hit = (tool_rects, tuple(self._swept_rects(tool_rects, sign)))
+            if len(self._push_rects_cache) >= 20_000:
+                self._push_rects_cache.clear()
+            self._push_rects_cache[key] = hit
+        return hit
+
     def push_tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
+        """The tool's outline when inserted to push ``fp`` toward ``sign`` x: (centre x, centre y, half x,
+        half y) of the blade in the gap beside the object and of the shaft's way in (see :meth:`_tool_rects`)."""
+        return list(self._push_rects(fp, sign)[0])
+
+    def _tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
         """The tool's outline when inserted to push ``fp`` toward ``sign`` x: (centre x, centre y, half x,
         half y) of the blade in the gap beside the object (``blade_width`` along x, from the object's front
         extreme to the blade's depth) and of the shaft's way in (``tube_diameter`` wide, from outside the
@@ -485,8 +538,8 @@ class ActionModel:
             return None
         cx, cy, hx, hy, height = corridor
         for j in ctx.others(i):
-            if ctx.all_heights[j] > height and not clear_of("box", np.array([[cx, cy]]), 0.0, (hx, hy),
-                                                           ctx.all_fps[j], 0.0)[0]:
+            if ctx.all_heights[j] > height and not self._pair(("tube", ctx.fps[i], sign, ctx.all_fps[j]), lambda: bool(
+                    clear_of("box", np.array([[cx, cy]]), 0.0, (hx, hy), ctx.all_fps[j], 0.0)[0])):
                 return ctx.all_names[j]
         return None
 
@@ -494,8 +547,11 @@ class ActionModel:
         """The parts of :meth:`push_tool_rects` the model requires to be free (and drags along the push):
         the blade in the gap, with the tube's end ``tube_past_blade`` beyond its tip, plus the shaft's way in
         when ``shaft_lane_check`` is on."""
+        return list(self._push_rects(fp, sign)[1])
+
+    def _swept_rects(self, tool_rects, sign: int) -> list[tuple[float, float, float, float]]:
         t = self.tool
-        blade, shaft = self.push_tool_rects(fp, sign)
+        blade, shaft = tool_rects
         edge = blade[0] + sign * t.geometry.blade_width / 2
         y_face, y_end = blade[1] - blade[3], blade[1] + blade[3] + t.rules.tube_past_blade
         gap = (edge - sign * t.rules.blade_gap / 2, (y_face + y_end) / 2, t.rules.blade_gap / 2, (y_end - y_face) / 2)
@@ -612,9 +668,16 @@ class _StateContext:
         # cells under known objects hold no unseen object (only with min_hidden_width > 0, the strict
         # variant keeps the overhead shadows whole)
         self.occupied = np.any(self.masks, axis=0) if self.masks and self._radius_cells > 0 else None
-        self.hidden_all = self._open(erode(self.count > 0))
+        self._hidden_all = None
         self._n = len(self.all_objs)
         self._hidden_others: dict = {}
+
+    @property
+    def hidden_all(self) -> np.ndarray:
+        """The hidden space as all objects make it (computed on first use: only suctions read it)."""
+        if self._hidden_all is None:
+            self._hidden_all = self._open(erode(self.count > 0))
+        return self._hidden_all
 
     def others(self, i):
         return [j for j in range(self._n) if j != i]
