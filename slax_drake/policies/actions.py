@@ -162,6 +162,7 @@ class ActionModel:
         self._raster_cache: dict = {}
         self._push_rects_cache: dict = {}  # (footprint, sign) -> (tool rects, swept rects); the tool never changes
         self._pair_cache: dict = {}  # collision tests of one moved footprint against one other (see _pair)
+        self._fp_ids: dict = {}  # footprint -> int (footprint_id)
         self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
     # ----------------------------------------------------------------------------------------------------
@@ -183,6 +184,16 @@ class ActionModel:
         return Candidates(feasible, rejected)
 
     # ----------------------------------------------------------------------------------------------------
+    def footprint_ids(self, fps) -> list[int]:
+        """Small ints naming ``fps`` (equal footprints, equal ids) for the keys of :meth:`_pair`: hashing ints is
+        cheaper than hashing footprints at every test. One call names all footprints of a state: when the table
+        is full it is emptied first, with the pairs keyed by its ids, so no id of the returned list is stale."""
+        if len(self._fp_ids) + len(fps) > PAIR_CACHE_SIZE:
+            self._fp_ids.clear()
+            self._pair_cache.clear()
+        ids = self._fp_ids
+        return [ids.setdefault(fp, len(ids)) for fp in fps]
+
     def _pair(self, key: tuple, compute):
         """``compute()``, cached under ``key``: a collision test of one object's motion against one other
         footprint. Such a test depends only on the two footprints, the direction and the tool (which never
@@ -219,7 +230,7 @@ class ActionModel:
             return -1
 
         for j in band:
-            k_r = self._pair(("lane", fp, sign, ctx.all_fps[j]), lambda: lane_blocked(ctx.all_fps[j]))
+            k_r = self._pair(("lane", ctx.ids[i], sign, ctx.ids[j]), lambda: lane_blocked(ctx.all_fps[j]))
             if k_r >= 0:
                 where = "gap" if k_r == 0 else "shaft's way in"
                 rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
@@ -245,7 +256,7 @@ class ActionModel:
             return _first_false(clear)
 
         for j in band:
-            bad = self._pair(("sweep", fp, sign, ctx.all_fps[j]), lambda: first_step_hitting(ctx.all_fps[j]))
+            bad = self._pair(("sweep", ctx.ids[i], sign, ctx.ids[j]), lambda: first_step_hitting(ctx.all_fps[j]))
             if bad < first_bad:
                 first_bad, stopper = bad, ctx.all_names[j]
         end_ok = None  # push_hidden_extent "end": per step 1..first_bad, whether the object may stop there
@@ -363,7 +374,7 @@ class ActionModel:
         for j in (ctx.others(i) if t.rules.tube_approach_check else ()):
             if ctx.all_heights[j] <= cz - tube_r:
                 continue  # the tube passes over it
-            if not self._pair(("approach", fp, tuple(obj.size), ctx.all_fps[j]), lambda: bool(
+            if not self._pair(("approach", ctx.ids[i], tuple(obj.size), ctx.ids[j]), lambda: bool(
                     clear_of("box", corridor, yaw, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0])):
                 rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
                 return
@@ -376,7 +387,7 @@ class ActionModel:
         for j in ctx.others_in_band(i, 0, fp.x - ex - t.physics.clearance - 1e-6, fp.x + ex + t.physics.clearance + 1e-6):
             if j not in blocking:
                 continue
-            if not self._pair(("out", fp, ctx.all_fps[j]), lambda: bool(clear_of(
+            if not self._pair(("out", ctx.ids[i], ctx.ids[j]), lambda: bool(clear_of(
                     fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all())):
                 rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
                 return
@@ -408,7 +419,7 @@ class ActionModel:
         grid_c = np.column_stack([np.repeat(xs, n_in), np.tile(steps, len(xs))])
         clear = np.ones(len(grid_c), dtype=bool)
         for j in blocking:  # (the lattice and the way in depend on fp alone: cached per pair of footprints)
-            clear &= self._pair(("in", fp, ctx.all_fps[j]), lambda: clear_of(
+            clear &= self._pair(("in", ctx.ids[i], ctx.ids[j]), lambda: clear_of(
                 fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance))
         clear = clear.reshape(len(xs), n_in)
         first_bad = np.where(clear.all(axis=1), n_in, np.argmin(clear, axis=1))
@@ -429,6 +440,7 @@ class ActionModel:
                             t.physics.clearance).reshape(len(xs), len(b_all))
         ny = self.grid.ny
         n_found = 0
+        y_placed = fp.y + b_all * res
         for a_index, (a, x_new, y_ex) in enumerate(zip(a_all, xs, y_reach_exact)):
             shifted_cols = cols + a * cells_per
             inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
@@ -440,10 +452,12 @@ class ActionModel:
                 y_reach = min(y_ex, fp.y + adv * t.grid.cell if adv < NOT_FOUND // 2 else np.inf)
             else:
                 y_reach = y_ex
-            bs = [b for b in b_all if not (a == 0 and b == 0) and fp.y + b * res <= y_reach + 1e-9]
-            if not bs:
+            keep = y_placed <= y_reach + 1e-9
+            if a == 0:
+                keep &= b_all != 0  # not where it stands
+            bs = b_all[keep]
+            if not len(bs):
                 continue
-            bs = np.array(bs)
             if t.rules.suction_hidden_rule == "placement":
                 c_in = shifted_cols[inside]
                 r0 = np.clip(first_rows[inside][None, :] + bs[:, None] * cells_per, 0, ny)
@@ -453,7 +467,7 @@ class ActionModel:
             if passed_over and len(bs):
                 ok = np.ones(len(bs), dtype=bool)
                 for j in passed_over:
-                    ok &= self._pair(("placed", fp, ctx.all_fps[j]), lambda: placements_clear_of(
+                    ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: placements_clear_of(
                         ctx.all_fps[j]))[a_index, bs - b_all[0]]
                 bs = bs[ok]
             for b in bs:
@@ -538,7 +552,7 @@ class ActionModel:
             return None
         cx, cy, hx, hy, height = corridor
         for j in ctx.others(i):
-            if ctx.all_heights[j] > height and not self._pair(("tube", ctx.fps[i], sign, ctx.all_fps[j]), lambda: bool(
+            if ctx.all_heights[j] > height and not self._pair(("tube", ctx.ids[i], sign, ctx.ids[j]), lambda: bool(
                     clear_of("box", np.array([[cx, cy]]), 0.0, (hx, hy), ctx.all_fps[j], 0.0)[0])):
                 return ctx.all_names[j]
         return None
@@ -654,6 +668,7 @@ class _StateContext:
         self.all_objs = objects + fixed
         self.fps = [Footprint.of(o) for o in objects]
         self.all_fps = self.fps + [Footprint.of(o) for o in fixed]
+        self.ids = model.footprint_ids(self.all_fps)  # keys of ActionModel._pair
         self.all_names = [o.name for o in self.all_objs]
         self.all_heights = [o.size[2] for o in self.all_objs]
         grid = model.grid
