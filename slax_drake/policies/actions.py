@@ -678,11 +678,11 @@ class _StateContext:
         self.shadows = shadows
         self.aabbs = np.array([[fp.x - e[0], fp.x + e[0], fp.y - e[1], fp.y + e[1]]
                                for fp, e in ((fp, fp.extents()) for fp in self.all_fps)]).reshape(-1, 4)
-        self.count = np.sum(shadows, axis=0) if shadows else np.zeros((grid.ny, grid.nx), dtype=int)
+        self._shape = (grid.ny, grid.nx)
         self._radius_cells = int(math.floor(model.tool.rules.min_hidden_width / 2 / grid.cell + 1e-9))
         # cells under known objects hold no unseen object (only with min_hidden_width > 0, the strict
         # variant keeps the overhead shadows whole)
-        self.occupied = np.any(self.masks, axis=0) if self.masks and self._radius_cells > 0 else None
+        self.occupied = _union(self.masks, self._shape) if self.masks and self._radius_cells > 0 else None
         self._hidden_all = None
         self._n = len(self.all_objs)
         self._hidden_others: dict = {}
@@ -691,7 +691,7 @@ class _StateContext:
     def hidden_all(self) -> np.ndarray:
         """The hidden space as all objects make it (computed on first use: only suctions read it)."""
         if self._hidden_all is None:
-            self._hidden_all = self._open(erode(self.count > 0))
+            self._hidden_all = self._open(erode(_union(self.shadows, self._shape)))
         return self._hidden_all
 
     def others(self, i):
@@ -715,8 +715,17 @@ class _StateContext:
         """The hidden space as the other objects make it (cached per object: both push directions read it)."""
         hit = self._hidden_others.get(i)
         if hit is None:
-            hit = self._hidden_others[i] = self._open(erode((self.count - self.shadows[i]) > 0))
+            others = [s for j, s in enumerate(self.shadows) if j != i]
+            hit = self._hidden_others[i] = self._open(erode(_union(others, self._shape)))
         return hit
+
+
+def _union(masks, shape) -> np.ndarray:
+    """The cells (bool ``shape``) in any of ``masks``."""
+    out = np.zeros(shape, dtype=bool)
+    for m in masks:
+        out |= m
+    return out
 
 
 def _first_false(ok: np.ndarray) -> int:
