@@ -63,6 +63,7 @@ FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
 CONTACT_INSET = 0.01  # the blade's tip this far past the point where it meets the object (m)
 BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
 PAIR_CACHE_SIZE = 20_000  # entries of an ActionModel's cache of pairwise collision tests (ActionModel._pair)
+GEOMETRY_CACHE_SIZE = 2_000  # objects in an ActionModel's identity cache (ActionModel.object_geometry)
 REACH_MARGIN = 0.015  # m: the reach map refuses a tool position only when every grid node this near it is unreached
 # Where the planner puts the blade for a push (slax_drake.planning.waypoints reads these): the tube's surface
 # TUBE_STANDOFF beside the pushed object's extreme x (the blade's plane a tube radius farther), the blade's lower
@@ -162,7 +163,8 @@ class ActionModel:
         self._raster_cache: dict = {}
         self._push_rects_cache: dict = {}  # (footprint, sign) -> (tool rects, swept rects); the tool never changes
         self._pair_cache: dict = {}  # collision tests of one moved footprint against one other (see _pair)
-        self._fp_ids: dict = {}  # footprint -> int (footprint_id)
+        self._fp_ids: dict = {}  # footprint -> int (footprint_ids)
+        self._geometry: dict = {}  # id(obj) -> (obj, ObjectGeometry) (object_geometry)
         self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
     # ----------------------------------------------------------------------------------------------------
@@ -184,15 +186,31 @@ class ActionModel:
         return Candidates(feasible, rejected)
 
     # ----------------------------------------------------------------------------------------------------
-    def footprint_ids(self, fps) -> list[int]:
-        """Small ints naming ``fps`` (equal footprints, equal ids) for the keys of :meth:`_pair`: hashing ints is
-        cheaper than hashing footprints at every test. One call names all footprints of a state: when the table
-        is full it is emptied first, with the pairs keyed by its ids, so no id of the returned list is stale."""
-        if len(self._fp_ids) + len(fps) > PAIR_CACHE_SIZE:
+    def object_geometry(self, objects, rasters: bool = True) -> list["ObjectGeometry"]:
+        """Each object's :class:`ObjectGeometry`, cached by identity (a search passes the same unmoved object
+        instances in thousands of states; the cache holds them, so their ids are not reused while it lives). The
+        footprint ids are small ints naming footprints (equal footprints, equal ids) for the keys of
+        :meth:`_pair`: hashing ints is cheaper than hashing footprints at every test. One call names all objects
+        of a state: when the id table is full it is emptied first, with everything keyed by its ids, so no id of
+        the returned list is stale. ``rasters``: with the footprint and shadow masks (:meth:`rasters`)."""
+        if len(self._fp_ids) + len(objects) > PAIR_CACHE_SIZE:
             self._fp_ids.clear()
             self._pair_cache.clear()
-        ids = self._fp_ids
-        return [ids.setdefault(fp, len(ids)) for fp in fps]
+            self._geometry.clear()
+        elif len(self._geometry) + len(objects) > GEOMETRY_CACHE_SIZE:
+            self._geometry.clear()
+        out = []
+        for obj in objects:
+            hit = self._geometry.get(id(obj))
+            if hit is None or hit[0] is not obj or (rasters and hit[1].mask is None):
+                fp = Footprint.of(obj)
+                ex, ey = fp.extents()
+                mask, shadow = self.rasters(obj, fp) if rasters else (None, None)
+                hit = self._geometry[id(obj)] = (obj, ObjectGeometry(
+                    fp, self._fp_ids.setdefault(fp, len(self._fp_ids)), mask, shadow,
+                    (fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey)))
+            out.append(hit[1])
+        return out
 
     def _pair(self, key: tuple, compute):
         """``compute()``, cached under ``key``: a collision test of one object's motion against one other
@@ -660,24 +678,36 @@ def _front_face(obj: SceneObject):
     return min(faces, key=lambda f: f[0][1])
 
 
+@dataclasses.dataclass(frozen=True)
+class ObjectGeometry:
+    """What the action model derives from one object's pose (:meth:`ActionModel.object_geometry`): its
+    footprint, the footprint's id (keys of ``ActionModel._pair``), footprint and shadow masks on the floor
+    raster (None when not asked for) and the footprint's axis-aligned box (x_lo, x_hi, y_lo, y_hi; S, m)."""
+
+    fp: Footprint
+    id: int
+    mask: np.ndarray | None
+    shadow: np.ndarray | None
+    aabb: tuple[float, float, float, float]
+
+
 class _StateContext:
     """Per-state precomputation: footprints, masks, shadows."""
 
     def __init__(self, model: ActionModel, objects, fixed):
         self.objects = objects
         self.all_objs = objects + fixed
-        self.fps = [Footprint.of(o) for o in objects]
-        self.all_fps = self.fps + [Footprint.of(o) for o in fixed]
-        self.ids = model.footprint_ids(self.all_fps)  # keys of ActionModel._pair
+        geometry = model.object_geometry(objects) + model.object_geometry(fixed, rasters=False)
+        self.fps = [g.fp for g in geometry[:len(objects)]]
+        self.all_fps = [g.fp for g in geometry]
+        self.ids = [g.id for g in geometry]  # keys of ActionModel._pair
         self.all_names = [o.name for o in self.all_objs]
         self.all_heights = [o.size[2] for o in self.all_objs]
         grid = model.grid
-        rasters = [model.rasters(o, fp) for o, fp in zip(objects, self.fps)]
-        self.masks = [r[0] for r in rasters]
-        shadows = [r[1] for r in rasters]
+        self.masks = [g.mask for g in geometry[:len(objects)]]
+        shadows = [g.shadow for g in geometry[:len(objects)]]
         self.shadows = shadows
-        self.aabbs = np.array([[fp.x - e[0], fp.x + e[0], fp.y - e[1], fp.y + e[1]]
-                               for fp, e in ((fp, fp.extents()) for fp in self.all_fps)]).reshape(-1, 4)
+        self.aabbs = np.array([g.aabb for g in geometry]).reshape(-1, 4)
         self._shape = (grid.ny, grid.nx)
         self._radius_cells = int(math.floor(model.tool.rules.min_hidden_width / 2 / grid.cell + 1e-9))
         # cells under known objects hold no unseen object (only with min_hidden_width > 0, the strict
