@@ -285,7 +285,8 @@ class ActionModel:
                 first_bad, stopper = last_ok, "hidden space"
                 end_ok = end_ok[:first_bad]
         elif t.rules.push_hidden_check:
-            hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign)
+            r0, r1, hidden = ctx.hidden_others_near(i)
+            hidden_cells = free_push_cells(ctx.masks[i][r0:r1], hidden, sign)
             if hidden_cells < first_bad:
                 first_bad, stopper = hidden_cells, "hidden space"
         d_max = first_bad * t.grid.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
@@ -716,6 +717,7 @@ class _StateContext:
         self._hidden_all = None
         self._n = len(self.all_objs)
         self._hidden_others: dict = {}
+        self._hidden_others_near: dict = {}
 
     @property
     def hidden_all(self) -> np.ndarray:
@@ -740,6 +742,28 @@ class _StateContext:
         if self._radius_cells <= 0:
             return mask
         return open_with_disc(mask & ~self.occupied if self.occupied is not None else mask, self._radius_cells)
+
+    def hidden_others_near(self, i) -> tuple[int, int, np.ndarray]:
+        """(r0, r1, rows r0 .. r1 - 1 of :meth:`hidden_others`), the rows of object i's footprint mask with a
+        margin, computed on those rows alone (the pushes read only the rows the object covers). Exact: the
+        one-cell erosion and the opening by a disc of r cells see the window's edge only 2 r + 1 rows into it,
+        and the margin is 2 r + 2 rows (none at the raster's own edges, which behave as before)."""
+        hit = self._hidden_others_near.get(i)
+        if hit is None:
+            ny = self._shape[0]
+            rows = np.flatnonzero(self.masks[i].any(axis=1))
+            if len(rows) == 0:
+                r0, r1 = 0, ny
+            else:
+                pad = 2 * self._radius_cells + 2
+                r0, r1 = max(0, int(rows[0]) - pad), min(ny, int(rows[-1]) + 1 + pad)
+            others = [s[r0:r1] for j, s in enumerate(self.shadows) if j != i]
+            mask = erode(_union(others, (r1 - r0, self._shape[1])))
+            if self._radius_cells > 0:
+                free = mask & ~self.occupied[r0:r1] if self.occupied is not None else mask
+                mask = open_with_disc(free, self._radius_cells)
+            hit = self._hidden_others_near[i] = (r0, r1, mask)
+        return hit
 
     def hidden_others(self, i) -> np.ndarray:
         """The hidden space as the other objects make it (cached per object: both push directions read it)."""
