@@ -460,6 +460,12 @@ class ActionModel:
         ny = self.grid.ny
         n_found = 0
         y_placed = fp.y + b_all * res
+        placed_ok = None  # (len(a_all), len(b_all)): the placement keeps clear of every object it passes over
+        if passed_over:
+            placed_ok = np.ones((len(xs), len(b_all)), dtype=bool)
+            for j in passed_over:
+                placed_ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: placements_clear_of(
+                    ctx.all_fps[j]))
         for a_index, (a, x_new, y_ex) in enumerate(zip(a_all, xs, y_reach_exact)):
             shifted_cols = cols + a * cells_per
             inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
@@ -483,12 +489,8 @@ class ActionModel:
                 r1 = np.clip(last_rows[inside][None, :] + bs[:, None] * cells_per + 1, 0, ny)
                 hidden_count = (prefix[r1, c_in[None, :]] - prefix[r0, c_in[None, :]]).sum(axis=1)
                 bs = bs[hidden_count == 0]
-            if passed_over and len(bs):
-                ok = np.ones(len(bs), dtype=bool)
-                for j in passed_over:
-                    ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: placements_clear_of(
-                        ctx.all_fps[j]))[a_index, bs - b_all[0]]
-                bs = bs[ok]
+            if placed_ok is not None and len(bs):
+                bs = bs[placed_ok[a_index, bs - b_all[0]]]
             for b in bs:
                 y_new = fp.y + b * res
                 feasible.append(Suction(obj.name, q, round(float(a * res), 6), round(float(y_new), 6),
