@@ -62,6 +62,8 @@ GRAVITY = 9.81  # m/s^2
 FRONT_MARGIN = 0.05  # the lanes start this far outside the shelf's opening (m)
 CONTACT_INSET = 0.01  # the blade's tip this far past the point where it meets the object (m)
 BLADE_CONTACT_CLEARANCE = 1e-4  # the blade may pass this close to an object without touching it (m)
+PAIR_CACHE_SIZE = 20_000  # entries of an ActionModel's cache of pairwise collision tests (ActionModel._pair)
+GEOMETRY_CACHE_SIZE = 2_000  # objects in an ActionModel's identity cache (ActionModel.object_geometry)
 REACH_MARGIN = 0.015  # m: the reach map refuses a tool position only when every grid node this near it is unreached
 # Where the planner puts the blade for a push (slax_drake.planning.waypoints reads these): the tube's surface
 # TUBE_STANDOFF beside the pushed object's extreme x (the blade's plane a tube radius farther), the blade's lower
@@ -159,6 +161,10 @@ class ActionModel:
         self.grid = FloorGrid(shelf, tool.grid.cell)
         self.y_front = -shelf.depth / 2 - FRONT_MARGIN
         self._raster_cache: dict = {}
+        self._push_rects_cache: dict = {}  # (footprint, sign) -> (tool rects, swept rects); the tool never changes
+        self._pair_cache: dict = {}  # collision tests of one moved footprint against one other (see _pair)
+        self._fp_ids: dict = {}  # footprint -> int (footprint_ids)
+        self._geometry: dict = {}  # id(obj) -> (obj, ObjectGeometry) (object_geometry)
         self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
     # ----------------------------------------------------------------------------------------------------
@@ -180,6 +186,44 @@ class ActionModel:
         return Candidates(feasible, rejected)
 
     # ----------------------------------------------------------------------------------------------------
+    def object_geometry(self, objects, rasters: bool = True) -> list["ObjectGeometry"]:
+        """Each object's :class:`ObjectGeometry`, cached by identity (a search passes the same unmoved object
+        instances in thousands of states; the cache holds them, so their ids are not reused while it lives). The
+        footprint ids are small ints naming footprints (equal footprints, equal ids) for the keys of
+        :meth:`_pair`: hashing ints is cheaper than hashing footprints at every test. One call names all objects
+        of a state: when the id table is full it is emptied first, with everything keyed by its ids, so no id of
+        the returned list is stale. ``rasters``: with the footprint and shadow masks (:meth:`rasters`)."""
+        if len(self._fp_ids) + len(objects) > PAIR_CACHE_SIZE:
+            self._fp_ids.clear()
+            self._pair_cache.clear()
+            self._geometry.clear()
+        elif len(self._geometry) + len(objects) > GEOMETRY_CACHE_SIZE:
+            self._geometry.clear()
+        out = []
+        for obj in objects:
+            hit = self._geometry.get(id(obj))
+            if hit is None or hit[0] is not obj or (rasters and hit[1].mask is None):
+                fp = Footprint.of(obj)
+                ex, ey = fp.extents()
+                mask, shadow = self.rasters(obj, fp) if rasters else (None, None)
+                hit = self._geometry[id(obj)] = (obj, ObjectGeometry(
+                    fp, self._fp_ids.setdefault(fp, len(self._fp_ids)), mask, shadow,
+                    (fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey)))
+            out.append(hit[1])
+        return out
+
+    def _pair(self, key: tuple, compute):
+        """``compute()``, cached under ``key``: a collision test of one object's motion against one other
+        footprint. Such a test depends only on the two footprints, the direction and the tool (which never
+        changes), and a search meets the same pairs in thousands of states, so the cache returns exactly what
+        ``compute()`` would. The cache is emptied when it holds ``PAIR_CACHE_SIZE`` entries."""
+        hit = self._pair_cache.get(key)
+        if hit is None:
+            if len(self._pair_cache) >= PAIR_CACHE_SIZE:
+                self._pair_cache.clear()
+            hit = self._pair_cache[key] = compute()
+        return hit
+
     def _pushes(self, ctx, i, sign, feasible, rejected):
         t, shelf = self.tool, self.shelf
         obj, fp = ctx.objects[i], ctx.fps[i]
@@ -196,12 +240,19 @@ class ActionModel:
         y_lo = min([y - ey] + [r[1] - r[3] for r in rects]) - t.physics.clearance - 1e-6
         y_hi = max([y + ey] + [r[1] + r[3] for r in rects]) + t.physics.clearance + 1e-6
         band = ctx.others_in_band(i, 1, y_lo, y_hi)
-        for j in band:
+        def lane_blocked(other: Footprint):
+            """The index of the first of ``rects`` that meets ``other`` (None when none does)."""
             for k_r, (rx, ry, hx, hy) in enumerate(rects):
-                if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
-                    where = "gap" if k_r == 0 else "shaft's way in"
-                    rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
-                    return
+                if not clear_of("box", np.array([[rx, ry]]), 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)[0]:
+                    return k_r
+            return -1
+
+        for j in band:
+            k_r = self._pair(("lane", ctx.ids[i], sign, ctx.ids[j]), lambda: lane_blocked(ctx.all_fps[j]))
+            if k_r >= 0:
+                where = "gap" if k_r == 0 else "shaft's way in"
+                rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
+                return
         if t.rules.push_tube_check:
             blocker = self.push_tube_blocker(ctx, i, sign)
             if blocker is not None:
@@ -212,14 +263,18 @@ class ActionModel:
         xs = x + sign * k * t.grid.cell
         ok = np.abs(xs) + ex <= shelf.width / 2 - t.physics.clearance + 1e-12
         first_bad, stopper = _first_false(ok), "the wall"
-        centers = np.column_stack([xs, np.full(n, y)])
-        for j in band:
-            other = ctx.all_fps[j]
+
+        def first_step_hitting(other: Footprint) -> int:
+            """The first step (index into k) at which the pushed footprint or the dragged tool meets ``other``."""
+            centers = np.column_stack([xs, np.full(n, y)])
             clear = clear_of(fp.shape, centers, fp.yaw, (fp.half_x, fp.half_y), other, t.physics.clearance)
             for rx, ry, hx, hy in rects:
                 tool = np.column_stack([rx + sign * k * t.grid.cell, np.full(n, ry)])
                 clear &= clear_of("box", tool, 0.0, (hx, hy), other, BLADE_CONTACT_CLEARANCE)
-            bad = _first_false(clear)
+            return _first_false(clear)
+
+        for j in band:
+            bad = self._pair(("sweep", ctx.ids[i], sign, ctx.ids[j]), lambda: first_step_hitting(ctx.all_fps[j]))
             if bad < first_bad:
                 first_bad, stopper = bad, ctx.all_names[j]
         end_ok = None  # push_hidden_extent "end": per step 1..first_bad, whether the object may stop there
@@ -230,7 +285,8 @@ class ActionModel:
                 first_bad, stopper = last_ok, "hidden space"
                 end_ok = end_ok[:first_bad]
         elif t.rules.push_hidden_check:
-            hidden_cells = free_push_cells(ctx.masks[i], ctx.hidden_others(i), sign)
+            r0, r1, hidden = ctx.hidden_others_near(i)
+            hidden_cells = free_push_cells(ctx.masks[i][r0:r1], hidden, sign)
             if hidden_cells < first_bad:
                 first_bad, stopper = hidden_cells, "hidden space"
         d_max = first_bad * t.grid.cell  # first_bad is the index of the first bad step: steps 0..first_bad-1 ok
@@ -337,7 +393,8 @@ class ActionModel:
         for j in (ctx.others(i) if t.rules.tube_approach_check else ()):
             if ctx.all_heights[j] <= cz - tube_r:
                 continue  # the tube passes over it
-            if not clear_of("box", corridor, yaw, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0]:
+            if not self._pair(("approach", ctx.ids[i], tuple(obj.size), ctx.ids[j]), lambda: bool(
+                    clear_of("box", corridor, yaw, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0])):
                 rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
                 return
         ex, ey = fp.extents()
@@ -349,7 +406,8 @@ class ActionModel:
         for j in ctx.others_in_band(i, 0, fp.x - ex - t.physics.clearance - 1e-6, fp.x + ex + t.physics.clearance + 1e-6):
             if j not in blocking:
                 continue
-            if not clear_of(fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all():
+            if not self._pair(("out", ctx.ids[i], ctx.ids[j]), lambda: bool(clear_of(
+                    fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all())):
                 rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
                 return
         cols, first_rows, last_rows = column_extents(ctx.masks[i])
@@ -379,8 +437,9 @@ class ActionModel:
         xs = fp.x + a_all * res
         grid_c = np.column_stack([np.repeat(xs, n_in), np.tile(steps, len(xs))])
         clear = np.ones(len(grid_c), dtype=bool)
-        for j in blocking:
-            clear &= clear_of(fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance)
+        for j in blocking:  # (the lattice and the way in depend on fp alone: cached per pair of footprints)
+            clear &= self._pair(("in", ctx.ids[i], ctx.ids[j]), lambda: clear_of(
+                fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance))
         clear = clear.reshape(len(xs), n_in)
         first_bad = np.where(clear.all(axis=1), n_in, np.argmin(clear, axis=1))
         y_reach_exact = np.where(
@@ -392,9 +451,22 @@ class ActionModel:
         first_h = first_hidden_row(hidden_in)
         prefix = np.vstack([np.zeros((1, self.grid.nx), dtype=np.int32), np.cumsum(hidden_in, axis=0, dtype=np.int32)])
         passed_over = [j for j in ctx.others(i) if j not in blocking]
+
+        def placements_clear_of(other: Footprint) -> np.ndarray:
+            """(len(a_all), len(b_all)): whether the object placed at each lattice point is clear of ``other``."""
+            placed = np.column_stack([np.repeat(xs, len(b_all)), np.tile(fp.y + b_all * res, len(xs))])
+            return clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), other,
+                            t.physics.clearance).reshape(len(xs), len(b_all))
         ny = self.grid.ny
         n_found = 0
-        for a, x_new, y_ex in zip(a_all, xs, y_reach_exact):
+        y_placed = fp.y + b_all * res
+        placed_ok = None  # (len(a_all), len(b_all)): the placement keeps clear of every object it passes over
+        if passed_over:
+            placed_ok = np.ones((len(xs), len(b_all)), dtype=bool)
+            for j in passed_over:
+                placed_ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: placements_clear_of(
+                    ctx.all_fps[j]))
+        for a_index, (a, x_new, y_ex) in enumerate(zip(a_all, xs, y_reach_exact)):
             shifted_cols = cols + a * cells_per
             inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
             if not inside.any():
@@ -405,22 +477,20 @@ class ActionModel:
                 y_reach = min(y_ex, fp.y + adv * t.grid.cell if adv < NOT_FOUND // 2 else np.inf)
             else:
                 y_reach = y_ex
-            bs = [b for b in b_all if not (a == 0 and b == 0) and fp.y + b * res <= y_reach + 1e-9]
-            if not bs:
+            keep = y_placed <= y_reach + 1e-9
+            if a == 0:
+                keep &= b_all != 0  # not where it stands
+            bs = b_all[keep]
+            if not len(bs):
                 continue
-            bs = np.array(bs)
             if t.rules.suction_hidden_rule == "placement":
                 c_in = shifted_cols[inside]
                 r0 = np.clip(first_rows[inside][None, :] + bs[:, None] * cells_per, 0, ny)
                 r1 = np.clip(last_rows[inside][None, :] + bs[:, None] * cells_per + 1, 0, ny)
                 hidden_count = (prefix[r1, c_in[None, :]] - prefix[r0, c_in[None, :]]).sum(axis=1)
                 bs = bs[hidden_count == 0]
-            if passed_over and len(bs):
-                placed = np.column_stack([np.full(len(bs), x_new), fp.y + bs * res])
-                ok = np.ones(len(bs), dtype=bool)
-                for j in passed_over:
-                    ok &= clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance)
-                bs = bs[ok]
+            if placed_ok is not None and len(bs):
+                bs = bs[placed_ok[a_index, bs - b_all[0]]]
             for b in bs:
                 y_new = fp.y + b * res
                 feasible.append(Suction(obj.name, q, round(float(a * res), 6), round(float(y_new), 6),
@@ -429,7 +499,25 @@ class ActionModel:
         if n_found == 0:
             rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
 
+    def _push_rects(self, fp: Footprint, sign: int):
+        """(:meth:`push_tool_rects`, :meth:`push_swept_rects`) of ``fp``, cached by footprint and direction: they
+        depend on nothing else (the tool is fixed), and a search asks for them thousands of times."""
+        key = (fp, sign)
+        hit = self._push_rects_cache.get(key)
+        if hit is None:
+            tool_rects = tuple(self._tool_rects(fp, sign))
+            hit = (tool_rects, tuple(self._swept_rects(tool_rects, sign)))
+            if len(self._push_rects_cache) >= 20_000:
+                self._push_rects_cache.clear()
+            self._push_rects_cache[key] = hit
+        return hit
+
     def push_tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
+        """The tool's outline when inserted to push ``fp`` toward ``sign`` x: (centre x, centre y, half x,
+        half y) of the blade in the gap beside the object and of the shaft's way in (see :meth:`_tool_rects`)."""
+        return list(self._push_rects(fp, sign)[0])
+
+    def _tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
         """The tool's outline when inserted to push ``fp`` toward ``sign`` x: (centre x, centre y, half x,
         half y) of the blade in the gap beside the object (``blade_width`` along x, from the object's front
         extreme to the blade's depth) and of the shaft's way in (``tube_diameter`` wide, from outside the
@@ -485,8 +573,8 @@ class ActionModel:
             return None
         cx, cy, hx, hy, height = corridor
         for j in ctx.others(i):
-            if ctx.all_heights[j] > height and not clear_of("box", np.array([[cx, cy]]), 0.0, (hx, hy),
-                                                           ctx.all_fps[j], 0.0)[0]:
+            if ctx.all_heights[j] > height and not self._pair(("tube", ctx.ids[i], sign, ctx.ids[j]), lambda: bool(
+                    clear_of("box", np.array([[cx, cy]]), 0.0, (hx, hy), ctx.all_fps[j], 0.0)[0])):
                 return ctx.all_names[j]
         return None
 
@@ -494,8 +582,11 @@ class ActionModel:
         """The parts of :meth:`push_tool_rects` the model requires to be free (and drags along the push):
         the blade in the gap, with the tube's end ``tube_past_blade`` beyond its tip, plus the shaft's way in
         when ``shaft_lane_check`` is on."""
+        return list(self._push_rects(fp, sign)[1])
+
+    def _swept_rects(self, tool_rects, sign: int) -> list[tuple[float, float, float, float]]:
         t = self.tool
-        blade, shaft = self.push_tool_rects(fp, sign)
+        blade, shaft = tool_rects
         edge = blade[0] + sign * t.geometry.blade_width / 2
         y_face, y_end = blade[1] - blade[3], blade[1] + blade[3] + t.rules.tube_past_blade
         gap = (edge - sign * t.rules.blade_gap / 2, (y_face + y_end) / 2, t.rules.blade_gap / 2, (y_end - y_face) / 2)
@@ -590,31 +681,52 @@ def _front_face(obj: SceneObject):
     return min(faces, key=lambda f: f[0][1])
 
 
+@dataclasses.dataclass(frozen=True)
+class ObjectGeometry:
+    """What the action model derives from one object's pose (:meth:`ActionModel.object_geometry`): its
+    footprint, the footprint's id (keys of ``ActionModel._pair``), footprint and shadow masks on the floor
+    raster (None when not asked for) and the footprint's axis-aligned box (x_lo, x_hi, y_lo, y_hi; S, m)."""
+
+    fp: Footprint
+    id: int
+    mask: np.ndarray | None
+    shadow: np.ndarray | None
+    aabb: tuple[float, float, float, float]
+
+
 class _StateContext:
     """Per-state precomputation: footprints, masks, shadows."""
 
     def __init__(self, model: ActionModel, objects, fixed):
         self.objects = objects
         self.all_objs = objects + fixed
-        self.fps = [Footprint.of(o) for o in objects]
-        self.all_fps = self.fps + [Footprint.of(o) for o in fixed]
+        geometry = model.object_geometry(objects) + model.object_geometry(fixed, rasters=False)
+        self.fps = [g.fp for g in geometry[:len(objects)]]
+        self.all_fps = [g.fp for g in geometry]
+        self.ids = [g.id for g in geometry]  # keys of ActionModel._pair
         self.all_names = [o.name for o in self.all_objs]
         self.all_heights = [o.size[2] for o in self.all_objs]
         grid = model.grid
-        rasters = [model.rasters(o, fp) for o, fp in zip(objects, self.fps)]
-        self.masks = [r[0] for r in rasters]
-        shadows = [r[1] for r in rasters]
+        self.masks = [g.mask for g in geometry[:len(objects)]]
+        shadows = [g.shadow for g in geometry[:len(objects)]]
         self.shadows = shadows
-        self.aabbs = np.array([[fp.x - e[0], fp.x + e[0], fp.y - e[1], fp.y + e[1]]
-                               for fp, e in ((fp, fp.extents()) for fp in self.all_fps)]).reshape(-1, 4)
-        self.count = np.sum(shadows, axis=0) if shadows else np.zeros((grid.ny, grid.nx), dtype=int)
+        self.aabbs = np.array([g.aabb for g in geometry]).reshape(-1, 4)
+        self._shape = (grid.ny, grid.nx)
         self._radius_cells = int(math.floor(model.tool.rules.min_hidden_width / 2 / grid.cell + 1e-9))
         # cells under known objects hold no unseen object (only with min_hidden_width > 0, the strict
         # variant keeps the overhead shadows whole)
-        self.occupied = np.any(self.masks, axis=0) if self.masks and self._radius_cells > 0 else None
-        self.hidden_all = self._open(erode(self.count > 0))
+        self.occupied = _union(self.masks, self._shape) if self.masks and self._radius_cells > 0 else None
+        self._hidden_all = None
         self._n = len(self.all_objs)
         self._hidden_others: dict = {}
+        self._hidden_others_near: dict = {}
+
+    @property
+    def hidden_all(self) -> np.ndarray:
+        """The hidden space as all objects make it (computed on first use: only suctions read it)."""
+        if self._hidden_all is None:
+            self._hidden_all = self._open(erode(_union(self.shadows, self._shape)))
+        return self._hidden_all
 
     def others(self, i):
         return [j for j in range(self._n) if j != i]
@@ -633,12 +745,43 @@ class _StateContext:
             return mask
         return open_with_disc(mask & ~self.occupied if self.occupied is not None else mask, self._radius_cells)
 
+    def hidden_others_near(self, i) -> tuple[int, int, np.ndarray]:
+        """(r0, r1, rows r0 .. r1 - 1 of :meth:`hidden_others`), the rows of object i's footprint mask with a
+        margin, computed on those rows alone (the pushes read only the rows the object covers). Exact: the
+        one-cell erosion and the opening by a disc of r cells see the window's edge only 2 r + 1 rows into it,
+        and the margin is 2 r + 2 rows (none at the raster's own edges, which behave as before)."""
+        hit = self._hidden_others_near.get(i)
+        if hit is None:
+            ny = self._shape[0]
+            rows = np.flatnonzero(self.masks[i].any(axis=1))
+            if len(rows) == 0:
+                r0, r1 = 0, ny
+            else:
+                pad = 2 * self._radius_cells + 2
+                r0, r1 = max(0, int(rows[0]) - pad), min(ny, int(rows[-1]) + 1 + pad)
+            others = [s[r0:r1] for j, s in enumerate(self.shadows) if j != i]
+            mask = erode(_union(others, (r1 - r0, self._shape[1])))
+            if self._radius_cells > 0:
+                free = mask & ~self.occupied[r0:r1] if self.occupied is not None else mask
+                mask = open_with_disc(free, self._radius_cells)
+            hit = self._hidden_others_near[i] = (r0, r1, mask)
+        return hit
+
     def hidden_others(self, i) -> np.ndarray:
         """The hidden space as the other objects make it (cached per object: both push directions read it)."""
         hit = self._hidden_others.get(i)
         if hit is None:
-            hit = self._hidden_others[i] = self._open(erode((self.count - self.shadows[i]) > 0))
+            others = [s for j, s in enumerate(self.shadows) if j != i]
+            hit = self._hidden_others[i] = self._open(erode(_union(others, self._shape)))
         return hit
+
+
+def _union(masks, shape) -> np.ndarray:
+    """The cells (bool ``shape``) in any of ``masks``."""
+    out = np.zeros(shape, dtype=bool)
+    for m in masks:
+        out |= m
+    return out
 
 
 def _first_false(ok: np.ndarray) -> int:

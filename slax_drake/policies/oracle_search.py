@@ -135,6 +135,24 @@ def maximal_pushes_only(actions: list) -> list:
     return [a for a in actions if not isinstance(a, Push) or id(a) in keep]
 
 
+class StateKeys:
+    """:func:`slax_drake.scene.model.state_key` of objects and states, each object's key computed once: a search
+    passes the same (unmoved) object instances in thousands of states, so the keys are cached by identity (the
+    cache holds the objects, so their ids are not reused while it lives). Equal to ``state_key`` always."""
+
+    def __init__(self):
+        self._by_identity: dict = {}
+
+    def of_object(self, obj) -> tuple:
+        hit = self._by_identity.get(id(obj))
+        if hit is None or hit[0] is not obj:
+            hit = self._by_identity[id(obj)] = (obj, state_key((obj,))[0])
+        return hit[1]
+
+    def of_state(self, objects) -> tuple:
+        return tuple(self.of_object(o) for o in objects)
+
+
 class PushCache:
     """Each object's feasible pushes, cached by everything they depend on: the object's pose and the poses of the
     objects that reach its push band (the strip of y its pushes and their tool lanes span, across the shelf,
@@ -142,10 +160,12 @@ class PushCache:
     its blockers, stoppers or the hidden space in the band, so the pushes are computed on the smaller state
     (exact: the same candidates as on the whole state)."""
 
-    def __init__(self, model: ActionModel, fixed):
+    def __init__(self, model: ActionModel, fixed, keys: StateKeys | None = None):
         self.model, self.fixed = model, tuple(fixed)
         self.margin = commutation_margin(model)
+        self.keys = keys or StateKeys()
         self.cache: dict = {}
+        self._geometry: dict = {}  # id(obj) -> (obj, (footprint box, shadow box), push band), see _boxes_and_band
         self.hits = self.misses = 0
 
     def band(self, fp: Footprint) -> Box:
@@ -156,17 +176,24 @@ class PushCache:
         half_w = self.model.shelf.width / 2
         return -half_w, half_w, y_lo, y_hi
 
-    def pushes(self, objects) -> list:
-        fps = [Footprint.of(o) for o in objects]
-        boxes = []
-        for fp in fps:
+    def _boxes_and_band(self, obj):
+        """(footprint box, shadow box) and push band of ``obj``, cached by identity (they depend on its pose only)."""
+        hit = self._geometry.get(id(obj))
+        if hit is None or hit[0] is not obj:
+            fp = Footprint.of(obj)
             ex, ey = fp.extents()
-            boxes.append(((fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey), shadow_box(self.model, fp)))
+            boxes = ((fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey), shadow_box(self.model, fp))
+            hit = self._geometry[id(obj)] = (obj, boxes, self.band(fp))
+        return hit[1], hit[2]
+
+    def pushes(self, objects) -> list:
+        geometry = [self._boxes_and_band(o) for o in objects]
+        boxes = [g[0] for g in geometry]
         out = []
         for i, obj in enumerate(objects):
-            band = self.band(fps[i])
+            band = geometry[i][1]
             near = [j for j in range(len(objects)) if j == i or any(_overlap(b, band, self.margin) for b in boxes[j])]
-            key = tuple(state_key(objects[j:j + 1])[0] for j in near) + (i,)
+            key = tuple(self.keys.of_object(objects[j]) for j in near) + (i,)
             hit = self.cache.get(key)
             if hit is None:
                 self.misses += 1
@@ -198,13 +225,14 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
     if h0 == 0:
         return SearchResult([], "optimal", 0.0, 0.0, 0, 0.0)
     margin = commutation_margin(model)
-    push_cache = PushCache(model, fixed)
+    keys = StateKeys()
+    push_cache = PushCache(model, fixed, keys)
     expansions = 0
     children_cache: dict = {}
 
     def children(objects):
-        """Feasible (action, after, h, step cost, regions) of a state, cached across phases."""
-        key = state_key(objects)
+        """Feasible (action, after, h, step cost, key of after) of a state, cached across phases."""
+        key = keys.of_state(objects)
         hit = children_cache.get(key)
         if hit is None:
             cands = push_cache.pushes(objects)
@@ -215,14 +243,14 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
             if allowed is not None:
                 cands = list(allowed(cands, objects))
             hit = [(a, apply_action(objects, a), 1.0 if isinstance(a, Push) else psi) for a in cands]
-            hit = [(a, after, h_of(after), c, None) for a, after, c in hit]
+            hit = [(a, after, h_of(after), c, keys.of_state(after)) for a, after, c in hit]
             children_cache[key] = hit
         return hit
 
     regions_cache: dict = {}
 
     def regions(objects, a):
-        key = (state_key(objects), a)
+        key = (keys.of_state(objects), a)
         r = regions_cache.get(key)
         if r is None:
             r = regions_cache[key] = action_regions(model, objects, a)
@@ -251,7 +279,7 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
             expansions += 1
             last_regions = regions(*last) if (commute and last is not None) else None
             last_name = last[1].name if last is not None else None
-            for a, after, h2, c, _ in children(objects):
+            for a, after, h2, c, after_key in children(objects):
                 if h2 > remaining - depth - 1:
                     continue  # cannot be finished within the horizon
                 g2 = g + c
@@ -260,7 +288,7 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
                 if last_regions is not None and a.name != last_name and a.name < last_name and \
                         not interacts(last_regions, regions(objects, a), margin):
                     continue  # the same state is reached with a first, in the canonical order
-                node_key = (state_key(after), state_key((next(o for o in objects if o.name == a.name),)))
+                node_key = (after_key, (next(keys.of_object(o) for o in objects if o.name == a.name),))
                 kept = best.setdefault(node_key, [])
                 if any(g_old <= g2 + 1e-9 and d_old <= depth + 1 for g_old, d_old in kept):
                     continue

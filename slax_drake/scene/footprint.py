@@ -84,14 +84,37 @@ def clear_of(
         qy = np.maximum(np.abs(ly) - rect_half[1], 0.0)
         return np.hypot(qx, qy) >= radius + clearance
     # Rectangle against rectangle: separating axis theorem over the four edge normals.
-    a_axes = _axes(yaw)
-    b_axes = _axes(other.yaw)
     separated = np.zeros(len(centers), dtype=bool)
-    for u in (*a_axes, *b_axes):
-        r_a = half[0] * abs(a_axes[0] @ u) + half[1] * abs(a_axes[1] @ u)
-        r_b = other.half_x * abs(b_axes[0] @ u) + other.half_y * abs(b_axes[1] @ u)
-        separated |= np.abs(dx * u[0] + dy * u[1]) >= r_a + r_b + clearance
+    for ux, uy, reach in _separating_axes(float(yaw), (float(half[0]), float(half[1])),
+                                          float(other.yaw), (other.half_x, other.half_y)):
+        separated |= np.abs(dx * ux + dy * uy) >= reach + clearance
     return separated
+
+
+_AXES_CACHE: dict = {}
+
+
+def _separating_axes(yaw_a: float, half_a: tuple[float, float], yaw_b: float,
+                     half_b: tuple[float, float]) -> tuple[tuple[float, float, float], ...]:
+    """The four edge normals u = (ux, uy) of two rectangles and, per normal, the sum of their projected half
+    extents r_a + r_b (m): what :func:`clear_of` compares the centres' separation with. Pure in its arguments,
+    so cached (searches test the same pairs of shapes thousands of times); the values are computed exactly as
+    before the cache, so the tests' results do not change."""
+    key = (yaw_a, half_a, yaw_b, half_b)
+    hit = _AXES_CACHE.get(key)
+    if hit is not None:
+        return hit
+    a_axes = _axes(yaw_a)
+    b_axes = _axes(yaw_b)
+    out = []
+    for u in (*a_axes, *b_axes):
+        r_a = half_a[0] * abs(a_axes[0] @ u) + half_a[1] * abs(a_axes[1] @ u)
+        r_b = half_b[0] * abs(b_axes[0] @ u) + half_b[1] * abs(b_axes[1] @ u)
+        out.append((u[0], u[1], r_a + r_b))
+    if len(_AXES_CACHE) >= 100_000:
+        _AXES_CACHE.clear()
+    hit = _AXES_CACHE[key] = tuple(out)
+    return hit
 
 
 def footprints_clear(a: Footprint, b: Footprint, clearance: float = 0.0) -> bool:
