@@ -110,3 +110,70 @@ def test_registry_passes_the_protocol_horizon_to_slax_belief_only(paper):
     assert make_policy("slax-belief", paper).horizon is None  # no horizon given: planned as unknown
     assert make_policy("slax-belief", paper, horizon=7, policy_options={"horizon": 3}).horizon == 3
     assert not hasattr(make_policy("slax-hindsight", paper, horizon=7), "horizon")
+
+
+def _push_outcome_setup(paper, options=None):
+    """A lone box at the shelf's centre, pushed +0.15 m along x; the belief holds four target placements: in its
+    path at x = 0.08 and 0.10 and 0.12 m (a target there stops it, the nearer the earlier) and one far away."""
+    from slax_drake.policies.actions import Push
+
+    block = box("block", 0.0, 0.0, 0.06, 0.06, 0.10)
+    template = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), (block,), None, 3)
+    policy = make_policy("slax-belief", paper, horizon=4, policy_options=options)
+    policy.reset(template)
+    keys = {(8, 0), (10, 0), (12, 0), (-20, 20)}
+    policy._consistent = set(keys)
+    policy._template = template
+    policy._executed = (Push("block", (-0.04, -0.03, 0.05), 0.15), (block,))
+    return policy, template, block, keys
+
+
+def test_belief_drops_the_placements_a_completed_push_swept(paper):
+    """The push went as far as the seen objects predict: no target stood in its way, so the three placements in
+    its path leave the belief (certain), the far one stays, and no weight changes."""
+    policy, template, block, _ = _push_outcome_setup(paper)
+    after, note = execute(template, policy._executed[0], policy.action_model)
+    assert note == ""
+    policy.condition_on_outcome(after.objects)
+    assert policy._consistent == {(-20, 20)}
+    assert policy._weights == {}
+    assert policy.evidence_log[-1]["stopped"] is False and policy.evidence_log[-1]["removed"] == 3
+
+
+def test_belief_weighs_up_the_placements_that_explain_a_stopped_push(paper):
+    """The true target at x = 0.10 m stopped the push short (what the robot sees: the box moved less than
+    commanded). A target at 0.10 explains it (weight x block_weight); one at 0.08 would have stopped it earlier
+    (dropped); one at 0.12 or far away is left as it was (an unseen object may have stopped it)."""
+    policy, template, block, _ = _push_outcome_setup(paper)
+    truth = Scene(template.shelf, template.camera, (block,), Target(TARGET, planar_pose(0.10, 0.0, 0.03, 0.0)), 3)
+    after, note = execute(truth, policy._executed[0], policy.action_model)
+    assert "stopped" in note
+    policy.condition_on_outcome(after.objects)
+    assert policy._consistent == {(10, 0), (12, 0), (-20, 20)}
+    assert policy._weights == {(10, 0): policy.block_weight}
+    assert {k: policy.evidence_log[-1][k] for k in ("stopped", "removed", "explained")} == \
+        {"stopped": True, "removed": 1, "explained": 1}
+
+
+def test_belief_without_evidence_leaves_the_belief_alone(paper):
+    """``evidence="none"`` (slax-belief v2's behaviour) ignores the outcome."""
+    policy, template, block, keys = _push_outcome_setup(paper, {"evidence": "none"})
+    after, _ = execute(template, policy._executed[0], policy.action_model)
+    policy.condition_on_outcome(after.objects)
+    assert policy._consistent == keys and policy.evidence_log == []
+
+
+def test_weighted_draw_is_seeded_and_follows_the_weights(paper):
+    """With a weight, the draw samples the weighted belief systematically: a placement of weight 8 among 8 of
+    weight 1 gets half of the 9 samples (as many as placements), 4 or 5; the same seed and step give the same draw; without weights the draw is
+    slax-hindsight's uniform one."""
+    policy = make_policy("slax-belief", paper, policy_options={"samples": 16})
+    placements = np.array([[0.01 * i, 0.1] for i in range(9)])
+    uniform = policy.draw(placements, 5)
+    policy._weights = {(4, 10): 8.0}
+    first, again = policy.draw(placements, 5), policy.draw(placements, 5)
+    assert np.array_equal(first, again)
+    heavy = int(np.sum(np.all(np.isclose(first, [0.04, 0.1]), axis=1)))
+    assert len(first) == 9 and heavy in (4, 5)
+    policy._weights = {}
+    assert np.array_equal(policy.draw(placements, 5), uniform)

@@ -48,6 +48,7 @@ time), so those results do not depend on the machine.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 
@@ -84,7 +85,8 @@ class BeliefSearch(Hindsight):
 
     def __init__(self, *args, samples: int = 64, depth: int = 3, beam: int = 6, placements_per_object: int = 2,
                  failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
-                 hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", **kwargs):
+                 hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
+                 block_weight: float = 8.0, **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
@@ -104,12 +106,21 @@ class BeliefSearch(Hindsight):
         self.select = select
         self._blocked: list = []  # boxes (x_lo, x_hi, y_lo, y_hi) where a placement failed: an unseen obstacle
         self._last = None  # (the suction taken last, the pose it predicts for its object)
+        if evidence not in ("outcome", "none"):
+            raise ValueError("evidence must be 'outcome' or 'none'")
+        self.evidence = evidence
+        self.block_weight = float(block_weight)
+        self._weights: dict = {}  # lattice key -> the placement's weight in the belief (1 when absent)
+        self._executed = None  # (the action taken last, the seen objects it was planned on)
+        self._template = None  # the observation's scene template (shelf, camera) at this decision
+        self.evidence_log: list = []  # per executed action: how its outcome changed the belief
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
         self._plan, self._expected = [], None
         self._blocked, self._last = [], None
         self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
+        self._weights, self._executed, self.evidence_log = {}, None, []
 
     def worlds_for(self, template, placements: np.ndarray, seed: int):
         """(the worlds, (K,) bool: those still consistent with every observation). The worlds drawn at the first
@@ -150,6 +161,108 @@ class BeliefSearch(Hindsight):
         x, y = float(obj.center[0]), float(obj.center[1])
         if abs(x - (x_lo + x_hi) / 2) > 0.005 or abs(y - (y_lo + y_hi) / 2) > 0.005:
             self._blocked.append((x_lo, x_hi, y_lo, y_hi))
+
+    # ---- what an executed action's outcome says about the target ---------------------------------------------
+    def condition_on_outcome(self, known) -> None:
+        """Updates the belief with the outcome of the action taken last (``evidence="outcome"``).
+
+        A robot knows where it commanded an object and sees where the object ended (the next observation: the
+        object moved less than commanded, or not at all); it does not know what stopped it. For every placement c
+        still possible, the action is replayed with the first-order executor on the objects seen before it (plus
+        any seen only now, where they stand now) and a target at c, giving the pose the object would have ended
+        at (the simulator's own rule: a push or a placement stops before the first obstacle; a blocked blade or
+        way out leaves it in place). Then, against the pose observed now:
+        - the outcome is what the seen objects alone predict: a target at c that would have stopped the object
+          cannot be there (removed from the belief; certain);
+        - something unseen stopped it: a target at c that would have stopped it exactly there explains the
+          outcome, and its weight is multiplied by ``block_weight`` (the odds of the target against a wholly
+          hidden object there: at 8-10 objects Table I scenes hide about two objects besides the target, so the
+          target is not certain); a target at c that would have stopped a push earlier than observed cannot be
+          there (removed); the others keep their weight.
+        The worlds are drawn anew from the weighted belief when a weight changed (:meth:`draw`)."""
+        executed, self._executed = self._executed, None
+        if executed is None or self.evidence != "outcome" or not self._consistent:
+            return
+        from slax_drake.policies.simulator import execute
+        from slax_drake.scene.model import Target, planar_pose
+
+        a, before = executed
+        now = {o.name: o for o in known}
+        if a.name not in now:
+            return
+        names = {o.name for o in before}
+        objects = tuple(before) + tuple(o for o in known if o.name not in names)
+        template = self._template
+        size = self.target_size()
+
+        def end_of(scene) -> np.ndarray:
+            after, _ = execute(scene, a, self.action_model)
+            return np.asarray(after.object_named(a.name).center[:2], dtype=float)
+
+        start = np.asarray(next(o for o in before if o.name == a.name).center[:2], dtype=float)
+        seen = np.asarray(now[a.name].center[:2], dtype=float)
+        alone = end_of(template.with_objects(objects))
+        tol = 0.003
+        keys = sorted(self._consistent)
+        centers = np.array(keys, dtype=float).reshape(-1, 2) * self.grid_step
+        near = self._near_action(objects, a, centers)
+        removed = explained = 0
+        certain = bool(np.linalg.norm(seen - alone) <= tol)
+        for key, c, close in zip(keys, centers, near):
+            if not close:
+                continue
+            target = Target(size, planar_pose(float(c[0]), float(c[1]), size[2] / 2.0, 0.0))
+            end = end_of(dataclasses.replace(template, objects=objects, target=target))
+            if np.linalg.norm(end - seen) <= tol:
+                if not certain and np.linalg.norm(end - alone) > tol:
+                    self._weights[key] = self._weights.get(key, 1.0) * self.block_weight
+                    explained += 1
+                continue
+            if np.linalg.norm(end - alone) <= tol:
+                continue  # the target there would not have touched it: unseen something else stopped it
+            if certain or (isinstance(a, Push) and np.linalg.norm(end - start) < np.linalg.norm(seen - start) - tol):
+                self._consistent.discard(key)
+                removed += 1
+        self.evidence_log.append({"step": self._step, "action": a.describe(), "stopped": not certain,
+                                  "removed": removed, "explained": explained})
+        if explained:
+            self._worlds = None  # drawn anew from the weighted belief
+
+    def _near_action(self, objects, a, centers: np.ndarray) -> np.ndarray:
+        """(K,) bool: the target placements that could touch action ``a``'s object, blade or ways out and in (a box
+        around the object's whole travel, widened by the target, the blade and the clearances); the others cannot
+        change its outcome."""
+        from slax_drake.scene.footprint import Footprint
+
+        fp = Footprint.of(next(o for o in objects if o.name == a.name))
+        ex, ey = fp.extents()
+        pad = max(self.target_size()[:2]) / 2 + 0.06
+        if isinstance(a, Push):
+            boxes = [(min(fp.x, fp.x + a.d) - ex, max(fp.x, fp.x + a.d) + ex, fp.y - ey, fp.y + ey)]
+        else:
+            front = -self._template.shelf.depth / 2
+            boxes = [(fp.x - ex, fp.x + ex, front, fp.y + ey), (fp.x + a.dx - ex, fp.x + a.dx + ex, front, a.dz + ey)]
+        near = np.zeros(len(centers), bool)
+        for x_lo, x_hi, y_lo, y_hi in boxes:
+            near |= ((centers[:, 0] >= x_lo - pad) & (centers[:, 0] <= x_hi + pad)
+                     & (centers[:, 1] >= y_lo - pad) & (centers[:, 1] <= y_hi + pad))
+        return near
+
+    def draw(self, placements: np.ndarray, seed: int) -> np.ndarray:
+        """``samples`` placements: :meth:`Hindsight.draw` (stratified, uniform) while every weight is 1; else one
+        per stratum of equal weight along x (then y), by the same seeded generator (systematic sampling of the
+        weighted belief, which :meth:`condition_on_outcome` set)."""
+        step = self.grid_step
+        w = np.array([self._weights.get((int(round(x / step)), int(round(y / step))), 1.0) for x, y in placements])
+        if not len(w) or np.all(w == 1.0):
+            return super().draw(placements, seed)
+        rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, self._step])
+        order = np.lexsort((placements[:, 1], placements[:, 0]))
+        cum = np.cumsum(w[order])
+        k = min(self.samples, len(placements))
+        u = (np.arange(k) + rng.random(k)) / k * cum[-1]
+        picks = order[np.minimum(np.searchsorted(cum, u, side="right"), len(order) - 1)]
+        return placements[picks]
 
     def placement_allowed(self, objects, a) -> bool:
         if not self._blocked:
@@ -313,7 +426,9 @@ class BeliefSearch(Hindsight):
         t0 = time.process_time()
         self._step += 1
         known = tuple(obs.known)
+        self._template = obs.scene_template
         self.note_outcome(known)
+        self.condition_on_outcome(known)
         cands = maximal_pushes_only(self.action_model_candidates(known))
         if not cands:
             return Decision.stop("no feasible action")
@@ -384,6 +499,7 @@ class BeliefSearch(Hindsight):
         first = best.plan[0]
         if isinstance(first, Suction):
             self._last = (self.placement_box(known, first), first.name)
+        self._executed = (first, known)
         self._plan = list(best.plan[1:])
         self._expected = state_key(apply_action(known, first))
         ranked = sorted(first_level, key=lambda k: (k.value, k.order))
