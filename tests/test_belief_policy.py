@@ -2,6 +2,7 @@
 a stacked occlusion needs, rolls out deterministically, keeps to its per-decision CPU cap, and its per-world
 distances agree with a brute-force count."""
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -177,3 +178,28 @@ def test_weighted_draw_is_seeded_and_follows_the_weights(paper):
     assert len(first) == 9 and heavy in (4, 5)
     policy._weights = {}
     assert np.array_equal(policy.draw(placements, 5), uniform)
+
+
+def test_belief_remembers_an_untouched_object_that_became_hidden(paper):
+    """An object seen at one decision and hidden at the next stays in the policy's seen objects where it stood,
+    unless it is the object the last action moved (where that one stopped is not known); slax-belief-v2 forgets."""
+    from slax_drake.policies.actions import Push
+
+    scene = stacked_scene(paper)
+    policy = make_policy("slax-belief", paper, horizon=4)
+    policy.reset(scene)
+    obs = observation_for(policy, scene)
+    assert [o.name for o in obs.known] == ["front", "middle"]
+    assert policy.with_remembered(obs).known == obs.known
+    front_only = dataclasses.replace(obs, known=obs.known[:1])  # "middle" hidden now
+    policy._executed = (Push("front", (0.0, -0.2, 0.05), 0.05), obs.known)
+    remembered = policy.with_remembered(front_only)
+    assert [o.name for o in remembered.known] == ["front", "middle"]
+    assert remembered.known[1] is obs.known[1] and [o.name for o in remembered.scene_template.objects] == \
+        ["front", "middle"]
+    policy._executed = (Push("middle", (0.0, 0.02, 0.05), 0.05), remembered.known)
+    assert [o.name for o in policy.with_remembered(front_only).known] == ["front"]  # it moved: not remembered
+    forgetful = make_policy("slax-belief-v2", paper, horizon=4)
+    forgetful.reset(scene)
+    forgetful.with_remembered(obs)
+    assert forgetful.with_remembered(front_only).known == front_only.known

@@ -86,7 +86,7 @@ class BeliefSearch(Hindsight):
     def __init__(self, *args, samples: int = 64, depth: int = 3, beam: int = 6, placements_per_object: int = 2,
                  failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
                  hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
-                 block_weight: float = 8.0, **kwargs):
+                 block_weight: float = 8.0, remember_objects: bool = True, **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
@@ -114,6 +114,8 @@ class BeliefSearch(Hindsight):
         self._executed = None  # (the action taken last, the seen objects it was planned on)
         self._template = None  # the observation's scene template (shelf, camera) at this decision
         self.evidence_log: list = []  # per executed action: how its outcome changed the belief
+        self.remember_objects = remember_objects
+        self._remembered: dict = {}  # name -> the object as last believed (seen, or remembered), last decision
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -121,6 +123,7 @@ class BeliefSearch(Hindsight):
         self._blocked, self._last = [], None
         self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
         self._weights, self._executed, self.evidence_log = {}, None, []
+        self._remembered = {}
 
     def worlds_for(self, template, placements: np.ndarray, seed: int):
         """(the worlds, (K,) bool: those still consistent with every observation). The worlds drawn at the first
@@ -161,6 +164,31 @@ class BeliefSearch(Hindsight):
         x, y = float(obj.center[0]), float(obj.center[1])
         if abs(x - (x_lo + x_hi) / 2) > 0.005 or abs(y - (y_lo + y_hi) / 2) > 0.005:
             self._blocked.append((x_lo, x_hi, y_lo, y_hi))
+
+    # ---- objects seen before and hidden now ---------------------------------------------------------------------
+    def decide(self, obs) -> Decision:
+        return super().decide(self.with_remembered(obs))
+
+    def with_remembered(self, obs):
+        """``obs`` with the objects seen earlier in this trial and hidden now added to ``known`` (and to the scene
+        template), where they were last believed to stand (``remember_objects``; privileged observation only,
+        where an object keeps its name from one observation to the next).
+
+        In the paper's first-order world nothing moves but the object the robot moves, so an object that the
+        robot did not touch since it was seen still stands there when another one, moved in front of it, hides
+        it. Forgetting it (the observation lists only what is seen now) makes the planner place objects onto it
+        (a placement put back) and believe the target may stand where it stands. The object the last action moved
+        is not remembered when it ends hidden: where it stopped is not known."""
+        if not self.remember_objects or getattr(obs, "belief", None) is not None:
+            return obs
+        moved = self._executed[0].name if self._executed is not None else None
+        seen = {o.name for o in obs.known}
+        kept = tuple(o for name, o in sorted(self._remembered.items()) if name not in seen and name != moved)
+        known = tuple(obs.known) + kept
+        self._remembered = {o.name: o for o in known}
+        if not kept:
+            return obs
+        return dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known))
 
     # ---- what an executed action's outcome says about the target ---------------------------------------------
     def condition_on_outcome(self, known) -> None:
@@ -223,8 +251,11 @@ class BeliefSearch(Hindsight):
             if certain or (isinstance(a, Push) and np.linalg.norm(end - start) < np.linalg.norm(seen - start) - tol):
                 self._consistent.discard(key)
                 removed += 1
+        planned = np.asarray(apply_action(before, a)[[o.name for o in before].index(a.name)].center[:2], dtype=float)
         self.evidence_log.append({"step": self._step, "action": a.describe(), "stopped": not certain,
-                                  "removed": removed, "explained": explained})
+                                  "removed": removed, "explained": explained,
+                                  "as_planned": bool(np.linalg.norm(seen - planned) <= tol),
+                                  "seen_objects_predict": bool(np.linalg.norm(alone - planned) <= tol)})
         if explained:
             self._worlds = None  # drawn anew from the weighted belief
 
