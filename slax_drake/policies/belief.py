@@ -38,6 +38,21 @@ suction may place its object in hidden space, where an unseen object may stop it
 as ``hidden_risk`` times the share of hidden placements in its placement box (widened by half the target), and a
 placement that was put back or stopped short marks its box blocked for the rest of the trial.
 
+What the trial has shown (v3; ``slax-belief-v2`` in the registry turns both off, the behaviour of
+docs/results/slax_belief_v2_*):
+- ``remember_objects``: an object seen earlier and hidden now, that the robot has not moved since, is kept among
+  the seen objects where it stood (:meth:`with_remembered`; in the first-order world nothing moves unless the
+  robot moves it). Without it the planner placed objects onto an object that a move had just hidden.
+- ``evidence="outcome"``: the outcome of each executed action updates the belief
+  (:meth:`condition_on_outcome`). A robot sees, at the next observation, whether the object it moved ended where
+  it was commanded to; the policy replays the action with the first-order executor for a target at each
+  possible placement. An action that went as the seen objects predict proves that no target stood in its way
+  (those placements leave the belief); one stopped by something unseen makes the placements that would have
+  stopped it exactly there ``block_weight`` times likelier (an unseen object other than the target may have done
+  it: Table I scenes of 8-10 objects hide about two), and those that would have stopped a push earlier impossible.
+  The worlds are then drawn from the weighted belief (:meth:`draw`). The policy never reads the target's pose or
+  the simulator's notes: only the next observation of the object it moved.
+
 The first action of the chosen plan is taken; the next decision searches again on the new observation, the rest
 of the last plan kept in the beam at every depth (so it is kept unless a better one is found). Deterministic: no
 random number is drawn but from the seeded generator, and ties keep enumeration order. ``seconds`` caps a
@@ -78,7 +93,8 @@ class BeliefSearch(Hindsight):
     (searched further while nothing is revealed), ``beam``, ``placements_per_object`` (suction placements kept per
     object and state), ``failure_cost``, ``horizon`` (actions per trial, None: unknown), ``hidden_risk``,
     ``select`` ("ratio": the most revealed mass per expected cost; "value": the least V), ``seconds`` (the
-    per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's)."""
+    per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's),
+    ``remember_objects``, ``evidence`` ("outcome" or "none") and ``block_weight`` (see the module docstring)."""
 
     name = "slax-belief"
     uses_horizon = True  # the registry passes the protocol's H (see the module docstring)
