@@ -102,7 +102,7 @@ class BeliefSearch(Hindsight):
     def __init__(self, *args, samples: int = 64, depth: int = 3, beam: int = 6, placements_per_object: int = 2,
                  failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
                  hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
-                 block_weight: float = 8.0, remember_objects: bool = True, **kwargs):
+                 block_weight: float = 8.0, remember_objects: bool = True, widen_beam: int = 0, **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
@@ -131,6 +131,7 @@ class BeliefSearch(Hindsight):
         self._template = None  # the observation's scene template (shelf, camera) at this decision
         self.evidence_log: list = []  # per executed action: how its outcome changed the belief
         self.remember_objects = remember_objects
+        self.widen_beam = widen_beam  # the beam of a second search when the first reveals nothing (0: none)
         self._remembered: dict = {}  # name -> the object as last believed (seen, or remembered), last decision
 
     def reset(self, scene_or_observation=None) -> None:
@@ -504,37 +505,11 @@ class BeliefSearch(Hindsight):
                 after = apply_action(node.objects, a)
                 c = self.move_cost(node.objects, a)
                 node = kept[i + 1] = self.child(worlds, node, a, after, c, remaining, next(counter))
-        seen_nodes = []  # every plan looked at (after merging duplicates)
         first_level = list(level)
-        for depth in range(1, self.max_depth + 1):
-            merged: dict = {}
-            for k in level + ([kept[depth]] if depth in kept else []):
-                key = state_key(k.objects)
-                old = merged.get(key)
-                if old is None or (k.value, k.order) < (old.value, old.order):
-                    merged[key] = k
-            level = sorted(merged.values(), key=lambda k: (k.value, k.order))
-            seen_nodes.extend(level)
-            level = [k for k in level if k.alive.any()]
-            beam = level[: self.beam]
-            if depth in kept and kept[depth].alive.any() and all(k is not kept[depth] for k in beam):
-                if merged.get(state_key(kept[depth].objects)) is kept[depth]:
-                    beam.append(kept[depth])
-            level = beam
-            log["expanded"] += len(level)
-            if not level or depth >= self.max_depth or \
-                    (depth >= self.depth and any(k.revealed > 0 for k in seen_nodes)):
-                break
-            if time.process_time() - t0 > self.seconds:
-                log["capped"] = True
-                break
-            nxt = []
-            for i, k in enumerate(level):
-                if i and time.process_time() - t0 > self.seconds:
-                    log["capped"] = True  # the nodes looked at so far make the next level
-                    break
-                nxt.extend(self.expansions(worlds, k, self.moves(k.objects), remaining, counter))
-            level = nxt
+        seen_nodes = self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.beam)
+        if self.widen_beam > self.beam and not log["capped"] and not any(k.revealed > 0 for k in seen_nodes):
+            log["widened"] = True  # nothing revealed within max_depth: once more with a wider beam
+            seen_nodes += self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.widen_beam)
         if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
             best = max(seen_nodes, key=lambda k: (k.revealed / max(k.g, 1e-9), -k.value, -k.order))
         else:
@@ -553,6 +528,45 @@ class BeliefSearch(Hindsight):
         rest = [k.plan[0] for k in ranked if k.plan[0] != first]
         rest += [a for a in cands if a != first and a not in rest]
         return Decision((first, *rest))
+
+
+    def beam_search(self, worlds, first_level: list, kept: dict, remaining: int, counter, log: dict, t0: float,
+                    beam_width: int) -> list:
+        """Every plan looked at (duplicates merged per depth) by a beam of ``beam_width`` from the first moves
+        ``first_level``, ``kept`` (depth -> node: the rest of the last plan) kept in the beam, to ``depth``
+        actions, on to ``max_depth`` while no plan reveals anything; stops at the CPU cap (``log["capped"]``)."""
+        level = list(first_level)
+        seen_nodes = []  # every plan looked at (after merging duplicates)
+        for depth in range(1, self.max_depth + 1):
+            merged: dict = {}
+            for k in level + ([kept[depth]] if depth in kept else []):
+                key = state_key(k.objects)
+                old = merged.get(key)
+                if old is None or (k.value, k.order) < (old.value, old.order):
+                    merged[key] = k
+            level = sorted(merged.values(), key=lambda k: (k.value, k.order))
+            seen_nodes.extend(level)
+            level = [k for k in level if k.alive.any()]
+            beam = level[: beam_width]
+            if depth in kept and kept[depth].alive.any() and all(k is not kept[depth] for k in beam):
+                if merged.get(state_key(kept[depth].objects)) is kept[depth]:
+                    beam.append(kept[depth])
+            level = beam
+            log["expanded"] += len(level)
+            if not level or depth >= self.max_depth or \
+                    (depth >= self.depth and any(k.revealed > 0 for k in seen_nodes)):
+                break
+            if time.process_time() - t0 > self.seconds:
+                log["capped"] = True
+                break
+            nxt = []
+            for i, k in enumerate(level):
+                if i and time.process_time() - t0 > self.seconds:
+                    log["capped"] = True  # the nodes looked at so far make the next level
+                    break
+                nxt.extend(self.expansions(worlds, k, self.moves(k.objects), remaining, counter))
+            level = nxt
+        return seen_nodes
 
 
 @functools.lru_cache(maxsize=64)
