@@ -166,8 +166,8 @@ def test_belief_without_evidence_leaves_the_belief_alone(paper):
 
 def test_weighted_draw_is_seeded_and_follows_the_weights(paper):
     """With a weight, the draw samples the weighted belief systematically: a placement of weight 8 among 8 of
-    weight 1 gets half of the 9 samples (as many as placements), 4 or 5; the same seed and step give the same draw; without weights the draw is
-    slax-hindsight's uniform one."""
+    weight 1 gets half of the 9 samples (as many as placements), 4 or 5; the same seed and step give the same
+    draw; without weights the draw is slax-hindsight's uniform one."""
     policy = make_policy("slax-belief", paper, policy_options={"samples": 16})
     placements = np.array([[0.01 * i, 0.1] for i in range(9)])
     uniform = policy.draw(placements, 5)
