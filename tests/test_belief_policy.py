@@ -203,3 +203,25 @@ def test_belief_remembers_an_untouched_object_that_became_hidden(paper):
     forgetful.reset(scene)
     forgetful.with_remembered(obs)
     assert forgetful.with_remembered(front_only).known == front_only.known
+
+
+def test_belief_widens_its_beam_only_when_nothing_is_revealed(paper):
+    """Behind a low front box stands a wall box almost as wide as the bay, 2 cm behind (no room for the target between): one
+    action (only the front box can move) reveals nothing, so the search runs again with the wider beam, looking at
+    more plans; without ``widen_beam`` it does not. Where the first search reveals something, it is not widened."""
+    objects = (box("front", 0.0, -0.20, 0.24, 0.06, 0.12), box("middle", 0.0, -0.11, 0.54, 0.06, 0.25))
+    scene = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), objects,
+                  Target(TARGET, planar_pose(0.0, 0.20, 0.03, 0.0)), 7)
+    logs = {}
+    for widen in (0, 4):
+        policy = make_policy("slax-belief", paper, horizon=4, policy_options={
+            "depth": 1, "max_depth": 1, "beam": 1, "widen_beam": widen})
+        policy.reset(scene)
+        policy.decide(observation_for(policy, scene))
+        logs[widen] = policy.decision_log[-1]
+    assert logs[0]["revealed"] == 0 and "widened" not in logs[0] and logs[0]["expanded"] == 1
+    assert logs[4]["widened"] and logs[4]["expanded"] > 1
+    deep = make_policy("slax-belief", paper, horizon=4, policy_options={"beam": 1, "widen_beam": 4})
+    deep.reset(stacked_scene(paper))
+    deep.decide(observation_for(deep, stacked_scene(paper)))
+    assert deep.decision_log[-1]["revealed"] > 0 and "widened" not in deep.decision_log[-1]
