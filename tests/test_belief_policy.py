@@ -206,9 +206,10 @@ def test_belief_remembers_an_untouched_object_that_became_hidden(paper):
 
 
 def test_belief_widens_its_beam_only_when_nothing_is_revealed(paper):
-    """Behind a low front box stands a wall box almost as wide as the bay, 2 cm behind (no room for the target between): one
-    action (only the front box can move) reveals nothing, so the search runs again with the wider beam, looking at
-    more plans; without ``widen_beam`` it does not. Where the first search reveals something, it is not widened."""
+    """Behind a low front box stands a wall box almost as wide as the bay, 2 cm behind (no room for the target
+    between): one action (only the front box can move) reveals nothing, so the search runs again with the wider
+    beam, looking at more plans; without ``widen_beam`` it does not. Where the first search reveals something, it
+    is not widened."""
     objects = (box("front", 0.0, -0.20, 0.24, 0.06, 0.12), box("middle", 0.0, -0.11, 0.54, 0.06, 0.25))
     scene = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), objects,
                   Target(TARGET, planar_pose(0.0, 0.20, 0.03, 0.0)), 7)
