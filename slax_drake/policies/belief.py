@@ -63,7 +63,8 @@ of the last plan kept in the beam at every depth (so it is kept unless a better 
 random number is drawn but from the seeded generator, and ties keep enumeration order. ``seconds`` caps a
 decision's CPU time (checked per expanded node: the search stops and takes the best plan so far; ``decision_log``
 records ``capped``); the default, 30 s, bound in none of the README's runs (the longest decision took 6 s of wall
-time), so those results do not depend on the machine.
+time for v2, 19 s for v3's 25 scenes per density on the loaded shared machine), so those results do not depend on
+the machine.
 """
 
 from __future__ import annotations
