@@ -2,6 +2,7 @@
 a stacked occlusion needs, rolls out deterministically, keeps to its per-decision CPU cap, and its per-world
 distances agree with a brute-force count."""
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -110,3 +111,118 @@ def test_registry_passes_the_protocol_horizon_to_slax_belief_only(paper):
     assert make_policy("slax-belief", paper).horizon is None  # no horizon given: planned as unknown
     assert make_policy("slax-belief", paper, horizon=7, policy_options={"horizon": 3}).horizon == 3
     assert not hasattr(make_policy("slax-hindsight", paper, horizon=7), "horizon")
+
+
+def _push_outcome_setup(paper, options=None):
+    """A lone box at the shelf's centre, pushed +0.15 m along x; the belief holds four target placements: in its
+    path at x = 0.08 and 0.10 and 0.12 m (a target there stops it, the nearer the earlier) and one far away."""
+    from slax_drake.policies.actions import Push
+
+    block = box("block", 0.0, 0.0, 0.06, 0.06, 0.10)
+    template = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), (block,), None, 3)
+    policy = make_policy("slax-belief", paper, horizon=4, policy_options=options)
+    policy.reset(template)
+    keys = {(8, 0), (10, 0), (12, 0), (-20, 20)}
+    policy._consistent = set(keys)
+    policy._template = template
+    policy._executed = (Push("block", (-0.04, -0.03, 0.05), 0.15), (block,))
+    return policy, template, block, keys
+
+
+def test_belief_drops_the_placements_a_completed_push_swept(paper):
+    """The push went as far as the seen objects predict: no target stood in its way, so the three placements in
+    its path leave the belief (certain), the far one stays, and no weight changes."""
+    policy, template, block, _ = _push_outcome_setup(paper)
+    after, note = execute(template, policy._executed[0], policy.action_model)
+    assert note == ""
+    policy.condition_on_outcome(after.objects)
+    assert policy._consistent == {(-20, 20)}
+    assert policy._weights == {}
+    assert policy.evidence_log[-1]["stopped"] is False and policy.evidence_log[-1]["removed"] == 3
+
+
+def test_belief_weighs_up_the_placements_that_explain_a_stopped_push(paper):
+    """The true target at x = 0.10 m stopped the push short (what the robot sees: the box moved less than
+    commanded). A target at 0.10 explains it (weight x block_weight); one at 0.08 would have stopped it earlier
+    (dropped); one at 0.12 or far away is left as it was (an unseen object may have stopped it)."""
+    policy, template, block, _ = _push_outcome_setup(paper)
+    truth = Scene(template.shelf, template.camera, (block,), Target(TARGET, planar_pose(0.10, 0.0, 0.03, 0.0)), 3)
+    after, note = execute(truth, policy._executed[0], policy.action_model)
+    assert "stopped" in note
+    policy.condition_on_outcome(after.objects)
+    assert policy._consistent == {(10, 0), (12, 0), (-20, 20)}
+    assert policy._weights == {(10, 0): policy.block_weight}
+    assert {k: policy.evidence_log[-1][k] for k in ("stopped", "removed", "explained")} == \
+        {"stopped": True, "removed": 1, "explained": 1}
+
+
+def test_belief_without_evidence_leaves_the_belief_alone(paper):
+    """``evidence="none"`` (slax-belief v2's behaviour) ignores the outcome."""
+    policy, template, block, keys = _push_outcome_setup(paper, {"evidence": "none"})
+    after, _ = execute(template, policy._executed[0], policy.action_model)
+    policy.condition_on_outcome(after.objects)
+    assert policy._consistent == keys and policy.evidence_log == []
+
+
+def test_weighted_draw_is_seeded_and_follows_the_weights(paper):
+    """With a weight, the draw samples the weighted belief systematically: a placement of weight 8 among 8 of
+    weight 1 gets half of the 9 samples (as many as placements), 4 or 5; the same seed and step give the same
+    draw; without weights the draw is slax-hindsight's uniform one."""
+    policy = make_policy("slax-belief", paper, policy_options={"samples": 16})
+    placements = np.array([[0.01 * i, 0.1] for i in range(9)])
+    uniform = policy.draw(placements, 5)
+    policy._weights = {(4, 10): 8.0}
+    first, again = policy.draw(placements, 5), policy.draw(placements, 5)
+    assert np.array_equal(first, again)
+    heavy = int(np.sum(np.all(np.isclose(first, [0.04, 0.1]), axis=1)))
+    assert len(first) == 9 and heavy in (4, 5)
+    policy._weights = {}
+    assert np.array_equal(policy.draw(placements, 5), uniform)
+
+
+def test_belief_remembers_an_untouched_object_that_became_hidden(paper):
+    """An object seen at one decision and hidden at the next stays in the policy's seen objects where it stood,
+    unless it is the object the last action moved (where that one stopped is not known); slax-belief-v2 forgets."""
+    from slax_drake.policies.actions import Push
+
+    scene = stacked_scene(paper)
+    policy = make_policy("slax-belief", paper, horizon=4)
+    policy.reset(scene)
+    obs = observation_for(policy, scene)
+    assert [o.name for o in obs.known] == ["front", "middle"]
+    assert policy.with_remembered(obs).known == obs.known
+    front_only = dataclasses.replace(obs, known=obs.known[:1])  # "middle" hidden now
+    policy._executed = (Push("front", (0.0, -0.2, 0.05), 0.05), obs.known)
+    remembered = policy.with_remembered(front_only)
+    assert [o.name for o in remembered.known] == ["front", "middle"]
+    assert remembered.known[1] is obs.known[1] and [o.name for o in remembered.scene_template.objects] == \
+        ["front", "middle"]
+    policy._executed = (Push("middle", (0.0, 0.02, 0.05), 0.05), remembered.known)
+    assert [o.name for o in policy.with_remembered(front_only).known] == ["front"]  # it moved: not remembered
+    forgetful = make_policy("slax-belief-v2", paper, horizon=4)
+    forgetful.reset(scene)
+    forgetful.with_remembered(obs)
+    assert forgetful.with_remembered(front_only).known == front_only.known
+
+
+def test_belief_widens_its_beam_only_when_nothing_is_revealed(paper):
+    """Behind a low front box stands a wall box almost as wide as the bay, 2 cm behind (no room for the target
+    between): one action (only the front box can move) reveals nothing, so the search runs again with the wider
+    beam, looking at more plans; without ``widen_beam`` it does not. Where the first search reveals something, it
+    is not widened."""
+    objects = (box("front", 0.0, -0.20, 0.24, 0.06, 0.12), box("middle", 0.0, -0.11, 0.54, 0.06, 0.25))
+    scene = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), objects,
+                  Target(TARGET, planar_pose(0.0, 0.20, 0.03, 0.0)), 7)
+    logs = {}
+    for widen in (0, 4):
+        policy = make_policy("slax-belief", paper, horizon=4, policy_options={
+            "depth": 1, "max_depth": 1, "beam": 1, "widen_beam": widen})
+        policy.reset(scene)
+        policy.decide(observation_for(policy, scene))
+        logs[widen] = policy.decision_log[-1]
+    assert logs[0]["revealed"] == 0 and "widened" not in logs[0] and logs[0]["expanded"] == 1
+    assert logs[4]["widened"] and logs[4]["expanded"] > 1
+    deep = make_policy("slax-belief", paper, horizon=4, policy_options={"beam": 1, "widen_beam": 4})
+    deep.reset(stacked_scene(paper))
+    deep.decide(observation_for(deep, stacked_scene(paper)))
+    assert deep.decision_log[-1]["revealed"] > 0 and "widened" not in deep.decision_log[-1]

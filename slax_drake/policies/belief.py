@@ -38,16 +38,38 @@ suction may place its object in hidden space, where an unseen object may stop it
 as ``hidden_risk`` times the share of hidden placements in its placement box (widened by half the target), and a
 placement that was put back or stopped short marks its box blocked for the rest of the trial.
 
+What the trial has shown (v3; ``slax-belief-v2`` in the registry turns all three off, the behaviour of
+docs/results/slax_belief_v2_*):
+- ``remember_objects``: an object seen earlier and hidden now, that the robot has not moved since, is kept among
+  the seen objects where it stood (:meth:`with_remembered`; in the first-order world nothing moves unless the
+  robot moves it). Without it the planner placed objects onto an object that a move had just hidden.
+- ``evidence="outcome"``: the outcome of each executed action updates the belief
+  (:meth:`condition_on_outcome`). A robot sees, at the next observation, whether the object it moved ended where
+  it was commanded to; the policy replays the action with the first-order executor for a target at each
+  possible placement. An action that went as the seen objects predict proves that no target stood in its way
+  (those placements leave the belief); one stopped by something unseen makes the placements that would have
+  stopped it exactly there ``block_weight`` times likelier (an unseen object other than the target may have done
+  it: Table I scenes of 8-10 objects hide about two), and those that would have stopped a push earlier impossible.
+  The worlds are then drawn from the weighted belief (:meth:`draw`). The policy never reads the target's pose or
+  the simulator's notes: only the next observation of the object it moved.
+
+- ``widen_beam``: when no plan of the beam reveals anything within ``max_depth`` actions, the search runs once
+  more with a beam of ``widen_beam`` (``decision_log`` records ``widened``). At 10 objects the narrow beam often
+  found no revealing plan and the policy wandered: a small first move that makes room for a suction (a push of
+  2 cm) ranks low by V and falls out of a beam of 6.
+
 The first action of the chosen plan is taken; the next decision searches again on the new observation, the rest
 of the last plan kept in the beam at every depth (so it is kept unless a better one is found). Deterministic: no
 random number is drawn but from the seeded generator, and ties keep enumeration order. ``seconds`` caps a
 decision's CPU time (checked per expanded node: the search stops and takes the best plan so far; ``decision_log``
 records ``capped``); the default, 30 s, bound in none of the README's runs (the longest decision took 6 s of wall
-time), so those results do not depend on the machine.
+time for v2, 19 s for v3's 25 scenes per density on the loaded shared machine), so those results do not depend on
+the machine.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 
@@ -77,14 +99,17 @@ class BeliefSearch(Hindsight):
     (searched further while nothing is revealed), ``beam``, ``placements_per_object`` (suction placements kept per
     object and state), ``failure_cost``, ``horizon`` (actions per trial, None: unknown), ``hidden_risk``,
     ``select`` ("ratio": the most revealed mass per expected cost; "value": the least V), ``seconds`` (the
-    per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's)."""
+    per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's),
+    ``remember_objects``, ``evidence`` ("outcome" or "none"), ``block_weight`` and ``widen_beam`` (see the module
+    docstring)."""
 
     name = "slax-belief"
     uses_horizon = True  # the registry passes the protocol's H (see the module docstring)
 
     def __init__(self, *args, samples: int = 64, depth: int = 3, beam: int = 6, placements_per_object: int = 2,
                  failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
-                 hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", **kwargs):
+                 hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
+                 block_weight: float = 8.0, remember_objects: bool = True, widen_beam: int = 12, **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
@@ -104,12 +129,25 @@ class BeliefSearch(Hindsight):
         self.select = select
         self._blocked: list = []  # boxes (x_lo, x_hi, y_lo, y_hi) where a placement failed: an unseen obstacle
         self._last = None  # (the suction taken last, the pose it predicts for its object)
+        if evidence not in ("outcome", "none"):
+            raise ValueError("evidence must be 'outcome' or 'none'")
+        self.evidence = evidence
+        self.block_weight = float(block_weight)
+        self._weights: dict = {}  # lattice key -> the placement's weight in the belief (1 when absent)
+        self._executed = None  # (the action taken last, the seen objects it was planned on)
+        self._template = None  # the observation's scene template (shelf, camera) at this decision
+        self.evidence_log: list = []  # per executed action: how its outcome changed the belief
+        self.remember_objects = remember_objects
+        self.widen_beam = widen_beam  # the beam of a second search when the first reveals nothing (0: none)
+        self._remembered: dict = {}  # name -> the object as last believed (seen, or remembered), last decision
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
         self._plan, self._expected = [], None
         self._blocked, self._last = [], None
         self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
+        self._weights, self._executed, self.evidence_log = {}, None, []
+        self._remembered = {}
 
     def worlds_for(self, template, placements: np.ndarray, seed: int):
         """(the worlds, (K,) bool: those still consistent with every observation). The worlds drawn at the first
@@ -150,6 +188,136 @@ class BeliefSearch(Hindsight):
         x, y = float(obj.center[0]), float(obj.center[1])
         if abs(x - (x_lo + x_hi) / 2) > 0.005 or abs(y - (y_lo + y_hi) / 2) > 0.005:
             self._blocked.append((x_lo, x_hi, y_lo, y_hi))
+
+    # ---- objects seen before and hidden now ---------------------------------------------------------------------
+    def decide(self, obs) -> Decision:
+        return super().decide(self.with_remembered(obs))
+
+    def with_remembered(self, obs):
+        """``obs`` with the objects seen earlier in this trial and hidden now added to ``known`` (and to the scene
+        template), where they were last believed to stand (``remember_objects``; privileged observation only,
+        where an object keeps its name from one observation to the next).
+
+        In the paper's first-order world nothing moves but the object the robot moves, so an object that the
+        robot did not touch since it was seen still stands there when another one, moved in front of it, hides
+        it. Forgetting it (the observation lists only what is seen now) makes the planner place objects onto it
+        (a placement put back) and believe the target may stand where it stands. The object the last action moved
+        is not remembered when it ends hidden: where it stopped is not known."""
+        if not self.remember_objects or getattr(obs, "belief", None) is not None:
+            return obs
+        moved = self._executed[0].name if self._executed is not None else None
+        seen = {o.name for o in obs.known}
+        kept = tuple(o for name, o in sorted(self._remembered.items()) if name not in seen and name != moved)
+        known = tuple(obs.known) + kept
+        self._remembered = {o.name: o for o in known}
+        if not kept:
+            return obs
+        return dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known))
+
+    # ---- what an executed action's outcome says about the target ---------------------------------------------
+    def condition_on_outcome(self, known) -> None:
+        """Updates the belief with the outcome of the action taken last (``evidence="outcome"``).
+
+        A robot knows where it commanded an object and sees where the object ended (the next observation: the
+        object moved less than commanded, or not at all); it does not know what stopped it. For every placement c
+        still possible, the action is replayed with the first-order executor on the objects seen before it (plus
+        any seen only now, where they stand now) and a target at c, giving the pose the object would have ended
+        at (the simulator's own rule: a push or a placement stops before the first obstacle; a blocked blade or
+        way out leaves it in place). Then, against the pose observed now:
+        - the outcome is what the seen objects alone predict: a target at c that would have stopped the object
+          cannot be there (removed from the belief; certain);
+        - something unseen stopped it: a target at c that would have stopped it exactly there explains the
+          outcome, and its weight is multiplied by ``block_weight`` (the odds of the target against a wholly
+          hidden object there: at 8-10 objects Table I scenes hide about two objects besides the target, so the
+          target is not certain); a target at c that would have stopped a push earlier than observed cannot be
+          there (removed); the others keep their weight.
+        The worlds are drawn anew from the weighted belief when a weight changed (:meth:`draw`)."""
+        executed, self._executed = self._executed, None
+        if executed is None or self.evidence != "outcome" or not self._consistent:
+            return
+        from slax_drake.policies.simulator import execute
+        from slax_drake.scene.model import Target, planar_pose
+
+        a, before = executed
+        now = {o.name: o for o in known}
+        if a.name not in now:
+            return
+        names = {o.name for o in before}
+        objects = tuple(before) + tuple(o for o in known if o.name not in names)
+        template = self._template
+        size = self.target_size()
+
+        def end_of(scene) -> np.ndarray:
+            after, _ = execute(scene, a, self.action_model)
+            return np.asarray(after.object_named(a.name).center[:2], dtype=float)
+
+        start = np.asarray(next(o for o in before if o.name == a.name).center[:2], dtype=float)
+        seen = np.asarray(now[a.name].center[:2], dtype=float)
+        alone = end_of(template.with_objects(objects))
+        tol = 0.003
+        keys = sorted(self._consistent)
+        centers = np.array(keys, dtype=float).reshape(-1, 2) * self.grid_step
+        near = self._near_action(objects, a, centers)
+        removed = explained = 0
+        certain = bool(np.linalg.norm(seen - alone) <= tol)
+        for key, c, close in zip(keys, centers, near):
+            if not close:
+                continue
+            target = Target(size, planar_pose(float(c[0]), float(c[1]), size[2] / 2.0, 0.0))
+            end = end_of(dataclasses.replace(template, objects=objects, target=target))
+            if np.linalg.norm(end - seen) <= tol:
+                if not certain and np.linalg.norm(end - alone) > tol:
+                    self._weights[key] = self._weights.get(key, 1.0) * self.block_weight
+                    explained += 1
+                continue
+            if np.linalg.norm(end - alone) <= tol:
+                continue  # the target there would not have touched it: unseen something else stopped it
+            if certain or (isinstance(a, Push) and np.linalg.norm(end - start) < np.linalg.norm(seen - start) - tol):
+                self._consistent.discard(key)
+                removed += 1
+        planned = np.asarray(apply_action(before, a)[[o.name for o in before].index(a.name)].center[:2], dtype=float)
+        self.evidence_log.append({"step": self._step, "action": a.describe(), "stopped": not certain,
+                                  "removed": removed, "explained": explained,
+                                  "as_planned": bool(np.linalg.norm(seen - planned) <= tol),
+                                  "seen_objects_predict": bool(np.linalg.norm(alone - planned) <= tol)})
+        if explained:
+            self._worlds = None  # drawn anew from the weighted belief
+
+    def _near_action(self, objects, a, centers: np.ndarray) -> np.ndarray:
+        """(K,) bool: the target placements that could touch action ``a``'s object, blade or ways out and in (a box
+        around the object's whole travel, widened by the target, the blade and the clearances); the others cannot
+        change its outcome."""
+        from slax_drake.scene.footprint import Footprint
+
+        fp = Footprint.of(next(o for o in objects if o.name == a.name))
+        ex, ey = fp.extents()
+        pad = max(self.target_size()[:2]) / 2 + 0.06
+        if isinstance(a, Push):
+            boxes = [(min(fp.x, fp.x + a.d) - ex, max(fp.x, fp.x + a.d) + ex, fp.y - ey, fp.y + ey)]
+        else:
+            front = -self._template.shelf.depth / 2
+            boxes = [(fp.x - ex, fp.x + ex, front, fp.y + ey), (fp.x + a.dx - ex, fp.x + a.dx + ex, front, a.dz + ey)]
+        near = np.zeros(len(centers), bool)
+        for x_lo, x_hi, y_lo, y_hi in boxes:
+            near |= ((centers[:, 0] >= x_lo - pad) & (centers[:, 0] <= x_hi + pad)
+                     & (centers[:, 1] >= y_lo - pad) & (centers[:, 1] <= y_hi + pad))
+        return near
+
+    def draw(self, placements: np.ndarray, seed: int) -> np.ndarray:
+        """``samples`` placements: :meth:`Hindsight.draw` (stratified, uniform) while every weight is 1; else one
+        per stratum of equal weight along x (then y), by the same seeded generator (systematic sampling of the
+        weighted belief, which :meth:`condition_on_outcome` set)."""
+        step = self.grid_step
+        w = np.array([self._weights.get((int(round(x / step)), int(round(y / step))), 1.0) for x, y in placements])
+        if not len(w) or np.all(w == 1.0):
+            return super().draw(placements, seed)
+        rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, self._step])
+        order = np.lexsort((placements[:, 1], placements[:, 0]))
+        cum = np.cumsum(w[order])
+        k = min(self.samples, len(placements))
+        u = (np.arange(k) + rng.random(k)) / k * cum[-1]
+        picks = order[np.minimum(np.searchsorted(cum, u, side="right"), len(order) - 1)]
+        return placements[picks]
 
     def placement_allowed(self, objects, a) -> bool:
         if not self._blocked:
@@ -313,7 +481,9 @@ class BeliefSearch(Hindsight):
         t0 = time.process_time()
         self._step += 1
         known = tuple(obs.known)
+        self._template = obs.scene_template
         self.note_outcome(known)
+        self.condition_on_outcome(known)
         cands = maximal_pushes_only(self.action_model_candidates(known))
         if not cands:
             return Decision.stop("no feasible action")
@@ -342,8 +512,38 @@ class BeliefSearch(Hindsight):
                 after = apply_action(node.objects, a)
                 c = self.move_cost(node.objects, a)
                 node = kept[i + 1] = self.child(worlds, node, a, after, c, remaining, next(counter))
-        seen_nodes = []  # every plan looked at (after merging duplicates)
         first_level = list(level)
+        seen_nodes = self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.beam)
+        if self.widen_beam > self.beam and not log["capped"] and not any(k.revealed > 0 for k in seen_nodes):
+            log["widened"] = True  # nothing revealed within max_depth: once more with a wider beam
+            seen_nodes += self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.widen_beam)
+        if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
+            best = max(seen_nodes, key=lambda k: (k.revealed / max(k.g, 1e-9), -k.value, -k.order))
+        else:
+            best = min(seen_nodes, key=lambda k: (k.value, len(k.plan), k.order))
+        log["revealed"] = round(best.revealed, 4)
+        log["value"] = round(best.value, 4)
+        log["plan"] = [a.describe() for a in best.plan]
+        log["seconds"] = round(time.process_time() - t0, 3)
+        first = best.plan[0]
+        if isinstance(first, Suction):
+            self._last = (self.placement_box(known, first), first.name)
+        self._executed = (first, known)
+        self._plan = list(best.plan[1:])
+        self._expected = state_key(apply_action(known, first))
+        ranked = sorted(first_level, key=lambda k: (k.value, k.order))
+        rest = [k.plan[0] for k in ranked if k.plan[0] != first]
+        rest += [a for a in cands if a != first and a not in rest]
+        return Decision((first, *rest))
+
+
+    def beam_search(self, worlds, first_level: list, kept: dict, remaining: int, counter, log: dict, t0: float,
+                    beam_width: int) -> list:
+        """Every plan looked at (duplicates merged per depth) by a beam of ``beam_width`` from the first moves
+        ``first_level``, ``kept`` (depth -> node: the rest of the last plan) kept in the beam, to ``depth``
+        actions, on to ``max_depth`` while no plan reveals anything; stops at the CPU cap (``log["capped"]``)."""
+        level = list(first_level)
+        seen_nodes = []  # every plan looked at (after merging duplicates)
         for depth in range(1, self.max_depth + 1):
             merged: dict = {}
             for k in level + ([kept[depth]] if depth in kept else []):
@@ -354,7 +554,7 @@ class BeliefSearch(Hindsight):
             level = sorted(merged.values(), key=lambda k: (k.value, k.order))
             seen_nodes.extend(level)
             level = [k for k in level if k.alive.any()]
-            beam = level[: self.beam]
+            beam = level[: beam_width]
             if depth in kept and kept[depth].alive.any() and all(k is not kept[depth] for k in beam):
                 if merged.get(state_key(kept[depth].objects)) is kept[depth]:
                     beam.append(kept[depth])
@@ -373,23 +573,7 @@ class BeliefSearch(Hindsight):
                     break
                 nxt.extend(self.expansions(worlds, k, self.moves(k.objects), remaining, counter))
             level = nxt
-        if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
-            best = max(seen_nodes, key=lambda k: (k.revealed / max(k.g, 1e-9), -k.value, -k.order))
-        else:
-            best = min(seen_nodes, key=lambda k: (k.value, len(k.plan), k.order))
-        log["revealed"] = round(best.revealed, 4)
-        log["value"] = round(best.value, 4)
-        log["plan"] = [a.describe() for a in best.plan]
-        log["seconds"] = round(time.process_time() - t0, 3)
-        first = best.plan[0]
-        if isinstance(first, Suction):
-            self._last = (self.placement_box(known, first), first.name)
-        self._plan = list(best.plan[1:])
-        self._expected = state_key(apply_action(known, first))
-        ranked = sorted(first_level, key=lambda k: (k.value, k.order))
-        rest = [k.plan[0] for k in ranked if k.plan[0] != first]
-        rest += [a for a in cands if a != first and a not in rest]
-        return Decision((first, *rest))
+        return seen_nodes
 
 
 @functools.lru_cache(maxsize=64)

@@ -53,6 +53,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
     "slax-belief": PolicyEntry("slax_drake.policies.belief:BeliefSearch"),
+    # slax-belief before v3 (remembered objects, actions' outcomes, wider beam): docs/results/slax_belief_v2_*
+    "slax-belief-v2": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
+                                  {"evidence": "none", "remember_objects": False, "widen_beam": 0}),
 }
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
