@@ -3,7 +3,7 @@ on rendered Table I frames with and without the L515 noise model. No physics: a 
 noisy frame do not seal.
 
     python benchmarks/bench_noisy_faces.py [--scenes-per-density 10] [--seed 0] [--densities 4,6,8,10]
-        [--no-offset-correction]
+        [--no-offset-correction] [--no-face-correction]
 
 Per scene (Table I's scenes, ``sim_configs/table1.yaml``, the physics benchmark's seeds): the scene is ray-cast at
 the camera's 640x480 (equal to Drake's render to 1e-6 m), optionally through
@@ -155,13 +155,17 @@ def main() -> None:
     parser.add_argument("--min-pixels", type=int, default=30, help="hypotheses of smaller segments are left out")
     parser.add_argument("--no-offset-correction", action="store_true",
                         help="the estimator without its range-offset correction (EstimatorConfig.correct_range_offset)")
+    parser.add_argument("--no-face-correction", action="store_true",
+                        help="camera-facing faces at the percentile edge (EstimatorConfig.face_from_points)")
     args = parser.parse_args()
     scenario = load_scenario(REPO / "sim_configs" / "table1.yaml")
     densities = [int(d) for d in args.densities.split(",")]
-    config = EstimatorConfig(correct_range_offset=not args.no_offset_correction)
+    config = EstimatorConfig(correct_range_offset=not args.no_offset_correction,
+                             face_from_points=not args.no_face_correction)
     suction = SuctionParameters()
     print(f"Table I scenes, {args.scenes_per_density} per density {densities}, seed {args.seed}; 640x480 -> "
-          f"{WIDTH} px; range-offset correction {'on' if config.correct_range_offset else 'off'}")
+          f"{WIDTH} px; range-offset correction {'on' if config.correct_range_offset else 'off'}, "
+          f"face correction {'on' if config.face_from_points else 'off'}")
     print(f"{'quantity':<12} {'noise':<5} {'n':>5} {'p10':>7} {'median':>7} {'p90':>7} {'p90|.|':>6}")
     for noisy in (False, True):
         r = measure(scenario, densities, args.scenes_per_density, args.seed, noisy, config, args.min_pixels)
