@@ -34,7 +34,7 @@ import math
 from pathlib import Path
 
 import numpy as np
-from shapely.geometry import LineString, Point
+from shapely.geometry import LineString
 
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import scene_seed
@@ -187,8 +187,10 @@ def main() -> None:
                   f"{np.mean(r['offset'] < 0):.0%} of scenes nearer than true")
             for lo, hi in ((-1.0, -0.5), (-0.5, 0.0), (0.0, 0.5), (0.5, 1.0)):
                 sel = (r["gap_u"] >= lo) & (r["gap_u"] < hi)
-                print(f"  u in [{lo:+.1f}, {hi:+.1f}): contacts {int(sel.sum()):3d}, gap median "
-                      f"{1000 * np.median(gap[sel]) if sel.any() else math.nan:+.1f} mm, any pull {pull[sel].mean() if sel.any() else math.nan:.0%}")
+                median = 1000 * np.median(gap[sel]) if sel.any() else math.nan
+                share = pull[sel].mean() if sel.any() else math.nan
+                print(f"  u in [{lo:+.1f}, {hi:+.1f}): contacts {int(sel.sum()):3d}, gap median {median:+.1f} mm, "
+                      f"any pull {share:.0%}")
 
 
 if __name__ == "__main__":

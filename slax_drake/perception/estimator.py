@@ -20,8 +20,9 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
 4. Extents along the box's two axes: the 0.5th and 99.5th percentiles of all the segment's points (side and top;
    robust to flying pixels), except, on a noisy frame, the camera-facing faces: range noise spreads a face's points
    both ways along the rays, so a low percentile lies in front of the face; the face is placed at the median of
-   its points near that edge (the band follows the range noise measured on the back panel, step 0), grown by half a pixel's footprint on the silhouette sides (pixel centres sample the
-   surface, the edge lies on average half a pixel beyond the outermost centre).
+   its points near that edge (the band follows the range noise measured on the back panel). The extents are
+   grown by half a pixel's footprint on the silhouette sides (pixel centres sample the surface, the edge lies on
+   average half a pixel beyond the outermost centre).
 5. The unseen depth -- the part of the object behind its visible surfaces -- is a stated prior
    (:class:`DepthPrior`): along each axis the box extends away from the camera to at least
 

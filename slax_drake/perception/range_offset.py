@@ -1,18 +1,22 @@
-"""A depth camera's range offset, measured on the shelf's own surfaces in the frame.
+"""A depth camera's range offset and range noise, measured on the shelf's own back panel in the frame.
 
 A time-of-flight camera's absolute accuracy is a range offset common to a whole frame sequence (the L515: ~5 mm
 to ~14 mm through 9 m; :mod:`slax_drake.perception.sensor_noise` models it as one draw per seed). It moves every
 surface the estimator fits, and so every hypothesis' front face, by the same few millimetres toward or away from
 the camera; a suction cup that stops 5 mm short of a face does not seal. The shelf's geometry is known (it is in
 the scenario, as it is to the planner), so the offset can be read off the frame: wherever the camera sees the back
-panel (y = depth / 2, facing the camera: the best gauge of a range error) of the bay, the depth it should read
+panel of the bay (y = depth / 2, facing the camera: the best gauge of a range error), the depth it should read
 there follows from the pixel's ray. (The support surface is seen near grazing incidence from the camera's height:
-a range error hardly moves its points, so it is no gauge.) The median difference over those pixels is the frame's range offset (metres along the optical axis,
-positive: the camera reads too far).
+a range error hardly moves its points, so it is no gauge.) The median difference, measured minus expected, over
+those pixels is the frame's range offset (metres along the optical axis, positive: the camera reads too far), and
+their spread about it (1.4826 times the median absolute deviation) the frame's per-pixel range noise, which the
+estimator needs to place a face amid its noisy points.
 
 Which pixels count: unsegmented, not target, with a return, whose back-projected point lies within ``band`` of
 the panel (farther ones are something else: an unsegmented object, a side wall) and whose ray meets the panel inside
-the bay's opening (|x| < width / 2, 0 < z < height). Fewer than ``min_pixels`` such pixels: no estimate (offset 0).
+the bay's opening (|x| < width / 2, 0 < z < height). Fewer than ``min_pixels`` such pixels: no estimate (0).
+The correction assumes the camera's pose relative to the shelf is right: an error of that pose along the optical
+axis reads as an offset too (and is then corrected with it, up to ``max_offset``).
 """
 
 from __future__ import annotations
