@@ -2,6 +2,9 @@
 
 For each segment of an :class:`~slax_drake.perception.observation.Observation`:
 
+0. The frame's range offset (a time-of-flight camera's absolute accuracy, common to the whole frame) and its
+   per-pixel range noise are measured on the shelf's back panel where the camera sees it; the offset is taken off
+   every return (:mod:`~slax_drake.perception.range_offset`; ``correct_range_offset``).
 1. Its pixels are back-projected into S (``segmentation.back_project``).
    Points within ``floor_band`` of the support surface or ``back_wall_band`` of the back panel are left out:
    range noise (and a range offset) moves floor and panel pixels past the segmentation's margins and into
@@ -15,8 +18,11 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
    points: the yaw in [0, pi/2) that packs them closest to two perpendicular edges (the "closeness" criterion of
    L-shape fitting on a 2 degree grid, then the least rms distance to the nearest edge within +-2 degrees). Yaw 0 when fewer than ``min_fit_points`` points are available.
 4. Extents along the box's two axes: the 0.5th and 99.5th percentiles of all the segment's points (side and top;
-   robust to flying pixels), grown by half a pixel's footprint on the silhouette sides (pixel centres sample the
-   surface, the edge lies on average half a pixel beyond the outermost centre).
+   robust to flying pixels), except, on a noisy frame, the camera-facing faces: range noise spreads a face's points
+   both ways along the rays, so a low percentile lies in front of the face; the face is placed at the median of
+   its points near that edge (the band follows the range noise measured on the back panel). The extents are
+   grown by half a pixel's footprint on the silhouette sides (pixel centres sample the surface, the edge lies on
+   average half a pixel beyond the outermost centre).
 5. The unseen depth -- the part of the object behind its visible surfaces -- is a stated prior
    (:class:`DepthPrior`): along each axis the box extends away from the camera to at least
 
@@ -52,6 +58,7 @@ import numpy as np
 
 from slax_drake.errors import ObservationError
 from slax_drake.perception.observation import Observation
+from slax_drake.perception.range_offset import shelf_range_calibration, without_range_offset
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
@@ -99,6 +106,16 @@ class EstimatorConfig:
     back_wall_band: float = 0.015  # ... and this close to the back panel (a range offset joins it to segments)
     overlap_tolerance: float = 1e-4  # m^2 of footprint overlap allowed between hypotheses
     wall_clearance: float = 0.0  # the prior keeps boxes this far inside the walls
+    # The frame's range offset, measured on the shelf's back panel and support surface, is taken off every return
+    # before fitting (:mod:`slax_drake.perception.range_offset`); False: the depths are used as they come.
+    correct_range_offset: bool = True
+    # On a noisy frame (range noise measured on the back panel at least ``min_face_noise``) a box's camera-facing
+    # faces are placed amid their points (:func:`_facing_edges`: the median of the face's points within twice
+    # ``face_band_sigmas`` noise deviations of the percentile edge), not at the low percentile, which the noise
+    # pulls toward the camera; False: the percentile always. 2.576: the 0.5th percentile of a normal distribution.
+    face_from_points: bool = True
+    face_band_sigmas: float = 2.576
+    min_face_noise: float = 0.0005
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,6 +166,10 @@ class _Box:
 def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorConfig = EstimatorConfig()
                      ) -> list[Hypothesis]:
     """One hypothesis per occluder segment with at least ``config.min_points`` valid pixels, in segment order."""
+    calibration = shelf_range_calibration(observation, shelf)
+    if config.correct_range_offset:
+        observation = without_range_offset(observation, calibration.offset)
+    noise = calibration.sigma if calibration.sigma >= config.min_face_noise else 0.0
     camera = observation.camera
     eye = camera.position[:2]
     labels = observation.segmentation
@@ -162,7 +183,7 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
         if len(p) < config.min_points:
             continue
         left, right = _occluded_sides(observation, mask, sid, config.occluded_row_fraction)
-        fits.append((sid, int(mask.sum()), left, right, _fit(p, columns, eye, camera, left, right, config)))
+        fits.append((sid, int(mask.sum()), left, right, _fit(p, columns, eye, camera, left, right, config, noise)))
     boxes = [f[4] for f in fits]
     _limit_priors(boxes, shelf, config)
     _separate(boxes, eye, config)
@@ -200,7 +221,7 @@ class _Fit:
 
 
 def _fit(p: np.ndarray, columns: np.ndarray, eye: np.ndarray, camera, occluded_left: bool,
-         occluded_right: bool, config: EstimatorConfig) -> _Fit:
+         occluded_right: bool, config: EstimatorConfig, noise: float = 0.0) -> _Fit:
     above = p[:, 2] > config.floor_band  # range noise lifts the floor around an object's base into its segment
     if np.count_nonzero(above) >= config.min_points:
         p, columns = p[above], columns[above]
@@ -225,7 +246,8 @@ def _fit(p: np.ndarray, columns: np.ndarray, eye: np.ndarray, camera, occluded_l
                      and np.hypot(cx - eye[0], cy - eye[1]) > np.median(np.hypot(*(side - eye).T)))
         if plausible and circle_rms < config.cylinder_residual_ratio * rect_rms:
             return _Fit("cylinder", None, (cx, cy, r), height, circle_rms, circle_rms)
-    box = _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, config)
+    box = _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, config,
+                       face_xy=p[is_side, :2], noise=noise)
     return _Fit("box", box, None, height, rect_rms if math.isfinite(rect_rms) else 0.0,
                 rect_rms if math.isfinite(rect_rms) else pixel)
 
@@ -311,15 +333,22 @@ def _circle_least_squares(xy: np.ndarray) -> tuple[float, float, float] | None:
     return float(c[0] + mean[0]), float(c[1] + mean[1]), float(r)
 
 
-def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, config) -> _Box:
-    """Percentile extents along the yawed axes, half-pixel growth on the silhouette sides, and the depth
-    prior's extension away from the camera."""
+def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, config, face_xy=None,
+                 noise: float = 0.0) -> _Box:
+    """Percentile extents along the yawed axes, the camera-facing faces placed amid their points on a noisy frame
+    (:func:`_facing_edges`, from ``face_xy``, the side points, and ``noise``, the range noise in metres),
+    half-pixel growth on the silhouette sides, and the depth prior's extension away from the camera."""
     c, s = math.cos(yaw), math.sin(yaw)
     axes = np.array([[c, s], [-s, c]])  # rows e1, e2
     coords = xy @ axes.T
     q = config.edge_percentile
     lo = np.percentile(coords, q, axis=0)
     hi = np.percentile(coords, 100 - q, axis=0)
+    if config.face_from_points and noise > 0 and face_xy is not None and len(face_xy) >= config.min_fit_points:
+        centre = axes.T @ ((lo + hi) / 2)
+        view = (centre - eye) / max(float(np.linalg.norm(centre - eye)), 1e-9)
+        spread = noise * np.abs(axes @ view)  # the range noise along each axis (it acts along the rays)
+        _facing_edges(face_xy @ axes.T, lo, hi, axes @ eye, 2.0 * config.face_band_sigmas * spread)
     centre = axes.T @ ((lo + hi) / 2)
     view = centre - eye
     view /= max(np.linalg.norm(view), 1e-9)
@@ -349,6 +378,31 @@ def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, con
             elif grow_lo and not grow_hi:
                 lo[k] = hi[k] - need
     return _Box(yaw, lo, hi, observed_hi, observed_lo, height)
+
+
+def _facing_edges(coords: np.ndarray, lo: np.ndarray, hi: np.ndarray, eye_c: np.ndarray, band: np.ndarray) -> None:
+    """Moves each camera-facing edge (lo or hi along a box axis, in place) into the middle of its face's noisy
+    points. Range noise spreads a face's points both ways along the rays, so a low percentile of them (the edge
+    as it comes in) lies about ``EstimatorConfig.face_band_sigmas`` standard deviations in front of the face; the
+    face's points within ``band[k]`` (twice that) of the edge straddle the face evenly, and their median is the
+    new edge. A face's points are the side points nearer its edge than the other camera-facing edge (a turned box
+    shows two faces). The edge only moves away from the camera and never past the far edge; edges seen across
+    (silhouette sides) are kept."""
+    facing = [k for k in range(2) if eye_c[k] < lo[k] or eye_c[k] > hi[k]]
+    if not facing:
+        return
+    edge = {k: lo[k] if eye_c[k] < lo[k] else hi[k] for k in facing}
+    distance = np.stack([np.abs(coords[:, k] - edge[k]) for k in facing], axis=1)
+    owner = np.argmin(distance, axis=1)
+    for i, k in enumerate(facing):
+        mine = coords[(owner == i) & (distance[:, i] <= band[k]), k]
+        if len(mine) == 0:
+            continue
+        face = float(np.median(mine))
+        if eye_c[k] < lo[k]:
+            lo[k] = min(max(face, lo[k]), hi[k])
+        else:
+            hi[k] = max(min(face, hi[k]), lo[k])
 
 
 def _box_footprint(box: _Box, fraction: float = 1.0) -> Footprint:
