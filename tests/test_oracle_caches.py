@@ -58,9 +58,9 @@ class UncachedModel(ActionModel):
         tool_rects = tuple(self._tool_rects(fp, sign))
         return tool_rects, tuple(self._swept_rects(tool_rects, sign))
 
-    def object_geometry(self, objects, rasters=True):
+    def object_geometry(self, objects, rasters=True, fixed=()):
         self._geometry.clear()
-        return super().object_geometry(objects, rasters)
+        return super().object_geometry(objects, rasters, fixed)
 
 
 @pytest.mark.parametrize("profile", ["paper", "station"])
@@ -77,6 +77,25 @@ def test_a_cached_models_candidates_equal_an_uncached_models(paper, profile):
             got = warm.enumerate(objects, fixed=fixed)
             assert got.feasible == expected.feasible
             assert got.rejected == expected.rejected
+
+
+def test_a_state_contexts_footprint_ids_come_from_one_id_table(paper, monkeypatch):
+    """The footprint ids of a state (its objects and the fixed target) name their footprints in the model's id
+    table as it stands after the state is read, and differ where the footprints differ, even when the table fills
+    up between the objects and the target (the pairwise cache keyed by ids must not mix two numberings)."""
+    import slax_drake.policies.actions as actions
+
+    model = ActionModel(shelf_of(paper), paper.camera.position, tool_config(paper, "paper"))
+    states, fixed = walk(paper, model, 8, 1, steps=0)
+    objects = states[0]
+    moved = tuple(dataclasses.replace(o, X_SO=o.X_SO.copy()) for o in objects)  # other instances ...
+    for o in moved:
+        o.X_SO[0, 3] += 0.001  # ... and other footprints
+    monkeypatch.setattr(actions, "PAIR_CACHE_SIZE", 2 * len(objects) + 1)  # the target of `moved` overflows it
+    _StateContext(model, objects, fixed)
+    ctx = _StateContext(model, moved, fixed)
+    assert all(model._fp_ids.get(fp) == i for fp, i in zip(ctx.all_fps, ctx.ids))
+    assert len(set(ctx.ids)) == len(set(ctx.all_fps))
 
 
 def test_the_hidden_space_near_an_object_equals_the_whole_rasters_rows(paper):

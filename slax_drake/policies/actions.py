@@ -186,21 +186,23 @@ class ActionModel:
         return Candidates(feasible, rejected)
 
     # ----------------------------------------------------------------------------------------------------
-    def object_geometry(self, objects, rasters: bool = True) -> list["ObjectGeometry"]:
+    def object_geometry(self, objects, rasters: bool = True, fixed=()) -> list["ObjectGeometry"]:
         """Each object's :class:`ObjectGeometry`, cached by identity (a search passes the same unmoved object
         instances in thousands of states; the cache holds them, so their ids are not reused while it lives). The
         footprint ids are small ints naming footprints (equal footprints, equal ids) for the keys of
         :meth:`_pair`: hashing ints is cheaper than hashing footprints at every test. One call names all objects
-        of a state: when the id table is full it is emptied first, with everything keyed by its ids, so no id of
-        the returned list is stale. ``rasters``: with the footprint and shadow masks (:meth:`rasters`)."""
-        if len(self._fp_ids) + len(objects) > PAIR_CACHE_SIZE:
+        of a state (``objects``, then ``fixed``): when the id table is full it is emptied first, with everything
+        keyed by its ids, so no id of the returned list is stale. ``rasters``: ``objects`` with the footprint and
+        shadow masks (:meth:`rasters`); ``fixed`` (objects the model never moves) always without."""
+        named = [(obj, rasters) for obj in objects] + [(obj, False) for obj in fixed]
+        if len(self._fp_ids) + len(named) > PAIR_CACHE_SIZE:
             self._fp_ids.clear()
             self._pair_cache.clear()
             self._geometry.clear()
-        elif len(self._geometry) + len(objects) > GEOMETRY_CACHE_SIZE:
+        elif len(self._geometry) + len(named) > GEOMETRY_CACHE_SIZE:
             self._geometry.clear()
         out = []
-        for obj in objects:
+        for obj, rasters in named:
             hit = self._geometry.get(id(obj))
             if hit is None or hit[0] is not obj or (rasters and hit[1].mask is None):
                 fp = Footprint.of(obj)
@@ -700,7 +702,7 @@ class _StateContext:
     def __init__(self, model: ActionModel, objects, fixed):
         self.objects = objects
         self.all_objs = objects + fixed
-        geometry = model.object_geometry(objects) + model.object_geometry(fixed, rasters=False)
+        geometry = model.object_geometry(objects, fixed=fixed)  # one call: the ids of one table
         self.fps = [g.fp for g in geometry[:len(objects)]]
         self.all_fps = [g.fp for g in geometry]
         self.ids = [g.id for g in geometry]  # keys of ActionModel._pair
