@@ -55,6 +55,7 @@ def main(argv=None) -> int:
     from slax_drake.scene.sampling import sample_scene
 
     try:
+        earlier = _earlier_candidates(args.compare) if args.compare else None  # read before the long run
         scenario = load_scenario(args.config)
         baseline = parse_tool_rules(args.baseline) if args.baseline else None
         seed = scenario.protocol.seed if args.seed is None else args.seed
@@ -138,8 +139,8 @@ def main(argv=None) -> int:
     print("planner rejections by first reason:")
     for reason, count in why.most_common(8):
         print(f"  {count:4d}  {reason}")
-    if args.compare:
-        _compare(json.loads(open(args.compare).read()).get("candidates", []), planned)
+    if earlier is not None:
+        _compare(earlier, planned)
     if args.json:
         from pathlib import Path
 
@@ -150,6 +151,21 @@ def main(argv=None) -> int:
         summary["candidates"] = planned
         write_text_atomic(Path(args.json), json.dumps(summary, indent=1) + "\n")
     return 0
+
+
+def _earlier_candidates(path: str) -> list:
+    """The candidate records of an earlier run's --json at ``path``; BenchmarkError (one line, exit 2) when it
+    cannot be read or holds none."""
+    from slax_drake.errors import BenchmarkError
+
+    try:
+        candidates = json.loads(open(path).read()).get("candidates")
+    except (OSError, ValueError, AttributeError) as e:
+        raise BenchmarkError(f"--compare {path}: not an earlier run's --json ({e})") from None
+    fields = {"n", "scene", "action", "feasible", "plan_s", "reason"}
+    if not isinstance(candidates, list) or not all(isinstance(c, dict) and fields <= set(c) for c in candidates):
+        raise BenchmarkError(f"--compare {path}: no candidate records (a --json of this script holds them)")
+    return candidates
 
 
 def _compare(earlier: list, planned: list) -> None:
