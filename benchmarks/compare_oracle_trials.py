@@ -6,7 +6,8 @@ search), trial by trial: outcome, steps, cost, how the search ended, and its CPU
 Each folder is a ``slax-drake benchmark --out`` folder (its ``trials/<policy>/<density>_<index>.json``). Prints
 one line per trial that differs, a count per policy, and exits 1 when a trial proven optimal in OLD has another
 outcome or step count in NEW, or when NEW has more trials cut by time than OLD (the bar for a change that should
-make the search faster without changing what it proves).
+make the search faster without changing what it proves). A folder without trial files, or a policy with no trial
+in both folders, is refused (one line, exit 2): an empty comparison would pass.
 """
 
 import argparse
@@ -24,12 +25,20 @@ def search_seconds(trial: dict) -> float:
     return sum(s["seconds"] for s in trial.get("oracle_searches", []))
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("old", type=Path)
     ap.add_argument("new", type=Path)
     ap.add_argument("--policies", default="oracle-p,oracle-p+s")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
+    for folder in (args.old, args.new):
+        if not (folder / "trials").is_dir():
+            print(f"error: {folder} holds no trial files (not a slax-drake benchmark --out folder)", file=sys.stderr)
+            return 2
+    for policy in args.policies.split(","):
+        if not set(load(args.old, policy)) & set(load(args.new, policy)):
+            print(f"error: no trial of {policy} in both {args.old} and {args.new}", file=sys.stderr)
+            return 2
     failed = False
     print("| policy | trials in both | proven optimal in old | of those changed | cut by time old -> new | "
           "infeasible old -> new | success old -> new | search CPU s old -> new | the same, trials cut in neither |")

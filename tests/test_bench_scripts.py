@@ -26,3 +26,20 @@ def test_bench_reach_rule_refuses_an_unreadable_compare_file_before_planning(tmp
     assert captured.out == ""  # refused before the first scene is planned
     err = captured.err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error: --compare ")
+
+
+def test_compare_oracle_trials_refuses_folders_without_common_trials(tmp_path, capsys):
+    """A mistyped folder or policy compared nothing and passed (exit 0); now it is refused."""
+    compare = script("compare_oracle_trials").main
+    old, new = tmp_path / "old", tmp_path / "new"
+    for folder in (old, new):
+        (folder / "trials" / "oracle-p").mkdir(parents=True)
+        (folder / "trials" / "oracle-p" / "4_0.json").write_text(
+            '{"success": true, "steps": 2, "cost": 2.0, "oracle_status": "optimal", "oracle_searches": []}')
+    assert compare([str(old), str(new), "--policies", "oracle-p"]) == 0
+    capsys.readouterr()
+    for argv in ([str(old), str(tmp_path / "typo"), "--policies", "oracle-p"],
+                 [str(old), str(new), "--policies", "oracle-p+s"]):
+        assert compare(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("error: ")
