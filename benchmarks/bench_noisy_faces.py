@@ -147,19 +147,30 @@ def quantiles(values, scale=1000.0):
     return f"{p10:+7.1f} {p50:+7.1f} {p90:+7.1f} {np.percentile(np.abs(v), 90):6.1f}"
 
 
-def main() -> None:
+def densities_arg(text: str) -> list[int]:
+    """``--densities``: comma-separated object counts, each at least 1."""
+    try:
+        values = [int(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"takes comma-separated whole numbers of at least 1 (got {text!r})")
+    return values
+
+
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes-per-density", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0, help="protocol seed (scene seeds as the physics benchmark)")
-    parser.add_argument("--densities", default="4,6,8,10")
+    parser.add_argument("--densities", type=densities_arg, default=[4, 6, 8, 10])
     parser.add_argument("--min-pixels", type=int, default=30, help="hypotheses of smaller segments are left out")
     parser.add_argument("--no-offset-correction", action="store_true",
                         help="the estimator without its range-offset correction (EstimatorConfig.correct_range_offset)")
     parser.add_argument("--no-face-correction", action="store_true",
                         help="camera-facing faces at the percentile edge (EstimatorConfig.face_from_points)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     scenario = load_scenario(REPO / "sim_configs" / "table1.yaml")
-    densities = [int(d) for d in args.densities.split(",")]
+    densities = args.densities
     config = EstimatorConfig(correct_range_offset=not args.no_offset_correction,
                              face_from_points=not args.no_face_correction)
     suction = SuctionParameters()

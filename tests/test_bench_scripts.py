@@ -43,3 +43,11 @@ def test_compare_oracle_trials_refuses_folders_without_common_trials(tmp_path, c
         assert compare(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("error: ")
+
+
+@pytest.mark.parametrize("densities", ["4,x", "", "0,4"])
+def test_bench_noisy_faces_refuses_bad_densities(capsys, densities):
+    with pytest.raises(SystemExit) as exit_info:
+        script("bench_noisy_faces").main(["--densities", densities])
+    assert exit_info.value.code == 2
+    assert "--densities: takes comma-separated whole numbers" in capsys.readouterr().err
