@@ -2,13 +2,14 @@
 run uses the same ones.
 
 Every setting that changes a trial's outcome goes into ``<out>/settings.json`` (the physics benchmark:
-``<out>/physics_settings.json``) before the first trial runs: the
-scenario's content (a SHA-256 of the parsed scenario, less the fields that only choose *which* trials run: the
-protocol's seed, densities and scenes per density), the protocol seed, the distribution model (perception), the
-target size, the observation mode (privileged or camera, with its segmentation and sensor noise), the horizon per object, the suction cost, the visibility threshold, the action-model rules (and the content of a reach map they name) and, per
-policy, its class and constructor options (the physics benchmark adds the station file's content and object
-sleep). A run into a folder recorded with other values is refused before anything runs, with one line naming the
-first setting that differs; a policy new to the folder is added to the record.
+``<out>/physics_settings.json``) before the first trial runs: the scenario's content (a SHA-256 of the parsed
+scenario, less the fields that only choose *which* trials run: the protocol's seed, densities and scenes per
+density), the protocol seed, the distribution model (perception), the target size, the observation mode (privileged
+or camera, with its segmentation and sensor noise), the horizon per object, the suction cost, the visibility
+threshold, the action-model rules (and the content of a reach map they name) and, per policy, its class and
+constructor options (the physics benchmark adds the station file's content and object sleep). A run into a folder
+recorded with other values is refused before anything runs, with one line naming the first setting that differs; a
+policy new to the folder is added to the record.
 """
 
 from __future__ import annotations

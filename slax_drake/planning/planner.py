@@ -28,14 +28,15 @@
    waypoints ask for them; the suction command is on during the segments that carry the object.
 
 When the waypoints in front of the opening fail (out of reach, no free way) or a straight segment cannot be kept
-(``STRAIGHT_SEGMENT_FAILURES``), the action is planned again with
-the tool's tip 1 cm in front of the opening (``APPROACH_MARGINS``); when a carried segment fails, a suctioned
-object is carried across at shallower depths inside the shelf and then, pulled all the way out, with the tool
-turned ``CARRY_YAWS`` each way about the cup's vertical axis (:func:`slax_drake.planning.waypoints.carry_options`:
-straight ahead of the shoulder the arm cannot hold the tube along S y that close to the robot; turned it can). IK solves and free paths are memoised per planning world (one decision's candidates share
-their approach waypoints). Any failure returns a :class:`Rejection` with a reason naming the waypoint (and the
-colliding body, or what the carried object meets); the reason of the last variant tried leads, the others
-follow in brackets. Timings of each stage are kept (seconds of wall clock) for the benchmark.
+(``STRAIGHT_SEGMENT_FAILURES``), the action is planned again with the tool's tip 1 cm in front of the opening
+(``APPROACH_MARGINS``); when a carried segment fails, a suctioned object is carried across at shallower depths
+inside the shelf and then, pulled all the way out, with the tool turned ``CARRY_YAWS`` each way about the cup's
+vertical axis (:func:`slax_drake.planning.waypoints.carry_options`: straight ahead of the shoulder the arm cannot
+hold the tube along S y that close to the robot; turned it can). IK solves and free paths are memoised per planning
+world (one decision's candidates share their approach waypoints). Any failure returns a :class:`Rejection` with a
+reason naming the waypoint (and the colliding body, or what the carried object meets); the reason of the last
+variant tried leads, the others follow in brackets. Timings of each stage are kept (seconds of wall clock) for the
+benchmark.
 """
 
 from __future__ import annotations

@@ -536,7 +536,6 @@ class BeliefSearch(Hindsight):
         rest += [a for a in cands if a != first and a not in rest]
         return Decision((first, *rest))
 
-
     def beam_search(self, worlds, first_level: list, kept: dict, remaining: int, counter, log: dict, t0: float,
                     beam_width: int) -> list:
         """Every plan looked at (duplicates merged per depth) by a beam of ``beam_width`` from the first moves
