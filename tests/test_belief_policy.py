@@ -106,6 +106,14 @@ def test_belief_rejects_an_unknown_selection(paper):
         BeliefSearch(policy.action_model, policy.distribution, select="greedy")
 
 
+@pytest.mark.parametrize("option", [{"evidence": "all"}, {"block_weight": 0.0}, {"block_weight": -1.0},
+                                    {"widen_beam": -1}, {"widen_beam": 2.5}])
+def test_belief_rejects_v3_options_out_of_range(paper, option):
+    policy = make_policy("slax-belief", paper)
+    with pytest.raises(ValueError):
+        BeliefSearch(policy.action_model, policy.distribution, **option)
+
+
 def test_registry_passes_the_protocol_horizon_to_slax_belief_only(paper):
     assert make_policy("slax-belief", paper, horizon=7).horizon == 7
     assert make_policy("slax-belief", paper).horizon is None  # no horizon given: planned as unknown

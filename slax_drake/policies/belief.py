@@ -132,6 +132,10 @@ class BeliefSearch(Hindsight):
         if evidence not in ("outcome", "none"):
             raise ValueError("evidence must be 'outcome' or 'none'")
         self.evidence = evidence
+        if not block_weight > 0:
+            raise ValueError(f"block_weight must be positive (got {block_weight!r})")
+        if isinstance(widen_beam, bool) or not isinstance(widen_beam, int) or widen_beam < 0:
+            raise ValueError(f"widen_beam must be a whole number, 0 or more (got {widen_beam!r})")
         self.block_weight = float(block_weight)
         self._weights: dict = {}  # lattice key -> the placement's weight in the belief (1 when absent)
         self._executed = None  # (the action taken last, the seen objects it was planned on)
