@@ -106,16 +106,17 @@ class EstimatorConfig:
     back_wall_band: float = 0.015  # ... and this close to the back panel (a range offset joins it to segments)
     overlap_tolerance: float = 1e-4  # m^2 of footprint overlap allowed between hypotheses
     wall_clearance: float = 0.0  # the prior keeps boxes this far inside the walls
-    # The frame's range offset, measured on the shelf's back panel and support surface, is taken off every return
-    # before fitting (:mod:`slax_drake.perception.range_offset`); False: the depths are used as they come.
+    # The frame's range offset, measured on the shelf's back panel (not the support surface: see
+    # :mod:`slax_drake.perception.range_offset`), is taken off every return before fitting; False: the depths are
+    # used as they come.
     correct_range_offset: bool = True
     # On a noisy frame (range noise measured on the back panel at least ``min_face_noise``) a box's camera-facing
     # faces are placed amid their points (:func:`_facing_edges`: the median of the face's points within twice
     # ``face_band_sigmas`` noise deviations of the percentile edge), not at the low percentile, which the noise
     # pulls toward the camera; False: the percentile always. 2.576: the 0.5th percentile of a normal distribution.
     face_from_points: bool = True
-    face_band_sigmas: float = 2.576
-    min_face_noise: float = 0.0005
+    face_band_sigmas: float = 2.576  # standard deviations of the range noise
+    min_face_noise: float = 0.0005  # m: range noise below this counts as a clean frame
 
 
 @dataclasses.dataclass(frozen=True)

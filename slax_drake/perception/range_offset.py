@@ -30,7 +30,7 @@ from slax_drake.scene.model import Shelf
 
 @dataclasses.dataclass(frozen=True)
 class RangeOffsetConfig:
-    """Tuning of :func:`shelf_range_calibration` (metres, degrees)."""
+    """Tuning of :func:`shelf_range_calibration` (metres)."""
 
     band: float = 0.02  # a back-panel pixel's back-projected point lies this close to the panel
     min_pixels: int = 30  # fewer shelf pixels: no estimate
