@@ -92,35 +92,17 @@ def test_midway_rotation_halves_a_turn_and_keeps_an_unturned_segment_exact():
 def test_a_carry_the_arm_cannot_make_straight_is_planned_turned_and_checks():
     """Table I, 10 objects, scene 0: object_9 stands at the front right, straight ahead of the shoulder; its
     pull-out and translate poses had no IK solution at any carrying depth (benchmarks/diagnose_carry.py)."""
-    from slax_drake.config import load_scenario
-    from slax_drake.evaluation.table1 import scene_seed
-    from slax_drake.hardware.check import check_trajectory
-    from slax_drake.hardware.check_action import make_checker
-    from slax_drake.hardware.trajectory_file import ExportedTrajectory, Motion
-    from slax_drake.planning.world import PlanningWorld
     from slax_drake.policies.actions import apply_action
-    from slax_drake.scene.sampling import sample_scene
+    from table1_suction_plans import assert_motion_checks, plan_table1_suction
 
-    scenario = load_scenario("sim_configs/table1.yaml")
-    scene = sample_scene(scenario, 10, scene_seed(scenario.protocol.seed, 10, 0),
-                         target_size=tuple(scenario.target.sizes[0]))
-    checker = make_checker(scene, "sim_configs/station_sim_shelf.yaml")
-    action = next(a for a in checker.candidates().feasible
-                  if a.name == "object_9" and a.kind == "suction" and abs(a.dx + 0.05) < 1e-9)
-    motion = checker.planner.plan(action, checker.scene)
+    checker, action, motion = plan_table1_suction(10, 0, "object_9", -0.05)
     assert motion.feasible, motion.reason
     wps = {w.label: w for w in motion.waypoints}
     turn = np.arctan2(wps["pull out"].X_SF[1, 0], wps["pull out"].X_SF[0, 0]) - \
         np.arctan2(wps["seal"].X_SF[1, 0], wps["seal"].X_SF[0, 0])
     assert abs(abs(turn) - CARRY_YAWS[0]) < 1e-9
+    world = assert_motion_checks(checker, action, motion)
     traj = motion.trajectory
-    report = check_trajectory(ExportedTrajectory([Motion(start_time=0.0, times=traj.times, q=traj.q, v=traj.v,
-                                                         a=traj.a)]), margin=0.01)
-    assert report.ok, report.summary()
-    others = checker.scene.with_objects(tuple(o for o in checker.scene.objects if o.name != action.name))
-    world = PlanningWorld(checker.planner.scenario, others)
-    assert all(world.checker.CheckConfigsCollisionFree([world.full_q(q) for q in traj.q[::10]]))
-    assert motion.max_deviation < 0.005
     # the object, held from the seal, is where the action model puts it at the release
     times = dict(motion.waypoint_times)
     q_seal = traj.value(times["seal"])[0]
