@@ -16,7 +16,7 @@ PACKAGE_DIR = Path(__file__).resolve().parents[1] / "slax_drake"
 # The stages, lowest first (a module of slax_drake/<name>.py or slax_drake/<name>/ belongs to stage <name>).
 STAGES = (
     # foundations shared by every stage
-    "errors", "lazy_exports", "arguments", "resources", "io", "backends", "config",
+    "errors", "lazy_exports", "arguments", "resources", "io", "backends", "caches", "config",
     # the pipeline, in the order data flows
     "scene", "occupancy", "station", "dataset", "perception", "policies", "planning", "systems", "evaluation",
     "hardware", "cli",

@@ -48,6 +48,7 @@ import math
 
 import numpy as np
 
+from slax_drake.caches import memo
 from slax_drake.policies.rules import RULES, ToolConfig, tool_config_problem
 from slax_drake.policies.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
@@ -219,12 +220,7 @@ class ActionModel:
         footprint. Such a test depends only on the two footprints, the direction and the tool (which never
         changes), and a search meets the same pairs in thousands of states, so the cache returns exactly what
         ``compute()`` would. The cache is emptied when it holds ``PAIR_CACHE_SIZE`` entries."""
-        hit = self._pair_cache.get(key)
-        if hit is None:
-            if len(self._pair_cache) >= PAIR_CACHE_SIZE:
-                self._pair_cache.clear()
-            hit = self._pair_cache[key] = compute()
-        return hit
+        return memo(self._pair_cache, key, compute, PAIR_CACHE_SIZE)
 
     def _pushes(self, ctx, i, sign, feasible, rejected):
         t, shelf = self.tool, self.shelf
@@ -504,15 +500,11 @@ class ActionModel:
     def _push_rects(self, fp: Footprint, sign: int):
         """(:meth:`push_tool_rects`, :meth:`push_swept_rects`) of ``fp``, cached by footprint and direction: they
         depend on nothing else (the tool is fixed), and a search asks for them thousands of times."""
-        key = (fp, sign)
-        hit = self._push_rects_cache.get(key)
-        if hit is None:
+        def compute():
             tool_rects = tuple(self._tool_rects(fp, sign))
-            hit = (tool_rects, tuple(self._swept_rects(tool_rects, sign)))
-            if len(self._push_rects_cache) >= 20_000:
-                self._push_rects_cache.clear()
-            self._push_rects_cache[key] = hit
-        return hit
+            return tool_rects, tuple(self._swept_rects(tool_rects, sign))
+
+        return memo(self._push_rects_cache, (fp, sign), compute, PAIR_CACHE_SIZE)
 
     def push_tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
         """The tool's outline when inserted to push ``fp`` toward ``sign`` x: (centre x, centre y, half x,
@@ -740,12 +732,14 @@ class _StateContext:
         near = (a[:, 2 * axis + 1] >= lo) & (a[:, 2 * axis] <= hi)
         return [j for j in range(self._n) if j != i and near[j]]
 
-    def _open(self, mask: np.ndarray) -> np.ndarray:
+    def _open(self, mask: np.ndarray, r0: int = 0) -> np.ndarray:
         """Hidden space where an unseen object could stand: free of known objects, a disc
-        ``min_hidden_width`` wide fits (unchanged when min_hidden_width is 0)."""
+        ``min_hidden_width`` wide fits (unchanged when min_hidden_width is 0). ``mask``: the raster's rows from
+        ``r0`` on (all of them by default)."""
         if self._radius_cells <= 0:
             return mask
-        return open_with_disc(mask & ~self.occupied if self.occupied is not None else mask, self._radius_cells)
+        free = mask & ~self.occupied[r0:r0 + len(mask)] if self.occupied is not None else mask
+        return open_with_disc(free, self._radius_cells)
 
     def hidden_others_near(self, i) -> tuple[int, int, np.ndarray]:
         """(r0, r1, rows r0 .. r1 - 1 of :meth:`hidden_others`), the rows of object i's footprint mask with a
@@ -762,11 +756,7 @@ class _StateContext:
                 pad = 2 * self._radius_cells + 2
                 r0, r1 = max(0, int(rows[0]) - pad), min(ny, int(rows[-1]) + 1 + pad)
             others = [s[r0:r1] for j, s in enumerate(self.shadows) if j != i]
-            mask = erode(_union(others, (r1 - r0, self._shape[1])))
-            if self._radius_cells > 0:
-                free = mask & ~self.occupied[r0:r1] if self.occupied is not None else mask
-                mask = open_with_disc(free, self._radius_cells)
-            hit = self._hidden_others_near[i] = (r0, r1, mask)
+            hit = self._hidden_others_near[i] = (r0, r1, self._open(erode(_union(others, (r1 - r0, self._shape[1]))), r0))
         return hit
 
     def hidden_others(self, i) -> np.ndarray:

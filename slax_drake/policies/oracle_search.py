@@ -33,6 +33,7 @@ import itertools
 import math
 import time
 
+from slax_drake.caches import IdentityMemo
 from slax_drake.policies.actions import FRONT_MARGIN, ActionModel, Push, apply_action
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import state_key
@@ -141,13 +142,7 @@ class StateKeys:
     cache holds the objects, so their ids are not reused while it lives). Equal to ``state_key`` always."""
 
     def __init__(self):
-        self._by_identity: dict = {}
-
-    def of_object(self, obj) -> tuple:
-        hit = self._by_identity.get(id(obj))
-        if hit is None or hit[0] is not obj:
-            hit = self._by_identity[id(obj)] = (obj, state_key((obj,))[0])
-        return hit[1]
+        self.of_object = IdentityMemo(lambda obj: state_key((obj,))[0])
 
     def of_state(self, objects) -> tuple:
         return tuple(self.of_object(o) for o in objects)
@@ -165,7 +160,7 @@ class PushCache:
         self.margin = commutation_margin(model)
         self.keys = keys or StateKeys()
         self.cache: dict = {}
-        self._geometry: dict = {}  # id(obj) -> (obj, (footprint box, shadow box), push band), see _boxes_and_band
+        self._boxes_and_band = IdentityMemo(self._geometry)  # by identity: they depend on the object's pose only
         self.hits = self.misses = 0
 
     def band(self, fp: Footprint) -> Box:
@@ -176,15 +171,11 @@ class PushCache:
         half_w = self.model.shelf.width / 2
         return -half_w, half_w, y_lo, y_hi
 
-    def _boxes_and_band(self, obj):
-        """(footprint box, shadow box) and push band of ``obj``, cached by identity (they depend on its pose only)."""
-        hit = self._geometry.get(id(obj))
-        if hit is None or hit[0] is not obj:
-            fp = Footprint.of(obj)
-            ex, ey = fp.extents()
-            boxes = ((fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey), shadow_box(self.model, fp))
-            hit = self._geometry[id(obj)] = (obj, boxes, self.band(fp))
-        return hit[1], hit[2]
+    def _geometry(self, obj):
+        """((footprint box, shadow box), push band) of ``obj``."""
+        fp = Footprint.of(obj)
+        ex, ey = fp.extents()
+        return ((fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey), shadow_box(self.model, fp)), self.band(fp)
 
     def pushes(self, objects) -> list:
         geometry = [self._boxes_and_band(o) for o in objects]

@@ -19,6 +19,7 @@ import itertools
 import numpy as np
 from shapely.geometry import MultiPoint
 
+from slax_drake.caches import IdentityMemo
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.raycast import SceneRaycaster
 from slax_drake.scene.surface import box_surface_points
@@ -43,19 +44,12 @@ class TargetOcclusion:
         self.hull = MultiPoint(hull_pts).convex_hull
         self._weights = 1 << np.arange(self.n, dtype=object) if self.n else np.zeros(0, dtype=object)
         self._cache: dict = {}
-        self._by_identity: dict = {}  # id(obj) -> (obj, bits): a search passes the same unmoved objects again and again
+        self._bits_of = IdentityMemo(self._bits_by_pose, limit=200_000)  # a search passes the same objects again
         self.raycasts = 0
 
     def hidden_bits(self, obj) -> int:
         """The points of U that ``obj`` hides on its own, as a bitset."""
-        seen_before = self._by_identity.get(id(obj))
-        if seen_before is not None and seen_before[0] is obj:  # (holding obj keeps its id from being reused)
-            return seen_before[1]
-        bits = self._bits_by_pose(obj)
-        if len(self._by_identity) >= 200_000:
-            self._by_identity.clear()
-        self._by_identity[id(obj)] = (obj, bits)
-        return bits
+        return self._bits_of(obj)
 
     def _bits_by_pose(self, obj) -> int:
         key = (obj.name, round(float(obj.center[0]), 5), round(float(obj.center[1]), 5), round(obj.yaw, 5))

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from slax_drake.caches import memo
 from slax_drake.scene.model import SceneObject, Shelf
 
 
@@ -100,21 +101,17 @@ def _separating_axes(yaw_a: float, half_a: tuple[float, float], yaw_b: float,
     extents r_a + r_b (m): what :func:`clear_of` compares the centres' separation with. Pure in its arguments,
     so cached (searches test the same pairs of shapes thousands of times); the values are computed exactly as
     before the cache, so the tests' results do not change."""
-    key = (yaw_a, half_a, yaw_b, half_b)
-    hit = _AXES_CACHE.get(key)
-    if hit is not None:
-        return hit
-    a_axes = _axes(yaw_a)
-    b_axes = _axes(yaw_b)
-    out = []
-    for u in (*a_axes, *b_axes):
-        r_a = half_a[0] * abs(a_axes[0] @ u) + half_a[1] * abs(a_axes[1] @ u)
-        r_b = half_b[0] * abs(b_axes[0] @ u) + half_b[1] * abs(b_axes[1] @ u)
-        out.append((u[0], u[1], r_a + r_b))
-    if len(_AXES_CACHE) >= 100_000:
-        _AXES_CACHE.clear()
-    hit = _AXES_CACHE[key] = tuple(out)
-    return hit
+    def compute():
+        a_axes = _axes(yaw_a)
+        b_axes = _axes(yaw_b)
+        out = []
+        for u in (*a_axes, *b_axes):
+            r_a = half_a[0] * abs(a_axes[0] @ u) + half_a[1] * abs(a_axes[1] @ u)
+            r_b = half_b[0] * abs(b_axes[0] @ u) + half_b[1] * abs(b_axes[1] @ u)
+            out.append((u[0], u[1], r_a + r_b))
+        return tuple(out)
+
+    return memo(_AXES_CACHE, (yaw_a, half_a, yaw_b, half_b), compute, 100_000)
 
 
 def footprints_clear(a: Footprint, b: Footprint, clearance: float = 0.0) -> bool:
