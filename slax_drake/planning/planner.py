@@ -531,16 +531,14 @@ def _carried_hits(world, qa, qb) -> str | None:
 
 
 def _midway_rotation(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
-    """The rotation halfway from Ra to Rb (about the axis of Rb Ra^T, half its angle; Ra when they are equal):
-    the tool's orientation at a segment's midpoint when it turns along the segment (a turned carry)."""
-    R = Rb @ Ra.T
-    angle = float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
-    if np.array_equal(Ra, Rb) or angle < 1e-6:
+    """The rotation halfway from Ra to Rb (Drake's quaternion slerp at 1/2; Ra itself when they are equal): the
+    tool's orientation at a segment's midpoint when it turns along the segment (a turned carry)."""
+    if np.array_equal(Ra, Rb):
         return Ra.copy()
-    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / (2.0 * np.sin(angle))
-    K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    half = angle / 2.0
-    return (np.eye(3) + np.sin(half) * K + (1.0 - np.cos(half)) * K @ K) @ Ra
+    from pydrake.math import RotationMatrix
+
+    qa, qb = RotationMatrix(Ra).ToQuaternion(), RotationMatrix(Rb).ToQuaternion()
+    return RotationMatrix(qa.slerp(0.5, qb)).matrix()
 
 
 def _distance_to_segment(p, a, b) -> float:
