@@ -1,7 +1,8 @@
 """Writes the README's camera-against-privileged Table I comparison from pairs of result folders (never typed by
 hand): success rate per density and overall for every non-oracle policy present in both folders of a pair, the
 difference in points, and the mean decision time per step; one row per policy and pair (a pair per distribution
-model: ground truth, the shipped network).
+model: ground truth, the shipped network; several pairs may share one, e.g. the paper's policies and ours run into
+separate folders). Rows are grouped by distribution model, policies in name order.
 
     python benchmarks/table1_observation_modes.py docs/results/table1_privileged docs/results/table1_camera \
         [docs/results/table1_privileged_learned docs/results/table1_camera_learned] [--write README.md]
@@ -51,6 +52,8 @@ def comparison(folders: list[Path]) -> str:
              "| policy | distributions | " + " | ".join("All" if k == "all" else f"{k} objects" for k in KEYS)
              + " | decision time per step, privileged / camera (s) |",
              "|---" * (len(KEYS) + 3) + "|"]
+    rows = []  # (distribution model's rank, policy, row): grouped by distribution model, policies in name order
+    order = list(dict.fromkeys(priv["meta"]["perception"] for priv, _ in pairs))
     for priv, cam in pairs:
         for p in [p for p in priv["policies"] if p in cam["policies"] and not p.startswith("oracle")]:
             cells = []
@@ -59,7 +62,9 @@ def comparison(folders: list[Path]) -> str:
                 cells.append(f"{100 * a:.0f} / {100 * b:.0f} ({100 * (b - a):+.0f})")
             t = (priv["policies"][p]["all"].get("mean_decision_seconds"),
                  cam["policies"][p]["all"].get("mean_decision_seconds"))
-            lines.append(f"| {p} | {priv['meta']['perception']} | " + " | ".join(cells) + f" | {t[0]} / {t[1]} |")
+            rows.append((order.index(priv["meta"]["perception"]), p,
+                         f"| {p} | {priv['meta']['perception']} | " + " | ".join(cells) + f" | {t[0]} / {t[1]} |"))
+    lines += [row for _, _, row in sorted(rows)]
     return "\n".join(lines) + "\n"
 
 
