@@ -12,7 +12,6 @@ placement, upright.
 """
 
 import argparse
-import dataclasses
 import math
 import time
 

@@ -2,7 +2,6 @@
 
 import copy
 
-import numpy as np
 import pytest
 from trial_records import FOLDED_INTO_TORSO, fake_trial
 

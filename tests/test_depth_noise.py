@@ -135,7 +135,7 @@ def test_segmentation_and_estimator_tolerate_the_noise(sim_scenario, resolution)
                 split += 1
                 continue
             true_fp, fp = Footprint.of(obj), Footprint.of(hypotheses[sid].object)
-            (tx, ty), (hx, hy) = true_fp.extents(), fp.extents()
+            (_, ty), (hx, hy) = true_fp.extents(), fp.extents()
             assert abs((fp.y - hy) - (true_fp.y - ty)) < 0.02, (scene.seed, i)
             # The x-extent of the segment's returns (a face at a grazing angle may return nothing or little, which
             # may land in another segment, and a yawed box's unseen back corners may reach farther).

@@ -413,7 +413,7 @@ class ActionModel:
         if path_rule:
             hidden_o = ctx.hidden_others(i)
             if any(hidden_o[:r, c].any() for c, r in zip(cols, first_rows)):
-                rejected.append(Rejected(what, f"path out of the shelf crosses space hidden from the camera"))
+                rejected.append(Rejected(what, "path out of the shelf crosses space hidden from the camera"))
                 return
         q = (float(cx), float(cy), float(cz))
         # Placements on a lattice around the object: x' = x + a res, y' = y + b res.

@@ -80,7 +80,6 @@ def action_regions(model: ActionModel, objects, action) -> tuple[list[Box], list
     decide the action's feasibility and its candidate set (the object's sweep, the tool's lanes, the band to
     the wall in a push's direction, where its stopper may stand; a suction's ways out and in), the shadow boxes
     the space the object hides before and after. They depend only on the moved object's pose and the action."""
-    t = model.tool
     obj = next(o for o in objects if o.name == action.name)
     fp = Footprint.of(obj)
     ex, ey = fp.extents()

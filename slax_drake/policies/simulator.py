@@ -23,7 +23,7 @@ import time
 import numpy as np
 
 from slax_drake.policies.actions import (
-    BLADE_CONTACT_CLEARANCE, FRONT_MARGIN, ActionModel, Push, Suction, apply_action,
+    BLADE_CONTACT_CLEARANCE, ActionModel, Push, Suction, apply_action,
 )
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import Scene

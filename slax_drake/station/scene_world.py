@@ -129,7 +129,7 @@ def add_scene_objects(plant, scene: Scene, density: float, include_target: bool 
     from pydrake.geometry import Box, Cylinder, ProximityProperties, Sphere
     from pydrake.multibody.plant import CoulombFriction
     from pydrake.multibody.tree import SpatialInertia, UnitInertia
-    from pydrake.geometry import AddCompliantHydroelasticProperties, AddContactMaterial  # noqa: F401
+    from pydrake.geometry import AddContactMaterial
     from pydrake.math import RigidTransform
 
     items = list(scene.objects)
@@ -181,7 +181,7 @@ def set_default_object_poses(plant, scene: Scene, bodies: SceneBodies, X_WS) -> 
 
 def assign_render_labels(scene_graph, plant, shelf_instance, robot_instance, bodies: SceneBodies) -> None:
     """Sets the perception role: shelf label 0, objects i + 1, target last; the robot gets no perception role."""
-    from pydrake.geometry import PerceptionProperties, RenderLabel, Role, RoleAssign, MakePhongIllustrationProperties  # noqa: F401
+    from pydrake.geometry import PerceptionProperties, RenderLabel, Role, RoleAssign
 
     inspector = scene_graph.model_inspector()
     source_id = plant.get_source_id()
