@@ -88,9 +88,7 @@ def test_a_state_contexts_footprint_ids_come_from_one_id_table(paper, monkeypatc
     model = ActionModel(shelf_of(paper), paper.camera.position, tool_config(paper, "paper"))
     states, fixed = walk(paper, model, 8, 1, steps=0)
     objects = states[0]
-    moved = tuple(dataclasses.replace(o, X_SO=o.X_SO.copy()) for o in objects)  # other instances ...
-    for o in moved:
-        o.X_SO[0, 3] += 0.001  # ... and other footprints
+    moved = tuple(o.moved_to(o.center[0] + 0.001, o.center[1]) for o in objects)  # other instances and footprints
     monkeypatch.setattr(actions, "PAIR_CACHE_SIZE", 2 * len(objects) + 1)  # the target of `moved` overflows it
     _StateContext(model, objects, fixed)
     ctx = _StateContext(model, moved, fixed)

@@ -32,13 +32,24 @@ class Shelf:
 @dataclasses.dataclass(frozen=True)
 class SceneObject:
     """An occluding object: ``shape`` "box" or "cylinder", ``size`` [x, y, z], its pose X_SO (4x4) and, when the
-    scenario draws masses, its ``mass`` (kg)."""
+    scenario draws masses, its ``mass`` (kg).
+
+    X_SO is a read-only float array (a writable one given is copied first): the search caches of the action model
+    key footprints by the object's identity, so an object whose pose changed in place would read another pose's
+    cached footprint. A moved object is a new one (:meth:`moved_to`, ``dataclasses.replace``)."""
 
     name: str
     shape: str
     size: tuple[float, float, float]
     X_SO: np.ndarray
     mass: float | None = None  # kg; None: from the scenario's density (slax_drake.scene.mass.object_mass)
+
+    def __post_init__(self):
+        X = self.X_SO
+        if not (isinstance(X, np.ndarray) and not X.flags.writeable and X.base is None and X.dtype == np.float64):
+            X = np.array(X, dtype=float)
+            X.flags.writeable = False
+            object.__setattr__(self, "X_SO", X)
 
     @property
     def center(self) -> np.ndarray:
@@ -63,6 +74,7 @@ class SceneObject:
         """The same object translated to (x, y) on the support surface."""
         X = self.X_SO.copy()
         X[0, 3], X[1, 3] = x, y
+        X.flags.writeable = False  # taken as it is (see the class docstring)
         return dataclasses.replace(self, X_SO=X)
 
     def to_dict(self) -> dict:
