@@ -1,0 +1,129 @@
+"""slax-belief in camera mode (issue 16, camera-mode drop): the hypotheses' assumed unseen depth
+(``camera_depth``), the memory of hypotheses hidden now (``camera_memory``: matched across frames by where they
+stand, never acted on) and the outcome evidence's tolerance on estimated poses; the privileged path is untouched."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from slax_drake.config import load_scenario
+from slax_drake.policies.actions import Push, Suction
+from slax_drake.policies.belief import REMEMBERED
+from slax_drake.policies.registry import make_policy
+from slax_drake.policies.simulator import CameraObserver, observation_for
+from slax_drake.scene import Camera
+from slax_drake.scene.footprint import Footprint
+from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
+
+TARGET = (0.06, 0.06, 0.06)
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return load_scenario("sim_configs/table1.yaml")
+
+
+def box(name, x, y, sx, sy, sz):
+    return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, 0.0))
+
+
+def scene_of(paper, objects):
+    return Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), tuple(objects),
+                 Target(TARGET, planar_pose(-0.2, 0.22, 0.03, 0.0)), 7)
+
+
+def observer(scene):
+    return CameraObserver(scene.shelf, scene.camera, TARGET, width=160)
+
+
+def test_camera_depth_makes_every_box_hypothesis_at_least_that_deep(paper):
+    """A 0.16 m deep box seen face on and from above its far edge is not seen: the observer's hypothesis is as
+    deep as the part the frame shows (at least the smallest depth, 0.06 m); with ``camera_depth`` 0.13 the
+    policy's is 0.13 m deep, its front face where the frame shows it."""
+    scene = scene_of(paper, [box("deep", 0.05, 0.0, 0.12, 0.16, 0.15)])
+    obs, _ = observer(scene).observe(scene)
+    policy = make_policy("slax-belief", paper, horizon=2, policy_options={"camera_depth": 0.13})
+    deeper = policy.with_camera_hypotheses(obs)
+    (seen,), (assumed,) = obs.known, deeper.known
+    assert seen.name == assumed.name and deeper.belief.known == deeper.known
+    front = lambda o: Footprint.of(o).y - Footprint.of(o).extents()[1]  # noqa: E731
+    assert 0.06 - 1e-9 <= seen.size[1] < 0.12 and assumed.size[1] == pytest.approx(0.13, abs=0.002)
+    assert front(assumed) == pytest.approx(front(seen), abs=1e-9)
+    assert deeper.scene_template.objects == deeper.known
+    np.testing.assert_array_equal(deeper.p1d, obs.p1d)
+    as_seen = make_policy("slax-belief", paper, horizon=2, policy_options={"camera_depth": None})
+    assert as_seen.with_camera_hypotheses(obs) is obs
+
+
+def test_camera_options_leave_a_privileged_observation_alone(paper):
+    scene = scene_of(paper, [box("deep", 0.05, 0.0, 0.12, 0.16, 0.15)])
+    policy = make_policy("slax-belief", paper, horizon=2, policy_options={"camera_depth": 0.13,
+                                                                          "camera_memory": True})
+    policy.reset(scene)
+    obs = observation_for(policy, scene)
+    assert obs.belief is None and policy.with_camera_hypotheses(obs) is obs
+
+
+def _hidden_after_push(paper):
+    """A tall wide box beside a small one; pushing the tall one in front of the small one hides it wholly."""
+    small = box("small", 0.0, 0.05, 0.10, 0.08, 0.12)
+    tall = box("tall", 0.2, -0.2, 0.26, 0.06, 0.40)
+    return scene_of(paper, [small, tall]), scene_of(paper, [small, tall.moved_to(0.0, -0.2)])
+
+
+def test_camera_memory_keeps_an_untouched_hypothesis_that_a_move_hid(paper):
+    before, after = _hidden_after_push(paper)
+    cam = observer(before)
+    first, names = cam.observe(before)
+    inverse = {v: k for k, v in names.items()}
+    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"camera_memory": True})
+    policy.reset(first)
+    seen = policy.with_remembered(first)
+    assert {names[o.name] for o in seen.known} == {"small", "tall"}
+    policy._executed = (Push(inverse["tall"], (0.2, -0.23, 0.05), -0.2), seen.known)
+    second, names2 = cam.observe(after)
+    assert set(names2.values()) == {"tall"}  # the small box is hidden now
+    kept = policy.with_remembered(second)
+    remembered = [o for o in kept.known if o.name.startswith(REMEMBERED)]
+    assert len(remembered) == 1 and len(kept.known) == 2
+    small_then = next(o for o in seen.known if names[o.name] == "small")
+    assert np.array_equal(remembered[0].center, small_then.center) and remembered[0].size == small_then.size
+    assert remembered[0] in kept.scene_template.objects
+    # an obstacle, never acted on: the camera shows no segment of it
+    actions = policy.action_model.enumerate(kept.known).feasible
+    assert actions and all(not a.name.startswith(REMEMBERED) for a in actions)
+    moves = policy.moves(kept.known)
+    assert moves and all(not a.name.startswith(REMEMBERED) for a, _, _ in moves)
+    # the privileged-mode switch alone does not remember in camera mode (the behaviour before camera_memory)
+    old = make_policy("slax-belief", paper, horizon=4, policy_options={"camera_memory": False})
+    old.reset(first)
+    old.with_remembered(first)
+    old._executed = policy._executed
+    assert old.with_remembered(second) is second
+
+
+def test_camera_memory_forgets_the_moved_hypothesis_and_one_the_frame_sees_through(paper):
+    before, after = _hidden_after_push(paper)
+    cam = observer(before)
+    first, names = cam.observe(before)
+    inverse = {v: k for k, v in names.items()}
+    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"camera_memory": True})
+    policy.reset(first)
+    seen = policy.with_remembered(first)
+    # the small box was the one moved (here: taken away): not remembered
+    policy._executed = (Suction(inverse["small"], (0.0, 0.01, 0.06), 0.0, 0.2), seen.known)
+    gone = scene_of(paper, [o for o in before.objects if o.name != "small"])
+    frame = cam.observe(gone)[0]
+    assert [o.name for o in policy.with_remembered(frame).known] == [o.name for o in frame.known]
+    # untouched but the frame shows the floor where it was believed to stand: not remembered either
+    policy._remembered = {o.name: o for o in seen.known}
+    policy._executed = (Push(inverse["tall"], (0.2, -0.23, 0.05), 0.02), seen.known)
+    assert all(not o.name.startswith(REMEMBERED) for o in policy.with_remembered(frame).known)
+
+
+def test_camera_outcome_tolerance_is_used_on_camera_frames_only(paper):
+    with pytest.raises(ValueError):
+        make_policy("slax-belief", paper, horizon=2, policy_options={"camera_outcome_tolerance": 0.0})
+    with pytest.raises(ValueError):
+        make_policy("slax-belief", paper, horizon=2, policy_options={"camera_depth": -0.1})
