@@ -2,7 +2,7 @@
 into. Prints Markdown.
 
     python benchmarks/camera_divergence.py CAMERA_FOLDER PRIVILEGED_FOLDER [--policy slax-belief]
-        [--densities 8,10] [--config sim_configs/table1.yaml] [--profile paper]
+        [--densities 8,10] [--config sim_configs/table1.yaml] [--profile paper] [--privileged-policy NAME]
 
 Both folders hold ``trials/<policy>/DD_NNNN.json`` for the same scenes (same protocol seed). Per scene: both
 outcomes, the first executed action that differs (actions name the true objects in both modes) and the number of
@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.config import load_scenario
-from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.policies.actions import Push, Suction
 from slax_drake.policies.registry import make_policy
 from slax_drake.policies.simulator import execute
@@ -129,6 +128,7 @@ def main():
     ap.add_argument("camera")
     ap.add_argument("privileged")
     ap.add_argument("--policy", default="slax-belief")
+    ap.add_argument("--privileged-policy", default=None, help="the policy's name in PRIVILEGED_FOLDER (default: --policy)")
     ap.add_argument("--densities", default="8,10")
     ap.add_argument("--config", default="sim_configs/table1.yaml")
     ap.add_argument("--profile", default="paper")
@@ -143,11 +143,12 @@ def main():
         print("|---|---|---|---|---|---|")
         classes = {"fail": collections.Counter(), "all": collections.Counter()}
         for path in sorted(Path(args.camera, "trials", args.policy).glob(f"{density:02d}_*.json")):
-            ppath = Path(args.privileged, "trials", args.policy, path.name)
+            ppath = Path(args.privileged, "trials", args.privileged_policy or args.policy, path.name)
             if not ppath.exists():
                 continue
             c, p = json.loads(path.read_text()), json.loads(ppath.read_text())
-            assert c["seed"] == p["seed"] == scene_seed(0, density, c["index"]) or True
+            if c["seed"] != p["seed"]:
+                raise SystemExit(f"{path} and {ppath} are trials of different scenes (seeds {c['seed']}, {p['seed']})")
             k = first_difference(c["actions"], p["actions"])
             where = "same" if k is None else (
                 f"{k + 1}: {c['actions'][k] if k < len(c['actions']) else '-'} / "

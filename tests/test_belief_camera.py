@@ -127,3 +127,29 @@ def test_camera_outcome_tolerance_is_used_on_camera_frames_only(paper):
         make_policy("slax-belief", paper, horizon=2, policy_options={"camera_outcome_tolerance": 0.0})
     with pytest.raises(ValueError):
         make_policy("slax-belief", paper, horizon=2, policy_options={"camera_depth": -0.1})
+
+
+def test_maybe_occupied_keeps_placements_in_the_assumed_depth_at_a_lower_weight(paper):
+    """Behind a box whose far part the frame does not show: with ``camera_depth`` alone the target's placements
+    there are excluded (the deeper hypothesis fills them); with ``maybe_occupied`` they stay possible, and only
+    those weigh ``maybe_occupied`` in the draw of the worlds."""
+    scene = scene_of(paper, [box("deep", 0.0, -0.1, 0.30, 0.16, 0.30)])
+    obs, _ = observer(scene).observe(scene)
+    (seen,) = obs.known
+    probe = (0.0, round((Footprint.of(seen).y + Footprint.of(seen).extents()[1] + 0.04) / 0.01) * 0.01)
+    found = {}
+    for weight in (None, 0.5):
+        policy = make_policy("slax-belief", paper, horizon=2, policy_options={"camera_depth": 0.13,
+                                                                              "maybe_occupied": weight})
+        policy.reset(obs)
+        policy._camera_mode = True
+        deeper = policy.with_camera_hypotheses(obs)
+        placements = policy.placements(deeper)
+        keys = {(int(round(x / 0.01)), int(round(y / 0.01))) for x, y in placements}
+        found[weight] = (keys, set(policy._maybe))
+    probe_key = (int(round(probe[0] / 0.01)), int(round(probe[1] / 0.01)))
+    assert probe_key not in found[None][0] and not found[None][1]
+    assert probe_key in found[0.5][0] and probe_key in found[0.5][1]
+    assert found[None][0] < found[0.5][0] and found[0.5][1] == found[0.5][0] - found[None][0]
+    with pytest.raises(ValueError):
+        make_policy("slax-belief", paper, horizon=2, policy_options={"maybe_occupied": 1.5})

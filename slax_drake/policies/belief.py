@@ -134,7 +134,7 @@ class BeliefSearch(Hindsight):
                  hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
                  block_weight: float = 8.0, remember_objects: bool = True, widen_beam: int = 12,
                  camera_depth: float | None = None, camera_memory: bool = False,
-                 camera_outcome_tolerance: float = 0.003, **kwargs):
+                 camera_outcome_tolerance: float = 0.003, maybe_occupied: float | None = None, **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
@@ -178,6 +178,11 @@ class BeliefSearch(Hindsight):
         self.camera_outcome_tolerance = float(camera_outcome_tolerance)  # m, outcome evidence on estimated poses
         self._action_model = _NoActionsOnRemembered(self._action_model)
         self._camera_mode = False  # the last observation was a camera frame's
+        if maybe_occupied is not None and not 0 < maybe_occupied <= 1:
+            raise ValueError(f"maybe_occupied must be in (0, 1] or None (got {maybe_occupied!r})")
+        self.maybe_occupied = maybe_occupied  # camera mode: the weight of a placement in a hypothesis' assumed depth
+        self._as_observed: dict = {}  # camera mode with camera_depth: name -> the observer's hypothesis (least depth)
+        self._maybe: frozenset = frozenset()  # lattice keys of the placements weighed by maybe_occupied now
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -186,6 +191,7 @@ class BeliefSearch(Hindsight):
         self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
         self._weights, self._executed, self.evidence_log = {}, None, []
         self._remembered = {}
+        self._as_observed, self._maybe = {}, frozenset()
 
     def worlds_for(self, template, placements: np.ndarray, seed: int):
         """(the worlds, (K,) bool: those still consistent with every observation). The worlds drawn at the first
@@ -224,7 +230,8 @@ class BeliefSearch(Hindsight):
         if obj is None:
             return
         x, y = float(obj.center[0]), float(obj.center[1])
-        if abs(x - (x_lo + x_hi) / 2) > 0.005 or abs(y - (y_lo + y_hi) / 2) > 0.005:
+        limit = max(0.005, self.camera_outcome_tolerance) if self._camera_mode else 0.005  # estimated poses: noisier
+        if abs(x - (x_lo + x_hi) / 2) > limit or abs(y - (y_lo + y_hi) / 2) > limit:
             self._blocked.append((x_lo, x_hi, y_lo, y_hi))
 
     # ---- objects seen before and hidden now ---------------------------------------------------------------------
@@ -240,8 +247,10 @@ class BeliefSearch(Hindsight):
         run the moved object, or another one, into the unseen rest of a seen object. Privileged observation, or
         ``camera_depth`` None: ``obs`` unchanged."""
         belief = getattr(obs, "belief", None)
+        self._as_observed = {}
         if belief is None or self.camera_depth is None:
             return obs
+        self._as_observed = {o.name: o for o in obs.known}
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.estimator import DepthPrior, EstimatorConfig, estimate_objects
 
@@ -318,6 +327,29 @@ class BeliefSearch(Hindsight):
             names.add(label)
             out.append(o if label == o.name else dataclasses.replace(o, name=label))
         return tuple(out)
+
+    def placements(self, obs) -> np.ndarray:
+        """:meth:`Hindsight.placements`; in camera mode with ``camera_depth`` and ``maybe_occupied``, judged against
+        the observer's hypotheses (each as deep as the frame shows, at least the smallest object depth) rather than
+        the deeper ones the actions are checked against: a placement in the part of a hypothesis that only the
+        assumed depth fills is possible, with weight ``maybe_occupied`` in the worlds' draw (:meth:`draw`)."""
+        shallow = self._as_observed
+        if self.maybe_occupied is None or not shallow:
+            self._maybe = frozenset()
+            return super().placements(obs)
+        from slax_drake.scene.footprint import Footprint, clear_of
+
+        objects = tuple(shallow.get(o.name, o) for o in obs.known)
+        out = super().placements(dataclasses.replace(obs, known=objects,
+                                                     scene_template=obs.scene_template.with_objects(objects)))
+        half = (self.target_size()[0] / 2, self.target_size()[1] / 2)
+        inside = np.zeros(len(out), bool)
+        for o in obs.known:
+            if o.name in shallow and len(out):
+                inside |= ~clear_of("box", out, 0.0, half, Footprint.of(o), 0.0)
+        step = self.grid_step
+        self._maybe = frozenset((int(round(x / step)), int(round(y / step))) for x, y in out[inside])
+        return out
 
     # ---- what an executed action's outcome says about the target ---------------------------------------------
     def condition_on_outcome(self, known) -> None:
@@ -411,9 +443,10 @@ class BeliefSearch(Hindsight):
     def draw(self, placements: np.ndarray, seed: int) -> np.ndarray:
         """``samples`` placements: :meth:`Hindsight.draw` (stratified, uniform) while every weight is 1; else one
         per stratum of equal weight along x (then y), by the same seeded generator (systematic sampling of the
-        weighted belief, which :meth:`condition_on_outcome` set)."""
+        weighted belief, which :meth:`condition_on_outcome` and, in camera mode, :meth:`placements` set)."""
         step = self.grid_step
-        w = np.array([self._weights.get((int(round(x / step)), int(round(y / step))), 1.0) for x, y in placements])
+        keys = [(int(round(x / step)), int(round(y / step))) for x, y in placements]
+        w = np.array([self._weights.get(k, 1.0) * (self.maybe_occupied if k in self._maybe else 1.0) for k in keys])
         if not len(w) or np.all(w == 1.0):
             return super().draw(placements, seed)
         rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, self._step])
