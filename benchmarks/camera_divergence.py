@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import dataclasses
 import json
 import re
 from pathlib import Path
@@ -69,8 +70,7 @@ def blockers(scene, action, model) -> list[str]:
         if n2 != note or not np.array_equal(e2, end):
             found.append(o.name)
     if scene.target is not None:
-        n2, e2 = _outcome(scene.with_target(None) if hasattr(scene, "with_target") else
-                          __import__("dataclasses").replace(scene, target=None), action, model)
+        n2, e2 = _outcome(dataclasses.replace(scene, target=None), action, model)
         if n2 != note or not np.array_equal(e2, end):
             found.append("target")
     return found
@@ -78,7 +78,7 @@ def blockers(scene, action, model) -> list[str]:
 
 def classify_trial(scenario, trial: dict, model, width: int = 160) -> list[tuple[int, str, str]]:
     """(step, note kind, blocker class) for every wasted action of a camera trial (see the module docstring)."""
-    density, index = trial["density"], trial["index"]
+    density = trial["density"]
     size = tuple(scenario.target.sizes[0])
     scene = sample_scene(scenario, scenario.protocol.occluders(density), trial["seed"], target_size=size)
     cam = scene.camera

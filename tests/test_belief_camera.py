@@ -2,8 +2,6 @@
 (``camera_depth``), the memory of hypotheses hidden now (``camera_memory``: matched across frames by where they
 stand, never acted on) and the outcome evidence's tolerance on estimated poses; the privileged path is untouched."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
