@@ -136,7 +136,8 @@ def main():
     scenario = load_scenario(args.config)
     totals = {}
     for density in (int(d) for d in args.densities.split(",")):
-        model = make_policy(args.policy, scenario, horizon=2 * density, profile=args.profile).action_model
+        model = make_policy(args.privileged_policy or args.policy, scenario, horizon=2 * density,
+                            profile=args.profile).action_model  # the executor's model (a registry name)
         print(f"\n## {density} objects\n")
         print("| scene | camera | privileged | first differing step: camera / privileged | wasted camera / priv. "
               "| camera's wasted actions: blocker class |")
