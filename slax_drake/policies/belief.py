@@ -64,14 +64,16 @@ runs, 8 and 10 objects): 158 of the camera trials' 232 wasted actions (put back,
 an object the frame showed, reaching beyond its hypothesis (mostly its unseen depth: the observer's hypotheses
 assume the least depth an object can have, 0.06 m), 17 (7 %) into an object seen before and hidden now, 20 (9 %)
 beyond the walls (an object wider than its hypothesis), 7 into objects never seen. Hence (the
-registry's ``slax-belief`` sets them; all off is the behaviour before, ``slax-belief-camera-v3``):
+registry's ``slax-belief`` sets all but ``maybe_occupied``; all off is the behaviour before,
+``slax-belief-camera-v3``; docs/results/slax_belief_camera_first10):
 - ``camera_depth`` (m): the hypotheses are estimated again from the frame assuming each at least this deep behind
   its visible surfaces (:meth:`with_camera_hypotheses`; the estimator's ``DepthPrior(rule="fixed")``, shortened at
   the walls and the other hypotheses); the actions are checked and replayed on them;
 - ``maybe_occupied``: the target's placements are judged against the observer's (shallow) hypotheses, so a
   placement in the part of a hypothesis that only the assumed depth fills stays possible, at this weight
   (:meth:`placements`); with ``camera_depth`` alone such placements are excluded, the true one among them in 6 of
-  25 first frames at 8 objects;
+  25 first frames at 8 objects (on the first 10 scenes at 8 and 10 objects, 0.5 did worse than none: 6 and 4
+  successes against 7 and 5);
 - ``camera_memory``: :meth:`with_remembered` in camera mode, a hypothesis matched across frames by where it
   stands (segment ids are not kept by a real segmentation), remembered as ``remembered_<name>``, an obstacle the
   policy takes no action on (:meth:`remembered_in_frame`);
