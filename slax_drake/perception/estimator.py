@@ -31,7 +31,10 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
      there, so no hidden space is claimed as occupied on a guess;
    - ``"visible-extent"``: as deep as the object is wide (the visible extent along the other axis, clipped to
      [smallest, largest]): the rule of the paper's image-space collision checks, where an object is as large as
-     its segment.
+     its segment;
+   - ``"fixed"``: a stated depth (``DepthPrior.fixed``, clipped to [smallest, largest]), e.g. the mean object
+     dimension (0.13 m): a policy that must not run objects into the unseen part of an object assumes more than
+     the least material there.
 
    The prior never pushes a box through the back or side wall nor into another hypothesis: the extension is
    shortened until the overlap is at most ``overlap_tolerance`` (m^2).
@@ -62,7 +65,7 @@ from slax_drake.perception.range_offset import shelf_range_calibration, without_
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
-DEPTH_RULES = ("smallest-object", "visible-extent")
+DEPTH_RULES = ("smallest-object", "visible-extent", "fixed")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -70,11 +73,13 @@ class DepthPrior:
     """The assumption for what the camera cannot see: how deep an object reaches behind its visible surfaces.
 
     ``rule`` "smallest-object" (default) or "visible-extent" (see the module docstring); ``smallest`` and
-    ``largest`` bound every object dimension (metres; the paper's scenes: 0.06 and 0.20)."""
+    ``largest`` bound every object dimension (metres; the paper's scenes: 0.06 and 0.20); ``fixed``: the depth of
+    the "fixed" rule (metres)."""
 
     rule: str = "smallest-object"
     smallest: float = 0.06
     largest: float = 0.20
+    fixed: float = 0.13
 
     def __post_init__(self) -> None:
         if self.rule not in DEPTH_RULES:
@@ -86,6 +91,8 @@ class DepthPrior:
         """The assumed full extent (m) along an axis the camera looks along, given the extent across it."""
         if self.rule == "smallest-object":
             return self.smallest
+        if self.rule == "fixed":
+            return float(np.clip(self.fixed, self.smallest, self.largest))
         return float(np.clip(visible_width, self.smallest, self.largest))
 
 
