@@ -123,7 +123,7 @@ class BeliefSearch(Hindsight):
                  failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
                  hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
                  block_weight: float = 8.0, remember_objects: bool = True, widen_beam: int = 12,
-                 no_return_pose: bool = False, stuck_select: str = "value", room_weight: float = 0.0, room_span: float = 0.2, **kwargs):
+                 no_return_pose: bool = False, stuck_select: str = "progress", room_weight: float = 0.0, room_span: float = 0.2, **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
