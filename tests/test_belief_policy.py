@@ -236,72 +236,35 @@ def test_belief_widens_its_beam_only_when_nothing_is_revealed(paper):
     assert deep.decision_log[-1]["revealed"] > 0 and "widened" not in deep.decision_log[-1]
 
 
-def _wide_occluder_scene(paper, neighbour_x=-0.05):
-    """A wide tall box against the right wall hides the back right corner; a neighbour box stands beside it on its
-    left (at ``neighbour_x``), so the wide box has little room to slide aside."""
-    wide = box("wide", 0.18, -0.10, 0.22, 0.10, 0.30)
-    neighbour = box("neighbour", neighbour_x, -0.10, 0.10, 0.10, 0.30)
-    return Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), (wide, neighbour),
-                 Target(TARGET, planar_pose(0.20, 0.20, 0.03, 0.0)), 5)
+
+def test_belief_when_nothing_reveals_takes_the_plan_nearest_to_a_reveal(paper):
+    """The wall scene of the test above: no plan reveals anything, even widened. v4 (stuck_select="progress") takes
+    the plan whose end is nearest to revealing (least V - G), v3 ("value") the least V, over the same plans: each
+    choice is at least as good as the other's by its own rule. Where a plan reveals something, both choose alike."""
+    objects = (box("front", 0.0, -0.20, 0.24, 0.06, 0.12), box("middle", 0.0, -0.11, 0.54, 0.06, 0.25))
+    scene = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), objects,
+                  Target(TARGET, planar_pose(0.0, 0.20, 0.03, 0.0)), 7)
+    logs = {}
+    for rule in ("progress", "value"):
+        policy = make_policy("slax-belief", paper, horizon=6, policy_options={
+            "depth": 2, "max_depth": 2, "beam": 2, "widen_beam": 4, "stuck_select": rule})
+        policy.reset(scene)
+        policy.decide(observation_for(policy, scene))
+        logs[rule] = policy.decision_log[-1]
+    assert all(log["widened"] and log["revealed"] == 0 for log in logs.values())
+    progress, value = logs["progress"], logs["value"]
+    assert progress["value"] - progress["expected_cost"] <= value["value"] - value["expected_cost"] + 1e-3
+    assert value["value"] <= progress["value"] + 1e-3
+    assert make_policy("slax-belief-v3", paper, horizon=4).stuck_select == "value"
+    plans = []
+    for name in ("slax-belief", "slax-belief-v3"):
+        policy = make_policy(name, paper, horizon=4)
+        policy.reset(stacked_scene(paper))
+        policy.decide(observation_for(policy, stacked_scene(paper)))
+        plans.append(policy.decision_log[-1]["plan"])
+    assert plans[0] == plans[1] and plans[0]
 
 
-def test_push_room_counts_the_gaps_to_the_neighbours_and_the_walls(paper):
-    """The wide box (x 0.07..0.29 m) has 0.01 m to the right wall (0.30) and 0.07 m to the neighbour's right side
-    (0.00) on its left; a box behind both (no overlap in y) does not count; moved far left the neighbour leaves
-    0.37 m on that side (to the left wall)."""
-    scene = _wide_occluder_scene(paper)
-    policy = make_policy("slax-belief", paper, horizon=4)
-    policy.reset(scene)
-    policy._template = scene
-    wide, neighbour = scene.objects
-    behind = box("behind", 0.0, 0.20, 0.10, 0.10, 0.30)
-    assert policy.push_room(wide, (wide, neighbour)) == pytest.approx(0.01 + 0.07)
-    assert policy.push_room(wide, (wide, neighbour, behind)) == pytest.approx(0.08)
-    assert policy.push_room(wide, (wide,)) == pytest.approx(0.01 + 0.37)
-    assert policy.push_room(neighbour, (wide, neighbour)) == pytest.approx(0.20 + 0.07)
-
-
-def test_missing_room_is_lower_when_a_neighbour_makes_room_for_the_occluder(paper):
-    """The worlds behind the wide box weigh its missing room: a neighbour moved away lowers the sum, with the
-    same worlds unrevealed; worlds that are revealed (not alive) weigh nothing."""
-    scene = _wide_occluder_scene(paper)
-    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"room_span": 0.2})
-    policy.reset(scene)
-    obs = observation_for(policy, scene)
-    policy._template = obs.scene_template
-    centers = policy.draw(policy.placements(obs), 0)
-    worlds = PackedWorlds(Worlds(obs.scene_template, centers, TARGET, policy.threshold))
-    policy._n_worlds = worlds.count
-    alive = np.ones(worlds.count, bool)
-    wide, neighbour = obs.known
-    hides = worlds.hides_any(wide)
-    assert hides is not None and hides.any()
-    tight = policy.missing_room(worlds, (wide, neighbour), alive)
-    moved = box("neighbour", -0.20, -0.10, 0.10, 0.10, 0.30)
-    roomy = policy.missing_room(worlds, (wide, moved), alive)
-    assert 0 <= roomy < tight
-    share = hides.sum() / worlds.count
-    assert tight >= share * (1 - 0.08 / 0.2) - 1e-9  # the wide box's term alone: 8 cm of the 20 cm span
-    assert policy.missing_room(worlds, (wide, neighbour), np.zeros(worlds.count, bool)) == 0.0
-
-
-def test_belief_refuses_a_move_back_to_an_earlier_pose_until_the_belief_shrinks(paper):
-    """no_return_pose: after the neighbour was seen at x = -0.05 m and moved to -0.20, a push taking it back to
-    -0.05 is refused while the possible placements did not shrink, allowed again once they did; when it is the only
-    move it is kept."""
-    from slax_drake.policies.actions import Push
-
-    scene = _wide_occluder_scene(paper)
-    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"no_return_pose": True})
-    policy.reset(scene)
-    wide, neighbour = scene.objects
-    other = Push("wide", (0.07, -0.2, 0.05), -0.02)
-    assert policy.without_returns((wide, neighbour), [other], 100) == [other]
-    moved = box("neighbour", -0.20, -0.10, 0.10, 0.10, 0.30)
-    back = Push("neighbour", (0.0, -0.2, 0.05), 0.15)  # -0.20 + 0.15 = -0.05: the pose it was seen at
-    onward = Push("neighbour", (0.0, -0.2, 0.05), 0.05)
-    assert policy.without_returns((wide, moved), [back, onward, other], 100) == [onward, other]
-    assert policy.without_returns((wide, moved), [back], 100) == [back]  # the only move: kept
-    assert policy.without_returns((wide, moved), [back, onward], 90) == [back, onward]  # the belief shrank
-    plain = make_policy("slax-belief-v3", paper, horizon=4)
-    assert not plain.no_return_pose and plain.room_weight == 0.0
+def test_belief_rejects_an_unknown_stuck_rule(paper):
+    with pytest.raises(ValueError, match="stuck_select"):
+        make_policy("slax-belief", paper, horizon=4, policy_options={"stuck_select": "random"})

@@ -58,18 +58,17 @@ docs/results/slax_belief_v2_*):
   found no revealing plan and the policy wandered: a small first move that makes room for a suction (a push of
   2 cm) ranks low by V and falls out of a beam of 6.
 
-What v4 adds to the search (``slax-belief-v3`` in the registry turns it off, the behaviour of
-docs/results/slax_belief_v3_*):
-- ``room_weight``: the widened search (above) ranks its beam by V plus ``room_weight`` times the occluders'
-  missing push room (:meth:`missing_room`: per object, the share of unrevealed worlds it hides times
-  1 - room / ``room_span``, room being how far it could slide along x before a neighbour or a wall). In v3's
-  failures at 10 objects the search stalled with most worlds one object away behind a wide box that had no room
-  to move: every plan within ``max_depth`` revealed nothing, V was flat, and the policy took the cheapest move,
-  often undoing an earlier one. A move that only makes room (a neighbour pushed or lifted away) now ranks
-  higher, and the plans after it reveal. When the widened search reveals nothing either, the least V with room
-  decides. The first search, and every decision where it reveals something, are v3's.
-- ``no_return_pose`` (off by default, not measured): refuses a first move that returns its object to a pose it
-  was seen at since the possible placements last shrank (:meth:`without_returns`).
+What v4 changes: ``stuck_select="progress"`` (the registry's ``slax-belief`` sets it; the class default, "value",
+is v3's, so that ``slax-belief-v3`` and ``slax-belief-v2`` keep the behaviour of docs/results/slax_belief_v3_* and
+_v2_*). When no plan of either search reveals anything, v3
+took the plan of least V; since every action adds to G while the distances rarely fall, that is nearly always a
+single cheap move that changes nothing (at 10 objects, mostly pushes of 1-4 cm, some undoing earlier ones, until
+the horizon: v3's failures 10_0004, 10_0011, 10_0012 and 10_0020 took 9-19 of their 20 actions so). v4 takes the plan
+whose end is nearest to revealing, the least V - G (the worlds' distances, lost and failed worlds, the suctions'
+risk), whatever it costs, ties by V; the rest of that plan stays in the next decision's beam. Every decision
+where some plan reveals something is v3's. Also measured on the first 10 scenes of 10 objects and not kept
+(commit 36b564c, ``benchmarks/belief_variants.py``): a push-room term in the widened search's ranking (5/10)
+and refusing a first move back to a pose seen since the belief last shrank (6/10; v3 6/10, v4 7/10).
 
 The first action of the chosen plan is taken; the next decision searches again on the new observation, the rest
 of the last plan kept in the beam at every depth (so it is kept unless a better one is found). Deterministic: no
@@ -113,8 +112,8 @@ class BeliefSearch(Hindsight):
     object and state), ``failure_cost``, ``horizon`` (actions per trial, None: unknown), ``hidden_risk``,
     ``select`` ("ratio": the most revealed mass per expected cost; "value": the least V), ``seconds`` (the
     per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's),
-    ``remember_objects``, ``evidence`` ("outcome" or "none"), ``block_weight``, ``widen_beam``, ``room_weight``,
-    ``room_span`` (m) and ``no_return_pose`` (see the module docstring)."""
+    ``remember_objects``, ``evidence`` ("outcome" or "none"), ``block_weight``, ``widen_beam`` and ``stuck_select``
+    ("progress" or "value"; see the module docstring)."""
 
     name = "slax-belief"
     uses_horizon = True  # the registry passes the protocol's H (see the module docstring)
@@ -123,7 +122,7 @@ class BeliefSearch(Hindsight):
                  failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
                  hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
                  block_weight: float = 8.0, remember_objects: bool = True, widen_beam: int = 12,
-                 no_return_pose: bool = False, stuck_select: str = "progress", room_weight: float = 0.0, room_span: float = 0.2, **kwargs):
+                 stuck_select: str = "value", **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
@@ -160,17 +159,7 @@ class BeliefSearch(Hindsight):
         self._remembered: dict = {}  # name -> the object as last believed (seen, or remembered), last decision
         if stuck_select not in ("value", "progress"):
             raise ValueError("stuck_select must be 'value' or 'progress'")
-        self.stuck_select = stuck_select  # "value" (v3) or "progress": the rule when no plan reveals anything
-        self.no_return_pose = no_return_pose  # refuse a first move that returns its object to an earlier pose
-        if not room_weight >= 0 or not room_span > 0:
-            raise ValueError(f"room_weight must be 0 or more and room_span positive (got {room_weight!r}, "
-                             f"{room_span!r})")
-        self.room_weight = float(room_weight)  # the widened search's weight of the occluders' missing push room
-        self.room_span = float(room_span)  # m: the push room (both sides together) that counts as enough
-        self._boxes: dict = {}  # id -> (object, its footprint box), for push_room
-        self._room = 0.0  # the room weight of the search running now (room_weight in the widened one, else 0)
-        self._poses: dict = {}  # name -> the poses (mm lattice keys) it was seen at since the belief last shrank
-        self._poses_belief = None  # the number of possible placements when _poses was started
+        self.stuck_select = stuck_select  # the rule when no plan looked at reveals anything (see the module docstring)
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -179,8 +168,6 @@ class BeliefSearch(Hindsight):
         self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
         self._weights, self._executed, self.evidence_log = {}, None, []
         self._remembered = {}
-        self._poses, self._poses_belief = {}, None
-        self._boxes = {}
 
     def worlds_for(self, template, placements: np.ndarray, seed: int):
         """(the worlds, (K,) bool: those still consistent with every observation). The worlds drawn at the first
@@ -453,50 +440,6 @@ class BeliefSearch(Hindsight):
             removed[pick, np.arange(k)] = True
         return out
 
-    # ---- room to push the occluders aside ------------------------------------------------------------------------
-    def push_room(self, obj, objects) -> float:
-        """m: how far ``obj`` could slide along x before touching a neighbour or a wall, both sides together (its
-        axis-aligned footprint box against the others' whose y span overlaps; the profile's clearances and lanes
-        are left out: a measure of room, not a feasibility test)."""
-        x, y, ex, ey = self._box(obj)
-        half = self._template.shelf.width / 2
-        left, right = x - ex + half, half - (x + ex)
-        for o in objects:
-            if o is obj or o.name == obj.name:
-                continue
-            ox, oy, oex, oey = self._box(o)
-            if oy + oey <= y - ey or oy - oey >= y + ey:
-                continue
-            if ox <= x:
-                left = min(left, (x - ex) - (ox + oex))
-            else:
-                right = min(right, (ox - oex) - (x + ex))
-        return max(0.0, left) + max(0.0, right)
-
-    def _box(self, obj) -> tuple:
-        """(x, y, half x, half y) of ``obj``'s footprint box (m), cached by the object (objects are immutable)."""
-        hit = self._boxes.get(id(obj))
-        if hit is None or hit[0] is not obj:
-            from slax_drake.scene.footprint import Footprint
-
-            fp = Footprint.of(obj)
-            hit = self._boxes[id(obj)] = (obj, (float(fp.x), float(fp.y), *map(float, fp.extents())))
-        return hit[1]
-
-    def missing_room(self, worlds, objects, alive: np.ndarray) -> float:
-        """The share of the unrevealed worlds each object hides times the push room it lacks (1 - room /
-        ``room_span``, at least 0), summed over the objects: what a move that only makes room for an occluder (a
-        neighbour pushed or lifted away) lowers. The widened search adds it to V with ``room_weight``."""
-        total = 0.0
-        for o in objects:
-            hides = worlds.hides_any(o)
-            if hides is None:
-                continue
-            mass = float((hides & alive).sum()) / self._n_worlds
-            if mass > 0:
-                total += mass * max(0.0, 1.0 - self.push_room(o, objects) / self.room_span)
-        return total
-
     # ---- search --------------------------------------------------------------------------------------------------
     def child(self, worlds, node: _Node, a, after, c: float, remaining: int, order: int) -> _Node:
         mass = node.alive.sum() / self._n_worlds
@@ -516,8 +459,6 @@ class BeliefSearch(Hindsight):
         h = np.where(d > left, self.failure_cost, d)
         n = self._n_worlds
         value = g + lost + float((h * alive).sum()) / n + (1.0 - prob) * float(shown.sum()) / n
-        if self._room:
-            value += self._room * self.missing_room(worlds, after, alive)
         revealed = node.revealed + prob * float(shown.sum()) / n
         return _Node(after, node.plan + (a,), g, alive, lost, value, order, revealed, prob)
 
@@ -554,28 +495,6 @@ class BeliefSearch(Hindsight):
         base = super(Hindsight, self).candidates(objects, True, True)
         return [a for a in base if not isinstance(a, Suction) or self.placement_allowed(objects, a)]
 
-    @staticmethod
-    def pose_key(obj) -> tuple:
-        """An object's pose on a 5 mm lattice (x, y in the shelf frame); what "the same pose" means here."""
-        return obj.name, int(round(float(obj.center[0]) / 0.005)), int(round(float(obj.center[1]) / 0.005))
-
-    def without_returns(self, known, cands: list, n_placements: int) -> list:
-        """``cands`` less the moves that put their object back at a pose it was seen at since the belief last
-        shrank (``no_return_pose``), unless that leaves none. A move and its reverse with nothing learned in
-        between cost two actions and change nothing the policy knows; the corrections' rule (no return to an
-        arrangement observed) misses them when another object moved in between. The poses seen are forgotten
-        whenever the possible placements shrink: with less unknown, going back can be worth it."""
-        if self._poses_belief is None or n_placements < self._poses_belief:
-            self._poses, self._poses_belief = {}, n_placements
-        for o in known:
-            self._poses.setdefault(o.name, set()).add(self.pose_key(o))
-        kept = []
-        for a in cands:
-            moved = next(o for o in apply_action(known, a) if o.name == a.name)
-            if self.pose_key(moved) not in self._poses.get(a.name, ()):
-                kept.append(a)
-        return kept or cands
-
     def rank(self, obs) -> Decision:
         import itertools
 
@@ -589,8 +508,6 @@ class BeliefSearch(Hindsight):
         if not cands:
             return Decision.stop("no feasible action")
         placements = self._hidden_centers = self.placements(obs)
-        if self.no_return_pose:
-            cands = self.without_returns(known, cands, len(placements))
         log = {"placements": int(len(placements)), "samples": 0, "expanded": 0, "capped": False}
         self.decision_log.append(log)
         if not len(placements):
@@ -608,33 +525,28 @@ class BeliefSearch(Hindsight):
         level = self.expansions(worlds, root, [(a, apply_action(known, a), self.move_cost(known, a)) for a in cands],
                                 remaining, counter)
         # the rest of the last plan, when this is the arrangement it expected: kept in the beam at every depth
-        kept = self.kept_nodes(worlds, root, known, cands, remaining, counter)
+        kept: dict = {}
+        if self._plan and self._expected == state_key(known) and self._plan[0] in cands:
+            node = root
+            for i, a in enumerate(self._plan[: self.depth]):
+                after = apply_action(node.objects, a)
+                c = self.move_cost(node.objects, a)
+                node = kept[i + 1] = self.child(worlds, node, a, after, c, remaining, next(counter))
         first_level = list(level)
         seen_nodes = self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.beam)
         if self.widen_beam > self.beam and not log["capped"] and not any(k.revealed > 0 for k in seen_nodes):
             log["widened"] = True  # nothing revealed within max_depth: once more with a wider beam
-            if not self.room_weight:
-                seen_nodes += self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.widen_beam)
-            else:  # ... valuing room made for the occluders; when it reveals nothing either, V with room decides
-                self._room = self.room_weight
-                try:
-                    roomy = self.expansions(worlds, root, [(a, apply_action(known, a), self.move_cost(known, a))
-                                                           for a in cands], remaining, counter)
-                    roomy = self.beam_search(worlds, roomy, self.kept_nodes(worlds, root, known, cands, remaining,
-                                                                            counter),
-                                             remaining, counter, log, t0, self.widen_beam)
-                finally:
-                    self._room = 0.0
-                seen_nodes = seen_nodes + roomy if any(k.revealed > 0 for k in roomy) else roomy
+            seen_nodes += self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.widen_beam)
         if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
             best = max(seen_nodes, key=lambda k: (k.revealed / max(k.g, 1e-9), -k.value, -k.order))
         elif self.stuck_select == "progress" and log.get("widened"):
-            # nothing revealed by any plan: the plan that ends nearest to revealing, whatever it costs
+            # no plan reveals anything, even widened: the plan that ends nearest to revealing (least V - G)
             best = min(seen_nodes, key=lambda k: (k.value - k.g, k.value, len(k.plan), k.order))
         else:
             best = min(seen_nodes, key=lambda k: (k.value, len(k.plan), k.order))
         log["revealed"] = round(best.revealed, 4)
         log["value"] = round(best.value, 4)
+        log["expected_cost"] = round(best.g, 4)  # G of the chosen plan
         log["plan"] = [a.describe() for a in best.plan]
         log["seconds"] = round(time.process_time() - t0, 3)
         first = best.plan[0]
@@ -647,18 +559,6 @@ class BeliefSearch(Hindsight):
         rest = [k.plan[0] for k in ranked if k.plan[0] != first]
         rest += [a for a in cands if a != first and a not in rest]
         return Decision((first, *rest))
-
-    def kept_nodes(self, worlds, root: _Node, known, cands: list, remaining: int, counter) -> dict:
-        """depth -> node: the rest of the last plan (its first ``depth`` actions), when ``known`` is the
-        arrangement it expected and its next action is still a candidate; else empty."""
-        kept: dict = {}
-        if self._plan and self._expected == state_key(known) and self._plan[0] in cands:
-            node = root
-            for i, a in enumerate(self._plan[: self.depth]):
-                after = apply_action(node.objects, a)
-                c = self.move_cost(node.objects, a)
-                node = kept[i + 1] = self.child(worlds, node, a, after, c, remaining, next(counter))
-        return kept
 
     def beam_search(self, worlds, first_level: list, kept: dict, remaining: int, counter, log: dict, t0: float,
                     beam_width: int) -> list:
@@ -733,7 +633,6 @@ class PackedWorlds:
         self.need = worlds.threshold * worlds.n_shown - 1e-9
         self.shown = self.pack(worlds.shown)
         self._masks: dict = {}
-        self._hides: dict = {}
         from shapely.geometry import MultiPoint
 
         hx, hy = worlds.size[0] / 2, worlds.size[1] / 2
@@ -767,14 +666,6 @@ class PackedWorlds:
             else:
                 m = self.worlds.hidden_by(obj)
                 hit = self._masks[id(obj)] = (obj, self.pack(m) if m.any() else None)
-        return hit[1]
-
-    def hides_any(self, obj):
-        """(K,) bool: the worlds of whose target ``obj`` alone hides some point; None when it hides none."""
-        hit = self._hides.get(id(obj))
-        if hit is None or hit[0] is not obj:
-            m = self.mask(obj)
-            hit = self._hides[id(obj)] = (obj, None if m is None else (np.bitwise_count(m).sum(axis=1) > 0))
         return hit[1]
 
     def blocks(self, objects, name: str) -> np.ndarray:

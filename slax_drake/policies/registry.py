@@ -57,9 +57,8 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # slax-belief before v3 (remembered objects, actions' outcomes, wider beam): docs/results/slax_belief_v2_*
     "slax-belief-v2": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
                                   {"evidence": "none", "remember_objects": False, "widen_beam": 0}),
-    # slax-belief v3 (before the widened search's room term and the no-return-pose rule): docs/results/slax_belief_v3_*
-    "slax-belief-v3": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
-                                  {"stuck_select": "value", "room_weight": 0.0, "no_return_pose": False}),
+    # slax-belief v3 (the least V when no plan reveals anything): docs/results/slax_belief_v3_*
+    "slax-belief-v3": PolicyEntry("slax_drake.policies.belief:BeliefSearch", {"stuck_select": "value"}),
 }
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
