@@ -238,9 +238,10 @@ def test_belief_widens_its_beam_only_when_nothing_is_revealed(paper):
 
 
 def test_belief_when_nothing_reveals_takes_the_plan_nearest_to_a_reveal(paper):
-    """The wall scene of the test above: no plan reveals anything, even widened. v4 (stuck_select="progress") takes
-    the plan whose end is nearest to revealing (least V - G), v3 ("value") the least V, over the same plans: each
-    choice is at least as good as the other's by its own rule. Where a plan reveals something, both choose alike."""
+    """The wall scene of the test above: no plan reveals anything, even widened. stuck_select="progress" takes the
+    plan whose end is nearest to revealing (least V - G), "value" (the default) the least V, over the same plans:
+    each choice is at least as good as the other's by its own rule. Where a plan reveals something, both choose
+    alike."""
     objects = (box("front", 0.0, -0.20, 0.24, 0.06, 0.12), box("middle", 0.0, -0.11, 0.54, 0.06, 0.25))
     scene = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), objects,
                   Target(TARGET, planar_pose(0.0, 0.20, 0.03, 0.0)), 7)
@@ -255,10 +256,10 @@ def test_belief_when_nothing_reveals_takes_the_plan_nearest_to_a_reveal(paper):
     progress, value = logs["progress"], logs["value"]
     assert progress["value"] - progress["expected_cost"] <= value["value"] - value["expected_cost"] + 1e-3
     assert value["value"] <= progress["value"] + 1e-3
-    assert make_policy("slax-belief-v3", paper, horizon=4).stuck_select == "value"
+    assert make_policy("slax-belief", paper, horizon=4).stuck_select == "value"
     plans = []
-    for name in ("slax-belief", "slax-belief-v3"):
-        policy = make_policy(name, paper, horizon=4)
+    for rule in ("progress", "value"):
+        policy = make_policy("slax-belief", paper, horizon=4, policy_options={"stuck_select": rule})
         policy.reset(stacked_scene(paper))
         policy.decide(observation_for(policy, stacked_scene(paper)))
         plans.append(policy.decision_log[-1]["plan"])

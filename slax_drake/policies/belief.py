@@ -58,17 +58,21 @@ docs/results/slax_belief_v2_*):
   found no revealing plan and the policy wandered: a small first move that makes room for a suction (a push of
   2 cm) ranks low by V and falls out of a beam of 6.
 
-What v4 changes: ``stuck_select="progress"`` (the registry's ``slax-belief`` sets it; the class default, "value",
-is v3's, so that ``slax-belief-v3`` and ``slax-belief-v2`` keep the behaviour of docs/results/slax_belief_v3_* and
-_v2_*). When no plan of either search reveals anything, v3
-took the plan of least V; since every action adds to G while the distances rarely fall, that is nearly always a
-single cheap move that changes nothing (at 10 objects, mostly pushes of 1-4 cm, some undoing earlier ones, until
-the horizon: v3's failures 10_0004, 10_0011, 10_0012 and 10_0020 took 9-19 of their 20 actions so). v4 takes the plan
-whose end is nearest to revealing, the least V - G (the worlds' distances, lost and failed worlds, the suctions'
-risk), whatever it costs, ties by V; the rest of that plan stays in the next decision's beam. Every decision
-where some plan reveals something is v3's. Also measured on the first 10 scenes of 10 objects and not kept
-(commit 36b564c, ``benchmarks/belief_variants.py``): a push-room term in the widened search's ranking (5/10)
-and refusing a first move back to a pose seen since the belief last shrank (6/10; v3 6/10, v4 7/10).
+``stuck_select`` (measured, not the default): the rule when no plan of either search reveals anything. "value"
+(the default) takes the plan of least V; since every action adds to G while the distances rarely fall, that is
+nearly always a single cheap move that changes nothing (at 10 objects, mostly pushes of 1-4 cm, some undoing
+earlier ones, until the horizon: the failures 10_0004, 10_0011, 10_0012 and 10_0020 of
+docs/results/slax_belief_v3_paper25 took 9-19 of their 20 actions so). "progress" takes the plan whose end is
+nearest to revealing, the least V - G (the worlds' distances, lost and failed worlds, the suctions' risk),
+whatever it costs, ties by V; the rest of that plan stays in the next decision's beam; every other decision is
+unchanged. On the 25 Table I scenes of 10 objects (paper profile, privileged, ground truth) it reveals 18, as
+"value" does (it wins 10_0003 and 10_0004, loses 10_0007 and 10_0018), so the default stays "value"
+(measured with ``slax-drake benchmark --policies slax-belief --profile paper --observation privileged
+--densities 10 --scenes-per-density 25`` at commit a4a5725, where "progress" was the registry's; the same trials:
+``benchmarks/belief_variants.py --options '{"stuck_select": "progress"}' --trials 10:0-24``). Two more variants
+of the stalled decisions, measured on the first 10 of those scenes and dropped (commit 36b564c): a push-room term
+in the widened search's ranking (5 of 10 revealed) and refusing a first move back to a pose seen since the belief
+last shrank (6 of 10; "value" 6, "progress" 7).
 
 The first action of the chosen plan is taken; the next decision searches again on the new observation, the rest
 of the last plan kept in the beam at every depth (so it is kept unless a better one is found). Deterministic: no
@@ -159,7 +163,7 @@ class BeliefSearch(Hindsight):
         self._remembered: dict = {}  # name -> the object as last believed (seen, or remembered), last decision
         if stuck_select not in ("value", "progress"):
             raise ValueError("stuck_select must be 'value' or 'progress'")
-        self.stuck_select = stuck_select  # the rule when no plan looked at reveals anything (see the module docstring)
+        self.stuck_select = stuck_select  # the rule when no plan looked at reveals anything (module docstring)
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)

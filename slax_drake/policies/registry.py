@@ -52,13 +52,10 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "bluction-dar-cost": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "cost", "corrected": True}),
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
-    # v4; its option named so that a result folder of v3 (recorded with no options) refuses its trials
-    "slax-belief": PolicyEntry("slax_drake.policies.belief:BeliefSearch", {"stuck_select": "progress"}),
+    "slax-belief": PolicyEntry("slax_drake.policies.belief:BeliefSearch"),
     # slax-belief before v3 (remembered objects, actions' outcomes, wider beam): docs/results/slax_belief_v2_*
     "slax-belief-v2": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
                                   {"evidence": "none", "remember_objects": False, "widen_beam": 0}),
-    # slax-belief v3 (the least V when no plan reveals anything): docs/results/slax_belief_v3_*
-    "slax-belief-v3": PolicyEntry("slax_drake.policies.belief:BeliefSearch", {"stuck_select": "value"}),
 }
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
