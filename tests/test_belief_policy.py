@@ -234,3 +234,38 @@ def test_belief_widens_its_beam_only_when_nothing_is_revealed(paper):
     deep.reset(stacked_scene(paper))
     deep.decide(observation_for(deep, stacked_scene(paper)))
     assert deep.decision_log[-1]["revealed"] > 0 and "widened" not in deep.decision_log[-1]
+
+
+
+def test_belief_when_nothing_reveals_takes_the_plan_nearest_to_a_reveal(paper):
+    """The wall scene of the test above: no plan reveals anything, even widened. stuck_select="progress" takes the
+    plan whose end is nearest to revealing (least V - G), "value" (the default) the least V, over the same plans:
+    each choice is at least as good as the other's by its own rule. Where a plan reveals something, both choose
+    alike."""
+    objects = (box("front", 0.0, -0.20, 0.24, 0.06, 0.12), box("middle", 0.0, -0.11, 0.54, 0.06, 0.25))
+    scene = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), objects,
+                  Target(TARGET, planar_pose(0.0, 0.20, 0.03, 0.0)), 7)
+    logs = {}
+    for rule in ("progress", "value"):
+        policy = make_policy("slax-belief", paper, horizon=6, policy_options={
+            "depth": 2, "max_depth": 2, "beam": 2, "widen_beam": 4, "stuck_select": rule})
+        policy.reset(scene)
+        policy.decide(observation_for(policy, scene))
+        logs[rule] = policy.decision_log[-1]
+    assert all(log["widened"] and log["revealed"] == 0 for log in logs.values())
+    progress, value = logs["progress"], logs["value"]
+    assert progress["value"] - progress["expected_cost"] <= value["value"] - value["expected_cost"] + 1e-3
+    assert value["value"] <= progress["value"] + 1e-3
+    assert make_policy("slax-belief", paper, horizon=4).stuck_select == "value"
+    plans = []
+    for rule in ("progress", "value"):
+        policy = make_policy("slax-belief", paper, horizon=4, policy_options={"stuck_select": rule})
+        policy.reset(stacked_scene(paper))
+        policy.decide(observation_for(policy, stacked_scene(paper)))
+        plans.append(policy.decision_log[-1]["plan"])
+    assert plans[0] == plans[1] and plans[0]
+
+
+def test_belief_rejects_an_unknown_stuck_rule(paper):
+    with pytest.raises(ValueError, match="stuck_select"):
+        make_policy("slax-belief", paper, horizon=4, policy_options={"stuck_select": "random"})

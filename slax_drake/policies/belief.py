@@ -58,6 +58,24 @@ docs/results/slax_belief_v2_*):
   found no revealing plan and the policy wandered: a small first move that makes room for a suction (a push of
   2 cm) ranks low by V and falls out of a beam of 6.
 
+``stuck_select`` (measured, not the default): the rule when no plan of either search reveals anything. "value"
+(the default) takes the plan of least V; since every action adds to G while the distances rarely fall, that is
+nearly always a single cheap move that changes nothing (at 10 objects, mostly pushes of 1-4 cm, some undoing
+earlier ones, until the horizon: the failures 10_0004, 10_0011, 10_0012 and 10_0020 of
+docs/results/slax_belief_v3_paper25 took 9-19 of their 20 actions so). "progress" takes the plan whose end is
+nearest to revealing, the least V - G (the worlds' distances, lost and failed worlds, the suctions' risk),
+whatever it costs, ties by V; the rest of that plan stays in the next decision's beam; every other decision is
+unchanged. On Table I's 25 scenes per density (paper profile, privileged, ground truth) it reveals the target in
+100 / 92 / 92 / 72 %, 89 %, exactly as "value" does: 9 of the 100 trials act differently, 2 flip each way
+(10_0003 and 10_0004 won, 10_0007 and 10_0018 lost), so the default stays "value"
+(docs/results/slax_belief_stuck_progress_paper25: ``slax-drake benchmark --policies slax-belief --profile paper
+--observation privileged --scenes-per-density 25 --workers 1`` at commit a4a5725, where "progress" was the
+registry's; ``benchmarks/belief_variants.py --options '{"stuck_select": "progress"}' --trials 10:0-24`` runs the
+same trials). Two more variants
+of the stalled decisions, measured on the first 10 of those scenes and dropped (commit 36b564c): a push-room term
+in the widened search's ranking (5 of 10 revealed) and refusing a first move back to a pose seen since the belief
+last shrank (6 of 10; "value" 6, "progress" 7).
+
 Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses ``segment_<id>``, never true
 objects). Where camera trials diverged from privileged ones (``benchmarks/camera_divergence.py`` on the 25-per-density
 runs, 8 and 10 objects): 158 of the camera trials' 232 wasted actions (put back, stopped, blocked; 68 %) ran into
@@ -146,9 +164,9 @@ class BeliefSearch(Hindsight):
     object and state), ``failure_cost``, ``horizon`` (actions per trial, None: unknown), ``hidden_risk``,
     ``select`` ("ratio": the most revealed mass per expected cost; "value": the least V), ``seconds`` (the
     per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's),
-    ``remember_objects``, ``evidence`` ("outcome" or "none"), ``block_weight`` and ``widen_beam``; camera mode:
-    ``camera_depth``, ``maybe_occupied``, ``camera_memory`` and ``camera_outcome_tolerance`` (see the module
-    docstring)."""
+    ``remember_objects``, ``evidence`` ("outcome" or "none"), ``block_weight``, ``widen_beam`` and ``stuck_select``
+    ("progress" or "value"); camera mode: ``camera_depth``, ``maybe_occupied``, ``camera_memory`` and
+    ``camera_outcome_tolerance`` (see the module docstring)."""
 
     name = "slax-belief"
     uses_horizon = True  # the registry passes the protocol's H (see the module docstring)
@@ -158,7 +176,8 @@ class BeliefSearch(Hindsight):
                  hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
                  block_weight: float = 8.0, remember_objects: bool = True, widen_beam: int = 12,
                  camera_depth: float | None = None, camera_memory: bool = False,
-                 camera_outcome_tolerance: float = 0.003, maybe_occupied: float | None = None, **kwargs):
+                 camera_outcome_tolerance: float = 0.003, maybe_occupied: float | None = None,
+                 stuck_select: str = "value", **kwargs):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
@@ -207,6 +226,9 @@ class BeliefSearch(Hindsight):
         self.maybe_occupied = maybe_occupied  # camera mode: the weight of a placement in a hypothesis' assumed depth
         self._as_observed: dict = {}  # camera mode with camera_depth: name -> the observer's hypothesis (least depth)
         self._maybe: frozenset = frozenset()  # lattice keys of the placements weighed by maybe_occupied now
+        if stuck_select not in ("value", "progress"):
+            raise ValueError("stuck_select must be 'value' or 'progress'")
+        self.stuck_select = stuck_select  # the rule when no plan looked at reveals anything (module docstring)
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -681,10 +703,14 @@ class BeliefSearch(Hindsight):
             seen_nodes += self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.widen_beam)
         if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
             best = max(seen_nodes, key=lambda k: (k.revealed / max(k.g, 1e-9), -k.value, -k.order))
+        elif self.stuck_select == "progress" and log.get("widened"):
+            # no plan reveals anything, even widened: the plan that ends nearest to revealing (least V - G)
+            best = min(seen_nodes, key=lambda k: (k.value - k.g, k.value, len(k.plan), k.order))
         else:
             best = min(seen_nodes, key=lambda k: (k.value, len(k.plan), k.order))
         log["revealed"] = round(best.revealed, 4)
         log["value"] = round(best.value, 4)
+        log["expected_cost"] = round(best.g, 4)  # G of the chosen plan
         log["plan"] = [a.describe() for a in best.plan]
         log["seconds"] = round(time.process_time() - t0, 3)
         first = best.plan[0]

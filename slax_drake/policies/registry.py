@@ -53,7 +53,7 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
     # camera mode (belief.py's docstring): hypotheses assumed 0.13 m deep, hidden ones remembered, outcome evidence
-    # within 1 cm; the privileged path reads none of these. docs/results/ours_camera25_belief
+    # within 1 cm; the privileged path reads none of these. docs/results/slax_belief_camera_first10
     "slax-belief": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
                                {"camera_depth": 0.13, "camera_memory": True, "camera_outcome_tolerance": 0.01}),
     # slax-belief's camera mode before that (the observer's hypotheses, no memory, 3 mm): docs/results/ours_camera25

@@ -1,0 +1,68 @@
+"""Runs slax-belief with extra constructor options on chosen Table I trials and prints, per trial, whether the
+target was revealed, the steps, the cost and the longest decision (CPU s), then the count revealed. The trials are
+the benchmark's (`slax-drake benchmark`): the same scene seed per (protocol seed, density, index), the registry's
+policy with the protocol's horizon, privileged observation, ground-truth distributions, the first-order shelf
+simulator; only the options differ. It is how the variants of issue 19 item 5 were measured one by one without a
+registry row each.
+
+    python benchmarks/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
+        [--policy slax-belief] [--seed 0] [--log]
+"""
+
+import argparse
+import json
+import time
+
+from slax_drake.config import load_scenario
+from slax_drake.evaluation.table1 import scene_seed
+from slax_drake.policies.registry import make_policy
+from slax_drake.policies.simulator import run_trial
+from slax_drake.scene.sampling import sample_scene
+
+
+def parse_trials(text: str) -> list[tuple[int, int]]:
+    """"10:0-9,8:3" -> [(10, 0), ..., (10, 9), (8, 3)]."""
+    out = []
+    for part in text.split(","):
+        density, _, indices = part.partition(":")
+        lo, _, hi = indices.partition("-")
+        out += [(int(density), i) for i in range(int(lo), int(hi or lo) + 1)]
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--options", default="{}", help="JSON: constructor options added to the registry's")
+    ap.add_argument("--trials", required=True, help="density:index or density:first-last, comma separated")
+    ap.add_argument("--policy", default="slax-belief")
+    ap.add_argument("--profile", default="paper")
+    ap.add_argument("--seed", type=int, default=0, help="the protocol seed")
+    ap.add_argument("--config", default="sim_configs/table1.yaml")
+    ap.add_argument("--log", action="store_true", help="also print each action with its decision log")
+    args = ap.parse_args()
+    options = json.loads(args.options)
+    scenario = load_scenario(args.config)
+    size = tuple(scenario.target.sizes[0])
+    revealed = 0
+    trials = parse_trials(args.trials)
+    for density, index in trials:
+        scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
+                             target_size=size)
+        horizon = scenario.protocol.horizon_per_object * density
+        policy = make_policy(args.policy, scenario, horizon=horizon, profile=args.profile, policy_options=options)
+        t0 = time.process_time()
+        result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
+                           suction_cost=scenario.protocol.suction_cost, density=density)
+        longest = max((d.get("seconds", 0.0) for d in policy.decision_log), default=0.0)
+        revealed += bool(result.success)
+        print(f"{density:02d}_{index:04d} revealed={result.success} steps={result.steps} cost={result.cost:.1f} "
+              f"visible={result.visible_fraction:.2f} cpu_s={time.process_time() - t0:.1f} "
+              f"longest_decision_s={longest:.2f}", flush=True)
+        if args.log:
+            for action, log in zip(result.actions, policy.decision_log):
+                print("   ", action, {k: log.get(k) for k in ("revealed", "value", "widened", "plan")})
+    print(f"revealed {revealed} / {len(trials)} ({args.policy}, options {options})")
+
+
+if __name__ == "__main__":
+    main()
