@@ -123,12 +123,13 @@ def test_camera_memory_forgets_the_moved_hypothesis_and_one_the_frame_sees_throu
 def test_camera_outcome_tolerance_reads_an_estimated_pose_6_mm_off_as_a_completed_push(paper):
     """A push that went as planned, its object seen 6 mm short of where the seen objects predict (an estimated
     pose): within camera_outcome_tolerance (1 cm) on a camera frame it proves the path clear (the placements in it
-    leave the belief); on exact poses (3 mm; a privileged observation, or slax-belief-camera-v3) it reads as a
+    leave the belief); on exact poses (3 mm; a privileged observation, or the registry's slax-belief) it reads as a
     push stopped by something unseen."""
     block = box("block", 0.0, 0.0, 0.06, 0.06, 0.10)
     template = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), (block,), None, 3)
     stopped = {}
-    for name, camera in (("slax-belief", True), ("slax-belief", False), ("slax-belief-camera-v3", True)):
+    for name, camera in (("slax-belief-camera-depth", True), ("slax-belief-camera-depth", False),
+                         ("slax-belief", True)):
         policy = make_policy(name, paper, horizon=4)
         policy.reset(template)
         policy._consistent = {(8, 0), (10, 0), (12, 0), (-20, 20)}
@@ -137,8 +138,8 @@ def test_camera_outcome_tolerance_reads_an_estimated_pose_6_mm_off_as_a_complete
         policy._executed = (Push("block", (-0.04, -0.03, 0.05), 0.15), (block,))
         policy.condition_on_outcome((block.moved_to(0.144, 0.0),))  # 0.15 planned, 0.144 estimated
         stopped[name, camera] = (policy.evidence_log[-1]["stopped"], policy._consistent)
-    assert stopped["slax-belief", True] == (False, {(-20, 20)})
-    assert stopped["slax-belief", False][0] is True and stopped["slax-belief-camera-v3", True][0] is True
+    assert stopped["slax-belief-camera-depth", True] == (False, {(-20, 20)})
+    assert stopped["slax-belief-camera-depth", False][0] is True and stopped["slax-belief", True][0] is True
 
 
 def test_camera_options_reject_values_out_of_range(paper):
@@ -175,18 +176,18 @@ def test_maybe_occupied_keeps_placements_in_the_assumed_depth_at_a_lower_weight(
 
 
 def test_privileged_trials_do_not_read_the_camera_options(paper):
-    """The registry's slax-belief (camera options on) and slax-belief-camera-v3 (off) take the same actions on a
+    """The registry's slax-belief-camera-depth (camera options on) and slax-belief (off) take the same actions on a
     privileged trial and log the same decisions: none of the options is read without a camera frame."""
     from slax_drake.policies.simulator import run_trial
     from slax_drake.scene.sampling import sample_scene
 
     scene = sample_scene(paper, 6, 11, target_size=TARGET)
     runs = {}
-    for name in ("slax-belief", "slax-belief-camera-v3"):
+    for name in ("slax-belief-camera-depth", "slax-belief"):
         policy = make_policy(name, paper, horizon=4)
         runs[name] = (run_trial(scene, policy, 4).actions, policy.decision_log)
-    assert runs["slax-belief"][0] and runs["slax-belief"][0] == runs["slax-belief-camera-v3"][0]
+    assert runs["slax-belief"][0] and runs["slax-belief"][0] == runs["slax-belief-camera-depth"][0]
     strip = lambda logs: [{k: v for k, v in log.items() if k != "seconds"} for log in logs]  # noqa: E731
-    assert strip(runs["slax-belief"][1]) == strip(runs["slax-belief-camera-v3"][1])
-    on = make_policy("slax-belief", paper, horizon=4)
+    assert strip(runs["slax-belief"][1]) == strip(runs["slax-belief-camera-depth"][1])
+    on = make_policy("slax-belief-camera-depth", paper, horizon=4)
     assert on.camera_depth == 0.13 and on.camera_memory and on.camera_outcome_tolerance == 0.01

@@ -81,9 +81,14 @@ objects). Where camera trials diverged from privileged ones (``benchmarks/camera
 runs, 8 and 10 objects): 158 of the camera trials' 232 wasted actions (put back, stopped, blocked; 68 %) ran into
 an object the frame showed, reaching beyond its hypothesis (mostly its unseen depth: the observer's hypotheses
 assume the least depth an object can have, 0.06 m), 17 (7 %) into an object seen before and hidden now, 20 (9 %)
-beyond the walls (an object wider than its hypothesis), 7 into objects never seen. Hence (the
-registry's ``slax-belief`` sets all but ``maybe_occupied``; all off is the behaviour before,
-``slax-belief-camera-v3``; docs/results/slax_belief_camera_first10):
+beyond the walls (an object wider than its hypothesis), 7 into objects never seen. Hence the options below, all
+off in the registry's ``slax-belief``; ``slax-belief-camera-depth`` sets all but ``maybe_occupied``. On the first
+10 scenes at 8 and 10 objects that variant revealed 7 and 5 (``slax-belief`` 6 and 4; docs/results/
+slax_belief_camera_first10), but on all 25 scenes per density it reveals 92 / 76 / 68 / 40 %, 69 %, against
+``slax-belief``'s 100 / 88 / 72 / 32 %, 73 % (docs/results/slax_belief_camera_depth25): better at 10 objects,
+worse at 4 and 6 (not analysed; a candidate: the deeper prior fills space where the target stands, and a true
+placement that leaves the belief at the first frame never comes back: at 8 objects it did so in 6 of 25 first
+frames), so it is not the default:
 - ``camera_depth`` (m): the hypotheses are estimated again from the frame assuming each at least this deep behind
   its visible surfaces (:meth:`with_camera_hypotheses`; the estimator's ``DepthPrior(rule="fixed")``, shortened at
   the walls and the other hypotheses); the actions are checked and replayed on them;
