@@ -1,0 +1,84 @@
+"""Compares two physics-benchmark runs (``slax-drake benchmark --physics ... --out DIR``) on the scenes both hold:
+per density, Drake's trial endings, its success (and with nothing lost), the actions matching the first-order
+prediction, and the candidate motions the planner refused before each executed action. Made for the question
+"what did a code change do to 'no feasible motion'?" on the same scenes (never typed by hand).
+
+    python benchmarks/compare_physics_runs.py results/phys_cam results/phys_s8 [--policy bluction-dar]
+
+OLD and NEW are result folders with ``physics_trials/POLICY/DD_NNNN.json`` (their trial files); the scenes are
+matched by density and index, and a scene whose protocol seed differs between the runs stops the comparison.
+"""
+
+import argparse
+import collections
+import json
+import sys
+from pathlib import Path
+
+DENSITIES = ("04", "06", "08", "10")
+
+
+def load(folder: Path, policy: str) -> dict:
+    trials = {}
+    for path in sorted((folder / "physics_trials" / policy).glob("*.json")):
+        trials[path.stem] = json.loads(path.read_text())
+    if not trials:
+        sys.exit(f"{folder} holds no trial files of {policy} (physics_trials/{policy}/*.json)")
+    return trials
+
+
+def summary(trials: list[dict]) -> dict:
+    endings = collections.Counter(t["drake"]["result"] for t in trials)
+    actions = [a for t in trials for a in t["drake"]["actions"]]
+    lost = sum(bool(t["drake"]["toppled"] or t["drake"]["dropped"]) for t in trials)
+    return {
+        "scenes": len(trials),
+        "success": sum(t["drake"]["success"] for t in trials),
+        "nothing_lost": sum(t["drake"]["success"] and not (t["drake"]["toppled"] or t["drake"]["dropped"])
+                            for t in trials),
+        "lost_any": lost,
+        "matched": sum(bool(a.get("matched")) for a in actions),
+        "actions": len(actions),
+        "refused_before": sum(a.get("rejected_before", 0) for a in actions),
+        "endings": endings,
+        "shelf_success": sum(t["shelf"]["success"] for t in trials),
+    }
+
+
+def row(label: str, density: str, s: dict) -> str:
+    endings = ", ".join(f"{k} {v}" for k, v in sorted(s["endings"].items()))
+    match = f"{100 * s['matched'] / s['actions']:.0f} % ({s['matched']}/{s['actions']})" if s["actions"] else "-"
+    return (f"| {label} | {density} | {s['scenes']} | {s['shelf_success']} | {s['success']} | {s['nothing_lost']} | "
+            f"{match} | {s['refused_before']} | {endings} |")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("old", type=Path)
+    parser.add_argument("new", type=Path)
+    parser.add_argument("--policy", default="bluction-dar")
+    args = parser.parse_args()
+    old, new = load(args.old, args.policy), load(args.new, args.policy)
+    common = sorted(set(old) & set(new))
+    for key in common:
+        if old[key]["seed"] != new[key]["seed"]:
+            sys.exit(f"scene {key} has seed {old[key]['seed']} in {args.old} and {new[key]['seed']} in {args.new}")
+    print(f"{args.policy}, the {len(common)} scenes both runs hold; counts of scenes (shelf simulator and Drake "
+          f"successes), actions matching the first-order prediction, candidate motions the planner refused before "
+          f"the executed actions, and Drake's endings. Made by `python benchmarks/compare_physics_runs.py "
+          f"{args.old} {args.new} --policy {args.policy}`.\n")
+    print("| run | objects | scenes | shelf sim. successes | Drake successes | nothing lost | actions matching | "
+          "motions refused before an action | Drake endings |")
+    print("|---" * 9 + "|")
+    for density in DENSITIES + ("all",):
+        keys = [k for k in common if density == "all" or k.startswith(density + "_")]
+        if not keys:
+            continue
+        for label, run in (("old", old), ("new", new)):
+            print(row(f"{label} ({Path(getattr(args, label)).name})", density.lstrip("0"),
+                      summary([run[k] for k in keys])))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
