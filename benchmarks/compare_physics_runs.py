@@ -3,7 +3,7 @@ per density, Drake's trial endings, its success (and with nothing lost), the act
 prediction, and the candidate motions the planner refused before each executed action. Made for the question
 "what did a code change do to 'no feasible motion'?" on the same scenes (never typed by hand).
 
-    python benchmarks/compare_physics_runs.py results/phys_cam results/phys_s8 [--policy bluction-dar]
+    python benchmarks/compare_physics_runs.py results/phys_cam results/phys_s8 [--policy bluction-dar] [--first N]
 
 OLD and NEW are result folders with ``physics_trials/POLICY/DD_NNNN.json`` (their trial files); the scenes are
 matched by density and index, and a scene whose protocol seed differs between the runs stops the comparison.
@@ -57,16 +57,19 @@ def main() -> int:
     parser.add_argument("old", type=Path)
     parser.add_argument("new", type=Path)
     parser.add_argument("--policy", default="bluction-dar")
+    parser.add_argument("--first", type=int, default=None, metavar="N",
+                        help="only the first N scenes per density (e.g. those a run still in progress has finished)")
     args = parser.parse_args()
     old, new = load(args.old, args.policy), load(args.new, args.policy)
-    common = sorted(set(old) & set(new))
+    common = sorted(k for k in set(old) & set(new) if args.first is None or int(k.split("_")[1]) < args.first)
     for key in common:
         if old[key]["seed"] != new[key]["seed"]:
             sys.exit(f"scene {key} has seed {old[key]['seed']} in {args.old} and {new[key]['seed']} in {args.new}")
     print(f"{args.policy}, the {len(common)} scenes both runs hold; counts of scenes (shelf simulator and Drake "
           f"successes), actions matching the first-order prediction, candidate motions the planner refused before "
           f"the executed actions, and Drake's endings. Made by `python benchmarks/compare_physics_runs.py "
-          f"{args.old} {args.new} --policy {args.policy}`.\n")
+          f"{args.old} {args.new} --policy {args.policy}"
+          + (f" --first {args.first}" if args.first is not None else "") + "`.\n")
     print("| run | objects | scenes | shelf sim. successes | Drake successes | nothing lost | actions matching | "
           "motions refused before an action | Drake endings |")
     print("|---" * 9 + "|")
