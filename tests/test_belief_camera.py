@@ -70,14 +70,20 @@ def _hidden_after_push(paper):
     return scene_of(paper, [small, tall]), scene_of(paper, [small, tall.moved_to(0.0, -0.2)])
 
 
-def test_camera_memory_keeps_an_untouched_hypothesis_that_a_move_hid(paper):
+def _remembering_policy(paper):
+    """The two frames of :func:`_hidden_after_push`'s scene, the observer, its first frame and names, and a
+    slax-belief with ``camera_memory`` that has read that frame (``seen``)."""
     before, after = _hidden_after_push(paper)
     cam = observer(before)
     first, names = cam.observe(before)
-    inverse = {v: k for k, v in names.items()}
     policy = make_policy("slax-belief", paper, horizon=4, policy_options={"camera_memory": True})
     policy.reset(first)
     seen = policy.with_remembered(first)
+    return before, after, cam, first, names, {v: k for k, v in names.items()}, policy, seen
+
+
+def test_camera_memory_keeps_an_untouched_hypothesis_that_a_move_hid(paper):
+    before, after, cam, first, names, inverse, policy, seen = _remembering_policy(paper)
     assert {names[o.name] for o in seen.known} == {"small", "tall"}
     policy._executed = (Push(inverse["tall"], (0.2, -0.23, 0.05), -0.2), seen.known)
     second, names2 = cam.observe(after)
@@ -102,13 +108,7 @@ def test_camera_memory_keeps_an_untouched_hypothesis_that_a_move_hid(paper):
 
 
 def test_camera_memory_forgets_the_moved_hypothesis_and_one_the_frame_sees_through(paper):
-    before, after = _hidden_after_push(paper)
-    cam = observer(before)
-    first, names = cam.observe(before)
-    inverse = {v: k for k, v in names.items()}
-    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"camera_memory": True})
-    policy.reset(first)
-    seen = policy.with_remembered(first)
+    before, after, cam, first, names, inverse, policy, seen = _remembering_policy(paper)
     # the small box was the one moved (here: taken away): not remembered
     policy._executed = (Suction(inverse["small"], (0.0, 0.01, 0.06), 0.0, 0.2), seen.known)
     gone = scene_of(paper, [o for o in before.objects if o.name != "small"])

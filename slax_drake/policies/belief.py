@@ -398,8 +398,7 @@ class BeliefSearch(Hindsight):
         for o in obs.known:
             if o.name in shallow and len(out):
                 inside |= ~clear_of("box", out, 0.0, half, Footprint.of(o), 0.0)
-        step = self.grid_step
-        self._maybe = frozenset((int(round(x / step)), int(round(y / step))) for x, y in out[inside])
+        self._maybe = frozenset(self.lattice_keys(out[inside]))
         return out
 
     # ---- what an executed action's outcome says about the target ---------------------------------------------
@@ -495,8 +494,7 @@ class BeliefSearch(Hindsight):
         """``samples`` placements: :meth:`Hindsight.draw` (stratified, uniform) while every weight is 1; else one
         per stratum of equal weight along x (then y), by the same seeded generator (systematic sampling of the
         weighted belief, which :meth:`condition_on_outcome` and, in camera mode, :meth:`placements` set)."""
-        step = self.grid_step
-        keys = [(int(round(x / step)), int(round(y / step))) for x, y in placements]
+        keys = self.lattice_keys(placements)
         w = np.array([self._weights.get(k, 1.0) * (self.maybe_occupied if k in self._maybe else 1.0) for k in keys])
         if not len(w) or np.all(w == 1.0):
             return super().draw(placements, seed)

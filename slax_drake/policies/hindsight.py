@@ -97,11 +97,16 @@ class Hindsight(BluctionDAR):
         # later ones: a target seen at the threshold would have ended the trial.
         first = self._consistent is None
         now = possible_placements(scene, self.target_size(), self.grid_step, 1e-9 if first else self.threshold)
-        keys = {(int(round(x / self.grid_step)), int(round(y / self.grid_step))) for x, y in now}
+        keys = set(self.lattice_keys(now))
         self._consistent = keys if self._consistent is None else (self._consistent & keys)
         if not self._consistent:
             self._consistent = keys  # the seen objects' estimate moved: start the intersection again
         return np.array(sorted(self._consistent), dtype=float).reshape(-1, 2) * self.grid_step
+
+    def lattice_keys(self, placements) -> list[tuple[int, int]]:
+        """The lattice indices (x / grid_step, y / grid_step, rounded) of (x, y) placements (m), in their order."""
+        step = self.grid_step
+        return [(int(round(x / step)), int(round(y / step))) for x, y in placements]
 
     def draw(self, placements: np.ndarray, seed: int) -> np.ndarray:
         """``samples`` placements, one per equal-count stratum along x (then y), by a generator seeded with ``seed``
