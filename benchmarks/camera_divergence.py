@@ -26,6 +26,7 @@ import collections
 import dataclasses
 import json
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -149,7 +150,9 @@ def main():
                 continue
             c, p = json.loads(path.read_text()), json.loads(ppath.read_text())
             if c["seed"] != p["seed"]:
-                raise SystemExit(f"{path} and {ppath} are trials of different scenes (seeds {c['seed']}, {p['seed']})")
+                print(f"error: {path} and {ppath} are trials of different scenes (seeds {c['seed']}, {p['seed']})",
+                      file=sys.stderr)
+                raise SystemExit(2)
             k = first_difference(c["actions"], p["actions"])
             where = "same" if k is None else (
                 f"{k + 1}: {c['actions'][k] if k < len(c['actions']) else '-'} / "

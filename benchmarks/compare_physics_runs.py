@@ -18,12 +18,18 @@ from pathlib import Path
 DENSITIES = ("04", "06", "08", "10")
 
 
+def fail(message: str) -> None:
+    """A user error: one line on stderr, exit code 2."""
+    print(f"error: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
 def load(folder: Path, policy: str) -> dict:
     trials = {}
     for path in sorted((folder / "physics_trials" / policy).glob("*.json")):
         trials[path.stem] = json.loads(path.read_text())
     if not trials:
-        sys.exit(f"{folder} holds no trial files of {policy} (physics_trials/{policy}/*.json)")
+        fail(f"{folder} holds no trial files of {policy} (physics_trials/{policy}/*.json)")
     return trials
 
 
@@ -64,7 +70,7 @@ def main() -> int:
     common = sorted(k for k in set(old) & set(new) if args.first is None or int(k.split("_")[1]) < args.first)
     for key in common:
         if old[key]["seed"] != new[key]["seed"]:
-            sys.exit(f"scene {key} has seed {old[key]['seed']} in {args.old} and {new[key]['seed']} in {args.new}")
+            fail(f"scene {key} has seed {old[key]['seed']} in {args.old} and {new[key]['seed']} in {args.new}")
     print(f"{args.policy}, the {len(common)} scenes both runs hold; counts of scenes (shelf simulator and Drake "
           f"successes), actions matching the first-order prediction, candidate motions the planner refused before "
           f"the executed actions, and Drake's endings. Made by `python benchmarks/compare_physics_runs.py "
