@@ -548,32 +548,31 @@ class BeliefSearch(Hindsight):
     def distances(self, worlds: "PackedWorlds", objects) -> np.ndarray:
         """(K,) float: per world, the fewest objects of ``objects`` whose removal shows its target at v (0, 1, 2
         exactly; from 3 on, the count a greedy cover removes, an upper bound; ``failure_cost`` for a world whose
-        target the empty shelf does not show)."""
-        key = tuple(id(o) for o in objects)
+        target the empty shelf does not show). Cached per tuple of objects (by identity: the search reuses the
+        arrangement tuples of :meth:`moves`)."""
+        key = tuple(map(id, objects))
         hit = self._distance_cache.get(key)
         if hit is not None:
             return hit[1]
         need = worlds.need
-        masks = [m for m in (worlds.mask(o) for o in objects) if m is not None]
+        masks = [m for m in map(worlds.mask, objects) if m is not None]
         k = worlds.count
         if masks:
-            masks = np.stack(masks)  # (n, K, W) uint64: the points each object hides
-            at1, at2, at3 = _at_least_three(masks)
-            seen = _popcount(worlds.shown & ~at1)
+            masks = np.array(masks)  # (n, K, W) uint64: the points each object hides
+            at1, at2, at3 = _at_least(masks, 3)
+            seen = _popcount(worlds.shown & ~at1)  # (K,) points seen past all objects
             d = np.full(k, 3.0)
-            exactly1 = at1 & ~at2
-            only = _popcount(masks & exactly1[None])  # (n, K) points hidden by that object alone
-            one = (seen[None] + only >= need[None]).any(axis=0)
+            only = _popcount(masks & (at1 & ~at2))  # (n, K) points hidden by that object alone
+            one = (seen + only >= need).any(axis=0)
             two = np.zeros(k, bool)
             if len(masks) > 1 and not one.all():
-                exactly2 = at2 & ~at3
-                both = _popcount(masks[:, None] & masks[None, :] & exactly2[None, None])  # (n, n, K)
-                pair = seen[None, None] + only[:, None] + only[None, :] + both
-                iu = _pairs(len(masks))
-                two = (pair[iu[0], iu[1]] >= need[None]).any(axis=0)
+                i, j = _pairs(len(masks))
+                both = _popcount(masks[i] & masks[j] & (at2 & ~at3))  # (pairs, K) hidden by exactly that pair
+                two = (seen + only[i] + only[j] + both >= need).any(axis=0)
             rest = ~(one | two) & (seen < need)
             if rest.any():
-                d[rest] = np.maximum(3.0, self.greedy_removals(masks[:, rest], worlds.shown[rest], need[rest]))
+                d[rest] = np.maximum(3.0, self.greedy_removals(masks[:, rest], worlds.shown[rest], need[rest],
+                                                               known_above=2))
             d = np.where(one, 1.0, np.where(two, 2.0, d))
         else:
             seen = _popcount(worlds.shown)
@@ -584,27 +583,34 @@ class BeliefSearch(Hindsight):
         return d
 
     @staticmethod
-    def greedy_removals(masks: np.ndarray, shown: np.ndarray, need: np.ndarray) -> np.ndarray:
+    def greedy_removals(masks: np.ndarray, shown: np.ndarray, need: np.ndarray, known_above: int = 0) -> np.ndarray:
         """(K,) per world, how many objects a greedy cover removes until its target is seen at v (each time the
-        object whose removal shows the most of it; an upper bound on the fewest; ``len(masks) + 1`` when even
-        removing all does not show it). ``masks`` (n, K, W) packed per object, ``shown`` (K, W), ``need`` (K,)."""
+        object whose removal shows the most of it, the first such on a tie; an upper bound on the fewest;
+        ``len(masks) + 1`` when even removing all does not show it). ``masks`` (n, K, W) packed per object,
+        ``shown`` (K, W), ``need`` (K,). ``known_above``: the caller knows that no world's target is shown by
+        removing this many objects or fewer (:meth:`distances` passes 2), so the check is skipped for those
+        counts; the picks are made all the same."""
         n, k = masks.shape[0], masks.shape[1]
+        present = masks.copy()  # the masks of the objects not removed yet (a removed one's are zeroed)
         removed = np.zeros((n, k), bool)
         out = np.full(k, float(n + 1))
         todo = np.ones(k, bool)
+        worlds = np.arange(k)
         for step in range(n + 1):
-            present = np.where(removed[:, :, None], np.uint64(0), masks)
-            at1, at2, _ = _at_least_three(present)
-            seen = _popcount(shown & ~at1)
-            done = todo & (seen >= need)
-            out[done] = step
-            todo &= ~done
-            if not todo.any() or step == n:
+            at1, at2 = _at_least(present, 2)
+            if step > known_above or step == n:
+                done = todo & (_popcount(shown & ~at1) >= need)
+                out[done] = step
+                todo &= ~done
+                if not todo.any():
+                    break
+            if step == n:
                 break
-            gain = _popcount(present & (at1 & ~at2)[None])  # (n, K) shown by removing that one next
-            gain = np.where(removed, -1, gain)
+            gain = _popcount(present & (at1 & ~at2))  # (n, K) shown by removing that one next
+            gain[removed] = -1
             pick = gain.argmax(axis=0)
-            removed[pick, np.arange(k)] = True
+            removed[pick, worlds] = True
+            present[pick, worlds] = 0
         return out
 
     # ---- search --------------------------------------------------------------------------------------------------
@@ -773,25 +779,37 @@ def _pairs(n: int):
 
 
 def _popcount(words: np.ndarray) -> np.ndarray:
-    """Set bits per row of packed words: (..., W) uint64 -> (...) int."""
-    return np.bitwise_count(words).sum(axis=-1, dtype=np.int64)
+    """Set bits per row of packed words: (..., W) uint64 -> (...) int64. The W words are added one by one: a numpy
+    sum over a short last axis costs several times more than W additions."""
+    counts = np.bitwise_count(words)
+    total = counts[..., 0].astype(np.int64)
+    for w in range(1, counts.shape[-1]):
+        total += counts[..., w]
+    return total
 
 
-def _at_least_three(masks: np.ndarray):
-    """(at least one, at least two, at least three) of the packed ``masks`` (n, ..., W) set, bit by bit."""
-    at1 = np.zeros(masks.shape[1:], np.uint64)
-    at2 = at1.copy()
-    at3 = at1.copy()
-    for m in masks:
-        at3 |= at2 & m
-        at2 |= at1 & m
-        at1 |= m
-    return at1, at2, at3
+def _at_least(masks: np.ndarray, levels: int) -> list:
+    """[bits set in at least 1, ..., at least ``levels`` (at most 3) of the packed ``masks`` (n, ..., W) uint64],
+    each (..., W), bit by bit. A bit is set in at least two of masks[:i + 1] when it is set in masks[i] and in one
+    of masks[:i], and in at least three when it is set in masks[i] and in two of masks[:i]: OR-accumulated
+    prefixes along the first axis, a fixed number of array operations whatever n."""
+    zeros = np.zeros(masks.shape[1:], np.uint64)
+    if not len(masks):
+        return [zeros] * levels
+    one = np.bitwise_or.accumulate(masks, axis=0)  # one[i]: set in at least one of masks[:i + 1]
+    out = [one[-1]]
+    if levels >= 2:
+        two = np.bitwise_or.accumulate(masks[1:] & one[:-1], axis=0) if len(masks) > 1 else zeros[None]
+        out.append(two[-1])  # two[i]: set in at least two of masks[:i + 2]
+        if levels >= 3:
+            out.append(np.bitwise_or.reduce(masks[2:] & two[:-1], axis=0) if len(masks) > 2 else zeros)
+    return out
 
 
 class PackedWorlds:
     """:class:`~slax_drake.policies.hindsight.Worlds` with each world's target points packed as bits (uint64 words),
-    and each object's occlusion masks cached by the object itself (objects are immutable)."""
+    and each object's occlusion masks cached by the object itself and by its pose (:func:`state_key`: name and
+    planar pose), so that an equal object rebuilt by another plan reuses them."""
 
     def __init__(self, worlds: Worlds):
         self.worlds = worlds
@@ -799,15 +817,14 @@ class PackedWorlds:
         self.n_shown = worlds.n_shown
         self.need = worlds.threshold * worlds.n_shown - 1e-9
         self.shown = self.pack(worlds.shown)
-        self._masks: dict = {}
+        self._masks: dict = {}  # id(object) -> (the object, kept alive; its mask or None)
+        self._masks_by_pose: dict = {}  # state_key of the object -> its mask or None
         from shapely.geometry import MultiPoint
 
         hx, hy = worlds.size[0] / 2, worlds.size[1] / 2
         corners = [(x + sx * hx, y + sy * hy) for x, y in worlds.centers for sx in (-1, 1) for sy in (-1, 1)]
         # every eye-to-target segment of every world projects inside this hull: an object clear of it hides nothing
-        from shapely.prepared import prep
-
-        self.hull = prep(MultiPoint([tuple(worlds.eye[:2])] + corners).convex_hull)
+        self.hull = _ConvexRegion(MultiPoint([tuple(worlds.eye[:2])] + corners).convex_hull)
 
     @staticmethod
     def pack(bits: np.ndarray) -> np.ndarray:
@@ -822,18 +839,55 @@ class PackedWorlds:
         """(K, W) the points of each world's target that ``obj`` alone hides; None when it hides none."""
         hit = self._masks.get(id(obj))
         if hit is None:
-            from shapely.geometry import box
-
-            from slax_drake.scene.footprint import Footprint
-
-            fp = Footprint.of(obj)
-            ex, ey = fp.extents()
-            if not self.hull.intersects(box(fp.x - ex, fp.y - ey, fp.x + ex, fp.y + ey)):
-                hit = self._masks[id(obj)] = (obj, None)
+            key = state_key((obj,))[0]
+            if key in self._masks_by_pose:
+                m = self._masks_by_pose[key]
             else:
-                m = self.worlds.hidden_by(obj)
-                hit = self._masks[id(obj)] = (obj, self.pack(m) if m.any() else None)
+                from slax_drake.scene.footprint import Footprint
+
+                fp = Footprint.of(obj)
+                ex, ey = fp.extents()
+                m = None
+                if self.hull.may_meet_box(fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey):
+                    hidden = self.worlds.hidden_by(obj)
+                    m = self.pack(hidden) if hidden.any() else None
+                self._masks_by_pose[key] = m
+            hit = self._masks[id(obj)] = (obj, m)
         return hit[1]
 
     def blocks(self, objects, name: str) -> np.ndarray:
         return self.worlds.blocks(objects, name)
+
+
+class _ConvexRegion:
+    """A convex polygon of the shelf plane (x, y; m) as half-planes, for a fast test whether an axis-aligned box may
+    meet it (the separating-axis test of a box against a convex polygon: the box's two axes and the polygon's edge
+    normals). Conservative: a box within ``slack`` (m) of the polygon counts as meeting it; a caller may only use a
+    "no" to skip work whose result would be empty anyway."""
+
+    def __init__(self, polygon, slack: float = 1e-9):
+        self.slack = slack
+        if polygon.geom_type != "Polygon" or polygon.area <= 0.0:
+            self.lo, self.hi = tuple(polygon.bounds[:2]), tuple(polygon.bounds[2:])
+            self.edges = []  # a degenerate hull (a point or a segment): its bounding box only
+            return
+        from shapely.geometry.polygon import orient
+
+        ring = np.asarray(orient(polygon, 1.0).exterior.coords)  # counter-clockwise, closed
+        edges = np.diff(ring, axis=0)
+        normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # (m, 2) outward for a CCW ring
+        offsets = np.einsum("ij,ij->i", normals, ring[:-1]) + slack * np.linalg.norm(normals, axis=1)
+        # per edge (normal x, normal y, offset): a point p is inside (or within slack of) it when normal . p <= offset
+        self.edges = [(float(nx), float(ny), float(c)) for (nx, ny), c in zip(normals, offsets)]
+        self.lo, self.hi = tuple(map(float, ring.min(axis=0))), tuple(map(float, ring.max(axis=0)))
+
+    def may_meet_box(self, x_lo: float, x_hi: float, y_lo: float, y_hi: float) -> bool:
+        """False only when the box [x_lo, x_hi] x [y_lo, y_hi] lies farther than ``slack`` outside the polygon."""
+        e = self.slack
+        if x_lo > self.hi[0] + e or x_hi < self.lo[0] - e or y_lo > self.hi[1] + e or y_hi < self.lo[1] - e:
+            return False
+        for nx, ny, offset in self.edges:  # a few edges: plain floats beat numpy's per-call overhead
+            nearest = (nx * x_lo if nx > 0 else nx * x_hi) + (ny * y_lo if ny > 0 else ny * y_hi)  # the box's least
+            if nearest > offset:
+                return False
+        return True
