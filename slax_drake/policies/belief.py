@@ -549,68 +549,101 @@ class BeliefSearch(Hindsight):
         """(K,) float: per world, the fewest objects of ``objects`` whose removal shows its target at v (0, 1, 2
         exactly; from 3 on, the count a greedy cover removes, an upper bound; ``failure_cost`` for a world whose
         target the empty shelf does not show). Cached per tuple of objects (by identity: the search reuses the
-        arrangement tuples of :meth:`moves`)."""
+        arrangement tuples of :meth:`moves`); :meth:`prefetch_distances` computes many at once."""
         key = tuple(map(id, objects))
         hit = self._distance_cache.get(key)
-        if hit is not None:
-            return hit[1]
-        need = worlds.need
-        masks = [m for m in map(worlds.mask, objects) if m is not None]
-        k = worlds.count
-        if masks:
-            masks = np.array(masks)  # (n, K, W) uint64: the points each object hides
-            at1, at2, at3 = _at_least(masks, 3)
-            seen = _popcount(worlds.shown & ~at1)  # (K,) points seen past all objects
-            d = np.full(k, 3.0)
-            only = _popcount(masks & (at1 & ~at2))  # (n, K) points hidden by that object alone
-            one = (seen + only >= need).any(axis=0)
-            two = np.zeros(k, bool)
-            if len(masks) > 1 and not one.all():
-                i, j = _pairs(len(masks))
-                both = _popcount(masks[i] & masks[j] & (at2 & ~at3))  # (pairs, K) hidden by exactly that pair
-                two = (seen + only[i] + only[j] + both >= need).any(axis=0)
-            rest = ~(one | two) & (seen < need)
-            if rest.any():
-                d[rest] = np.maximum(3.0, self.greedy_removals(masks[:, rest], worlds.shown[rest], need[rest],
-                                                               known_above=2))
-            d = np.where(one, 1.0, np.where(two, 2.0, d))
-        else:
-            seen = _popcount(worlds.shown)
-            d = np.full(k, 3.0)
+        if hit is None:
+            self.prefetch_distances(worlds, [objects])
+            hit = self._distance_cache[key]
+        return hit[1]
+
+    def prefetch_distances(self, worlds: "PackedWorlds", arrangements) -> None:
+        """Computes and caches :meth:`distances` of every arrangement of ``arrangements`` not cached yet, all in
+        one :meth:`world_distances` call per object count: the arrangements' worlds side by side as columns (every
+        quantity is computed column by column, so this is exactly the one-by-one result, in far fewer numpy
+        calls). An object hiding nothing in any world gets a zero mask row marked ``absent``."""
+        cache = self._distance_cache
+        todo: dict = {}  # object count -> {key: objects}
+        for objects in arrangements:
+            key = tuple(map(id, objects))
+            if key not in cache:
+                todo.setdefault(len(key), {})[key] = objects
+        k, (kk, w) = worlds.count, worlds.shown.shape
+        zero = np.zeros((kk, w), np.uint64)
+        for n, items in todo.items():
+            per = [[worlds.mask(o) for o in objects] for objects in items.values()]  # J lists of n masks or None
+            j = len(per)
+            masks = np.array([[zero if m is None else m for m in ms] for ms in per], dtype=np.uint64).reshape(j, n, k, w)
+            masks = masks.transpose(1, 0, 2, 3).reshape(n, j * k, w)  # column j * K + k: world k of arrangement j
+            absent = np.repeat(np.array([[m is None for m in ms] for ms in per], bool).reshape(j, n).T, k, axis=1)
+            d = self.world_distances(masks, absent, np.tile(worlds.shown, (j, 1)), np.tile(worlds.need, j),
+                                     np.tile(worlds.n_shown, j)).reshape(j, k)
+            for row, (key, objects) in zip(d, items.items()):
+                cache[key] = (tuple(objects), row)  # the objects keep their ids alive
+
+    def world_distances(self, masks: np.ndarray, absent: np.ndarray, shown: np.ndarray, need: np.ndarray,
+                        n_shown: np.ndarray) -> np.ndarray:
+        """(C,) :meth:`distances` of C world columns: ``masks`` (n, C, W) uint64 the target points each object
+        hides (in the arrangement's order), ``absent`` (n, C) bool the rows of objects that hide nothing in any
+        world of their arrangement (zero masks; never counted as a removal), ``shown`` (C, W) the points the empty
+        shelf shows, ``need`` (C,) how many must be seen (v times ``n_shown``), ``n_shown`` (C,). Column by
+        column: a column's value depends on that column alone."""
+        c = len(shown)
+        at1, at2, at3 = _at_least(masks, 3)
+        seen = _popcount(shown & ~at1)  # (C,) points seen past all objects
+        d = np.full(c, 3.0)
+        only = _popcount(masks & (at1 & ~at2))  # (n, C) points hidden by that object alone
+        one = (seen + only >= need).any(axis=0)
+        two = np.zeros(c, bool)
+        ask = ~one & (seen < need)  # the columns whose count of two decides something
+        if len(masks) > 1 and ask.any():
+            i, j = _pairs(len(masks))
+            m, s, o = masks[:, ask], seen[ask], only[:, ask]
+            both = _popcount(m[i] & m[j] & (at2[ask] & ~at3[ask]))  # (pairs, C') hidden by exactly that pair
+            two[ask] = (s + o[i] + o[j] + both >= need[ask]).any(axis=0)
+        rest = ask & ~two
+        if rest.any():
+            d[rest] = np.maximum(3.0, self.greedy_removals(masks[:, rest], shown[rest], need[rest], known_above=2,
+                                                           absent=absent[:, rest]))
+        d = np.where(one, 1.0, np.where(two, 2.0, d))
         d = np.where(seen >= need, 0.0, d)
-        d = np.where(worlds.n_shown > 0, d, self.failure_cost)
-        self._distance_cache[key] = (tuple(objects), d)  # the objects keep their ids alive
-        return d
+        return np.where(n_shown > 0, d, self.failure_cost)
 
     @staticmethod
-    def greedy_removals(masks: np.ndarray, shown: np.ndarray, need: np.ndarray, known_above: int = 0) -> np.ndarray:
+    def greedy_removals(masks: np.ndarray, shown: np.ndarray, need: np.ndarray, known_above: int = 0,
+                        absent: np.ndarray | None = None) -> np.ndarray:
         """(K,) per world, how many objects a greedy cover removes until its target is seen at v (each time the
         object whose removal shows the most of it, the first such on a tie; an upper bound on the fewest;
         ``len(masks) + 1`` when even removing all does not show it). ``masks`` (n, K, W) packed per object,
         ``shown`` (K, W), ``need`` (K,). ``known_above``: the caller knows that no world's target is shown by
-        removing this many objects or fewer (:meth:`distances` passes 2), so the check is skipped for those
-        counts; the picks are made all the same."""
+        removing this many objects or fewer (:meth:`world_distances` passes 2), so the check is skipped for those
+        counts; the picks are made all the same. ``absent`` (n, K) bool: rows standing for no object (zero masks,
+        never picked). Worlds leave the arrays as they are done."""
         n, k = masks.shape[0], masks.shape[1]
         present = masks.copy()  # the masks of the objects not removed yet (a removed one's are zeroed)
-        removed = np.zeros((n, k), bool)
+        removed = np.zeros((n, k), bool) if absent is None else absent.copy()
         out = np.full(k, float(n + 1))
-        todo = np.ones(k, bool)
-        worlds = np.arange(k)
+        worlds = np.arange(k)  # the worlds the arrays' columns stand for
         for step in range(n + 1):
             at1, at2 = _at_least(present, 2)
             if step > known_above or step == n:
-                done = todo & (_popcount(shown & ~at1) >= need)
-                out[done] = step
-                todo &= ~done
-                if not todo.any():
+                done = _popcount(shown & ~at1) >= need
+                out[worlds[done]] = step
+                if done.all():
                     break
+                if done.any():
+                    keep = ~done
+                    present, removed, shown, need, worlds = present[:, keep], removed[:, keep], shown[keep], \
+                        need[keep], worlds[keep]
+                    at1, at2 = at1[keep], at2[keep]
             if step == n:
                 break
             gain = _popcount(present & (at1 & ~at2))  # (n, K) shown by removing that one next
             gain[removed] = -1
             pick = gain.argmax(axis=0)
-            removed[pick, worlds] = True
-            present[pick, worlds] = 0
+            columns = np.arange(len(worlds))
+            removed[pick, columns] = True
+            present[pick, columns] = 0
         return out
 
     # ---- search --------------------------------------------------------------------------------------------------
@@ -642,6 +675,7 @@ class BeliefSearch(Hindsight):
         kids = []
         best_suctions: dict = {}
         aside: dict = {}  # per object, the placement that hides no world's target with the least risk
+        looked = []  # the moves looked at, in order (the aside ones after them)
         for a, after, c in moves:
             if isinstance(a, Suction):
                 moved = next(o for o in after if o.name == a.name)
@@ -650,13 +684,15 @@ class BeliefSearch(Hindsight):
                     if a.name not in aside or risk < aside[a.name][0]:
                         aside[a.name] = (risk, a, after, c)
                     continue
+            looked.append((a, after, c))
+        looked += [(a, after, c) for _, a, after, c in aside.values()]  # suctions only
+        self.prefetch_distances(worlds, [node.objects] + [after for _, after, _ in looked])
+        for a, after, c in looked:
             kid = self.child(worlds, node, a, after, c, remaining, next(counter))
             if isinstance(a, Push):
                 kids.append(kid)
             else:
                 best_suctions.setdefault(a.name, []).append(kid)
-        for risk, a, after, c in aside.values():  # suctions only
-            best_suctions.setdefault(a.name, []).append(self.child(worlds, node, a, after, c, remaining, next(counter)))
         for group in best_suctions.values():
             group.sort(key=lambda k: (k.value, k.order))
             kids.extend(group[: self.placements_per_object])
