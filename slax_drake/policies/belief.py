@@ -186,6 +186,7 @@ class BeliefSearch(Hindsight):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
+        self._risk_cache: dict = {}  # placement box -> placement_risk, for this decision's hidden centres
         self.depth = depth
         self.max_depth = max(depth, max_depth)  # deeper while no plan of ``depth`` reveals anything
         self.beam = beam
@@ -537,7 +538,16 @@ class BeliefSearch(Hindsight):
         centers = self._hidden_centers
         if not isinstance(a, Suction) or not self.hidden_risk or centers is None or not len(centers):
             return 0.0
-        x_lo, x_hi, y_lo, y_hi = self.placement_box(objects, a)
+        box = self.placement_box(objects, a)
+        hit = self._risk_cache.get(box)  # cached per decision (the hidden centres are the decision's)
+        if hit is None:
+            hit = self._risk_cache[box] = self.box_risk(box, centers)
+        return hit
+
+    def box_risk(self, box: tuple, centers: np.ndarray) -> float:
+        """:meth:`placement_risk` of a placement box (x_lo, x_hi, y_lo, y_hi; m) among the target's possible
+        placements ``centers`` (K, 2)."""
+        x_lo, x_hi, y_lo, y_hi = box
         hx, hy = self.target_size()[0] / 2, self.target_size()[1] / 2
         x_lo, x_hi, y_lo, y_hi = x_lo - hx, x_hi + hx, y_lo - hy, y_hi + hy
         inside = ((centers[:, 0] >= x_lo) & (centers[:, 0] <= x_hi) & (centers[:, 1] >= y_lo) & (centers[:, 1] <= y_hi))
@@ -717,6 +727,7 @@ class BeliefSearch(Hindsight):
         if not cands:
             return Decision.stop("no feasible action")
         placements = self._hidden_centers = self.placements(obs)
+        self._risk_cache = {}
         log = {"placements": int(len(placements)), "samples": 0, "expanded": 0, "capped": False}
         self.decision_log.append(log)
         if not len(placements):
@@ -844,8 +855,8 @@ def _at_least(masks: np.ndarray, levels: int) -> list:
 
 class PackedWorlds:
     """:class:`~slax_drake.policies.hindsight.Worlds` with each world's target points packed as bits (uint64 words),
-    and each object's occlusion masks cached by the object itself and by its pose (:func:`state_key`: name and
-    planar pose), so that an equal object rebuilt by another plan reuses them."""
+    and each object's occlusion masks cached by the object itself and by its name, footprint and size, so that an
+    equal object rebuilt by another plan reuses them."""
 
     def __init__(self, worlds: Worlds):
         self.worlds = worlds
@@ -854,7 +865,8 @@ class PackedWorlds:
         self.need = worlds.threshold * worlds.n_shown - 1e-9
         self.shown = self.pack(worlds.shown)
         self._masks: dict = {}  # id(object) -> (the object, kept alive; its mask or None)
-        self._masks_by_pose: dict = {}  # state_key of the object -> its mask or None
+        self._masks_by_pose: dict = {}  # (name, Footprint, size) of the object -> its mask or None
+        self._blocks: dict = {}  # Footprint of an object -> (K,) bool, the worlds whose target it overlaps
         from shapely.geometry import MultiPoint
 
         hx, hy = worlds.size[0] / 2, worlds.size[1] / 2
@@ -875,13 +887,13 @@ class PackedWorlds:
         """(K, W) the points of each world's target that ``obj`` alone hides; None when it hides none."""
         hit = self._masks.get(id(obj))
         if hit is None:
-            key = state_key((obj,))[0]
+            from slax_drake.scene.footprint import Footprint
+
+            fp = Footprint.of(obj)
+            key = (obj.name, fp, tuple(obj.size))  # exact: what the hull test and the mask depend on
             if key in self._masks_by_pose:
                 m = self._masks_by_pose[key]
             else:
-                from slax_drake.scene.footprint import Footprint
-
-                fp = Footprint.of(obj)
                 ex, ey = fp.extents()
                 m = None
                 if self.hull.may_meet_box(fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey):
@@ -892,7 +904,16 @@ class PackedWorlds:
         return hit[1]
 
     def blocks(self, objects, name: str) -> np.ndarray:
-        return self.worlds.blocks(objects, name)
+        """(K,) bool: :meth:`Worlds.blocks` (the object ``name`` of ``objects`` overlaps the target of each world),
+        cached by the object's footprint (all it depends on). Not to be modified."""
+        from slax_drake.scene.footprint import Footprint
+
+        obj = next(o for o in objects if o.name == name)
+        key = Footprint.of(obj)
+        hit = self._blocks.get(key)
+        if hit is None:
+            hit = self._blocks[key] = self.worlds.blocks(objects, name)
+        return hit
 
 
 class _ConvexRegion:
