@@ -156,11 +156,12 @@ class _Node:
     (``alive``, bool (K,)), the terminal value of the worlds lost to a blocked action (``lost``), its value V, the
     revealed mass R (``revealed``) and the probability that its suctions so far went as planned (``prob``)."""
 
-    __slots__ = ("objects", "plan", "g", "alive", "lost", "value", "order", "revealed", "prob")
+    __slots__ = ("objects", "plan", "g", "alive", "lost", "value", "order", "revealed", "prob", "mass")
 
     def __init__(self, objects, plan, g, alive, lost, value, order, revealed=0.0, prob=1.0):
         self.objects, self.plan, self.g, self.alive, self.lost = objects, plan, g, alive, lost
         self.value, self.order, self.revealed, self.prob = value, order, revealed, prob
+        self.mass = None  # the share of worlds alive, set by the first child (``alive`` is fixed by then)
 
 
 class BeliefSearch(Hindsight):
@@ -186,7 +187,8 @@ class BeliefSearch(Hindsight):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
-        self._risk_cache: dict = {}  # placement box -> placement_risk, for this decision's hidden centres
+        self._risk_by_box: dict = {}  # placement box -> its placement_risk, for this decision's hidden centres
+        self._risk_cache: dict = {}  # (id(object), action) -> (the object, its placement_risk), this decision
         self.depth = depth
         self.max_depth = max(depth, max_depth)  # deeper while no plan of ``depth`` reveals anything
         self.beam = beam
@@ -538,11 +540,15 @@ class BeliefSearch(Hindsight):
         centers = self._hidden_centers
         if not isinstance(a, Suction) or not self.hidden_risk or centers is None or not len(centers):
             return 0.0
-        box = self.placement_box(objects, a)
-        hit = self._risk_cache.get(box)  # cached per decision (the hidden centres are the decision's)
+        obj = next(o for o in objects if o.name == a.name)
+        hit = self._risk_cache.get((id(obj), a))  # cached per decision (the hidden centres are the decision's)
         if hit is None:
-            hit = self._risk_cache[box] = self.box_risk(box, centers)
-        return hit
+            box = self.placement_box((obj,), a)
+            risk = self._risk_by_box.get(box)
+            if risk is None:
+                risk = self._risk_by_box[box] = self.box_risk(box, centers)
+            hit = self._risk_cache[(id(obj), a)] = (obj, risk)  # the object keeps its id alive
+        return hit[1]
 
     def box_risk(self, box: tuple, centers: np.ndarray) -> float:
         """:meth:`placement_risk` of a placement box (x_lo, x_hi, y_lo, y_hi; m) among the target's possible
@@ -658,8 +664,9 @@ class BeliefSearch(Hindsight):
 
     # ---- search --------------------------------------------------------------------------------------------------
     def child(self, worlds, node: _Node, a, after, c: float, remaining: int, order: int) -> _Node:
-        mass = node.alive.sum() / self._n_worlds
-        g = node.g + c * mass
+        if node.mass is None:
+            node.mass = node.alive.sum() / self._n_worlds  # the share of worlds not revealed yet
+        g = node.g + c * node.mass
         d_before = self.distances(worlds, node.objects)
         alive, lost = node.alive, node.lost
         if isinstance(a, Suction):
@@ -674,8 +681,9 @@ class BeliefSearch(Hindsight):
         left = remaining - len(node.plan) - 1
         h = np.where(d > left, self.failure_cost, d)
         n = self._n_worlds
-        value = g + lost + float((h * alive).sum()) / n + (1.0 - prob) * float(shown.sum()) / n
-        revealed = node.revealed + prob * float(shown.sum()) / n
+        n_shown = float(shown.sum())
+        value = g + lost + float((h * alive).sum()) / n + (1.0 - prob) * n_shown / n
+        revealed = node.revealed + prob * n_shown / n
         return _Node(after, node.plan + (a,), g, alive, lost, value, order, revealed, prob)
 
     def expansions(self, worlds, node: _Node, moves, remaining: int, counter) -> list:
@@ -727,7 +735,7 @@ class BeliefSearch(Hindsight):
         if not cands:
             return Decision.stop("no feasible action")
         placements = self._hidden_centers = self.placements(obs)
-        self._risk_cache = {}
+        self._risk_by_box, self._risk_cache = {}, {}
         log = {"placements": int(len(placements)), "samples": 0, "expanded": 0, "capped": False}
         self.decision_log.append(log)
         if not len(placements):
@@ -867,6 +875,7 @@ class PackedWorlds:
         self._masks: dict = {}  # id(object) -> (the object, kept alive; its mask or None)
         self._masks_by_pose: dict = {}  # (name, Footprint, size) of the object -> its mask or None
         self._blocks: dict = {}  # Footprint of an object -> (K,) bool, the worlds whose target it overlaps
+        self._blocks_by_id: dict = {}  # id(object) -> (the object, its entry of _blocks)
         from shapely.geometry import MultiPoint
 
         hx, hy = worlds.size[0] / 2, worlds.size[1] / 2
@@ -906,14 +915,17 @@ class PackedWorlds:
     def blocks(self, objects, name: str) -> np.ndarray:
         """(K,) bool: :meth:`Worlds.blocks` (the object ``name`` of ``objects`` overlaps the target of each world),
         cached by the object's footprint (all it depends on). Not to be modified."""
-        from slax_drake.scene.footprint import Footprint
-
         obj = next(o for o in objects if o.name == name)
-        key = Footprint.of(obj)
-        hit = self._blocks.get(key)
+        hit = self._blocks_by_id.get(id(obj))
         if hit is None:
-            hit = self._blocks[key] = self.worlds.blocks(objects, name)
-        return hit
+            from slax_drake.scene.footprint import Footprint
+
+            key = Footprint.of(obj)
+            blocks = self._blocks.get(key)
+            if blocks is None:
+                blocks = self._blocks[key] = self.worlds.blocks(objects, name)
+            hit = self._blocks_by_id[id(obj)] = (obj, blocks)  # the object keeps its id alive
+        return hit[1]
 
 
 class _ConvexRegion:
