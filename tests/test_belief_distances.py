@@ -77,6 +77,41 @@ def test_distances_of_a_state_and_its_children_equal_the_plain_definition(ten_ob
     assert {0.0, 1.0, 2.0} & seen_values and max(seen_values) >= 3  # the scene exercises the greedy cover too
 
 
+def test_distances_of_many_arrangements_at_once_equal_one_at_a_time(ten_objects):
+    """:meth:`prefetch_distances` (every arrangement's worlds side by side, objects hiding nothing as absent rows)
+    gives each arrangement exactly its own :meth:`distances`."""
+    policy, raw, known = ten_objects
+    arrangements = [known] + [after for _, after, _ in policy.moves(known)]
+    one_by_one = []
+    for objects in arrangements:
+        policy._distance_cache = {}
+        one_by_one.append(policy.distances(PackedWorlds(raw), objects))
+    policy._distance_cache = {}
+    packed = PackedWorlds(raw)
+    policy.prefetch_distances(packed, arrangements)
+    assert len(policy._distance_cache) == len(arrangements)
+    assert all(np.array_equal(policy.distances(packed, o), d) for o, d in zip(arrangements, one_by_one))
+    rows = [sum(packed.mask(o) is None for o in objects) for objects in arrangements]
+    assert min(rows) < max(rows)  # the batch mixes arrangements with different objects hiding nothing
+
+
+def test_cached_blocks_and_placement_risks_equal_fresh_ones(ten_objects):
+    policy, raw, known = ten_objects
+    packed = PackedWorlds(raw)
+    policy._hidden_centers = raw.centers
+    policy._risk_by_box, policy._risk_cache = {}, {}
+    suctions = [(a, after) for a, after, _ in policy.moves(known) if a.kind == "suction"]
+    assert len(suctions) > 10
+    risks = set()
+    for _ in range(2):  # the second round is answered from the caches
+        for a, after in suctions:
+            assert np.array_equal(packed.blocks(after, a.name), raw.blocks(after, a.name))
+            risk = policy.placement_risk(known, a)
+            assert risk == policy.box_risk(policy.placement_box(known, a), raw.centers)
+            risks.add(risk)
+    assert len(risks) > 1
+
+
 def test_masks_cached_by_pose_equal_fresh_ones(ten_objects):
     """An equal object rebuilt (a new instance at the same pose) gets the same mask as a fresh PackedWorlds'."""
     policy, raw, known = ten_objects
