@@ -584,8 +584,8 @@ class BeliefSearch(Hindsight):
             key = tuple(map(id, objects))
             if key not in cache:
                 todo.setdefault(len(key), {})[key] = objects
-        k, (kk, w) = worlds.count, worlds.shown.shape
-        zero = np.zeros((kk, w), np.uint64)
+        k, w = worlds.shown.shape  # worlds, words per world
+        zero = np.zeros((k, w), np.uint64)
         for n, items in todo.items():
             per = [[worlds.mask(o) for o in objects] for objects in items.values()]  # J lists of n masks or None
             j = len(per)
