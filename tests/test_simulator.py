@@ -55,3 +55,25 @@ def test_suction_moves_the_object_to_its_placement(sim_scenario):
     o0 = scene.object_named(a.name)
     o1 = after.object_named(a.name)
     assert np.allclose(o1.center[:2], (o0.center[0] + a.dx, a.dz))
+
+
+def test_a_placement_over_a_low_object_backs_out_to_the_last_landing_spot(sim_scenario):
+    """The way in passes over a low object and is stopped by a tall one behind it; lowered anywhere over the low
+    one the object would land on it, so it backs out to the nearest spot before it, within one grid step."""
+    scene = sample_scene(sim_scenario, 4, 1, target_size=(0.06, 0.06, 0.06))
+    model = make_policy("oracle-p+s", sim_scenario).action_model
+    moved = SceneObject("a", "box", (0.06, 0.06, 0.10), planar_pose(-0.15, -0.10, 0.05, 0.0))
+    low = SceneObject("low", "box", (0.08, 0.08, 0.03), planar_pose(0.15, 0.0, 0.015, 0.0))
+    height = 0.9 * scene.shelf.height
+    tall = SceneObject("tall", "box", (0.10, 0.06, height), planar_pose(0.15, 0.12, height / 2, 0.0))
+    s = scene.with_objects((moved, low, tall))
+    s = s.__class__(s.shelf, s.camera, s.objects, None, 0)
+    assert model.passes_over(moved, 0.03) and not model.passes_over(moved, height)
+    after, note = execute(s, Suction("a", (-0.15, -0.13, 0.05), 0.30, 0.15), model)
+    assert note == "placement stopped early by an unseen obstacle"
+    end = after.object_named("a")
+    clearance, cell = model.tool.physics.clearance, model.tool.grid.cell
+    assert objects_overlap(after, clearance - 1e-9) == []
+    assert abs(end.center[0] - 0.15) < 1e-12
+    in_front_of_low = -0.04 - 0.03 - clearance  # the largest y where it stands clear of the low object
+    assert in_front_of_low - cell - 1e-9 <= end.center[1] <= in_front_of_low + 1e-9

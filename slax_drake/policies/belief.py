@@ -156,11 +156,12 @@ class _Node:
     (``alive``, bool (K,)), the terminal value of the worlds lost to a blocked action (``lost``), its value V, the
     revealed mass R (``revealed``) and the probability that its suctions so far went as planned (``prob``)."""
 
-    __slots__ = ("objects", "plan", "g", "alive", "lost", "value", "order", "revealed", "prob")
+    __slots__ = ("objects", "plan", "g", "alive", "lost", "value", "order", "revealed", "prob", "mass")
 
     def __init__(self, objects, plan, g, alive, lost, value, order, revealed=0.0, prob=1.0):
         self.objects, self.plan, self.g, self.alive, self.lost = objects, plan, g, alive, lost
         self.value, self.order, self.revealed, self.prob = value, order, revealed, prob
+        self.mass = None  # the share of worlds alive, set by the first child (``alive`` is fixed by then)
 
 
 class BeliefSearch(Hindsight):
@@ -186,6 +187,8 @@ class BeliefSearch(Hindsight):
         super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
                          **kwargs)
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
+        self._risk_by_box: dict = {}  # placement box -> its placement_risk, for this decision's hidden centres
+        self._risk_cache: dict = {}  # (id(object), action) -> (the object, its placement_risk), this decision
         self.depth = depth
         self.max_depth = max(depth, max_depth)  # deeper while no plan of ``depth`` reveals anything
         self.beam = beam
@@ -537,7 +540,20 @@ class BeliefSearch(Hindsight):
         centers = self._hidden_centers
         if not isinstance(a, Suction) or not self.hidden_risk or centers is None or not len(centers):
             return 0.0
-        x_lo, x_hi, y_lo, y_hi = self.placement_box(objects, a)
+        obj = next(o for o in objects if o.name == a.name)
+        hit = self._risk_cache.get((id(obj), a))  # cached per decision (the hidden centres are the decision's)
+        if hit is None:
+            box = self.placement_box((obj,), a)
+            risk = self._risk_by_box.get(box)
+            if risk is None:
+                risk = self._risk_by_box[box] = self.box_risk(box, centers)
+            hit = self._risk_cache[(id(obj), a)] = (obj, risk)  # the object keeps its id alive
+        return hit[1]
+
+    def box_risk(self, box: tuple, centers: np.ndarray) -> float:
+        """:meth:`placement_risk` of a placement box (x_lo, x_hi, y_lo, y_hi; m) among the target's possible
+        placements ``centers`` (K, 2)."""
+        x_lo, x_hi, y_lo, y_hi = box
         hx, hy = self.target_size()[0] / 2, self.target_size()[1] / 2
         x_lo, x_hi, y_lo, y_hi = x_lo - hx, x_hi + hx, y_lo - hy, y_hi + hy
         inside = ((centers[:, 0] >= x_lo) & (centers[:, 0] <= x_hi) & (centers[:, 1] >= y_lo) & (centers[:, 1] <= y_hi))
@@ -548,69 +564,109 @@ class BeliefSearch(Hindsight):
     def distances(self, worlds: "PackedWorlds", objects) -> np.ndarray:
         """(K,) float: per world, the fewest objects of ``objects`` whose removal shows its target at v (0, 1, 2
         exactly; from 3 on, the count a greedy cover removes, an upper bound; ``failure_cost`` for a world whose
-        target the empty shelf does not show)."""
-        key = tuple(id(o) for o in objects)
+        target the empty shelf does not show). Cached per tuple of objects (by identity: the search reuses the
+        arrangement tuples of :meth:`moves`); :meth:`prefetch_distances` computes many at once."""
+        key = tuple(map(id, objects))
         hit = self._distance_cache.get(key)
-        if hit is not None:
-            return hit[1]
-        need = worlds.need
-        masks = [m for m in (worlds.mask(o) for o in objects) if m is not None]
-        k = worlds.count
-        if masks:
-            masks = np.stack(masks)  # (n, K, W) uint64: the points each object hides
-            at1, at2, at3 = _at_least_three(masks)
-            seen = _popcount(worlds.shown & ~at1)
-            d = np.full(k, 3.0)
-            exactly1 = at1 & ~at2
-            only = _popcount(masks & exactly1[None])  # (n, K) points hidden by that object alone
-            one = (seen[None] + only >= need[None]).any(axis=0)
-            two = np.zeros(k, bool)
-            if len(masks) > 1 and not one.all():
-                exactly2 = at2 & ~at3
-                both = _popcount(masks[:, None] & masks[None, :] & exactly2[None, None])  # (n, n, K)
-                pair = seen[None, None] + only[:, None] + only[None, :] + both
-                iu = _pairs(len(masks))
-                two = (pair[iu[0], iu[1]] >= need[None]).any(axis=0)
-            rest = ~(one | two) & (seen < need)
-            if rest.any():
-                d[rest] = np.maximum(3.0, self.greedy_removals(masks[:, rest], worlds.shown[rest], need[rest]))
-            d = np.where(one, 1.0, np.where(two, 2.0, d))
-        else:
-            seen = _popcount(worlds.shown)
-            d = np.full(k, 3.0)
+        if hit is None:
+            self.prefetch_distances(worlds, [objects])
+            hit = self._distance_cache[key]
+        return hit[1]
+
+    def prefetch_distances(self, worlds: "PackedWorlds", arrangements) -> None:
+        """Computes and caches :meth:`distances` of every arrangement of ``arrangements`` not cached yet, all in
+        one :meth:`world_distances` call per object count: the arrangements' worlds side by side as columns (every
+        quantity is computed column by column, so this is exactly the one-by-one result, in far fewer numpy
+        calls). An object hiding nothing in any world gets a zero mask row marked ``absent``."""
+        cache = self._distance_cache
+        todo: dict = {}  # object count -> {key: objects}
+        for objects in arrangements:
+            key = tuple(map(id, objects))
+            if key not in cache:
+                todo.setdefault(len(key), {})[key] = objects
+        k, w = worlds.shown.shape  # worlds, words per world
+        zero = np.zeros((k, w), np.uint64)
+        for n, items in todo.items():
+            per = [[worlds.mask(o) for o in objects] for objects in items.values()]  # J lists of n masks or None
+            j = len(per)
+            masks = np.array([[zero if m is None else m for m in ms] for ms in per], dtype=np.uint64).reshape(j, n, k, w)
+            masks = masks.transpose(1, 0, 2, 3).reshape(n, j * k, w)  # column j * K + k: world k of arrangement j
+            absent = np.repeat(np.array([[m is None for m in ms] for ms in per], bool).reshape(j, n).T, k, axis=1)
+            d = self.world_distances(masks, absent, np.tile(worlds.shown, (j, 1)), np.tile(worlds.need, j),
+                                     np.tile(worlds.n_shown, j)).reshape(j, k)
+            for row, (key, objects) in zip(d, items.items()):
+                cache[key] = (tuple(objects), row)  # the objects keep their ids alive
+
+    def world_distances(self, masks: np.ndarray, absent: np.ndarray, shown: np.ndarray, need: np.ndarray,
+                        n_shown: np.ndarray) -> np.ndarray:
+        """(C,) :meth:`distances` of C world columns: ``masks`` (n, C, W) uint64 the target points each object
+        hides (in the arrangement's order), ``absent`` (n, C) bool the rows of objects that hide nothing in any
+        world of their arrangement (zero masks; never counted as a removal), ``shown`` (C, W) the points the empty
+        shelf shows, ``need`` (C,) how many must be seen (v times ``n_shown``), ``n_shown`` (C,). Column by
+        column: a column's value depends on that column alone."""
+        c = len(shown)
+        at1, at2, at3 = _at_least(masks, 3)
+        seen = _popcount(shown & ~at1)  # (C,) points seen past all objects
+        d = np.full(c, 3.0)
+        only = _popcount(masks & (at1 & ~at2))  # (n, C) points hidden by that object alone
+        one = (seen + only >= need).any(axis=0)
+        two = np.zeros(c, bool)
+        ask = ~one & (seen < need)  # the columns whose count of two decides something
+        if len(masks) > 1 and ask.any():
+            i, j = _pairs(len(masks))
+            m, s, o = masks[:, ask], seen[ask], only[:, ask]
+            both = _popcount(m[i] & m[j] & (at2[ask] & ~at3[ask]))  # (pairs, C') hidden by exactly that pair
+            two[ask] = (s + o[i] + o[j] + both >= need[ask]).any(axis=0)
+        rest = ask & ~two
+        if rest.any():
+            d[rest] = np.maximum(3.0, self.greedy_removals(masks[:, rest], shown[rest], need[rest], known_above=2,
+                                                           absent=absent[:, rest]))
+        d = np.where(one, 1.0, np.where(two, 2.0, d))
         d = np.where(seen >= need, 0.0, d)
-        d = np.where(worlds.n_shown > 0, d, self.failure_cost)
-        self._distance_cache[key] = (tuple(objects), d)  # the objects keep their ids alive
-        return d
+        return np.where(n_shown > 0, d, self.failure_cost)
 
     @staticmethod
-    def greedy_removals(masks: np.ndarray, shown: np.ndarray, need: np.ndarray) -> np.ndarray:
+    def greedy_removals(masks: np.ndarray, shown: np.ndarray, need: np.ndarray, known_above: int = 0,
+                        absent: np.ndarray | None = None) -> np.ndarray:
         """(K,) per world, how many objects a greedy cover removes until its target is seen at v (each time the
-        object whose removal shows the most of it; an upper bound on the fewest; ``len(masks) + 1`` when even
-        removing all does not show it). ``masks`` (n, K, W) packed per object, ``shown`` (K, W), ``need`` (K,)."""
+        object whose removal shows the most of it, the first such on a tie; an upper bound on the fewest;
+        ``len(masks) + 1`` when even removing all does not show it). ``masks`` (n, K, W) packed per object,
+        ``shown`` (K, W), ``need`` (K,). ``known_above``: the caller knows that no world's target is shown by
+        removing this many objects or fewer (:meth:`world_distances` passes 2), so the check is skipped for those
+        counts; the picks are made all the same. ``absent`` (n, K) bool: rows standing for no object (zero masks,
+        never picked). Worlds leave the arrays as they are done."""
         n, k = masks.shape[0], masks.shape[1]
-        removed = np.zeros((n, k), bool)
+        present = masks.copy()  # the masks of the objects not removed yet (a removed one's are zeroed)
+        removed = np.zeros((n, k), bool) if absent is None else absent.copy()
         out = np.full(k, float(n + 1))
-        todo = np.ones(k, bool)
+        worlds = np.arange(k)  # the worlds the arrays' columns stand for
         for step in range(n + 1):
-            present = np.where(removed[:, :, None], np.uint64(0), masks)
-            at1, at2, _ = _at_least_three(present)
-            seen = _popcount(shown & ~at1)
-            done = todo & (seen >= need)
-            out[done] = step
-            todo &= ~done
-            if not todo.any() or step == n:
+            at1, at2 = _at_least(present, 2)
+            if step > known_above or step == n:
+                done = _popcount(shown & ~at1) >= need
+                out[worlds[done]] = step
+                if done.all():
+                    break
+                if done.any():
+                    keep = ~done
+                    present, removed, shown, need, worlds = present[:, keep], removed[:, keep], shown[keep], \
+                        need[keep], worlds[keep]
+                    at1, at2 = at1[keep], at2[keep]
+            if step == n:
                 break
-            gain = _popcount(present & (at1 & ~at2)[None])  # (n, K) shown by removing that one next
-            gain = np.where(removed, -1, gain)
+            gain = _popcount(present & (at1 & ~at2))  # (n, K) shown by removing that one next
+            gain[removed] = -1
             pick = gain.argmax(axis=0)
-            removed[pick, np.arange(k)] = True
+            columns = np.arange(len(worlds))
+            removed[pick, columns] = True
+            present[pick, columns] = 0
         return out
 
     # ---- search --------------------------------------------------------------------------------------------------
     def child(self, worlds, node: _Node, a, after, c: float, remaining: int, order: int) -> _Node:
-        mass = node.alive.sum() / self._n_worlds
-        g = node.g + c * mass
+        if node.mass is None:
+            node.mass = node.alive.sum() / self._n_worlds  # the share of worlds not revealed yet
+        g = node.g + c * node.mass
         d_before = self.distances(worlds, node.objects)
         alive, lost = node.alive, node.lost
         if isinstance(a, Suction):
@@ -625,8 +681,9 @@ class BeliefSearch(Hindsight):
         left = remaining - len(node.plan) - 1
         h = np.where(d > left, self.failure_cost, d)
         n = self._n_worlds
-        value = g + lost + float((h * alive).sum()) / n + (1.0 - prob) * float(shown.sum()) / n
-        revealed = node.revealed + prob * float(shown.sum()) / n
+        n_shown = float(shown.sum())
+        value = g + lost + float((h * alive).sum()) / n + (1.0 - prob) * n_shown / n
+        revealed = node.revealed + prob * n_shown / n
         return _Node(after, node.plan + (a,), g, alive, lost, value, order, revealed, prob)
 
     def expansions(self, worlds, node: _Node, moves, remaining: int, counter) -> list:
@@ -636,6 +693,7 @@ class BeliefSearch(Hindsight):
         kids = []
         best_suctions: dict = {}
         aside: dict = {}  # per object, the placement that hides no world's target with the least risk
+        looked = []  # the moves looked at, in order (the aside ones after them)
         for a, after, c in moves:
             if isinstance(a, Suction):
                 moved = next(o for o in after if o.name == a.name)
@@ -644,13 +702,15 @@ class BeliefSearch(Hindsight):
                     if a.name not in aside or risk < aside[a.name][0]:
                         aside[a.name] = (risk, a, after, c)
                     continue
+            looked.append((a, after, c))
+        looked += [(a, after, c) for _, a, after, c in aside.values()]  # suctions only
+        self.prefetch_distances(worlds, [node.objects] + [after for _, after, _ in looked])
+        for a, after, c in looked:
             kid = self.child(worlds, node, a, after, c, remaining, next(counter))
             if isinstance(a, Push):
                 kids.append(kid)
             else:
                 best_suctions.setdefault(a.name, []).append(kid)
-        for risk, a, after, c in aside.values():  # suctions only
-            best_suctions.setdefault(a.name, []).append(self.child(worlds, node, a, after, c, remaining, next(counter)))
         for group in best_suctions.values():
             group.sort(key=lambda k: (k.value, k.order))
             kids.extend(group[: self.placements_per_object])
@@ -675,6 +735,7 @@ class BeliefSearch(Hindsight):
         if not cands:
             return Decision.stop("no feasible action")
         placements = self._hidden_centers = self.placements(obs)
+        self._risk_by_box, self._risk_cache = {}, {}
         log = {"placements": int(len(placements)), "samples": 0, "expanded": 0, "capped": False}
         self.decision_log.append(log)
         if not len(placements):
@@ -773,25 +834,37 @@ def _pairs(n: int):
 
 
 def _popcount(words: np.ndarray) -> np.ndarray:
-    """Set bits per row of packed words: (..., W) uint64 -> (...) int."""
-    return np.bitwise_count(words).sum(axis=-1, dtype=np.int64)
+    """Set bits per row of packed words: (..., W) uint64 -> (...) int64. The W words are added one by one: a numpy
+    sum over a short last axis costs several times more than W additions."""
+    counts = np.bitwise_count(words)
+    total = counts[..., 0].astype(np.int64)
+    for w in range(1, counts.shape[-1]):
+        total += counts[..., w]
+    return total
 
 
-def _at_least_three(masks: np.ndarray):
-    """(at least one, at least two, at least three) of the packed ``masks`` (n, ..., W) set, bit by bit."""
-    at1 = np.zeros(masks.shape[1:], np.uint64)
-    at2 = at1.copy()
-    at3 = at1.copy()
-    for m in masks:
-        at3 |= at2 & m
-        at2 |= at1 & m
-        at1 |= m
-    return at1, at2, at3
+def _at_least(masks: np.ndarray, levels: int) -> list:
+    """[bits set in at least 1, ..., at least ``levels`` (at most 3) of the packed ``masks`` (n, ..., W) uint64],
+    each (..., W), bit by bit. A bit is set in at least two of masks[:i + 1] when it is set in masks[i] and in one
+    of masks[:i], and in at least three when it is set in masks[i] and in two of masks[:i]: OR-accumulated
+    prefixes along the first axis, a fixed number of array operations whatever n."""
+    zeros = np.zeros(masks.shape[1:], np.uint64)
+    if not len(masks):
+        return [zeros] * levels
+    one = np.bitwise_or.accumulate(masks, axis=0)  # one[i]: set in at least one of masks[:i + 1]
+    out = [one[-1]]
+    if levels >= 2:
+        two = np.bitwise_or.accumulate(masks[1:] & one[:-1], axis=0) if len(masks) > 1 else zeros[None]
+        out.append(two[-1])  # two[i]: set in at least two of masks[:i + 2]
+        if levels >= 3:
+            out.append(np.bitwise_or.reduce(masks[2:] & two[:-1], axis=0) if len(masks) > 2 else zeros)
+    return out
 
 
 class PackedWorlds:
     """:class:`~slax_drake.policies.hindsight.Worlds` with each world's target points packed as bits (uint64 words),
-    and each object's occlusion masks cached by the object itself (objects are immutable)."""
+    and each object's occlusion masks cached by the object itself and by its name, footprint and size, so that an
+    equal object rebuilt by another plan reuses them."""
 
     def __init__(self, worlds: Worlds):
         self.worlds = worlds
@@ -799,15 +872,16 @@ class PackedWorlds:
         self.n_shown = worlds.n_shown
         self.need = worlds.threshold * worlds.n_shown - 1e-9
         self.shown = self.pack(worlds.shown)
-        self._masks: dict = {}
+        self._masks: dict = {}  # id(object) -> (the object, kept alive; its mask or None)
+        self._masks_by_pose: dict = {}  # (name, Footprint, size) of the object -> its mask or None
+        self._blocks: dict = {}  # Footprint of an object -> (K,) bool, the worlds whose target it overlaps
+        self._blocks_by_id: dict = {}  # id(object) -> (the object, its entry of _blocks)
         from shapely.geometry import MultiPoint
 
         hx, hy = worlds.size[0] / 2, worlds.size[1] / 2
         corners = [(x + sx * hx, y + sy * hy) for x, y in worlds.centers for sx in (-1, 1) for sy in (-1, 1)]
         # every eye-to-target segment of every world projects inside this hull: an object clear of it hides nothing
-        from shapely.prepared import prep
-
-        self.hull = prep(MultiPoint([tuple(worlds.eye[:2])] + corners).convex_hull)
+        self.hull = _ConvexRegion(MultiPoint([tuple(worlds.eye[:2])] + corners).convex_hull)
 
     @staticmethod
     def pack(bits: np.ndarray) -> np.ndarray:
@@ -822,18 +896,67 @@ class PackedWorlds:
         """(K, W) the points of each world's target that ``obj`` alone hides; None when it hides none."""
         hit = self._masks.get(id(obj))
         if hit is None:
-            from shapely.geometry import box
-
             from slax_drake.scene.footprint import Footprint
 
             fp = Footprint.of(obj)
-            ex, ey = fp.extents()
-            if not self.hull.intersects(box(fp.x - ex, fp.y - ey, fp.x + ex, fp.y + ey)):
-                hit = self._masks[id(obj)] = (obj, None)
+            key = (obj.name, fp, tuple(obj.size))  # exact: what the hull test and the mask depend on
+            if key in self._masks_by_pose:
+                m = self._masks_by_pose[key]
             else:
-                m = self.worlds.hidden_by(obj)
-                hit = self._masks[id(obj)] = (obj, self.pack(m) if m.any() else None)
+                ex, ey = fp.extents()
+                m = None
+                if self.hull.may_meet_box(fp.x - ex, fp.x + ex, fp.y - ey, fp.y + ey):
+                    hidden = self.worlds.hidden_by(obj)
+                    m = self.pack(hidden) if hidden.any() else None
+                self._masks_by_pose[key] = m
+            hit = self._masks[id(obj)] = (obj, m)
         return hit[1]
 
     def blocks(self, objects, name: str) -> np.ndarray:
-        return self.worlds.blocks(objects, name)
+        """(K,) bool: :meth:`Worlds.blocks` (the object ``name`` of ``objects`` overlaps the target of each world),
+        cached by the object's footprint (all it depends on). Not to be modified."""
+        obj = next(o for o in objects if o.name == name)
+        hit = self._blocks_by_id.get(id(obj))
+        if hit is None:
+            from slax_drake.scene.footprint import Footprint
+
+            key = Footprint.of(obj)
+            blocks = self._blocks.get(key)
+            if blocks is None:
+                blocks = self._blocks[key] = self.worlds.blocks(objects, name)
+            hit = self._blocks_by_id[id(obj)] = (obj, blocks)  # the object keeps its id alive
+        return hit[1]
+
+
+class _ConvexRegion:
+    """A convex polygon of the shelf plane (x, y; m) as half-planes, for a fast test whether an axis-aligned box may
+    meet it (the separating-axis test of a box against a convex polygon: the box's two axes and the polygon's edge
+    normals). Conservative: a box within ``slack`` (m) of the polygon counts as meeting it; a caller may only use a
+    "no" to skip work whose result would be empty anyway."""
+
+    def __init__(self, polygon, slack: float = 1e-9):
+        self.slack = slack
+        if polygon.geom_type != "Polygon" or polygon.area <= 0.0:
+            self.lo, self.hi = tuple(polygon.bounds[:2]), tuple(polygon.bounds[2:])
+            self.edges = []  # a degenerate hull (a point or a segment): its bounding box only
+            return
+        from shapely.geometry.polygon import orient
+
+        ring = np.asarray(orient(polygon, 1.0).exterior.coords)  # counter-clockwise, closed
+        edges = np.diff(ring, axis=0)
+        normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # (m, 2) outward for a CCW ring
+        offsets = np.einsum("ij,ij->i", normals, ring[:-1]) + slack * np.linalg.norm(normals, axis=1)
+        # per edge (normal x, normal y, offset): a point p is inside (or within slack of) it when normal . p <= offset
+        self.edges = [(float(nx), float(ny), float(c)) for (nx, ny), c in zip(normals, offsets)]
+        self.lo, self.hi = tuple(map(float, ring.min(axis=0))), tuple(map(float, ring.max(axis=0)))
+
+    def may_meet_box(self, x_lo: float, x_hi: float, y_lo: float, y_hi: float) -> bool:
+        """False only when the box [x_lo, x_hi] x [y_lo, y_hi] lies farther than ``slack`` outside the polygon."""
+        e = self.slack
+        if x_lo > self.hi[0] + e or x_hi < self.lo[0] - e or y_lo > self.hi[1] + e or y_hi < self.lo[1] - e:
+            return False
+        for nx, ny, offset in self.edges:  # a few edges: plain floats beat numpy's per-call overhead
+            nearest = (nx * x_lo if nx > 0 else nx * x_hi) + (ny * y_lo if ny > 0 else ny * y_hi)  # the box's least
+            if nearest > offset:
+                return False
+        return True

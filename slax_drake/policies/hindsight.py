@@ -282,8 +282,14 @@ class Worlds:
         if hit is None:
             from slax_drake.scene.raycast import SceneRaycaster
 
-            seen = SceneRaycaster(self.template, objects=(obj,)).visible(self.eye, self.points)
-            hit = self._hidden[key] = self.shown & ~seen
+            # rays only to the points the empty shelf shows: the others are not hidden by anything (each ray is
+            # cast on its own, so its result does not depend on which other rays are cast)
+            worlds, points = np.nonzero(self.shown)
+            hit = np.zeros_like(self.shown)
+            if len(worlds):
+                hit[worlds, points] = ~SceneRaycaster(self.template, objects=(obj,)).visible(
+                    self.eye, self.points[worlds, points])
+            self._hidden[key] = hit
         return hit
 
     def distance(self, objects) -> tuple[np.ndarray, np.ndarray]:

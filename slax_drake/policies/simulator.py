@@ -175,6 +175,13 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         bad = np.flatnonzero(~ok)
         return int(bad[0]) if len(bad) else len(centers)
 
+    def clear_everywhere(centers) -> np.ndarray:
+        """(M,) bool: the object, lowered at each of ``centers`` (M, 2), is clear of every obstacle."""
+        ok = np.ones(len(centers), dtype=bool)
+        for _, other in obstacles:
+            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.physics.clearance)
+        return ok
+
     if isinstance(action, Push):
         sign = 1 if action.d > 0 else -1
         rects = model.push_swept_rects(fp, sign)
@@ -214,8 +221,9 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         ys = np.linspace(y_out, action.dz, n_in + 1)[1:]
         path_in = np.column_stack([np.full(n_in, x_new), ys])
         k = first_blocked(path_in, lifted=True)
-        while k > 0 and first_blocked(path_in[k - 1:k]) == 0:
-            k -= 1  # lowered there it would land on something it passed over: back out along the way in
+        if k > 0:  # lowered where it stopped it would land on something it passed over: back out along the way in
+            landing = np.flatnonzero(clear_everywhere(path_in[:k]))  # where it can be lowered, before the stop
+            k = int(landing[-1]) + 1 if len(landing) else 0
         y_final = ys[k - 1] if k > 0 else None
         if y_final is None or y_final - ey < -shelf.depth / 2 + t.physics.clearance - 1e-9:
             # stopped before the whole object is back inside the bay: it is put back where it was
