@@ -443,11 +443,17 @@ class ActionModel:
         y_reach_exact = np.where(
             first_bad >= n_in, np.inf, np.where(first_bad == 0, -np.inf, steps[np.maximum(first_bad - 1, 0)])
         )
-        # Hidden-space rule on the raster: the shifted footprint, sweeping in from the front ("path"), or the
-        # shifted footprint at its placement only ("placement"; per column, a prefix count of hidden rows).
-        hidden_in = ctx.hidden_all & ~ctx.masks[i]
-        first_h = first_hidden_row(hidden_in)
-        prefix = np.vstack([np.zeros((1, self.grid.nx), dtype=np.int32), np.cumsum(hidden_in, axis=0, dtype=np.int32)])
+        # Hidden-space rule on the raster: the shifted footprint, sweeping in from the front ("path": per column,
+        # the first hidden row), or the shifted footprint at its placement only ("placement": per column, a prefix
+        # count of hidden rows); "none" reads no hidden space, so none is computed.
+        first_h = prefix = None
+        if t.rules.suction_hidden_rule != "none":
+            hidden_in = ctx.hidden_all & ~ctx.masks[i]
+            if path_rule:
+                first_h = first_hidden_row(hidden_in)
+            if t.rules.suction_hidden_rule == "placement":
+                prefix = np.vstack([np.zeros((1, self.grid.nx), dtype=np.int32),
+                                    np.cumsum(hidden_in, axis=0, dtype=np.int32)])
         passed_over = [j for j in ctx.others(i) if j not in blocking]
 
         def placements_clear_of(other: Footprint) -> np.ndarray:
