@@ -283,11 +283,13 @@ class Worlds:
             from slax_drake.scene.raycast import SceneRaycaster
 
             # rays only to the points the empty shelf shows: the others are not hidden by anything (each ray is
-            # cast on its own, so its result does not depend on which other rays are cast)
+            # cast on its own, so its result does not depend on which other rays are cast); and against the object
+            # alone: the shelf hides none of those points (its first hit along such a ray lies no nearer than the
+            # point less VISIBILITY_EPS), so the ray's first hit before that, if any, is the object's
             worlds, points = np.nonzero(self.shown)
             hit = np.zeros_like(self.shown)
             if len(worlds):
-                hit[worlds, points] = ~SceneRaycaster(self.template, objects=(obj,)).visible(
+                hit[worlds, points] = ~SceneRaycaster(self.template, objects=(obj,), shelf=False).visible(
                     self.eye, self.points[worlds, points])
             self._hidden[key] = hit
         return hit
