@@ -401,7 +401,7 @@ class ActionModel:
         if len(a_index) == 0:
             rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
             return
-        feasible.extend(lat.actions[a][b] for a, b in zip(a_index.tolist(), b_index.tolist()))
+        feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
 
     def suction_lattice(self, obj: SceneObject, fp: Footprint, mask: np.ndarray) -> "SuctionLattice":
         """Object ``obj``'s :class:`SuctionLattice` (``fp`` its footprint, ``mask`` its footprint mask on the
@@ -474,12 +474,9 @@ class ActionModel:
         inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
         base = np.repeat(inside.any(axis=1)[:, None], len(b_all), axis=1)  # a column wholly off the raster: none
         base[(a_all == 0)[:, None] & (b_all == 0)[None, :]] = False  # not where it stands
-        y_placed = fp.y + b_all * res
-        actions = [[Suction(obj.name, q, round(float(a * res), 6), round(float(y), 6), round(float(yaw), 6))
-                    for y in y_placed] for a in a_all]
-        return SuctionLattice(refusal=None, lattice_empty=False, a_all=a_all, b_all=b_all, xs=xs, y_placed=y_placed,
-                              steps=steps, shifted_cols=shifted_cols, inside=inside, base=base, actions=actions,
-                              **common)
+        return SuctionLattice(refusal=None, lattice_empty=False, a_all=a_all, b_all=b_all, xs=xs,
+                              y_placed=fp.y + b_all * res, steps=steps, shifted_cols=shifted_cols, inside=inside,
+                              base=base, name=obj.name, res=res, **common)
 
     def _reachable_past(self, lat: "SuctionLattice", fp: Footprint, other: Footprint) -> np.ndarray:
         """(A, B) bool: whether the object (footprint ``fp``), going straight in at each lattice column, reaches the
@@ -728,7 +725,8 @@ class SuctionLattice:
     the placements' x and y, ``steps`` the y of each step of the way in (from outside the shelf to the deepest
     placement), ``shifted_cols`` and ``inside`` (A, C) the footprint's columns at each placement column and whether
     they lie on the raster, ``base`` (A, B) the placements before any test against other objects (not where the
-    object stands, not in a column wholly off the raster) and ``actions`` (A lists of B :class:`Suction`)."""
+    object stands, not in a column wholly off the raster), ``name`` the object's and ``res`` the lattice step;
+    :meth:`action` the :class:`Suction` to a lattice point (made on first use and kept)."""
 
     refusal: str | None
     lattice_empty: bool = True
@@ -749,11 +747,23 @@ class SuctionLattice:
     shifted_cols: np.ndarray | None = None
     inside: np.ndarray | None = None
     base: np.ndarray | None = None
-    actions: list = dataclasses.field(default_factory=list)
+    name: str = ""
+    res: float = 0.0
+    _actions: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
     def refused(cls, reason: str) -> "SuctionLattice":
         return cls(refusal=reason)
+
+    def action(self, a_index: int, b_index: int) -> Suction:
+        """The suction that places the object at lattice point (a_all[a_index], b_all[b_index])."""
+        hit = self._actions.get((a_index, b_index))
+        if hit is None:
+            a = self.a_all[a_index]
+            hit = self._actions[(a_index, b_index)] = Suction(
+                self.name, self.q, round(float(a * self.res), 6), round(float(self.y_placed[b_index]), 6),
+                round(float(self.yaw), 6))
+        return hit
 
 
 class _StateContext:
