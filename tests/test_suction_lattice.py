@@ -50,8 +50,8 @@ def plain_placements(model: ActionModel, objects, fixed, i: int) -> list[tuple[f
     cells_per = int(round(res / cell))
     x_lim = shelf.width / 2 - t.physics.clearance - ex
     y_lim = shelf.depth / 2 - t.physics.clearance - ey
-    a_all = [a for a in range(int(math.floor((-x_lim - fp.x) / res + 1e-9)), int(math.floor((x_lim - fp.x) / res + 1e-9)) + 1)
-             if abs(fp.x + a * res) <= x_lim + 1e-12]
+    a_lo, a_hi = int(math.floor((-x_lim - fp.x) / res + 1e-9)), int(math.floor((x_lim - fp.x) / res + 1e-9))
+    a_all = [a for a in range(a_lo, a_hi + 1) if abs(fp.x + a * res) <= x_lim + 1e-12]
     b_all = list(range(int(math.ceil((-y_lim - fp.y) / res - 1e-9)), int(math.floor((y_lim - fp.y) / res + 1e-9)) + 1))
     y_out = -shelf.depth / 2 - ey - cell
     y_deep = fp.y + b_all[-1] * res
