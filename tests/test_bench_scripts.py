@@ -51,3 +51,16 @@ def test_bench_noisy_faces_refuses_bad_densities(capsys, densities):
         script("bench_noisy_faces").main(["--densities", densities])
     assert exit_info.value.code == 2
     assert "--densities: takes comma-separated whole numbers" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--policies", "dar,nope"], "error: unknown policies ['nope']"),
+    (["--profile", "nope"], "error: unknown profile 'nope'"),
+    (["--scenes-per-density", "0"], "error: --scenes-per-density must be at least 1"),
+])
+def test_table1_cpu_refuses_bad_arguments_before_any_trial(capsys, argv, message):
+    assert script("table1_cpu").main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""  # refused before the first trial runs
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(message)

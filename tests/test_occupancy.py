@@ -221,3 +221,29 @@ def test_rolled_camera_uses_the_generic_projection(sim_scenario):
     assert occ.num_hidden > 0
     direct = project_placements(camera, scene.camera.position, size, occ.hidden_xy, 0.005)
     assert np.abs(direct - occ.p2d).sum() < 0.02
+
+
+def test_per_footprint_caches_give_what_a_fresh_lattice_gives(sim_scenario):
+    """The lattice keeps each footprint's collision window and shadow polygon (the policies evaluate many
+    arrangements that share most objects): the occupancy of every arrangement of a walk, computed with those
+    caches warm, equals the one computed on a fresh lattice with nothing kept."""
+    from slax_drake.occupancy.hidden import _lattice
+
+    scene = sample_scene(sim_scenario, 8, 44)
+    rng = np.random.default_rng(0)
+    arrangements = [scene.objects]
+    for _ in range(6):  # move one object at a time, as a policy's candidates do
+        objects = list(arrangements[-1])
+        k = int(rng.integers(len(objects)))
+        objects[k] = objects[k].moved_to(float(objects[k].center[0]) + float(rng.uniform(-0.05, 0.05)),
+                                         float(objects[k].center[1]))
+        arrangements.append(tuple(objects))
+    warm = [compute_occupancy(scene.with_objects(a), SIZES[1], 0.01) for a in arrangements + arrangements]
+    hidden_total = 0
+    for k, a in enumerate(arrangements + arrangements):
+        _lattice.cache_clear()
+        cold = compute_occupancy(scene.with_objects(a), SIZES[1], 0.01)
+        np.testing.assert_array_equal(warm[k].hidden_xy, cold.hidden_xy)
+        np.testing.assert_array_equal(warm[k].p2d, cold.p2d)
+        hidden_total += cold.num_hidden
+    assert hidden_total > 0

@@ -49,7 +49,8 @@ def walk(scenario, model, n, seed, steps):
 
 
 class UncachedModel(ActionModel):
-    """The action model with its caches bypassed: every pairwise test, push rect and object geometry computed."""
+    """The action model with its caches bypassed: every pairwise test, push rect, object geometry and suction
+    lattice computed."""
 
     def _pair(self, key, compute):
         return compute()
@@ -61,6 +62,9 @@ class UncachedModel(ActionModel):
     def object_geometry(self, objects, rasters=True, fixed=()):
         self._geometry.clear()
         return super().object_geometry(objects, rasters, fixed)
+
+    def suction_lattice(self, obj, fp, mask):
+        return self._make_suction_lattice(obj, fp, mask)
 
 
 @pytest.mark.parametrize("profile", ["paper", "station"])

@@ -359,6 +359,8 @@ class _Lattice:
     ax: np.ndarray  # fine lattice x coordinates (n_a,)
     ay: np.ndarray  # fine lattice y coordinates (n_b,)
     _memo: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)  # per camera / eye
+    # per object footprint (and eye): its collision window and its shadow's raster polygon (_per_footprint)
+    _footprints: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
 
     @staticmethod
     def build(width: float, depth: float, size, step: float, spacing: float) -> "_Lattice | None":
@@ -417,16 +419,37 @@ class _Lattice:
         in_y = np.abs(self.cy) + hy <= scene.shelf.depth / 2.0 + 1e-12
         free = in_x[:, None] & in_y[None, :]
         for obj in scene.objects:
-            fp = Footprint.of(obj)
-            ex, ey = fp.extents()
-            i0, i1 = np.searchsorted(self.cx, [fp.x - ex - hx - _NEAR, fp.x + ex + hx + _NEAR])
-            j0, j1 = np.searchsorted(self.cy, [fp.y - ey - hy - _NEAR, fp.y + ey + hy + _NEAR])
-            if i0 >= i1 or j0 >= j1:
-                continue
-            gx, gy = np.meshgrid(self.cx[i0:i1], self.cy[j0:j1], indexing="ij")
-            clear = clear_of("box", np.column_stack([gx.ravel(), gy.ravel()]), 0.0, (hx, hy), fp, 0.0)
-            free[i0:i1, j0:j1] &= clear.reshape(gx.shape)
+            window = self._per_footprint(("free", Footprint.of(obj)), self._clear_window)
+            if window is not None:
+                i0, i1, j0, j1, clear = window
+                free[i0:i1, j0:j1] &= clear
         return free
+
+    def _clear_window(self, key) -> tuple | None:
+        """(i0, i1, j0, j1, clear): the placements [i0:i1, j0:j1] whose bounding box comes within ``_NEAR`` of the
+        footprint ``key[1]``'s, and which of them are clear of it (bool); None when there are none."""
+        fp = key[1]
+        hx, hy = self.size[0] / 2.0, self.size[1] / 2.0
+        ex, ey = fp.extents()
+        i0, i1 = np.searchsorted(self.cx, [fp.x - ex - hx - _NEAR, fp.x + ex + hx + _NEAR])
+        j0, j1 = np.searchsorted(self.cy, [fp.y - ey - hy - _NEAR, fp.y + ey + hy + _NEAR])
+        if i0 >= i1 or j0 >= j1:
+            return None
+        gx, gy = np.meshgrid(self.cx[i0:i1], self.cy[j0:j1], indexing="ij")
+        clear = clear_of("box", np.column_stack([gx.ravel(), gy.ravel()]), 0.0, (hx, hy), fp, 0.0)
+        clear = clear.reshape(gx.shape)
+        clear.setflags(write=False)  # shared through the cache
+        return i0, i1, j0, j1, clear
+
+    def _per_footprint(self, key, compute):
+        """``compute(key)``, kept per key (a footprint, with the eye where it matters): the policies evaluate many
+        arrangements in which most objects stand where they stood. Bounded (emptied at 4096 entries)."""
+        if key in self._footprints:
+            return self._footprints[key]
+        if len(self._footprints) >= 4096:
+            self._footprints.clear()
+        value = self._footprints[key] = compute(key)
+        return value
 
     def _certainly_visible(self, scene: Scene) -> np.ndarray:
         """bool (n_a, n_b): lattice points that the top-down (2D) test proves visible from the camera."""
@@ -437,14 +460,19 @@ class _Lattice:
         sx, sy = self.ax[1] - self.ax[0], self.ay[1] - self.ay[0]
         shadow = np.zeros((len(self.ax), len(self.ay)), dtype=np.uint8)
         shift = 8
-        for obj in scene.objects:
-            poly = np.asarray(Footprint.of(obj).polygon(segments=16).exterior.coords)[:-1]
+
+        def shadow_polygon(key) -> np.ndarray:
+            """The raster polygon (fixed point, ``shift`` fractional bits) of the footprint's top-down shadow."""
+            poly = np.asarray(key[1].polygon(segments=16).exterior.coords)[:-1]
             far = poly + _FAR * (poly - (ex, ey))
             hull = cv2.convexHull(np.concatenate([poly, far]).astype(np.float32))[:, 0, :]
             # Raster rows are lattice x indices, columns lattice y indices; cv2 takes (column, row) points.
             pix = np.column_stack([(hull[:, 1] - self.ay[0]) / sy, (hull[:, 0] - self.ax[0]) / sx])
-            cv2.fillConvexPoly(shadow, np.rint(pix * (1 << shift)).astype(np.int32), 1, lineType=cv2.LINE_8,
-                               shift=shift)
+            return np.rint(pix * (1 << shift)).astype(np.int32)
+
+        for obj in scene.objects:
+            polygon = self._per_footprint(("shadow", Footprint.of(obj), ex, ey), shadow_polygon)
+            cv2.fillConvexPoly(shadow, polygon, 1, lineType=cv2.LINE_8, shift=shift)
         shadow = cv2.dilate(shadow, np.ones((3, 3), np.uint8))
         return (shadow == 0) & self._through_opening(scene)
 

@@ -166,6 +166,7 @@ class ActionModel:
         self._pair_cache: dict = {}  # collision tests of one moved footprint against one other (see _pair)
         self._fp_ids: dict = {}  # footprint -> int (footprint_ids)
         self._geometry: dict = {}  # id(obj) -> (obj, ObjectGeometry) (object_geometry)
+        self._lattices: dict = {}  # id(obj) -> (obj, SuctionLattice) (suction_lattice)
         self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
     # ----------------------------------------------------------------------------------------------------
@@ -348,17 +349,79 @@ class ActionModel:
 
     # ----------------------------------------------------------------------------------------------------
     def _suctions(self, ctx, i, feasible, rejected):
-        t, shelf = self.tool, self.shelf
+        """Appends object i's feasible suctions (in lattice order: by column x', then depth y') to ``feasible``, or
+        its reason to ``rejected``. What depends on the object alone comes from :meth:`suction_lattice`; the
+        collision tests against each other object are pairwise masks of the lattice (cached per pair of
+        footprints); the hidden-space rule reads the state's raster."""
+        t = self.tool
         obj, fp = ctx.objects[i], ctx.fps[i]
         what = f"suction {obj.name}"
+        lat = self.suction_lattice(obj, fp, ctx.masks[i])
+        if lat.refusal is not None:
+            rejected.append(Rejected(what, lat.refusal))
+            return
+        cz = lat.q[2]
+        tube_r = t.geometry.tube_diameter / 2
+        for j in (ctx.others(i) if t.rules.tube_approach_check else ()):
+            if ctx.all_heights[j] <= cz - tube_r:
+                continue  # the tube passes over it
+            if not self._pair(("approach", ctx.ids[i], tuple(obj.size), ctx.ids[j]), lambda: bool(
+                    clear_of("box", lat.corridor, lat.yaw, lat.corridor_half, ctx.all_fps[j],
+                             BLADE_CONTACT_CLEARANCE)[0])):
+                rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
+                return
+        ex = fp.extents()[0]
+        blocking = [j for j in ctx.others(i) if not self.passes_over(obj, ctx.all_heights[j])]
+        for j in ctx.others_in_band(i, 0, fp.x - ex - t.physics.clearance - 1e-6, fp.x + ex + t.physics.clearance + 1e-6):
+            if j not in blocking:
+                continue
+            if not self._pair(("out", ctx.ids[i], ctx.ids[j]), lambda: bool(clear_of(
+                    fp.shape, lat.path_out, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all())):
+                rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
+                return
+        path_rule = t.rules.suction_hidden_rule == "path"
+        if path_rule:
+            hidden_o = ctx.hidden_others(i)
+            if any(hidden_o[:r, c].any() for c, r in zip(lat.cols, lat.first_rows)):
+                rejected.append(Rejected(what, "path out of the shelf crosses space hidden from the camera"))
+                return
+        if lat.lattice_empty:
+            rejected.append(Rejected(what, "no placement fits in the shelf"))
+            return
+        ok = lat.base.copy()
+        for j in blocking:  # reachable on the way in past each object it cannot pass over
+            ok &= self._pair(("in", ctx.ids[i], ctx.ids[j]), lambda: self._reachable_past(lat, fp, ctx.all_fps[j]))
+        for j in ctx.others(i):  # clear of each object it passes over, where it is put down
+            if j not in blocking:
+                ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: self._placements_clear_of(
+                    lat, fp, ctx.all_fps[j]))
+        if t.rules.suction_hidden_rule != "none" and ok.any():
+            ok &= self._suction_hidden_ok(ctx, i, lat, path_rule)
+        a_index, b_index = np.nonzero(ok)
+        if len(a_index) == 0:
+            rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
+            return
+        feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
+
+    def suction_lattice(self, obj: SceneObject, fp: Footprint, mask: np.ndarray) -> "SuctionLattice":
+        """Object ``obj``'s :class:`SuctionLattice` (``fp`` its footprint, ``mask`` its footprint mask on the
+        floor raster), cached by the object's identity: it depends on the object and the tool alone, and a search
+        passes the same unmoved object instances in thousands of states."""
+        hit = self._lattices.get(id(obj))
+        if hit is None or hit[0] is not obj:
+            if len(self._lattices) >= GEOMETRY_CACHE_SIZE:
+                self._lattices.clear()
+            hit = self._lattices[id(obj)] = (obj, self._make_suction_lattice(obj, fp, mask))
+        return hit[1]
+
+    def _make_suction_lattice(self, obj: SceneObject, fp: Footprint, mask: np.ndarray) -> "SuctionLattice":
+        t, shelf = self.tool, self.shelf
         mass = object_mass(obj, t.physics.object_density, t.physics)
         if RULES["max_suction_mass"].refuses(t.rules.max_suction_mass, mass):
-            rejected.append(Rejected(what, f"{obj.name} weighs {mass:.2f} kg > {t.rules.max_suction_mass:.2f} kg"))
-            return
+            return SuctionLattice.refused(f"{obj.name} weighs {mass:.2f} kg > {t.rules.max_suction_mass:.2f} kg")
         contact = self.suction_contact(obj)
         if contact is None:
-            rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is too small or curved for the cup"))
-            return
+            return SuctionLattice.refused(f"{obj.name}'s camera-facing side is too small or curved for the cup")
         cx, cy, cz = contact
         yaw = self.tool_yaw(obj, (cx, cy))
         face = math.degrees(self.face_yaw(obj))
@@ -367,54 +430,27 @@ class ActionModel:
             angle = 0.0  # a front face turns 45 deg at most (from y, and from a tube turned toward it): none refused
         if RULES["max_seal_angle_deg"].refuses(t.rules.max_seal_angle_deg, angle):
             turned = f" (the tool turns {abs(math.degrees(yaw)):.0f} deg)" if yaw else ""
-            rejected.append(Rejected(what, f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
-                                           f"tube{turned} > {t.rules.max_seal_angle_deg:.0f} deg"))
-            return
+            return SuctionLattice.refused(f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
+                                          f"tube{turned} > {t.rules.max_seal_angle_deg:.0f} deg")
         moment = mass * GRAVITY * math.hypot(float(obj.center[0]) - cx, float(obj.center[1]) - cy)
         if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
-            rejected.append(Rejected(what, f"{obj.name}'s weight hangs {moment:.2f} N m off the cup "
-                                           f"> {t.rules.max_suction_moment:.2f} N m"))
-            return
+            return SuctionLattice.refused(f"{obj.name}'s weight hangs {moment:.2f} N m off the cup "
+                                          f"> {t.rules.max_suction_moment:.2f} N m")
         if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, (cy - (-shelf.depth / 2)) / math.cos(yaw)):
-            rejected.append(Rejected(what, f"{obj.name}'s face is beyond the tube's reach"))
-            return
+            return SuctionLattice.refused(f"{obj.name}'s face is beyond the tube's reach")
         if self.reach is not None and self.reach.refuses_cup(cx, cy, cz, yaw, REACH_MARGIN):
             turned = f" turned {math.degrees(yaw):+.0f} deg" if yaw else ""
-            rejected.append(Rejected(what, f"the arm cannot reach the cup{turned} at {obj.name}'s face "
-                                           f"({cx:+.2f}, {cy:+.2f}) m (reach map)"))
-            return
+            return SuctionLattice.refused(f"the arm cannot reach the cup{turned} at {obj.name}'s face "
+                                          f"({cx:+.2f}, {cy:+.2f}) m (reach map)")
         tube_r = t.geometry.tube_diameter / 2
         # the tube's straight way in along its (turned) axis, from in front of the opening to the contact
         length = (cy - self.y_front) / math.cos(yaw)
-        corridor_half = (tube_r, length / 2)
         corridor = np.array([[cx + math.sin(yaw) * length / 2, cy - math.cos(yaw) * length / 2]])
-        for j in (ctx.others(i) if t.rules.tube_approach_check else ()):
-            if ctx.all_heights[j] <= cz - tube_r:
-                continue  # the tube passes over it
-            if not self._pair(("approach", ctx.ids[i], tuple(obj.size), ctx.ids[j]), lambda: bool(
-                    clear_of("box", corridor, yaw, corridor_half, ctx.all_fps[j], BLADE_CONTACT_CLEARANCE)[0])):
-                rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
-                return
         ex, ey = fp.extents()
         y_out = -shelf.depth / 2 - ey - t.grid.cell
         n_out = int(math.ceil((fp.y - y_out) / t.grid.cell))
-        ys = fp.y - np.arange(1, n_out + 1) * t.grid.cell
-        path = np.column_stack([np.full(n_out, fp.x), ys])
-        blocking = [j for j in ctx.others(i) if not self.passes_over(obj, ctx.all_heights[j])]
-        for j in ctx.others_in_band(i, 0, fp.x - ex - t.physics.clearance - 1e-6, fp.x + ex + t.physics.clearance + 1e-6):
-            if j not in blocking:
-                continue
-            if not self._pair(("out", ctx.ids[i], ctx.ids[j]), lambda: bool(clear_of(
-                    fp.shape, path, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all())):
-                rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
-                return
-        cols, first_rows, last_rows = column_extents(ctx.masks[i])
-        path_rule = t.rules.suction_hidden_rule == "path"
-        if path_rule:
-            hidden_o = ctx.hidden_others(i)
-            if any(hidden_o[:r, c].any() for c, r in zip(cols, first_rows)):
-                rejected.append(Rejected(what, "path out of the shelf crosses space hidden from the camera"))
-                return
+        path_out = np.column_stack([np.full(n_out, fp.x), fp.y - np.arange(1, n_out + 1) * t.grid.cell])
+        cols, first_rows, last_rows = column_extents(mask)
         q = (float(cx), float(cy), float(cz))
         # Placements on a lattice around the object: x' = x + a res, y' = y + b res.
         res = t.grid.suction_resolution
@@ -424,78 +460,65 @@ class ActionModel:
         a_all = np.arange(int(math.floor((-x_lim - fp.x) / res + 1e-9)), int(math.floor((x_lim - fp.x) / res + 1e-9)) + 1)
         a_all = a_all[np.abs(fp.x + a_all * res) <= x_lim + 1e-12]
         b_all = np.arange(int(math.ceil((-y_lim - fp.y) / res - 1e-9)), int(math.floor((y_lim - fp.y) / res + 1e-9)) + 1)
+        common = dict(q=q, yaw=yaw, corridor=corridor, corridor_half=(tube_r, length / 2), path_out=path_out,
+                      cols=cols, first_rows=first_rows, last_rows=last_rows, cells_per=cells_per)
         if len(a_all) == 0 or len(b_all) == 0:
-            rejected.append(Rejected(what, "no placement fits in the shelf"))
-            return
-        # Exact path check, vectorised over all columns x' and steps in from y_out to the deepest placement.
+            return SuctionLattice(refusal=None, lattice_empty=True, **common)
+        # the way in: per column x', steps in from y_out to the deepest placement
         y_deep = fp.y + b_all[-1] * res
         n_in = int(math.ceil((y_deep - y_out) / t.grid.cell)) + 1
         steps = y_out + np.arange(n_in) * t.grid.cell
         steps[-1] = min(steps[-1], y_deep)
         xs = fp.x + a_all * res
-        grid_c = np.column_stack([np.repeat(xs, n_in), np.tile(steps, len(xs))])
-        clear = np.ones(len(grid_c), dtype=bool)
-        for j in blocking:  # (the lattice and the way in depend on fp alone: cached per pair of footprints)
-            clear &= self._pair(("in", ctx.ids[i], ctx.ids[j]), lambda: clear_of(
-                fp.shape, grid_c, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance))
-        clear = clear.reshape(len(xs), n_in)
-        first_bad = np.where(clear.all(axis=1), n_in, np.argmin(clear, axis=1))
-        y_reach_exact = np.where(
-            first_bad >= n_in, np.inf, np.where(first_bad == 0, -np.inf, steps[np.maximum(first_bad - 1, 0)])
-        )
-        # Hidden-space rule on the raster: the shifted footprint, sweeping in from the front ("path"), or the
-        # shifted footprint at its placement only ("placement"; per column, a prefix count of hidden rows).
-        hidden_in = ctx.hidden_all & ~ctx.masks[i]
-        first_h = first_hidden_row(hidden_in)
-        prefix = np.vstack([np.zeros((1, self.grid.nx), dtype=np.int32), np.cumsum(hidden_in, axis=0, dtype=np.int32)])
-        passed_over = [j for j in ctx.others(i) if j not in blocking]
+        shifted_cols = cols[None, :] + a_all[:, None] * cells_per  # (A, C) raster columns of each placement column
+        inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
+        base = np.repeat(inside.any(axis=1)[:, None], len(b_all), axis=1)  # a column wholly off the raster: none
+        base[(a_all == 0)[:, None] & (b_all == 0)[None, :]] = False  # not where it stands
+        return SuctionLattice(refusal=None, lattice_empty=False, a_all=a_all, b_all=b_all, xs=xs,
+                              y_placed=fp.y + b_all * res, steps=steps, shifted_cols=shifted_cols, inside=inside,
+                              base=base, name=obj.name, res=res, **common)
 
-        def placements_clear_of(other: Footprint) -> np.ndarray:
-            """(len(a_all), len(b_all)): whether the object placed at each lattice point is clear of ``other``."""
-            placed = np.column_stack([np.repeat(xs, len(b_all)), np.tile(fp.y + b_all * res, len(xs))])
-            return clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), other,
-                            t.physics.clearance).reshape(len(xs), len(b_all))
+    def _reachable_past(self, lat: "SuctionLattice", fp: Footprint, other: Footprint) -> np.ndarray:
+        """(A, B) bool: whether the object (footprint ``fp``), going straight in at each lattice column, reaches the
+        placement's depth before meeting ``other`` (an object it cannot pass over): the path test at every step of
+        the way in, from outside the shelf to the deepest placement, keeping ``clearance``. Over several objects
+        the AND of these masks is the test against all of them (the first step blocked by any is the least)."""
+        n_in = len(lat.steps)
+        centres = np.column_stack([np.repeat(lat.xs, n_in), np.tile(lat.steps, len(lat.xs))])
+        clear = clear_of(fp.shape, centres, fp.yaw, (fp.half_x, fp.half_y), other,
+                         self.tool.physics.clearance).reshape(len(lat.xs), n_in)
+        first_bad = np.where(clear.all(axis=1), n_in, np.argmin(clear, axis=1))
+        y_reach = np.where(first_bad >= n_in, np.inf,
+                           np.where(first_bad == 0, -np.inf, lat.steps[np.maximum(first_bad - 1, 0)]))
+        return lat.y_placed[None, :] <= y_reach[:, None] + 1e-9
+
+    def _placements_clear_of(self, lat: "SuctionLattice", fp: Footprint, other: Footprint) -> np.ndarray:
+        """(A, B) bool: whether the object placed at each lattice point keeps ``clearance`` from ``other``."""
+        placed = np.column_stack([np.repeat(lat.xs, len(lat.y_placed)), np.tile(lat.y_placed, len(lat.xs))])
+        return clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), other,
+                        self.tool.physics.clearance).reshape(len(lat.xs), len(lat.y_placed))
+
+    def _suction_hidden_ok(self, ctx, i: int, lat: "SuctionLattice", path_rule: bool) -> np.ndarray:
+        """(A, B) bool: the lattice placements the hidden-space rule allows for object i. "path": the footprint,
+        shifted to the column, advances from the front no further than the row before its first hidden cell (the
+        placement's depth at most fp.y + that many cells); "placement": the shifted footprint at its placement
+        covers no hidden cell (per column, a prefix count of hidden rows). Hidden space is the state's, object i's
+        own cells excepted."""
+        hidden_in = ctx.hidden_all & ~ctx.masks[i]
+        cols_in = np.where(lat.inside, lat.shifted_cols, 0)  # (A, C), any valid column where outside (masked)
+        if path_rule:
+            first_h = first_hidden_row(hidden_in)
+            adv = np.where(lat.inside, first_h[cols_in] - lat.last_rows[None, :] - 1, NOT_FOUND).min(axis=1)
+            y_path = np.where(adv < NOT_FOUND // 2, ctx.fps[i].y + adv * self.tool.grid.cell, np.inf)
+            return lat.y_placed[None, :] <= y_path[:, None] + 1e-9
         ny = self.grid.ny
-        n_found = 0
-        y_placed = fp.y + b_all * res
-        placed_ok = None  # (len(a_all), len(b_all)): the placement keeps clear of every object it passes over
-        if passed_over:
-            placed_ok = np.ones((len(xs), len(b_all)), dtype=bool)
-            for j in passed_over:
-                placed_ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: placements_clear_of(
-                    ctx.all_fps[j]))
-        for a_index, (a, x_new, y_ex) in enumerate(zip(a_all, xs, y_reach_exact)):
-            shifted_cols = cols + a * cells_per
-            inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
-            if not inside.any():
-                continue
-            if path_rule:
-                # rows the footprint may advance by (relative to its current rows) before touching hidden cells
-                adv = (first_h[shifted_cols[inside]] - last_rows[inside] - 1).min()
-                y_reach = min(y_ex, fp.y + adv * t.grid.cell if adv < NOT_FOUND // 2 else np.inf)
-            else:
-                y_reach = y_ex
-            keep = y_placed <= y_reach + 1e-9
-            if a == 0:
-                keep &= b_all != 0  # not where it stands
-            bs = b_all[keep]
-            if not len(bs):
-                continue
-            if t.rules.suction_hidden_rule == "placement":
-                c_in = shifted_cols[inside]
-                r0 = np.clip(first_rows[inside][None, :] + bs[:, None] * cells_per, 0, ny)
-                r1 = np.clip(last_rows[inside][None, :] + bs[:, None] * cells_per + 1, 0, ny)
-                hidden_count = (prefix[r1, c_in[None, :]] - prefix[r0, c_in[None, :]]).sum(axis=1)
-                bs = bs[hidden_count == 0]
-            if placed_ok is not None and len(bs):
-                bs = bs[placed_ok[a_index, bs - b_all[0]]]
-            for b in bs:
-                y_new = fp.y + b * res
-                feasible.append(Suction(obj.name, q, round(float(a * res), 6), round(float(y_new), 6),
-                                        round(float(yaw), 6)))
-                n_found += 1
-        if n_found == 0:
-            rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
+        prefix = np.vstack([np.zeros((1, self.grid.nx), dtype=np.int32), np.cumsum(hidden_in, axis=0, dtype=np.int32)])
+        shift = lat.b_all[None, :, None] * lat.cells_per  # (1, B, 1) rows
+        r0 = np.clip(lat.first_rows[None, None, :] + shift, 0, ny)  # (1, B, C)
+        r1 = np.clip(lat.last_rows[None, None, :] + shift + 1, 0, ny)
+        c = cols_in[:, None, :]  # (A, 1, C)
+        counts = np.where(lat.inside[:, None, :], prefix[r1, c] - prefix[r0, c], 0).sum(axis=2)  # (A, B)
+        return counts == 0
 
     def _push_rects(self, fp: Footprint, sign: int):
         """(:meth:`push_tool_rects`, :meth:`push_swept_rects`) of ``fp``, cached by footprint and direction: they
@@ -686,6 +709,61 @@ class ObjectGeometry:
     mask: np.ndarray | None
     shadow: np.ndarray | None
     aabb: tuple[float, float, float, float]
+
+
+@dataclasses.dataclass(frozen=True)
+class SuctionLattice:
+    """What the suctions of one object depend on alone (its pose, the shelf and the tool;
+    :meth:`ActionModel.suction_lattice`). Shelf frame S, metres; A lattice columns x' = x + a res (``a_all``),
+    B depths y' = y + b res (``b_all``), C raster columns of the object's footprint.
+
+    ``refusal``: why a rule on the object alone refuses every suction of it (None: none does). Else ``q`` the cup's
+    contact (x, y, z), ``yaw`` the tool's yaw (rad), ``corridor`` (1, 2) and ``corridor_half`` the tube's way in as a
+    turned box, ``path_out`` (n_out, 2) the centres of the way straight out of the shelf, ``cols``, ``first_rows``,
+    ``last_rows`` (C,) the footprint's raster columns and their first and last rows, ``cells_per`` raster cells per
+    lattice step; ``lattice_empty`` when no placement fits in the shelf. Else also ``xs`` (A,) and ``y_placed`` (B,)
+    the placements' x and y, ``steps`` the y of each step of the way in (from outside the shelf to the deepest
+    placement), ``shifted_cols`` and ``inside`` (A, C) the footprint's columns at each placement column and whether
+    they lie on the raster, ``base`` (A, B) the placements before any test against other objects (not where the
+    object stands, not in a column wholly off the raster), ``name`` the object's and ``res`` the lattice step;
+    :meth:`action` the :class:`Suction` to a lattice point (made on first use and kept)."""
+
+    refusal: str | None
+    lattice_empty: bool = True
+    q: tuple = ()
+    yaw: float = 0.0
+    corridor: np.ndarray | None = None
+    corridor_half: tuple = ()
+    path_out: np.ndarray | None = None
+    cols: np.ndarray | None = None
+    first_rows: np.ndarray | None = None
+    last_rows: np.ndarray | None = None
+    cells_per: int = 0
+    a_all: np.ndarray | None = None
+    b_all: np.ndarray | None = None
+    xs: np.ndarray | None = None
+    y_placed: np.ndarray | None = None
+    steps: np.ndarray | None = None
+    shifted_cols: np.ndarray | None = None
+    inside: np.ndarray | None = None
+    base: np.ndarray | None = None
+    name: str = ""
+    res: float = 0.0
+    _actions: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
+
+    @classmethod
+    def refused(cls, reason: str) -> "SuctionLattice":
+        return cls(refusal=reason)
+
+    def action(self, a_index: int, b_index: int) -> Suction:
+        """The suction that places the object at lattice point (a_all[a_index], b_all[b_index])."""
+        hit = self._actions.get((a_index, b_index))
+        if hit is None:
+            a = self.a_all[a_index]
+            hit = self._actions[(a_index, b_index)] = Suction(
+                self.name, self.q, round(float(a * self.res), 6), round(float(self.y_placed[b_index]), 6),
+                round(float(self.yaw), 6))
+        return hit
 
 
 class _StateContext:

@@ -271,6 +271,9 @@ class Worlds:
         facing = np.einsum("pj,kpj->kp", normals, self.eye - self.points) > 0.0
         self.shown = facing & SceneRaycaster(template, objects=()).visible(self.eye, self.points)
         self.n_shown = self.shown.sum(axis=1)
+        # (K, P): the bearing (rad) of each point seen from above, from the eye: atan2(dx, dy), dy > 0 (the points
+        # stand in the shelf, the eye in front of it)
+        self.bearing = np.arctan2(self.points[..., 0] - self.eye[0], self.points[..., 1] - self.eye[1])
         self._revealed: dict = {}
         self._hidden: dict = {}
 
@@ -283,14 +286,31 @@ class Worlds:
             from slax_drake.scene.raycast import SceneRaycaster
 
             # rays only to the points the empty shelf shows: the others are not hidden by anything (each ray is
-            # cast on its own, so its result does not depend on which other rays are cast)
-            worlds, points = np.nonzero(self.shown)
+            # cast on its own, so its result does not depend on which other rays are cast); and against the object
+            # alone: the shelf hides none of those points (its first hit along such a ray lies no nearer than the
+            # point less VISIBILITY_EPS), so the ray's first hit before that, if any, is the object's
+            worlds, points = np.nonzero(self.shown & self.in_bearing_of(obj))
             hit = np.zeros_like(self.shown)
             if len(worlds):
-                hit[worlds, points] = ~SceneRaycaster(self.template, objects=(obj,)).visible(
+                hit[worlds, points] = ~SceneRaycaster(self.template, objects=(obj,), shelf=False).visible(
                     self.eye, self.points[worlds, points])
             self._hidden[key] = hit
         return hit
+
+    def in_bearing_of(self, obj, margin: float = 0.002) -> np.ndarray:
+        """(K, P) bool: the points whose ray from the eye could meet ``obj``. Seen from above, a ray is a segment
+        from the eye along its point's bearing, and the object's mesh (the triangles the rays are cast against) lies
+        in the axis-aligned box of its vertices; that box, grown by ``margin`` (m, far more than Embree's float32
+        error), lies beyond the eye and spans the bearings between its corners' least and greatest. A ray outside
+        them passes beside the object and is not cast. All True when the grown box reaches back to the eye's y."""
+        from slax_drake.scene.raycast import object_triangles
+
+        xy = object_triangles(obj).reshape(-1, 3)[:, :2] - self.eye[:2]
+        (x0, y0), (x1, y1) = xy.min(axis=0) - margin, xy.max(axis=0) + margin
+        if y0 <= 0.0:
+            return np.ones(self.shown.shape, dtype=bool)
+        corners = np.arctan2([x0, x0, x1, x1], [y0, y1, y0, y1])
+        return (self.bearing >= corners.min()) & (self.bearing <= corners.max())
 
     def distance(self, objects) -> tuple[np.ndarray, np.ndarray]:
         """(K,) bool twice: the target of each world seen at the threshold past ``objects``; and seen so once one

@@ -137,7 +137,8 @@ class DistributionPolicy:
         )
         allowed = self._exclusions.allowed(c.feasible, objects)
         if self.corrected and self.memory.observed:
-            allowed = [a for a in allowed if not self.memory.seen_before(apply_action(tuple(objects), a))]
+            back = self.memory.leads_back(objects, allowed)
+            allowed = [a for a, seen in zip(allowed, back) if not seen]
         return allowed
 
     def unseen_space(self, obs, objects) -> int | None:

@@ -60,6 +60,56 @@ class TrialMemory:
         """Whether ``objects`` (an arrangement an action would lead to) equals one already observed."""
         return any(self.same_arrangement(tuple(objects), seen) for seen in self.observed)
 
+    def leads_back(self, objects, actions) -> list[bool]:
+        """Per action, whether it leads back to an observed arrangement: ``seen_before(apply_action(objects, a))``
+        for each of ``actions``, without building every arrangement. An action moves one object and keeps the
+        names, so against an observed arrangement that shares names with ``objects``, the unmoved objects' match
+        is worked out once and only the moved object is compared per action; otherwise (no shared name, repeated
+        names) the arrangement is built and compared whole."""
+        objects = tuple(objects)
+        names = [o.name for o in objects]
+        out = [False] * len(actions)
+        if len(set(names)) != len(names):
+            return [self.seen_before(apply_action(objects, a)) for a in actions]
+        index = {name: k for k, name in enumerate(names)}
+        moved: dict = {}  # action index -> the moved object, made once
+
+        def moved_object(k):
+            if k not in moved:
+                a = actions[k]
+                moved[k] = apply_action((objects[index[a.name]],), a)[0] if a.name in index else None
+            return moved[k]
+
+        for seen in self.observed:
+            pending = [k for k, found in enumerate(out) if not found]
+            if not pending:
+                break
+            by_name = {o.name: o for o in seen}
+            shared = [name for name in names if name in by_name]
+            if not objects or not seen or not shared or len(by_name) != len(seen):
+                for k in pending:  # the general comparison (it does not depend on the names matching)
+                    out[k] = self.same_arrangement(apply_action(objects, actions[k]), seen)
+                continue
+            ours_small = len(objects) <= len(seen)  # same_arrangement compares the smaller one's objects first
+            if ours_small:
+                differ = {n for n in shared if not self._close(objects[index[n]], by_name[n])}
+            else:
+                mine = {o.name: o for o in objects}
+                differ = {o.name for o in seen if o.name in mine and not self._close(o, mine[o.name])}
+            for k in pending:
+                name = actions[k].name
+                if name not in index:  # an action on none of the objects leaves them as they are
+                    out[k] = self.same_arrangement(objects, seen)
+                    continue
+                if differ - {name}:
+                    continue  # an object the action leaves in place stands elsewhere there
+                if name not in by_name:
+                    out[k] = True  # the moved object is not in the observed arrangement: the others all match
+                    continue
+                after = moved_object(k)
+                out[k] = self._close(after, by_name[name]) if ours_small else self._close(by_name[name], after)
+        return out
+
     def _close(self, a, b) -> bool:
         if a.shape != b.shape:
             return False

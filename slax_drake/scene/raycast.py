@@ -8,10 +8,11 @@ hit along the segment from the camera's optical centre to the point lies at or b
 from __future__ import annotations
 
 import functools
+import os
 
 import numpy as np
 import trimesh
-from embreex import mesh_construction, rtcore_scene
+from embreex import mesh_construction, rtcore, rtcore_scene
 
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf
@@ -30,6 +31,18 @@ def _unit_box() -> np.ndarray:
 @functools.cache
 def _unit_cylinder() -> np.ndarray:
     return trimesh.creation.cylinder(radius=0.5, height=1.0, sections=CYLINDER_SECTIONS).triangles.astype(np.float64)
+
+
+_DEVICE: list = []  # [(process id, EmbreeDevice)]: one device per process, shared by its scenes
+
+
+def embree_device() -> rtcore.EmbreeDevice:
+    """This process's Embree device, made on first use. A scene made without a device makes its own, which costs
+    more than building a small scene; the device holds no geometry, so sharing it changes no ray's result. A
+    forked worker makes its own (a device is not carried across a fork)."""
+    if not _DEVICE or _DEVICE[0][0] != os.getpid():
+        _DEVICE[:] = [(os.getpid(), rtcore.EmbreeDevice())]
+    return _DEVICE[0][1]
 
 
 def object_triangles(obj: SceneObject) -> np.ndarray:
@@ -64,14 +77,15 @@ class SceneRaycaster:
     """An Embree scene of the shelf and the objects (and optionally the target), built once per scene.
 
     ``geometry_ids`` maps Embree's geomID to a label: 0 for the shelf, i + 1 for ``scene.objects[i]``,
-    and len(objects) + 1 for the target when included.
+    and len(objects) + 1 for the target when included. ``shelf=False`` leaves the shelf out (then the objects'
+    labels start at 0): for rays to points the empty shelf already shows, where only the objects can hide them.
     """
 
-    def __init__(self, scene: Scene, include_target: bool = False, objects=None):
+    def __init__(self, scene: Scene, include_target: bool = False, objects=None, shelf: bool = True):
         self.scene = scene
         objects = scene.objects if objects is None else tuple(objects)
-        self._embree = rtcore_scene.EmbreeScene()
-        meshes = [shelf_triangles(scene.shelf)] + [object_triangles(o) for o in objects]
+        self._embree = rtcore_scene.EmbreeScene(embree_device())
+        meshes = ([shelf_triangles(scene.shelf)] if shelf else []) + [object_triangles(o) for o in objects]
         if include_target and scene.target is not None:
             meshes.append(object_triangles(scene.target.as_object()))
         for tris in meshes:
