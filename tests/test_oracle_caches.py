@@ -6,15 +6,15 @@ import dataclasses
 import numpy as np
 import pytest
 
+from action_walks import walk
 from slax_drake.config import load_scenario
-from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.policies.actions import ActionModel, _StateContext, apply_action
 from slax_drake.policies.oracle_search import StateKeys
 from slax_drake.policies.registry import make_policy, tool_config
 from slax_drake.scene import Camera
 from slax_drake.scene.footprint import Footprint, _axes, clear_of
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose, state_key
-from slax_drake.scene.sampling import sample_scene, shelf_of
+from slax_drake.scene.sampling import shelf_of
 
 
 def box(name, x, y, sx=0.10, sy=0.08, sz=0.15):
@@ -32,20 +32,6 @@ def two_blockers(scenario):
 @pytest.fixture(scope="module")
 def paper():
     return load_scenario("sim_configs/table1.yaml")
-
-
-def walk(scenario, model, n, seed, steps):
-    """The states of a seeded random walk of ``steps`` feasible actions from a Table I scene of n objects."""
-    s = sample_scene(scenario, n, scene_seed(0, n, seed), target_size=(0.06, 0.06, 0.06))
-    fixed = (s.target.as_object(),)
-    rng = np.random.default_rng(seed)
-    states = [s.objects]
-    for _ in range(steps):
-        feasible = model.enumerate(states[-1], fixed=fixed).feasible
-        if not feasible:
-            break
-        states.append(apply_action(states[-1], feasible[int(rng.integers(len(feasible)))]))
-    return states, fixed
 
 
 class UncachedModel(ActionModel):

@@ -11,13 +11,13 @@ import math
 import numpy as np
 import pytest
 
+from action_walks import walk
 from slax_drake.config import load_scenario
-from slax_drake.evaluation.table1 import scene_seed
-from slax_drake.policies.actions import ActionModel, Suction, _StateContext, apply_action
+from slax_drake.policies.actions import ActionModel, Suction, _StateContext
 from slax_drake.policies.floor import column_extents
 from slax_drake.policies.registry import tool_config
 from slax_drake.scene.footprint import Footprint, clear_of
-from slax_drake.scene.sampling import sample_scene, shelf_of
+from slax_drake.scene.sampling import shelf_of
 
 
 @pytest.fixture(scope="module")
@@ -102,20 +102,6 @@ def hidden_rule_holds(model: ActionModel, hidden, mask, dc: int, dr: int) -> boo
         if hidden[lo:max(0, min(ny, r1 + 1)), c].any():
             return False
     return True
-
-
-def walk(scenario, model, n, seed, steps):
-    """The states of a seeded random walk of ``steps`` feasible actions from a Table I scene of n objects."""
-    s = sample_scene(scenario, n, scene_seed(0, n, seed), target_size=(0.06, 0.06, 0.06))
-    fixed = (s.target.as_object(),)
-    rng = np.random.default_rng(seed)
-    states = [s.objects]
-    for _ in range(steps):
-        feasible = model.enumerate(states[-1], fixed=fixed).feasible
-        if not feasible:
-            break
-        states.append(apply_action(states[-1], feasible[int(rng.integers(len(feasible)))]))
-    return states, fixed
 
 
 @pytest.mark.parametrize("profile,rules", [
