@@ -164,7 +164,9 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
     half = (fp.half_x, fp.half_y)
     ex, ey = fp.extents()
 
-    def first_blocked(centers, lane=None, lane_half=None, lifted=False):
+    def clear_at(centers, lane=None, lane_half=None, lifted=False) -> np.ndarray:
+        """(M,) bool: the object at each of ``centers`` (M, 2) is clear of every obstacle (lifted: of those it
+        does not pass over), and so is the blade's ``lane`` when given."""
         ok = np.ones(len(centers), dtype=bool)
         for (_, other), h in zip(obstacles, heights):
             if lifted and model.passes_over(obj, h):
@@ -172,15 +174,12 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
             ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.physics.clearance)
             if lane is not None:
                 ok &= clear_of("box", lane, 0.0, lane_half, other, BLADE_CONTACT_CLEARANCE)
-        bad = np.flatnonzero(~ok)
-        return int(bad[0]) if len(bad) else len(centers)
-
-    def clear_everywhere(centers) -> np.ndarray:
-        """(M,) bool: the object, lowered at each of ``centers`` (M, 2), is clear of every obstacle."""
-        ok = np.ones(len(centers), dtype=bool)
-        for _, other in obstacles:
-            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.physics.clearance)
         return ok
+
+    def first_blocked(centers, lane=None, lane_half=None, lifted=False) -> int:
+        """The index of the first of ``centers`` where :func:`clear_at` fails; ``len(centers)`` when none does."""
+        bad = np.flatnonzero(~clear_at(centers, lane, lane_half, lifted))
+        return int(bad[0]) if len(bad) else len(centers)
 
     if isinstance(action, Push):
         sign = 1 if action.d > 0 else -1
@@ -222,7 +221,7 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         path_in = np.column_stack([np.full(n_in, x_new), ys])
         k = first_blocked(path_in, lifted=True)
         if k > 0:  # lowered where it stopped it would land on something it passed over: back out along the way in
-            landing = np.flatnonzero(clear_everywhere(path_in[:k]))  # where it can be lowered, before the stop
+            landing = np.flatnonzero(clear_at(path_in[:k]))  # where it can be lowered, before the stop
             k = int(landing[-1]) + 1 if len(landing) else 0
         y_final = ys[k - 1] if k > 0 else None
         if y_final is None or y_final - ey < -shelf.depth / 2 + t.physics.clearance - 1e-9:
