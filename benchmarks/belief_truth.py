@@ -13,6 +13,7 @@ A belief that lost the target could never find it; one that kept it and still fa
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -51,8 +52,14 @@ def main():
     args = ap.parse_args()
     scenario = load_scenario(args.config)
     size = tuple(scenario.target.sizes[0])
-    for spec in args.trials:
-        density, index = (int(v) for v in spec.split(":"))
+    try:
+        trials = [tuple(int(v) for v in spec.split(":")) for spec in args.trials]
+        if any(len(t) != 2 for t in trials):
+            raise ValueError
+    except ValueError:
+        print(f"error: trials must be density:index pairs such as 10:9 (got {' '.join(args.trials)})", file=sys.stderr)
+        return 2
+    for density, index in trials:
         scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
                              target_size=size)
         horizon = scenario.protocol.horizon_per_object * density
@@ -70,7 +77,8 @@ def main():
             for i, (count, kept, near, weight, action) in enumerate(rows):
                 print(f"  {i:2d} placements={count} nearest_kept={kept} within_step={near} weight={weight:g} "
                       f"action={action}", flush=True)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
