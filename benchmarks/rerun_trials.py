@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from slax_drake.config import load_scenario
-from slax_drake.evaluation.table1 import _run_one, scene_seed
+from slax_drake.evaluation.table1 import run_benchmark_trial, scene_seed
 from slax_drake.io import write_text_atomic
 
 
@@ -73,7 +73,7 @@ def main() -> int:
         job = (scenario, args.policy, density, index, scene_seed(settings["seed"], density, index),
                settings.get("perception", "ground-truth"), rules, None, profile, args.oracle_seconds)
         t0 = time.perf_counter()
-        after = _run_one(job)
+        after = run_benchmark_trial(job)
         revealed += bool(after["success"])
         reruns.append(after)
         print(f"| {density:02d}_{index:04d} | {before['success']}, {before['steps']}, {before['reason']}, "

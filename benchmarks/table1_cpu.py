@@ -20,7 +20,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
 from slax_drake.config import load_scenario  # noqa: E402
-from slax_drake.evaluation.table1 import _run_one, scene_seed  # noqa: E402
+from slax_drake.evaluation.table1 import run_benchmark_trial, scene_seed  # noqa: E402
 from slax_drake.errors import UserError  # noqa: E402
 from slax_drake.policies.registry import POLICY_NAMES, scenario_profile  # noqa: E402
 from slax_drake.policies.rules import PROFILES  # noqa: E402
@@ -64,7 +64,7 @@ def main(argv=None) -> int:
                 job = (scenario, policy, density, index, scene_seed(args.seed, density, index), "ground-truth", {},
                        None, profile, None)
                 t0 = time.process_time()
-                _run_one(job)
+                run_benchmark_trial(job)
                 seconds.append(time.process_time() - t0)
                 per_trial[f"{policy}/{density:02d}_{index:04d}"] = round(seconds[-1], 3)
         total += sum(seconds)

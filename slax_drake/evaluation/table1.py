@@ -65,7 +65,7 @@ def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return out / "trials" / policy / f"{density:02d}_{index:04d}.json"
 
 
-def _run_one(job) -> dict:
+def run_benchmark_trial(job) -> dict:
     """Runs one trial (in whichever process the backend chose); returns the trial file's content."""
     scenario, policy_name, density, index, seed, perception, tool_rules, camera, profile, oracle_seconds = job
     from slax_drake.policies.registry import make_policy
@@ -145,7 +145,7 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
         from tqdm import tqdm
 
         with tqdm(total=len(jobs), desc="trials", disable=not progress, unit="trial") as bar:
-            for job, result in run_tasks(_run_one, jobs, workers=workers, backend=backend, ray_address=ray_address):
+            for job, result in run_tasks(run_benchmark_trial, jobs, workers=workers, backend=backend, ray_address=ray_address):
                 write_text_atomic(_trial_path(out, job[1], job[2], job[3]), json.dumps(result, sort_keys=True))
                 bar.update(1)
     elapsed = time.perf_counter() - start
