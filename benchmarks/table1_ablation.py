@@ -6,6 +6,10 @@ seconds per trial, and how many oracle searches were cut by time.
     python benchmarks/table1_ablation.py [--scenes 10] [--policies oracle-p,oracle-p+s,bluction-dar]
         [--variants station,paper,...] [--oracle-seconds 20] [--out results/table1_ablation]
 
+The ``station-without-<rule>`` variants are the station profile with one rule at its paper value, one per rule in
+which the profiles differ; when ``station`` is among the variants, a line per rule follows the table with what the
+rule costs each policy (the success without it minus the station's, in points).
+
 Trials are kept under OUT/<variant>/ (the Table I runner's trial files), so a stopped run resumes and a rerun
 with more variants or policies runs only what is missing.
 """
@@ -70,6 +74,43 @@ VARIANTS = {
                                 "reach_map": "models/reach/station_physical_shelf.json"}, {}),
 }
 
+# What each physical rule costs (issue 19, "station" done-when: one line per rule): the station profile with one rule
+# set to its paper value, every other rule left as the station has it. A variant per rule in which the two profiles
+# differ (slax_drake.policies.rules.profile_values); the cost of a rule is the variant's success rate minus the
+# station's, printed after the table by ``rule_cost_lines``.
+LEAVE_ONE_OUT_PREFIX = "station-without-"
+
+
+def leave_one_out_variants() -> dict:
+    """{``station-without-<rule>``: (what, "station", {rule: paper value}, {})} for every rule whose paper and station
+    values differ."""
+    from slax_drake.policies.rules import profile_values
+
+    paper, station = profile_values("paper"), profile_values("station")
+    return {f"{LEAVE_ONE_OUT_PREFIX}{name}": (f"station, {name} = {paper[name]} (paper) instead of {station[name]}",
+                                                 "station", {name: paper[name]}, {})
+            for name in paper if paper[name] != station[name]}
+
+
+VARIANTS.update(leave_one_out_variants())
+
+
+def rule_cost_lines(rates: dict, policies) -> list[str]:
+    """One line per leave-one-out variant in ``rates`` ({variant: {policy: success rate}}, "station" among them):
+    what the rule costs each policy in points of success (the rate without the rule minus the station's; a
+    negative cost means the station's value of the rule helps)."""
+    if "station" not in rates:
+        return []
+    lines = []
+    for name, per in rates.items():
+        if not name.startswith(LEAVE_ONE_OUT_PREFIX):
+            continue
+        rule = name[len(LEAVE_ONE_OUT_PREFIX):]
+        costs = ", ".join(f"{p} {100 * (per[p] - rates['station'][p]):+.1f}" for p in policies)
+        lines.append(f"- `{rule}` (station {VARIANTS[name][0].split(' instead of ')[1]}, paper "
+                     f"{VARIANTS[name][2][rule]}): costs {costs} points")
+    return lines
+
 
 def scenario_with(scenario, changes: dict):
     """A copy of ``scenario`` with ``{"section.key": value}`` set."""
@@ -107,7 +148,7 @@ def main():
     if unknown:
         ap.error(f"unknown variant(s) {unknown} (known: {', '.join(VARIANTS)})")  # one line, exit 2
     densities = list(base.protocol.densities)
-    rows = []
+    rows, rates = [], {}
     for name in variants:
         what, profile, rules, changes = VARIANTS[name]
         t0 = time.perf_counter()
@@ -117,6 +158,7 @@ def main():
         seconds = [table["policies"][p]["all"]["mean_trial_seconds"] for p in policies]
         rows.append((name, what, [cell(table["policies"][p], densities) for p in policies], seconds,
                      time.perf_counter() - t0))
+        rates[name] = {p: table["policies"][p]["all"]["success_rate"] for p in policies}
     print("Made by `python " + " ".join(shlex.quote(a) for a in sys.argv) + "`.")
     print()
     print(f"First {args.scenes} scenes per density of {args.config} ({'/'.join(map(str, densities))} objects; "
@@ -129,6 +171,13 @@ def main():
     for name, what, cells, seconds, _ in rows:
         per_trial = " / ".join("-" if s is None else f"{s:.1f}" for s in seconds)
         print(f"| {name} | {what} | " + " | ".join(cells) + f" | {per_trial} |")
+    costs = rule_cost_lines(rates, policies)
+    if costs:
+        print()
+        print("What each rule of the station profile costs: the success with that rule at its paper value minus the "
+              "station's, in points (one scene is 100 / (4 x scenes) points overall):")
+        print()
+        print("\n".join(costs))
 
 
 if __name__ == "__main__":

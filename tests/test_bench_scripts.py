@@ -64,3 +64,28 @@ def test_table1_cpu_refuses_bad_arguments_before_any_trial(capsys, argv, message
     assert captured.out == ""  # refused before the first trial runs
     err = captured.err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(message)
+
+
+def test_table1_ablation_has_one_leave_one_out_variant_per_rule_the_profiles_differ_in():
+    """The station profile's per-rule costs: each variant is the station with exactly one rule at its paper value."""
+    from slax_drake.policies.rules import profile_values
+
+    ablation = script("table1_ablation")
+    paper, station = profile_values("paper"), profile_values("station")
+    differing = {name for name in paper if paper[name] != station[name]}
+    variants = {name: v for name, v in ablation.VARIANTS.items() if name.startswith(ablation.LEAVE_ONE_OUT_PREFIX)}
+    assert {name[len(ablation.LEAVE_ONE_OUT_PREFIX):] for name in variants} == differing
+    for name, (_, profile, rules, changes) in variants.items():
+        rule = name[len(ablation.LEAVE_ONE_OUT_PREFIX):]
+        assert profile == "station" and changes == {} and rules == {rule: paper[rule]}
+
+
+def test_table1_ablation_rule_costs_are_the_success_gained_without_the_rule():
+    ablation = script("table1_ablation")
+    rates = {"station": {"oracle-p": 0.25, "bluction-dar": 0.5},
+             "station-without-blade_gap": {"oracle-p": 0.5, "bluction-dar": 0.45},
+             "paper": {"oracle-p": 0.6, "bluction-dar": 0.5}}
+    lines = ablation.rule_cost_lines(rates, ["oracle-p", "bluction-dar"])
+    assert lines == ["- `blade_gap` (station 0.035, paper 0.001): costs oracle-p +25.0, bluction-dar -5.0 points"]
+    assert ablation.rule_cost_lines({"station-without-blade_gap": rates["station-without-blade_gap"]},
+                                    ["oracle-p"]) == []  # no station row: nothing to subtract from
