@@ -44,6 +44,9 @@ Box = tuple[float, float, float, float]  # x_lo, x_hi, y_lo, y_hi in the shelf f
 # expanded 5,799 nodes against 6,451 reading it every 8th (Table I's first 10-object scene, Oracle-P). A search runs
 # at most this many nodes past its limit; only where the limit cuts a search does it matter.
 DEADLINE_CHECK_EVERY = 8
+# The share of a search's time limit kept for the greedy dive (phase 3), which runs only when the exact phases found
+# no plan by the rest of the limit. See search_plan.
+FALLBACK_SHARE = 0.3
 
 
 @dataclasses.dataclass
@@ -58,11 +61,15 @@ class SearchResult:
     lower_bound: float
     expansions: int
     seconds: float
+    greedy: bool = False
 
     def record(self) -> dict:
-        return {"status": self.status, "cost": self.cost, "lower_bound": round(self.lower_bound, 6),
-                "actions": None if self.plan is None else len(self.plan), "expansions": self.expansions,
-                "seconds": round(self.seconds, 3)}
+        out = {"status": self.status, "cost": self.cost, "lower_bound": round(self.lower_bound, 6),
+               "actions": None if self.plan is None else len(self.plan), "expansions": self.expansions,
+               "seconds": round(self.seconds, 3)}
+        if self.greedy:  # the exact phases were cut without a plan and the greedy dive ran (only then: old records)
+            out["greedy_fallback"] = True
+        return out
 
 
 # ---- commutation -------------------------------------------------------------------------------------------------
@@ -204,7 +211,7 @@ class PushCache:
 # ---- search ------------------------------------------------------------------------------------------------------
 def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions: bool, psi: float,
                 seconds: float, weight: float = 5.0, commute: bool = True, maximal_pushes: bool = True,
-                allowed=None) -> SearchResult:
+                allowed=None, fallback_share: float = FALLBACK_SHARE, clock=time.process_time) -> SearchResult:
     """The cheapest plan from ``start`` (objects) to a state where ``h_of(objects) == 0`` within ``remaining``
     actions; ``fixed``: known obstacles that never move (the target); ``h_of(objects)``: an admissible
     heuristic (0 exactly at the goal) counting actions; ``seconds``: the time limit (CPU seconds of this process,
@@ -213,8 +220,9 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
     coarse push set, each object pushed each way only up to its neighbour (the maximal push), not also on the
     ``push_resolution`` lattice (see :func:`maximal_pushes_only`); ``allowed(candidates, objects)``: the candidates
     the search may use (the policy's exclusions, :class:`slax_drake.policies.protocol.Exclusions`), all when None."""
-    t0 = time.process_time()  # CPU seconds of this process: the limit does not shrink when the machine is shared
+    t0 = clock()  # CPU seconds of this process: the limit does not shrink when the machine is shared
     deadline = t0 + seconds
+    exact_deadline = deadline - fallback_share * seconds  # phase 1's, and phase 2's while no plan is known
     start = tuple(start)
     h0 = h_of(start)
     if h0 == 0:
@@ -260,17 +268,20 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
             r = regions_cache[(moved_key, a)] = action_regions(model, objects, a)
         return r
 
-    def run(w: float, bound: float):
-        """One best-first search; returns (plan, cost, exhausted, least f left)."""
+    def run(w: float, bound: float, until: float):
+        """One best-first search stopped at CPU time ``until``; ``w``: the weight of h in f = g + w h, or math.inf
+        for greedy best-first (f = (h, g): the fewest objects left to move first, then the cheapest); returns
+        (plan, cost, exhausted, least g + h left)."""
         nonlocal expansions
+        greedy = math.isinf(w)
         counter = itertools.count()
         # node: (f, -depth, g, tie, objects, h, plan, last (parent objects, moved object's key, action) or None,
         # node key, state key)
-        frontier = [(w * h0, 0, 0.0, next(counter), start, h0, (), None, None, start_key)]
+        frontier = [(h0 if greedy else w * h0, 0, 0.0, next(counter), start, h0, (), None, None, start_key)]
         best: dict = {}
         pops = 0
         while frontier:
-            if pops % DEADLINE_CHECK_EVERY == 0 and time.process_time() > deadline:
+            if pops % DEADLINE_CHECK_EVERY == 0 and clock() > until:
                 return None, None, False, min(n[2] + n[5] for n in frontier)
             pops += 1
             f, neg_depth, g, _, objects, h, plan, last, node_key, key = heapq.heappop(frontier)
@@ -301,25 +312,44 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
                     continue
                 kept[:] = [(g_old, d_old) for g_old, d_old in kept if not (g2 <= g_old + 1e-9 and depth + 1 <= d_old)]
                 kept.append((g2, depth + 1))
-                heapq.heappush(frontier, (g2 + w * h2, -(depth + 1), g2, next(counter), after, h2, plan + (a,),
+                f2 = h2 if greedy else g2 + w * h2
+                heapq.heappush(frontier, (f2, -(depth + 1), g2, next(counter), after, h2, plan + (a,),
                                           (objects, moved_key, a), node_key, after_key))
         return None, None, True, math.inf
 
+    def used() -> float:
+        return clock() - t0
+
     upper, plan = math.inf, None
     if weight > 1.0:
-        plan1, cost1, exhausted, _ = run(weight, math.inf)
+        plan1, cost1, exhausted, least = run(weight, math.inf, exact_deadline)
         if plan1 is not None:
             upper, plan = cost1, plan1
         elif exhausted:
-            return SearchResult(None, "infeasible", None, math.inf, expansions, time.process_time() - t0)
-        else:
-            return SearchResult(None, "cut by time", None, float(h0), expansions, time.process_time() - t0)
-    plan2, cost2, exhausted, least = run(1.0, upper + 1e-6 if plan is not None else math.inf)
-    seconds_used = time.process_time() - t0
-    if plan2 is not None:
-        return SearchResult(plan2, "optimal", cost2, cost2, expansions, seconds_used)
-    if exhausted:
+            return SearchResult(None, "infeasible", None, math.inf, expansions, used())
+    if plan is not None or weight <= 1.0:
+        plan2, cost2, exhausted, least = run(1.0, upper + 1e-6 if plan is not None else math.inf,
+                                             deadline if plan is not None else exact_deadline)
+        if plan2 is not None:
+            return SearchResult(plan2, "optimal", cost2, cost2, expansions, used())
+        if exhausted:
+            if plan is not None:
+                return SearchResult(plan, "optimal", upper, upper, expansions, used())
+            return SearchResult(None, "infeasible", None, math.inf, expansions, used())
         if plan is not None:
-            return SearchResult(plan, "optimal", upper, upper, expansions, seconds_used)
-        return SearchResult(None, "infeasible", None, math.inf, expansions, seconds_used)
-    return SearchResult(plan, "cut by time", None if plan is None else upper, least, expansions, seconds_used)
+            return SearchResult(plan, "cut by time", upper, least, expansions, used())
+    # The exact phases were cut by time without a plan: the greedy dive, then A* pruned by its plan's cost.
+    lower = float(h0) if weight > 1.0 else least  # phase 1 is weighted: its frontier's least g + h is not kept
+    if fallback_share <= 0.0:
+        return SearchResult(None, "cut by time", None, lower, expansions, used())
+    plan3, cost3, exhausted, _ = run(math.inf, math.inf, deadline)
+    if plan3 is None:
+        if exhausted:
+            return SearchResult(None, "infeasible", None, math.inf, expansions, used(), greedy=True)
+        return SearchResult(None, "cut by time", None, lower, expansions, used(), greedy=True)
+    plan4, cost4, exhausted, least4 = run(1.0, cost3 + 1e-6, deadline)
+    if plan4 is not None:
+        return SearchResult(plan4, "optimal", cost4, cost4, expansions, used(), greedy=True)
+    if exhausted:
+        return SearchResult(plan3, "optimal", cost3, cost3, expansions, used(), greedy=True)
+    return SearchResult(plan3, "cut by time", cost3, min(cost3, max(lower, least4)), expansions, used(), greedy=True)
