@@ -17,8 +17,10 @@ Goal (``goal``):
 
 Search (:func:`slax_drake.policies.oracle_search.search_plan`): weighted A* for a first plan, then A* pruned
 by its cost to prove it optimal, with duplicate-state detection, commutation pruning and the horizon, within
-``seconds`` per decision. Each search's outcome ("optimal", "infeasible": proven, no plan within the horizon,
-"cut by time") is kept in ``search_log``; a search cut by time with a phase-1 plan still executes that plan.
+``seconds`` CPU seconds per decision; when those find no plan within ``1 - fallback_share`` of it, a greedy dive
+on h in the rest finds a fallback plan (then A* pruned by its cost). Each search's outcome ("optimal",
+"infeasible": proven, no plan within the horizon, "cut by time") is kept in ``search_log``; a search cut by time
+with a plan (phase 1's or the dive's) still executes that plan.
 """
 
 from __future__ import annotations

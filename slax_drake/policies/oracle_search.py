@@ -2,16 +2,26 @@
 first-order model: a cheapest plan (cost: pushes + psi suctions) that reaches the goal within H actions, with a
 proof of what was found.
 
-Two phases within one time limit per decision:
+Phases within one time limit per decision (``seconds``, CPU seconds, all phases together; a share
+``fallback_share``, default :data:`FALLBACK_SHARE`, is kept back for phase 3):
 
-1. weighted A* (f = g + w h, ``weight`` w >= 1): finds a plan fast; its cost U is an upper bound (and, since h is
-   admissible, at most w times the optimum);
-2. A* (f = g + h) pruned by U: proves U optimal, or finds the cheaper plan, or, when neither phase finds a plan
-   and the frontier empties, proves that no plan exists within H (on the action lattice).
+1. weighted A* (f = g + w h, ``weight`` w >= 1), until ``(1 - fallback_share)`` of the limit: finds a plan fast;
+   its cost U is an upper bound (and, since h is admissible, at most w times the optimum);
+2. once phase 1 has a plan, A* (f = g + h) pruned by U, until the whole limit: proves U optimal, or finds the
+   cheaper plan, or, when neither phase finds a plan and the frontier empties, proves that no plan exists
+   within H (on the action lattice). With w = 1 phase 2 runs alone, until ``(1 - fallback_share)`` of the limit;
+3. only when phases 1-2 are cut by time without a plan, in the rest of the limit: the greedy dive, best-first on
+   h alone with the deepest node first among equal h (the same children, duplicate, horizon and commutation
+   pruning), which finds some plan within H where the weighted search wanders on a plateau of h (Table I's
+   paper-profile scenes cut at the first decision: 8 of 16 have a dive plan within 10 CPU s, and its plans are
+   long, up to H); then A* pruned by the dive plan's cost with the time left, which proves it optimal or finds
+   the cheaper plan. An exhausted dive proves infeasibility, as phase 1 does. A search whose phase 1 (or, with
+   w = 1, phase 2) ends before ``(1 - fallback_share)`` of the limit is the same as without phase 3.
 
-The result's ``status``: "optimal" (phase 2 finished), "infeasible" (proven: no plan within the horizon),
-"cut by time" (the limit came first; the plan, if any, is phase 1's, with ``lower_bound`` the least f left on
-the frontier).
+The result's ``status``: "optimal" (an A* phase finished with a plan, or phase 3's A* exhausted its frontier
+below the dive plan's cost), "infeasible" (proven: no plan within the horizon), "cut by time" (the limit came
+first; the plan, if any, is phase 1's or the dive's, with ``lower_bound`` the least g + h left on the A*
+frontier; ``greedy`` says that phase 3 ran, recorded as ``greedy_fallback`` in the trial file).
 
 Pruning that keeps the search exact:
 
@@ -45,6 +55,8 @@ Box = tuple[float, float, float, float]  # x_lo, x_hi, y_lo, y_hi in the shelf f
 # at most this many nodes past its limit; only where the limit cuts a search does it matter.
 DEADLINE_CHECK_EVERY = 8
 # The share of a search's time limit kept for the greedy dive (phase 3), which runs only when the exact phases found
+# no plan by the rest of the limit. 0.3: of the 16 paper-profile Table I searches cut at 20 s with no plan, the
+# dive alone found a plan within 6 CPU s in 6 (10 s: 8); uncut searches whose phase 1 took under 14 s stay as they were.
 # no plan by the rest of the limit. See search_plan.
 FALLBACK_SHARE = 0.3
 
@@ -53,7 +65,7 @@ FALLBACK_SHARE = 0.3
 class SearchResult:
     """A search's outcome: ``plan`` (a list of actions; [] when the goal holds already; None when none was found),
     ``status`` ("optimal", "infeasible" or "cut by time"), its ``cost``, ``lower_bound`` on the optimum, nodes
-    ``expansions`` and CPU ``seconds`` spent."""
+    ``expansions`` and CPU ``seconds`` spent (all phases), ``greedy``: whether the greedy dive (phase 3) ran."""
 
     plan: list | None
     status: str
@@ -219,7 +231,9 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
     w (1 skips phase 1); ``commute``: commutation pruning (off only to check it); ``maximal_pushes``: the paper's
     coarse push set, each object pushed each way only up to its neighbour (the maximal push), not also on the
     ``push_resolution`` lattice (see :func:`maximal_pushes_only`); ``allowed(candidates, objects)``: the candidates
-    the search may use (the policy's exclusions, :class:`slax_drake.policies.protocol.Exclusions`), all when None."""
+    the search may use (the policy's exclusions, :class:`slax_drake.policies.protocol.Exclusions`), all when None;
+    ``fallback_share``: the share of ``seconds`` kept for the greedy dive (0: no dive, the search as before it);
+    ``clock``: the CPU clock (seconds), injectable for tests."""
     t0 = clock()  # CPU seconds of this process: the limit does not shrink when the machine is shared
     deadline = t0 + seconds
     exact_deadline = deadline - fallback_share * seconds  # phase 1's, and phase 2's while no plan is known
@@ -270,8 +284,9 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
 
     def run(w: float, bound: float, until: float):
         """One best-first search stopped at CPU time ``until``; ``w``: the weight of h in f = g + w h, or math.inf
-        for greedy best-first (f = (h, g): the fewest objects left to move first, then the cheapest); returns
-        (plan, cost, exhausted, least g + h left)."""
+        for the greedy dive (f = h: the fewest objects left to move first, then the deepest, then the cheapest);
+        ties always go to the deeper node, then the cheaper; returns (plan, cost, exhausted, least g + h left).
+        ``bound``: nodes with g + h at or above it are pruned."""
         nonlocal expansions
         greedy = math.isinf(w)
         counter = itertools.count()
