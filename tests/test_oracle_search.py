@@ -99,3 +99,79 @@ def test_cached_pushes_equal_the_whole_states_pushes(paper):
     first = cache.pushes((front, back))
     moved = apply_action((front, back), next(a for a in first if a.name == "b"))
     assert cache.pushes(moved) == model.enumerate(moved, suctions=False).feasible and cache.hits == 1
+
+
+# ---- the greedy dive (phase 3) -------------------------------------------------------------------------------------
+class PhaseClock:
+    """An injected CPU clock for search_plan with a limit of ``seconds``: 0 at the start, then 0.75 of the limit (past
+    the exact phases' share, inside the dive's) until the search's heuristic has met a goal state; after that, past
+    the limit for every reader but the greedy dive (read from the caller's ``greedy`` local), so the dive keeps
+    its plan and the A* after it is cut at its first look. ``cut_after_goal=False``: never past the limit."""
+
+    def __init__(self, seconds: float, cut_after_goal: bool = True):
+        self.seconds, self.cut_after_goal = seconds, cut_after_goal
+        self.started = self.goal_seen = False
+
+    def h_of(self, h):
+        def wrapped(objects):
+            value = h(objects)
+            self.goal_seen |= value == 0
+            return value
+        return wrapped
+
+    def __call__(self) -> float:
+        import sys
+
+        if not self.started:
+            self.started = True
+            return 0.0
+        in_dive = sys._getframe(1).f_locals.get("greedy") is True
+        if self.goal_seen and self.cut_after_goal and not in_dive:
+            return 2.0 * self.seconds
+        return 0.75 * self.seconds
+
+
+def search_with_clock(scene, scenario, horizon, clock, suctions=True):
+    model = ActionModel(shelf_of(scenario), scene.camera.position, tool_config(scenario))
+    occlusion = TargetOcclusion(scene, threshold=scenario.target.visibility_threshold)
+    result = search_plan(model, scene.objects, (scene.target.as_object(),), clock.h_of(occlusion.min_objects_to_move),
+                         horizon, suctions, scenario.protocol.suction_cost, seconds=20.0, clock=clock)
+    return result, model, occlusion
+
+
+def test_dive_plan_is_the_fallback_when_the_exact_phases_are_cut(paper):
+    from slax_drake.policies.actions import apply_action
+
+    s, horizon = two_blockers(paper), 4
+    result, model, occlusion = search_with_clock(s, paper, horizon, PhaseClock(20.0))
+    assert result.status == "cut by time" and result.greedy and result.record()["greedy_fallback"] is True
+    assert result.plan and len(result.plan) <= horizon
+    objects, fixed, cost = s.objects, (s.target.as_object(),), 0.0
+    for action in result.plan:  # each step feasible in the state it is taken in
+        assert action in model.enumerate(objects, fixed=fixed).feasible
+        objects = apply_action(objects, action)
+        cost += 1.0 if isinstance(action, Push) else paper.protocol.suction_cost
+    assert occlusion.min_objects_to_move(objects) == 0  # the goal: the target revealed
+    assert result.cost == pytest.approx(cost)
+    assert 2.0 - 1e-9 <= result.lower_bound <= result.cost  # two objects must move; the bound stays a bound
+
+
+def test_dive_then_astar_proves_the_optimum_and_an_exhausted_dive_proves_infeasibility(paper):
+    s = two_blockers(paper)
+    result, _, _ = search_with_clock(s, paper, 3, PhaseClock(20.0, cut_after_goal=False))
+    exact = search(s, paper, 3, suctions=True)
+    assert result.greedy and result.status == exact.status == "optimal"
+    assert result.cost == pytest.approx(exact.cost)
+    result, _, _ = search_with_clock(s, paper, 1, PhaseClock(20.0, cut_after_goal=False))
+    assert result.greedy and result.status == "infeasible" and result.plan is None
+
+
+def test_an_uncut_search_is_the_same_with_and_without_the_dive(paper):
+    s = two_blockers(paper)
+    for suctions in (False, True):
+        for horizon in (1, 2, 3):
+            with_dive = search(s, paper, horizon, suctions=suctions)
+            without = search(s, paper, horizon, suctions=suctions, fallback_share=0.0)
+            assert not with_dive.greedy and "greedy_fallback" not in with_dive.record()
+            assert (with_dive.plan, with_dive.status, with_dive.cost, with_dive.lower_bound, with_dive.expansions) == \
+                (without.plan, without.status, without.cost, without.lower_bound, without.expansions)

@@ -17,8 +17,10 @@ Goal (``goal``):
 
 Search (:func:`slax_drake.policies.oracle_search.search_plan`): weighted A* for a first plan, then A* pruned
 by its cost to prove it optimal, with duplicate-state detection, commutation pruning and the horizon, within
-``seconds`` per decision. Each search's outcome ("optimal", "infeasible": proven, no plan within the horizon,
-"cut by time") is kept in ``search_log``; a search cut by time with a phase-1 plan still executes that plan.
+``seconds`` CPU seconds per decision; when those find no plan within ``1 - fallback_share`` of it, a greedy dive
+on h in the rest finds a fallback plan (then A* pruned by its cost). Each search's outcome ("optimal",
+"infeasible": proven, no plan within the horizon, "cut by time") is kept in ``search_log``; a search cut by time
+with a plan (phase 1's or the dive's) still executes that plan.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from __future__ import annotations
 from shapely.geometry import Polygon
 
 from slax_drake.policies.actions import ActionModel, apply_action
-from slax_drake.policies.oracle_search import search_plan
+from slax_drake.policies.oracle_search import FALLBACK_SHARE, search_plan
 from slax_drake.policies.protocol import Decision, Exclusions
 from slax_drake.scene.model import state_key
 from slax_drake.policies.visibility import TargetOcclusion
@@ -45,7 +47,7 @@ class Oracle:
 
     def __init__(self, action_model: ActionModel, suctions: bool, psi: float = 1.3, horizon: int | None = None,
                  seconds: float = 20.0, weight: float = 5.0, maximal_pushes: bool = True, overlap_tolerance: float = 1e-6,
-                 goal: str = "visibility", threshold: float = 0.80):
+                 goal: str = "visibility", threshold: float = 0.80, fallback_share: float = FALLBACK_SHARE):
         if goal not in ("visibility", "triangle"):
             raise ValueError("goal must be 'visibility' or 'triangle'")
         self.goal = goal
@@ -56,6 +58,7 @@ class Oracle:
         self.horizon = horizon
         self.seconds = seconds  # the time limit per decision (s)
         self.weight = weight  # the first phase's heuristic weight
+        self.fallback_share = fallback_share  # the share of ``seconds`` kept for the greedy dive (search_plan)
         self.maximal_pushes = maximal_pushes  # the paper's coarse push set (oracle_search.maximal_pushes_only)
         self.search_log: list[dict] = []  # one record per search (SearchResult.record())
         self.overlap_tolerance = overlap_tolerance
@@ -140,7 +143,7 @@ class Oracle:
 
         result = search_plan(self.action_model, scene.objects, target, h_of, remaining, self.suctions, self.psi,
                              self.seconds, self.weight, maximal_pushes=self.maximal_pushes,
-                             allowed=self._exclusions.allowed)
+                             allowed=self._exclusions.allowed, fallback_share=self.fallback_share)
         self.expansions = result.expansions
         self.search_log.append(result.record())
         if result.plan is None:

@@ -2,16 +2,26 @@
 first-order model: a cheapest plan (cost: pushes + psi suctions) that reaches the goal within H actions, with a
 proof of what was found.
 
-Two phases within one time limit per decision:
+Phases within one time limit per decision (``seconds``, CPU seconds, all phases together; a share
+``fallback_share``, default :data:`FALLBACK_SHARE`, is kept back for phase 3):
 
-1. weighted A* (f = g + w h, ``weight`` w >= 1): finds a plan fast; its cost U is an upper bound (and, since h is
-   admissible, at most w times the optimum);
-2. A* (f = g + h) pruned by U: proves U optimal, or finds the cheaper plan, or, when neither phase finds a plan
-   and the frontier empties, proves that no plan exists within H (on the action lattice).
+1. weighted A* (f = g + w h, ``weight`` w >= 1), until ``(1 - fallback_share)`` of the limit: finds a plan fast;
+   its cost U is an upper bound (and, since h is admissible, at most w times the optimum);
+2. once phase 1 has a plan, A* (f = g + h) pruned by U, until the whole limit: proves U optimal, or finds the
+   cheaper plan, or, when neither phase finds a plan and the frontier empties, proves that no plan exists
+   within H (on the action lattice). With w = 1 phase 2 runs alone, until ``(1 - fallback_share)`` of the limit;
+3. only when phases 1-2 are cut by time without a plan, in the rest of the limit: the greedy dive, best-first on
+   h alone with the deepest node first among equal h (the same children, duplicate, horizon and commutation
+   pruning), which finds some plan within H where the weighted search wanders on a plateau of h (Table I's
+   paper-profile scenes cut at the first decision: 8 of 16 have a dive plan within 10 CPU s, and its plans are
+   long, up to H); then A* pruned by the dive plan's cost with the time left, which proves it optimal or finds
+   the cheaper plan. An exhausted dive proves infeasibility, as phase 1 does. A search whose phase 1 (or, with
+   w = 1, phase 2) ends before ``(1 - fallback_share)`` of the limit is the same as without phase 3.
 
-The result's ``status``: "optimal" (phase 2 finished), "infeasible" (proven: no plan within the horizon),
-"cut by time" (the limit came first; the plan, if any, is phase 1's, with ``lower_bound`` the least f left on
-the frontier).
+The result's ``status``: "optimal" (an A* phase finished with a plan, or phase 3's A* exhausted its frontier
+below the dive plan's cost), "infeasible" (proven: no plan within the horizon), "cut by time" (the limit came
+first; the plan, if any, is phase 1's or the dive's, with ``lower_bound`` the least g + h left on the A*
+frontier; ``greedy`` says that phase 3 ran, recorded as ``greedy_fallback`` in the trial file).
 
 Pruning that keeps the search exact:
 
@@ -44,13 +54,18 @@ Box = tuple[float, float, float, float]  # x_lo, x_hi, y_lo, y_hi in the shelf f
 # expanded 5,799 nodes against 6,451 reading it every 8th (Table I's first 10-object scene, Oracle-P). A search runs
 # at most this many nodes past its limit; only where the limit cuts a search does it matter.
 DEADLINE_CHECK_EVERY = 8
+# The share of a search's time limit kept for the greedy dive (phase 3), which runs only when the exact phases found
+# no plan by the rest of the limit. 0.3: of the 16 paper-profile Table I searches cut at 20 s with no plan, the
+# dive alone found a plan within 6 CPU s in 6 (10 s: 8); uncut searches whose phase 1 took under 14 s stay as they were.
+# no plan by the rest of the limit. See search_plan.
+FALLBACK_SHARE = 0.3
 
 
 @dataclasses.dataclass
 class SearchResult:
     """A search's outcome: ``plan`` (a list of actions; [] when the goal holds already; None when none was found),
     ``status`` ("optimal", "infeasible" or "cut by time"), its ``cost``, ``lower_bound`` on the optimum, nodes
-    ``expansions`` and CPU ``seconds`` spent."""
+    ``expansions`` and CPU ``seconds`` spent (all phases), ``greedy``: whether the greedy dive (phase 3) ran."""
 
     plan: list | None
     status: str
@@ -58,11 +73,15 @@ class SearchResult:
     lower_bound: float
     expansions: int
     seconds: float
+    greedy: bool = False
 
     def record(self) -> dict:
-        return {"status": self.status, "cost": self.cost, "lower_bound": round(self.lower_bound, 6),
-                "actions": None if self.plan is None else len(self.plan), "expansions": self.expansions,
-                "seconds": round(self.seconds, 3)}
+        out = {"status": self.status, "cost": self.cost, "lower_bound": round(self.lower_bound, 6),
+               "actions": None if self.plan is None else len(self.plan), "expansions": self.expansions,
+               "seconds": round(self.seconds, 3)}
+        if self.greedy:  # the exact phases were cut without a plan and the greedy dive ran (only then: old records)
+            out["greedy_fallback"] = True
+        return out
 
 
 # ---- commutation -------------------------------------------------------------------------------------------------
@@ -204,7 +223,7 @@ class PushCache:
 # ---- search ------------------------------------------------------------------------------------------------------
 def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions: bool, psi: float,
                 seconds: float, weight: float = 5.0, commute: bool = True, maximal_pushes: bool = True,
-                allowed=None) -> SearchResult:
+                allowed=None, fallback_share: float = FALLBACK_SHARE, clock=time.process_time) -> SearchResult:
     """The cheapest plan from ``start`` (objects) to a state where ``h_of(objects) == 0`` within ``remaining``
     actions; ``fixed``: known obstacles that never move (the target); ``h_of(objects)``: an admissible
     heuristic (0 exactly at the goal) counting actions; ``seconds``: the time limit (CPU seconds of this process,
@@ -212,9 +231,12 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
     w (1 skips phase 1); ``commute``: commutation pruning (off only to check it); ``maximal_pushes``: the paper's
     coarse push set, each object pushed each way only up to its neighbour (the maximal push), not also on the
     ``push_resolution`` lattice (see :func:`maximal_pushes_only`); ``allowed(candidates, objects)``: the candidates
-    the search may use (the policy's exclusions, :class:`slax_drake.policies.protocol.Exclusions`), all when None."""
-    t0 = time.process_time()  # CPU seconds of this process: the limit does not shrink when the machine is shared
+    the search may use (the policy's exclusions, :class:`slax_drake.policies.protocol.Exclusions`), all when None;
+    ``fallback_share``: the share of ``seconds`` kept for the greedy dive (0: no dive, the search as before it);
+    ``clock``: the CPU clock (seconds), injectable for tests."""
+    t0 = clock()  # CPU seconds of this process: the limit does not shrink when the machine is shared
     deadline = t0 + seconds
+    exact_deadline = deadline - fallback_share * seconds  # phase 1's, and phase 2's while no plan is known
     start = tuple(start)
     h0 = h_of(start)
     if h0 == 0:
@@ -260,17 +282,21 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
             r = regions_cache[(moved_key, a)] = action_regions(model, objects, a)
         return r
 
-    def run(w: float, bound: float):
-        """One best-first search; returns (plan, cost, exhausted, least f left)."""
+    def run(w: float, bound: float, until: float):
+        """One best-first search stopped at CPU time ``until``; ``w``: the weight of h in f = g + w h, or math.inf
+        for the greedy dive (f = h: the fewest objects left to move first, then the deepest, then the cheapest);
+        ties always go to the deeper node, then the cheaper; returns (plan, cost, exhausted, least g + h left).
+        ``bound``: nodes with g + h at or above it are pruned."""
         nonlocal expansions
+        greedy = math.isinf(w)
         counter = itertools.count()
         # node: (f, -depth, g, tie, objects, h, plan, last (parent objects, moved object's key, action) or None,
         # node key, state key)
-        frontier = [(w * h0, 0, 0.0, next(counter), start, h0, (), None, None, start_key)]
+        frontier = [(h0 if greedy else w * h0, 0, 0.0, next(counter), start, h0, (), None, None, start_key)]
         best: dict = {}
         pops = 0
         while frontier:
-            if pops % DEADLINE_CHECK_EVERY == 0 and time.process_time() > deadline:
+            if pops % DEADLINE_CHECK_EVERY == 0 and clock() > until:
                 return None, None, False, min(n[2] + n[5] for n in frontier)
             pops += 1
             f, neg_depth, g, _, objects, h, plan, last, node_key, key = heapq.heappop(frontier)
@@ -301,25 +327,44 @@ def search_plan(model: ActionModel, start, fixed, h_of, remaining: int, suctions
                     continue
                 kept[:] = [(g_old, d_old) for g_old, d_old in kept if not (g2 <= g_old + 1e-9 and depth + 1 <= d_old)]
                 kept.append((g2, depth + 1))
-                heapq.heappush(frontier, (g2 + w * h2, -(depth + 1), g2, next(counter), after, h2, plan + (a,),
+                f2 = h2 if greedy else g2 + w * h2
+                heapq.heappush(frontier, (f2, -(depth + 1), g2, next(counter), after, h2, plan + (a,),
                                           (objects, moved_key, a), node_key, after_key))
         return None, None, True, math.inf
 
+    def used() -> float:
+        return clock() - t0
+
     upper, plan = math.inf, None
     if weight > 1.0:
-        plan1, cost1, exhausted, _ = run(weight, math.inf)
+        plan1, cost1, exhausted, least = run(weight, math.inf, exact_deadline)
         if plan1 is not None:
             upper, plan = cost1, plan1
         elif exhausted:
-            return SearchResult(None, "infeasible", None, math.inf, expansions, time.process_time() - t0)
-        else:
-            return SearchResult(None, "cut by time", None, float(h0), expansions, time.process_time() - t0)
-    plan2, cost2, exhausted, least = run(1.0, upper + 1e-6 if plan is not None else math.inf)
-    seconds_used = time.process_time() - t0
-    if plan2 is not None:
-        return SearchResult(plan2, "optimal", cost2, cost2, expansions, seconds_used)
-    if exhausted:
+            return SearchResult(None, "infeasible", None, math.inf, expansions, used())
+    if plan is not None or weight <= 1.0:
+        plan2, cost2, exhausted, least = run(1.0, upper + 1e-6 if plan is not None else math.inf,
+                                             deadline if plan is not None else exact_deadline)
+        if plan2 is not None:
+            return SearchResult(plan2, "optimal", cost2, cost2, expansions, used())
+        if exhausted:
+            if plan is not None:
+                return SearchResult(plan, "optimal", upper, upper, expansions, used())
+            return SearchResult(None, "infeasible", None, math.inf, expansions, used())
         if plan is not None:
-            return SearchResult(plan, "optimal", upper, upper, expansions, seconds_used)
-        return SearchResult(None, "infeasible", None, math.inf, expansions, seconds_used)
-    return SearchResult(plan, "cut by time", None if plan is None else upper, least, expansions, seconds_used)
+            return SearchResult(plan, "cut by time", upper, least, expansions, used())
+    # The exact phases were cut by time without a plan: the greedy dive, then A* pruned by its plan's cost.
+    lower = float(h0) if weight > 1.0 else least  # phase 1 is weighted: its frontier's least g + h is not kept
+    if fallback_share <= 0.0:
+        return SearchResult(None, "cut by time", None, lower, expansions, used())
+    plan3, cost3, exhausted, _ = run(math.inf, math.inf, deadline)
+    if plan3 is None:
+        if exhausted:
+            return SearchResult(None, "infeasible", None, math.inf, expansions, used(), greedy=True)
+        return SearchResult(None, "cut by time", None, lower, expansions, used(), greedy=True)
+    plan4, cost4, exhausted, least4 = run(1.0, cost3 + 1e-6, deadline)
+    if plan4 is not None:
+        return SearchResult(plan4, "optimal", cost4, cost4, expansions, used(), greedy=True)
+    if exhausted:
+        return SearchResult(plan3, "optimal", cost3, cost3, expansions, used(), greedy=True)
+    return SearchResult(plan3, "cut by time", cost3, min(cost3, max(lower, least4)), expansions, used(), greedy=True)
