@@ -60,6 +60,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "slax-belief-camera-depth": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
                                             {"camera_depth": 0.13, "camera_memory": True,
                                              "camera_outcome_tolerance": 0.01}),
+    # a failed placement's box refuses only the placements that meet space still hidden (belief.py's
+    # placement_allowed, blocked_rule="hidden"); measured, not the default: docs/results/slax_belief_missed_reveals
+    "slax-belief-v4": PolicyEntry("slax_drake.policies.belief:BeliefSearch", {"blocked_rule": "risk"}),
     # slax-belief before v3 (remembered objects, actions' outcomes, wider beam): docs/results/slax_belief_v2_*
     "slax-belief-v2": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
                                   {"evidence": "none", "remember_objects": False, "widen_beam": 0}),
