@@ -88,7 +88,13 @@ second decision and wandered for 14 actions. "hidden": an overlap refuses only w
 (a possible target placement's footprint; :meth:`holds_hidden_space`); "risk": nothing is refused, and a placement
 overlapping a blocked region in hidden space fails with ``blocked_risk`` more (:meth:`placement_risk`), so the
 reveals after it count for less. Unlike a refusal, a risk lets a move that reveals much outrank the cheap moves
-left; an identical failed action is still excluded by the corrections.
+left; an identical failed action is still excluded by the corrections. Measured ("risk", ``blocked_risk`` 0.5,
+``slax-belief-v4``; docs/results/slax_belief_missed_reveals): on Table I's first 25 scenes per density 100 / 92 / 92
+/ 80 %, 90 % (default 100 / 92 / 92 / 72 %, 89 %; won 10_0004 and 10_0009, lost 10_0014), and 10 of the default's
+47 failures on the 100 scenes per density revealed (06_0089, 08_0030, 08_0055, 08_0087, 10_0004, 10_0009, 10_0035,
+10_0041, 10_0068, 10_0076): ``python benchmarks/belief_variants.py --policy slax-belief-v4 --trials ... --compare
+results/table1_paper100``. "hidden" alone revealed 1 of 3 of those trials tried (06_0089; not 08_0087, whose
+oracle move meets the blocked box in hidden space, nor 10_0041).
 
 Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses ``segment_<id>``, never true
 objects). Where camera trials diverged from privileged ones (``benchmarks/camera_divergence.py`` on the 25-per-density
