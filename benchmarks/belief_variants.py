@@ -6,12 +6,18 @@ simulator; only the options differ. It is how the variants of issue 19 item 5 we
 registry row each.
 
     python benchmarks/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
-        [--policy slax-belief] [--seed 0] [--log]
+        [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
+
+``--compare``: a `slax-drake benchmark` results folder run with the same protocol seed; each trial also prints
+the folder's outcome of ``--compare-policy`` for the same trial, and the flips (won: revealed here, not there;
+lost: the reverse) are counted at the end.
 """
 
 import argparse
 import json
+import sys
 import time
+from pathlib import Path
 
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import scene_seed
@@ -39,7 +45,16 @@ def main():
     ap.add_argument("--seed", type=int, default=0, help="the protocol seed")
     ap.add_argument("--config", default="sim_configs/table1.yaml")
     ap.add_argument("--log", action="store_true", help="also print each action with its decision log")
+    ap.add_argument("--compare", default=None, help="a results folder: print its outcome per trial and the flips")
+    ap.add_argument("--compare-policy", default="slax-belief", help="the policy of --compare's trials")
     args = ap.parse_args()
+    compare = None
+    if args.compare is not None:
+        compare = Path(args.compare) / "trials" / args.compare_policy
+        if not compare.is_dir():
+            print(f"error: --compare: no folder {compare}", file=sys.stderr)
+            return 2
+    flips = {"won": [], "lost": []}
     options = json.loads(args.options)
     scenario = load_scenario(args.config)
     size = tuple(scenario.target.sizes[0])
@@ -57,12 +72,32 @@ def main():
         revealed += bool(result.success)
         print(f"{density:02d}_{index:04d} revealed={result.success} steps={result.steps} cost={result.cost:.1f} "
               f"visible={result.visible_fraction:.2f} cpu_s={time.process_time() - t0:.1f} "
-              f"longest_decision_s={longest:.2f}", flush=True)
+              f"longest_decision_s={longest:.2f}" + earlier_outcome(compare, density, index, result.success, flips),
+              flush=True)
         if args.log:
             for action, log in zip(result.actions, policy.decision_log):
                 print("   ", action, {k: log.get(k) for k in ("revealed", "value", "widened", "plan")})
     print(f"revealed {revealed} / {len(trials)} ({args.policy}, options {options})")
+    if compare is not None:
+        print(f"flips against {compare}: won {len(flips['won'])} ({' '.join(flips['won'])}), lost "
+              f"{len(flips['lost'])} ({' '.join(flips['lost'])})")
+    return 0
+
+
+def earlier_outcome(folder, density: int, index: int, success: bool, flips: dict) -> str:
+    """" (there: revealed=...)" from ``folder``'s trial file, recording a flip in ``flips``; "" without a folder,
+    " (there: no trial)" when the folder has not this trial."""
+    if folder is None:
+        return ""
+    name = f"{density:02d}_{index:04d}"
+    path = folder / f"{name}.json"
+    if not path.is_file():
+        return " (there: no trial)"
+    there = bool(json.loads(path.read_text())["success"])
+    if there != bool(success):
+        flips["won" if success else "lost"].append(name)
+    return f" (there: revealed={there})"
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
