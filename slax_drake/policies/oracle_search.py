@@ -57,7 +57,7 @@ DEADLINE_CHECK_EVERY = 8
 # The share of a search's time limit kept for the greedy dive (phase 3), which runs only when the exact phases found
 # no plan by the rest of the limit. 0.3: of the 16 paper-profile Table I searches cut at 20 s with no plan, the
 # dive alone found a plan within 6 CPU s in 6 (10 s: 8); uncut searches whose phase 1 took under 14 s stay as they were.
-# no plan by the rest of the limit. See search_plan.
+# See search_plan.
 FALLBACK_SHARE = 0.3
 
 
