@@ -544,23 +544,20 @@ class BeliefSearch(Hindsight):
         if not self._blocked or self.blocked_rule == "risk":
             return True
         b = self.placement_box(objects, a)
-        for r in self._blocked:
-            if b[0] < r[1] and r[0] < b[1] and b[2] < r[3] and r[2] < b[3]:
-                if self.blocked_rule == "box":
-                    return False
-                if self.holds_hidden_space((max(b[0], r[0]), min(b[1], r[1]), max(b[2], r[2]), min(b[3], r[3]))):
-                    return False
-        return True
+        if self.blocked_rule == "box":
+            return not self._blocked_intersections(b)
+        return self.blocked_overlaps(b) == 0
+
+    def _blocked_intersections(self, box: tuple) -> list:
+        """The intersections (x_lo, x_hi, y_lo, y_hi; m) of the box with each blocked region it overlaps (open
+        intervals: touching is no overlap)."""
+        return [(max(box[0], r[0]), min(box[1], r[1]), max(box[2], r[2]), min(box[3], r[3])) for r in self._blocked
+                if box[0] < r[1] and r[0] < box[1] and box[2] < r[3] and r[2] < box[3]]
 
     def blocked_overlaps(self, box: tuple) -> int:
         """How many blocked regions the placement box (x_lo, x_hi, y_lo, y_hi; m) overlaps in space still hidden
         (:meth:`holds_hidden_space`)."""
-        count = 0
-        for r in self._blocked:
-            if box[0] < r[1] and r[0] < box[1] and box[2] < r[3] and r[2] < box[3]:
-                count += self.holds_hidden_space((max(box[0], r[0]), min(box[1], r[1]), max(box[2], r[2]),
-                                                  min(box[3], r[3])))
-        return count
+        return sum(self.holds_hidden_space(part) for part in self._blocked_intersections(box))
 
     def holds_hidden_space(self, box: tuple) -> bool:
         """Whether the box (x_lo, x_hi, y_lo, y_hi; m) meets the footprint of a target placement the belief still
