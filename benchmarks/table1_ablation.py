@@ -101,14 +101,16 @@ def rule_cost_lines(rates: dict, policies) -> list[str]:
     negative cost means the station's value of the rule helps)."""
     if "station" not in rates:
         return []
+    from slax_drake.policies.rules import profile_values
+
+    station = profile_values("station")
     lines = []
     for name, per in rates.items():
         if not name.startswith(LEAVE_ONE_OUT_PREFIX):
             continue
         rule = name[len(LEAVE_ONE_OUT_PREFIX):]
         costs = ", ".join(f"{p} {100 * (per[p] - rates['station'][p]):+.1f}" for p in policies)
-        lines.append(f"- `{rule}` (station {VARIANTS[name][0].split(' instead of ')[1]}, paper "
-                     f"{VARIANTS[name][2][rule]}): costs {costs} points")
+        lines.append(f"- `{rule}` (station {station[rule]}, paper {VARIANTS[name][2][rule]}): costs {costs} points")
     return lines
 
 
