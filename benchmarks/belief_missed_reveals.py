@@ -154,7 +154,7 @@ def chain(policy, worlds, root, plan: list, remaining: int, risk: bool = True):
     ``risk`` False, every placement risk taken as 0."""
     import itertools
 
-    from slax_drake.policies.actions import apply_action
+    from slax_drake.shelf.actions import apply_action
 
     counter = itertools.count(10 ** 9)
     saved = policy.placement_risk
@@ -172,7 +172,7 @@ def chain(policy, worlds, root, plan: list, remaining: int, risk: bool = True):
 
 def first_move_status(policy, known, action, cands: list, first: list) -> str:
     """Why ``action`` (the oracle's first move) is, or is not, among the first moves slax-belief looked at."""
-    from slax_drake.policies.actions import Suction
+    from slax_drake.shelf.actions import Suction
     from slax_drake.policies.oracle_search import maximal_pushes_only
 
     text = action.describe()
@@ -190,7 +190,7 @@ def first_move_status(policy, known, action, cands: list, first: list) -> str:
     if text not in {a.describe() for a in cands}:
         return "excluded (corrections)"
     if isinstance(action, Suction):
-        from slax_drake.policies.actions import apply_action
+        from slax_drake.shelf.actions import apply_action
 
         moved = next(o for o in apply_action(known, action) if o.name == action.name)
         tap_worlds = policy._worlds
@@ -203,7 +203,7 @@ def first_move_status(policy, known, action, cands: list, first: list) -> str:
 def belief_share(policy, template, plan: list, known) -> float:
     """The share of the whole weighted belief (every consistent lattice placement, not only the sampled worlds)
     whose target some arrangement along ``plan`` shows at v and no moved object overlaps."""
-    from slax_drake.policies.actions import apply_action
+    from slax_drake.shelf.actions import apply_action
     from slax_drake.policies.hindsight import Worlds
 
     keys = sorted(policy._consistent or ())
@@ -225,7 +225,7 @@ def belief_share(policy, template, plan: list, known) -> float:
 def true_single_reveals(policy, scene, known, first: list, threshold: float) -> tuple[int, int, float]:
     """(single moves on the seen objects that reveal the true target when executed on the true scene, how many of
     them are among slax-belief's first-level nodes, the best R / G among those)."""
-    from slax_drake.policies.simulator import execute
+    from slax_drake.shelf.simulator import execute
     from slax_drake.scene.sampling import target_visible_fraction
 
     by_text = {k.plan[0].describe(): k for k in first}
@@ -292,7 +292,7 @@ def run(density: int, index: int, scenario, args) -> tuple[list[Probe], object]:
     the first-order executor); returns the probes and the trial's outcome (revealed, actions)."""
     from slax_drake.evaluation.table1 import scene_seed
     from slax_drake.policies.registry import make_policy
-    from slax_drake.policies.simulator import execute, observation_for
+    from slax_drake.shelf.simulator import execute, observation_for
     from slax_drake.scene.sampling import sample_scene, target_visible_fraction
 
     size = tuple(scenario.target.sizes[0])

@@ -20,7 +20,7 @@ import numpy as np
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import run_trial
+from slax_drake.shelf.simulator import run_trial
 from slax_drake.scene.sampling import sample_scene
 
 

@@ -18,8 +18,8 @@ import time
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.physics import action_matches
 from slax_drake.planning.planner import MotionPlanner
-from slax_drake.policies.actions import GRAVITY, ActionModel, apply_action
-from slax_drake.policies.registry import tool_config
+from slax_drake.shelf.actions import GRAVITY, ActionModel, apply_action
+from slax_drake.shelf.tool import tool_config
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene, SceneObject, planar_pose
 from slax_drake.scene.sampling import shelf_of

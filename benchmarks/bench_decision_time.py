@@ -21,7 +21,7 @@ import numpy as np
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.policies.registry import POLICY_NAMES, make_policy
-from slax_drake.policies.simulator import execute, observation_for
+from slax_drake.shelf.simulator import execute, observation_for
 from slax_drake.scene import sample_scene
 from slax_drake.scene.sampling import target_visible_fraction
 

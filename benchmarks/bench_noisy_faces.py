@@ -42,8 +42,8 @@ from slax_drake.perception.estimator import EstimatorConfig, estimate_objects
 from slax_drake.perception.observation import Observation, occluder_segmentation
 from slax_drake.perception.sensor_noise import l515_depth_noise
 from slax_drake.planning.waypoints import SEAL_PRESS
-from slax_drake.policies.actions import ActionModel
-from slax_drake.policies.rules import ToolConfig
+from slax_drake.shelf.actions import ActionModel
+from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.raycast import SceneRaycaster
 from slax_drake.scene.sampling import sample_scene

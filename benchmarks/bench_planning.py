@@ -23,8 +23,8 @@ def main():
     args = parser.parse_args()
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
-    from slax_drake.policies.actions import ActionModel
-    from slax_drake.policies.registry import tool_config
+    from slax_drake.shelf.actions import ActionModel
+    from slax_drake.shelf.tool import tool_config
     from slax_drake.scene.sampling import sample_scene, shelf_of
     from slax_drake.station.scenario import load_station_scenario
 

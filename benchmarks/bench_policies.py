@@ -17,9 +17,9 @@ import numpy as np
 
 from slax_drake.config import load_scenario
 from slax_drake.occupancy import compute_occupancy
-from slax_drake.policies.distribution import GroundTruthDistribution, support
+from slax_drake.shelf.distribution import GroundTruthDistribution, support
 from slax_drake.policies.registry import POLICY_NAMES, make_policy
-from slax_drake.policies.simulator import run_trial
+from slax_drake.shelf.simulator import run_trial
 from slax_drake.scene import sample_scene
 
 

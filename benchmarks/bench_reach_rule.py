@@ -50,8 +50,8 @@ def main(argv=None) -> int:
     from slax_drake.errors import UserError
     from slax_drake.evaluation.table1 import scene_seed
     from slax_drake.hardware.check_action import make_checker
-    from slax_drake.policies.actions import ActionModel
-    from slax_drake.policies.registry import parse_tool_rules
+    from slax_drake.shelf.actions import ActionModel
+    from slax_drake.shelf.tool import parse_tool_rules
     from slax_drake.scene.sampling import sample_scene
 
     try:

@@ -1,5 +1,5 @@
 """Evidence for the action model's rule variants: for the scenario's profile (sim_configs/table1.yaml: paper), each
-strict rule alone and all strict rules together (slax_drake.policies.rules.STRICT_RULES), on the Table I scenes (protocol seed 0, the first N of each density), prints
+strict rule alone and all strict rules together (slax_drake.shelf.rules.STRICT_RULES), on the Table I scenes (protocol seed 0, the first N of each density), prints
 
 - the feasible actions per state (mean count at the initial state, pushes and suctions),
 - the fraction of scenes where some occluder (an object hiding part of the target) can be pushed / suctioned,
@@ -15,11 +15,11 @@ import time
 import numpy as np
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import ActionModel, Push, apply_action
-from slax_drake.policies.rules import STRICT_RULES
+from slax_drake.shelf.actions import ActionModel, Push, apply_action
+from slax_drake.shelf.rules import STRICT_RULES
 from slax_drake.evaluation.table1 import scene_seed
-from slax_drake.policies.registry import tool_config
-from slax_drake.policies.visibility import TargetOcclusion
+from slax_drake.shelf.tool import tool_config
+from slax_drake.shelf.visibility import TargetOcclusion
 from slax_drake.scene import sample_scene
 from slax_drake.scene.sampling import shelf_of
 

@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import Push, Suction
+from slax_drake.shelf.actions import Push, Suction
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import execute
+from slax_drake.shelf.simulator import execute
 from slax_drake.scene.raycast import SceneRaycaster
 from slax_drake.scene.sampling import sample_scene
 

@@ -19,9 +19,9 @@ from pathlib import Path
 
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import scene_seed
-from slax_drake.policies.actions import ActionModel, Push
-from slax_drake.policies.registry import tool_config
-from slax_drake.policies.visibility import TargetOcclusion
+from slax_drake.shelf.actions import ActionModel, Push
+from slax_drake.shelf.tool import tool_config
+from slax_drake.shelf.visibility import TargetOcclusion
 from slax_drake.scene.sampling import sample_scene, shelf_of
 
 

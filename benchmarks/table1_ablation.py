@@ -76,7 +76,7 @@ VARIANTS = {
 
 # What each physical rule costs (issue 19, "station" done-when: one line per rule): the station profile with one rule
 # set to its paper value, every other rule left as the station has it. A variant per rule in which the two profiles
-# differ (slax_drake.policies.rules.profile_values); the cost of a rule is the variant's success rate minus the
+# differ (slax_drake.shelf.rules.profile_values); the cost of a rule is the variant's success rate minus the
 # station's, printed after the table by ``rule_cost_lines``.
 LEAVE_ONE_OUT_PREFIX = "station-without-"
 
@@ -84,7 +84,7 @@ LEAVE_ONE_OUT_PREFIX = "station-without-"
 def leave_one_out_variants() -> dict:
     """{``station-without-<rule>``: (what, "station", {rule: paper value}, {})} for every rule whose paper and station
     values differ."""
-    from slax_drake.policies.rules import profile_values
+    from slax_drake.shelf.rules import profile_values
 
     paper, station = profile_values("paper"), profile_values("station")
     return {f"{LEAVE_ONE_OUT_PREFIX}{name}": (f"station, {name} = {paper[name]} (paper) instead of {station[name]}",
@@ -101,7 +101,7 @@ def rule_cost_lines(rates: dict, policies) -> list[str]:
     negative cost means the station's value of the rule helps)."""
     if "station" not in rates:
         return []
-    from slax_drake.policies.rules import profile_values
+    from slax_drake.shelf.rules import profile_values
 
     station = profile_values("station")
     lines = []

@@ -22,8 +22,9 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 from slax_drake.config import load_scenario  # noqa: E402
 from slax_drake.evaluation.table1 import run_benchmark_trial, scene_seed  # noqa: E402
 from slax_drake.errors import UserError  # noqa: E402
-from slax_drake.policies.registry import POLICY_NAMES, scenario_profile  # noqa: E402
-from slax_drake.policies.rules import PROFILES  # noqa: E402
+from slax_drake.policies.registry import POLICY_NAMES  # noqa: E402
+from slax_drake.shelf.tool import scenario_profile
+from slax_drake.shelf.rules import PROFILES  # noqa: E402
 
 
 def main(argv=None) -> int:

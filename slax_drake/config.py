@@ -16,7 +16,7 @@ from slax_drake.errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CONFIG = "sim_configs/sim_shelf.yaml"
-PROFILES = ("paper", "station")  # the action model's rule profiles (slax_drake.policies.rules.PROFILES)
+PROFILES = ("paper", "station")  # the action model's rule profiles (slax_drake.shelf.rules.PROFILES)
 TARGET_PLACEMENTS = ("after-objects", "first")  # target.placement
 
 
@@ -142,7 +142,7 @@ class ProtocolConfig:
 class Scenario:
     """Everything that defines a shelf world and how scenes are drawn in it, and the action model's rule profile
     (``profile``: "paper", the paper's first-order simulator, or "station", our physical tool; see
-    :mod:`slax_drake.policies.rules`)."""
+    :mod:`slax_drake.shelf.rules`)."""
 
     profile: str = "station"
     shelf: ShelfConfig = dataclasses.field(default_factory=ShelfConfig)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from slax_drake.evaluation.table1 import scene_seed
-from slax_drake.policies.actions import apply_action
+from slax_drake.shelf.actions import apply_action
 from slax_drake.scene.sampling import sample_scene
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from slax_drake.policies.actions import ActionModel, Push, Suction, ToolConfig, apply_action
+from slax_drake.shelf.actions import ActionModel, Push, Suction, ToolConfig, apply_action
 from slax_drake.scene.footprint import Footprint, footprints_clear, inside_shelf
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
@@ -197,7 +197,7 @@ def test_lifted_object_passes_over_lower_objects_only_when_allowed(lift):
 def test_suction_placements_avoid_hidden_space():
     objs = (box("a", -0.15, -0.15, sz=0.18), box("b", 0.10, -0.05, sx=0.12), cyl("c", 0.0, 0.18, d=0.10))
     m = model()
-    from slax_drake.policies.actions import _StateContext
+    from slax_drake.shelf.actions import _StateContext
 
     ctx = _StateContext(m, objs, ())
     sucs = [a for a in m.enumerate(objs, pushes=False).feasible]
@@ -220,7 +220,7 @@ def test_enumeration_is_deterministic():
 
 
 def test_hidden_slivers_narrower_than_the_smallest_object_do_not_count():
-    from slax_drake.policies.floor import open_with_disc
+    from slax_drake.shelf.floor import open_with_disc
 
     mask = np.zeros((40, 40), dtype=bool)
     mask[5:30, 5:9] = True  # 4 cells (2 cm) wide: no 6 cm disc (radius 6 cells) fits
@@ -246,7 +246,7 @@ def shift_mask(mask: np.ndarray, rows: int, cols: int) -> np.ndarray:
 def test_disc_opening_equals_the_union_of_fitting_discs():
     """OpenCV's opening against the definition: a cell is kept when some disc lying entirely inside the mask
     (cells beyond the raster's edge are outside) covers it."""
-    from slax_drake.policies.floor import disc_offsets, open_with_disc
+    from slax_drake.shelf.floor import disc_offsets, open_with_disc
 
     rng = np.random.default_rng(3)
     for radius in (1, 3, 6):

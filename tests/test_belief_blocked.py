@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import Suction
+from slax_drake.shelf.actions import Suction
 from slax_drake.policies.registry import make_policy
 from slax_drake.scene import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf, planar_pose

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import Push, Suction
+from slax_drake.shelf.actions import Push, Suction
 from slax_drake.policies.belief import REMEMBERED
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import CameraObserver, observation_for
+from slax_drake.shelf.simulator import CameraObserver, observation_for
 from slax_drake.scene import Camera
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
@@ -178,7 +178,7 @@ def test_maybe_occupied_keeps_placements_in_the_assumed_depth_at_a_lower_weight(
 def test_privileged_trials_do_not_read_the_camera_options(paper):
     """The registry's slax-belief-camera-depth (camera options on) and slax-belief (off) take the same actions on a
     privileged trial and log the same decisions: none of the options is read without a camera frame."""
-    from slax_drake.policies.simulator import run_trial
+    from slax_drake.shelf.simulator import run_trial
     from slax_drake.scene.sampling import sample_scene
 
     scene = sample_scene(paper, 6, 11, target_size=TARGET)

@@ -11,7 +11,7 @@ from slax_drake.config import load_scenario
 from slax_drake.policies.belief import PackedWorlds, _at_least, _ConvexRegion, _popcount
 from slax_drake.policies.hindsight import Worlds
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import observation_for
+from slax_drake.shelf.simulator import observation_for
 from slax_drake.scene.sampling import sample_scene
 
 TARGET = (0.06, 0.06, 0.06)

@@ -12,7 +12,7 @@ from slax_drake.config import load_scenario
 from slax_drake.policies.belief import BeliefSearch, PackedWorlds
 from slax_drake.policies.hindsight import Worlds
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import execute, observation_for, run_trial
+from slax_drake.shelf.simulator import execute, observation_for, run_trial
 from slax_drake.scene import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
 from slax_drake.scene.sampling import sample_scene, target_visible_fraction
@@ -124,7 +124,7 @@ def test_registry_passes_the_protocol_horizon_to_slax_belief_only(paper):
 def _push_outcome_setup(paper, options=None):
     """A lone box at the shelf's centre, pushed +0.15 m along x; the belief holds four target placements: in its
     path at x = 0.08 and 0.10 and 0.12 m (a target there stops it, the nearer the earlier) and one far away."""
-    from slax_drake.policies.actions import Push
+    from slax_drake.shelf.actions import Push
 
     block = box("block", 0.0, 0.0, 0.06, 0.06, 0.10)
     template = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), (block,), None, 3)
@@ -191,7 +191,7 @@ def test_weighted_draw_is_seeded_and_follows_the_weights(paper):
 def test_belief_remembers_an_untouched_object_that_became_hidden(paper):
     """An object seen at one decision and hidden at the next stays in the policy's seen objects where it stood,
     unless it is the object the last action moved (where that one stopped is not known); slax-belief-v2 forgets."""
-    from slax_drake.policies.actions import Push
+    from slax_drake.shelf.actions import Push
 
     scene = stacked_scene(paper)
     policy = make_policy("slax-belief", paper, horizon=4)

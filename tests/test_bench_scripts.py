@@ -68,7 +68,7 @@ def test_table1_cpu_refuses_bad_arguments_before_any_trial(capsys, argv, message
 
 def test_table1_ablation_has_one_leave_one_out_variant_per_rule_the_profiles_differ_in():
     """The station profile's per-rule costs: each variant is the station with exactly one rule at its paper value."""
-    from slax_drake.policies.rules import profile_values
+    from slax_drake.shelf.rules import profile_values
 
     ablation = script("table1_ablation")
     paper, station = profile_values("paper"), profile_values("station")

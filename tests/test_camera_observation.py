@@ -9,10 +9,10 @@ from slax_drake.config import load_scenario
 from slax_drake.occupancy.from_depth import occupancy_from_depth
 from slax_drake.perception.belief import DepthDistribution, ObservedBelief, background_depth
 from slax_drake.perception.observation import Observation
-from slax_drake.policies.actions import Push, Suction
-from slax_drake.policies.distribution import support
+from slax_drake.shelf.actions import Push, Suction
+from slax_drake.shelf.distribution import support
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import CameraObserver, on_true_object, run_trial
+from slax_drake.shelf.simulator import CameraObserver, on_true_object, run_trial
 from slax_drake.scene import sample_scene
 from slax_drake.scene.raycast import SceneRaycaster
 

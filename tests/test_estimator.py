@@ -181,7 +181,7 @@ def test_depth_prior_rules_differ_only_in_the_unseen_depth():
 
 
 def test_estimation_is_deterministic_and_feeds_the_action_model(scenes, renderers):
-    from slax_drake.policies.actions import ActionModel
+    from slax_drake.shelf.actions import ActionModel
 
     renderer = renderers[(128, 96)]
     scene = scenes[3]

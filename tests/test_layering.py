@@ -18,7 +18,7 @@ STAGES = (
     # foundations shared by every stage
     "errors", "lazy_exports", "arguments", "resources", "io", "backends", "caches", "config",
     # the pipeline, in the order data flows
-    "scene", "occupancy", "station", "dataset", "perception", "policies", "planning", "systems", "evaluation",
+    "scene", "occupancy", "station", "dataset", "perception", "shelf", "policies", "planning", "systems", "evaluation",
     "hardware", "cli",
 )
 

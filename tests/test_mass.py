@@ -9,8 +9,8 @@ import pytest
 
 from slax_drake.config import load_scenario
 from slax_drake.errors import ConfigError
-from slax_drake.policies.actions import object_mass as model_mass
-from slax_drake.policies.registry import tool_config
+from slax_drake.shelf.actions import object_mass as model_mass
+from slax_drake.shelf.tool import tool_config
 from slax_drake.scene.io import scene_from_dict, scene_to_dict
 from slax_drake.scene.mass import mass_range, median_mass, object_mass, volume
 from slax_drake.scene.sampling import sample_scene

@@ -3,7 +3,7 @@
 import numpy as np
 
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import run_trial
+from slax_drake.shelf.simulator import run_trial
 from slax_drake.scene import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
 from slax_drake.scene.sampling import target_visible_fraction
@@ -53,7 +53,7 @@ def test_suction_when_no_push_fits(sim_scenario):
 
 
 def test_occlusion_union_equals_the_simulators_visible_fraction(sim_scenario):
-    from slax_drake.policies.visibility import TargetOcclusion
+    from slax_drake.shelf.visibility import TargetOcclusion
     from slax_drake.scene import sample_scene
 
     for seed in range(3):
@@ -81,7 +81,7 @@ def test_the_heuristic_never_overestimates(sim_scenario):
     # Removing objects until revealed takes at least min_objects_to_move removals (checked by brute force).
     import itertools
 
-    from slax_drake.policies.visibility import TargetOcclusion
+    from slax_drake.shelf.visibility import TargetOcclusion
     from slax_drake.scene import sample_scene
 
     for seed in range(3):

@@ -8,9 +8,10 @@ import pytest
 
 from action_walks import walk
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import ActionModel, _StateContext, apply_action
+from slax_drake.shelf.actions import ActionModel, _StateContext, apply_action
 from slax_drake.policies.oracle_search import StateKeys
-from slax_drake.policies.registry import make_policy, tool_config
+from slax_drake.policies.registry import make_policy
+from slax_drake.shelf.tool import tool_config
 from slax_drake.scene import Camera
 from slax_drake.scene.footprint import Footprint, _axes, clear_of
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose, state_key
@@ -73,7 +74,7 @@ def test_a_state_contexts_footprint_ids_come_from_one_id_table(paper, monkeypatc
     """The footprint ids of a state (its objects and the fixed target) name their footprints in the model's id
     table as it stands after the state is read, and differ where the footprints differ, even when the table fills
     up between the objects and the target (the pairwise cache keyed by ids must not mix two numberings)."""
-    import slax_drake.policies.actions as actions
+    import slax_drake.shelf.actions as actions
 
     model = ActionModel(shelf_of(paper), paper.camera.position, tool_config(paper, "paper"))
     states, fixed = walk(paper, model, 8, 1, steps=0)

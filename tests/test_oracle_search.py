@@ -4,10 +4,11 @@
 import pytest
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import ActionModel, Push
+from slax_drake.shelf.actions import ActionModel, Push
 from slax_drake.policies.oracle_search import action_regions, commutation_margin, interacts, search_plan
-from slax_drake.policies.registry import make_policy, tool_config
-from slax_drake.policies.visibility import TargetOcclusion
+from slax_drake.policies.registry import make_policy
+from slax_drake.shelf.tool import tool_config
+from slax_drake.shelf.visibility import TargetOcclusion
 from slax_drake.scene import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
 from slax_drake.scene.sampling import shelf_of
@@ -78,7 +79,7 @@ def test_commutation_regions_separate_far_apart_pushes_only(paper):
 
 def test_cached_pushes_equal_the_whole_states_pushes(paper):
     from slax_drake.evaluation.table1 import scene_seed
-    from slax_drake.policies.actions import apply_action
+    from slax_drake.shelf.actions import apply_action
     from slax_drake.policies.oracle_search import PushCache
     from slax_drake.scene.sampling import sample_scene
 
@@ -140,7 +141,7 @@ def search_with_clock(scene, scenario, horizon, clock, suctions=True):
 
 
 def test_dive_plan_is_the_fallback_when_the_exact_phases_are_cut(paper):
-    from slax_drake.policies.actions import apply_action
+    from slax_drake.shelf.actions import apply_action
 
     s, horizon = two_blockers(paper), 4
     result, model, occlusion = search_with_clock(s, paper, horizon, PhaseClock(20.0))

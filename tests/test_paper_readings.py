@@ -11,11 +11,11 @@ import pytest
 from slax_drake.config import ProtocolConfig, Scenario, load_scenario, validate_scenario
 from slax_drake.errors import ConfigError, UserError
 from slax_drake.evaluation.settings import scenario_digest
-from slax_drake.policies.actions import ActionModel, Push, apply_action
-from slax_drake.policies.floor import free_push_cells, push_end_hidden
-from slax_drake.policies.registry import parse_tool_rules, tool_config, without_defaults
-from slax_drake.policies.rules import ToolConfig, tool_config_problem
-from slax_drake.policies.simulator import execute
+from slax_drake.shelf.actions import ActionModel, Push, apply_action
+from slax_drake.shelf.floor import free_push_cells, push_end_hidden
+from slax_drake.shelf.tool import parse_tool_rules, tool_config, without_defaults
+from slax_drake.shelf.rules import ToolConfig, tool_config_problem
+from slax_drake.shelf.simulator import execute
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.footprint import Footprint, footprints_clear
 from slax_drake.scene.model import Scene, SceneObject, Shelf, planar_pose

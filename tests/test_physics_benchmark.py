@@ -63,7 +63,7 @@ def test_shelf_side_is_the_shelf_benchmarks_scene(tiny):
     """The shelf simulator result in the file is the one of the shelf benchmark's scene for that seed."""
     from slax_drake.config import load_scenario
     from slax_drake.policies.registry import make_policy
-    from slax_drake.policies.simulator import run_trial
+    from slax_drake.shelf.simulator import run_trial
     from slax_drake.scene.sampling import sample_scene
 
     _, out = tiny
@@ -146,7 +146,7 @@ def test_a_diverged_simulation_is_a_failed_trial_not_a_crash(tmp_path, monkeypat
 
 
 def test_tool_rules_are_typed_and_bad_ones_exit_with_code_2(capsys, tmp_path):
-    from slax_drake.policies.registry import parse_tool_rules
+    from slax_drake.shelf.tool import parse_tool_rules
 
     assert parse_tool_rules(["max_suction_moment=0.4", "tube_approach_check=false"]) == {
         "max_suction_moment": 0.4, "tube_approach_check": False}
@@ -161,7 +161,7 @@ def test_tool_rules_are_typed_and_bad_ones_exit_with_code_2(capsys, tmp_path):
 def test_rules_equal_to_the_first_order_defaults_are_no_variant():
     import math
 
-    from slax_drake.policies.registry import without_defaults
+    from slax_drake.shelf.tool import without_defaults
 
     assert without_defaults({"max_suction_moment": math.inf, "max_seal_angle_deg": 90.0}) == {}
     assert without_defaults({"max_suction_moment": 0.4, "blade_gap": 0.035}) == {"max_suction_moment": 0.4}

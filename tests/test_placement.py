@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from slax_drake.planning.placement import Candidate, Evaluated, choose, main, subgrid
-from slax_drake.policies.reach import LAYERS
+from slax_drake.shelf.reach import LAYERS
 
 STATION = "sim_configs/station_sim_shelf.yaml"
 
@@ -59,7 +59,7 @@ def test_the_winners_map_holds_the_heights_of_its_own_layers_only():
 
     from slax_drake.planning.placement import PlacementSearch
     from slax_drake.config import load_scenario
-    from slax_drake.policies.registry import tool_config
+    from slax_drake.shelf.tool import tool_config
 
     tool = tool_config(load_scenario("sim_configs/table1.yaml"), "station")
     fake = SimpleNamespace(station_path=STATION, xs=np.array([0.0, 0.1, 0.2]), ys=np.array([0.0, 0.1, 0.2]), tool=tool)

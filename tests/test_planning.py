@@ -6,8 +6,8 @@ import pytest
 from slax_drake.planning.planner import MotionPlanner, Rejection
 from slax_drake.planning.timing import time_waypoints
 from slax_drake.planning.world import PlanningWorld
-from slax_drake.policies.actions import ActionModel, Push, Suction
-from slax_drake.policies.registry import tool_config
+from slax_drake.shelf.actions import ActionModel, Push, Suction
+from slax_drake.shelf.tool import tool_config
 from slax_drake.scene.sampling import sample_scene, shelf_of
 from slax_drake.station.plant import station_joint_limits
 from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario, observation_positions

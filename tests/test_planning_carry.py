@@ -7,8 +7,8 @@ import pytest
 from slax_drake.planning.planner import MotionPlanner
 from slax_drake.planning.waypoints import LIFT, LIFT_CLEARANCE, action_waypoints, carry_lift, pull_out_options
 from slax_drake.planning.world import PlanningWorld, rest_gap
-from slax_drake.policies.actions import ActionModel, Suction
-from slax_drake.policies.registry import tool_config
+from slax_drake.shelf.actions import ActionModel, Suction
+from slax_drake.shelf.tool import tool_config
 from slax_drake.scene.model import SceneObject, planar_pose
 from slax_drake.scene.sampling import sample_scene, shelf_of
 from slax_drake.station.scenario import load_station_scenario

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from slax_drake.policies.distribution import entropy, history_min, support
+from slax_drake.shelf.distribution import entropy, history_min, support
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import observe, run_trial
+from slax_drake.shelf.simulator import observe, run_trial
 from slax_drake.scene import sample_scene
 
 
@@ -50,7 +50,7 @@ def test_unknown_policy_and_unknown_perception_are_user_errors(sim_scenario):
 def test_learned_perception_plugs_into_the_policies(sim_scenario):
     """--perception learned: the shipped network predicts the 1D distribution of a believed scene."""
     from slax_drake.perception.distribution_model import LearnedDistribution
-    from slax_drake.policies.distribution import make_distribution_model
+    from slax_drake.shelf.distribution import make_distribution_model
 
     model = make_distribution_model("learned", (0.06, 0.06, 0.06))
     assert isinstance(model, LearnedDistribution)

@@ -5,9 +5,9 @@ executed action that moved nothing (with its reason) and never return to an arra
 import pytest
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import apply_action
+from slax_drake.shelf.actions import apply_action
 from slax_drake.policies.registry import POLICY_NAMES, make_policy
-from slax_drake.policies.simulator import execute, observation_for, run_trial
+from slax_drake.shelf.simulator import execute, observation_for, run_trial
 from slax_drake.policies.trial_memory import TrialMemory
 from slax_drake.scene import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
@@ -59,7 +59,7 @@ def test_an_executed_action_that_moved_nothing_is_excluded_with_its_reason(paper
 def test_a_push_that_moved_less_than_predicted_is_excluded():
     memory = TrialMemory()
     a, b = box("a", 0.0, 0.0), box("b", 0.2, 0.0)
-    from slax_drake.policies.actions import Push
+    from slax_drake.shelf.actions import Push
 
     push = Push("a", (0.0, 0.0, 0.0), 0.10)
     memory.propose(push, (a, b))

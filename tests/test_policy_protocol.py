@@ -7,7 +7,7 @@ import pytest
 
 from slax_drake.policies.protocol import Decision, Policy
 from slax_drake.policies.registry import POLICY_NAMES, POLICY_TABLE, PolicyEntry, make_policy
-from slax_drake.policies.simulator import observation_for, run_trial
+from slax_drake.shelf.simulator import observation_for, run_trial
 from slax_drake.scene.sampling import sample_scene
 
 TARGET = (0.06, 0.06, 0.06)

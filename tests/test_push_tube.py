@@ -5,7 +5,7 @@ are ones the motion planner rejects."""
 import numpy as np
 import pytest
 
-from slax_drake.policies.actions import ActionModel, Push, ToolConfig
+from slax_drake.shelf.actions import ActionModel, Push, ToolConfig
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
@@ -30,7 +30,7 @@ def test_the_corridor_lies_where_the_planner_puts_the_tube(sign, yaw):
     """The corridor's centre line is the insert waypoint's blade plane, it ends the slack short of the blade's
     tip, and its height is the tube's underside (the blade's upper edge less a tube radius) plus the slack."""
     from slax_drake.planning.waypoints import BLADE_HALF_LENGTH, TUBE_RADIUS, action_waypoints
-    from slax_drake.policies.actions import TUBE_CHECK_SLACK
+    from slax_drake.shelf.actions import TUBE_CHECK_SLACK
 
     tool = ToolConfig.build()
     a = box("a", 0.0, 0.05, yaw=yaw)

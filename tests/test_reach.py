@@ -5,9 +5,9 @@ planner on a seeded sample of poses."""
 import numpy as np
 import pytest
 
-from slax_drake.policies.actions import ActionModel
-from slax_drake.policies.reach import LAYERS, ReachMap, load_reach_map
-from slax_drake.policies.registry import tool_config
+from slax_drake.shelf.actions import ActionModel
+from slax_drake.shelf.reach import LAYERS, ReachMap, load_reach_map
+from slax_drake.shelf.tool import tool_config
 from slax_drake.scene.model import SceneObject, planar_pose
 from slax_drake.scene.sampling import shelf_of
 
@@ -109,7 +109,7 @@ def test_the_rule_agrees_with_the_planner_on_a_sample_of_poses(sim_scenario):
 
 def _turned_map(refused_layers):
     """The toy grid with every turned-cup layer: the layers in ``refused_layers`` reach nothing, the others all."""
-    from slax_drake.policies.reach import turned_cup_layers, turned_cup_params
+    from slax_drake.shelf.reach import turned_cup_layers, turned_cup_params
 
     xs, ys = np.array([0.0, 0.1, 0.2]), np.array([0.0, 0.1])
     reach = {n: np.full((2, 3), n not in refused_layers) for n in ("cup",) + turned_cup_layers()}
@@ -140,7 +140,7 @@ def test_a_turned_suction_is_refused_only_where_every_layer_around_refuses():
 
 
 def test_the_sim_map_holds_the_turned_cup_layers():
-    from slax_drake.policies.reach import turned_cup_layers
+    from slax_drake.shelf.reach import turned_cup_layers
 
     rmap = load_reach_map(SIM_MAP)
     for name in turned_cup_layers():
@@ -155,7 +155,7 @@ def test_the_turned_cup_layers_agree_with_the_planner_on_a_sample_of_poses(sim_s
     nodes are reached in every layer around it has one."""
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.planning.reach import cup_waypoint
-    from slax_drake.policies.reach import TURNED_CUP_HEIGHTS, TURNED_CUP_YAWS_DEG, turned_cup_layer
+    from slax_drake.shelf.reach import TURNED_CUP_HEIGHTS, TURNED_CUP_YAWS_DEG, turned_cup_layer
     from slax_drake.scene.camera import Camera
     from slax_drake.scene.model import Scene
     from slax_drake.station.scenario import load_station_scenario

@@ -7,8 +7,8 @@ import pytest
 
 from slax_drake.config import load_scenario
 from slax_drake.errors import ConfigError
-from slax_drake.policies.actions import ActionModel, Push, Suction
-from slax_drake.policies.rules import PROFILES, RULES, RuleSet, ToolConfig, overrides_of, profile_values, rule_set
+from slax_drake.shelf.actions import ActionModel, Push, Suction
+from slax_drake.shelf.rules import PROFILES, RULES, RuleSet, ToolConfig, overrides_of, profile_values, rule_set
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
 SHELF = Shelf(0.60, 0.60, 0.60, 0.02)
@@ -90,7 +90,7 @@ def test_the_scenario_selects_the_profile(tmp_path):
 
 
 def test_the_default_drake_trial_plans_with_the_station_rules():
-    from slax_drake.policies.registry import tool_config
+    from slax_drake.shelf.tool import tool_config
     from slax_drake.systems.trial import TrialOptions
 
     opts = TrialOptions()

@@ -3,9 +3,9 @@
 import numpy as np
 from hypothesis import example, given, settings, strategies as st
 
-from slax_drake.policies.actions import Push, Suction
+from slax_drake.shelf.actions import Push, Suction
 from slax_drake.policies.registry import make_policy
-from slax_drake.policies.simulator import execute, objects_overlap
+from slax_drake.shelf.simulator import execute, objects_overlap
 from slax_drake.scene import sample_scene
 from slax_drake.scene.footprint import Footprint, inside_shelf
 from slax_drake.scene.model import SceneObject, planar_pose

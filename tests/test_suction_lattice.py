@@ -13,9 +13,9 @@ import pytest
 
 from action_walks import walk
 from slax_drake.config import load_scenario
-from slax_drake.policies.actions import ActionModel, Suction, _StateContext
-from slax_drake.policies.floor import column_extents
-from slax_drake.policies.registry import tool_config
+from slax_drake.shelf.actions import ActionModel, Suction, _StateContext
+from slax_drake.shelf.floor import column_extents
+from slax_drake.shelf.tool import tool_config
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.sampling import shelf_of
 

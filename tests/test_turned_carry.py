@@ -9,7 +9,7 @@ import pytest
 from slax_drake.planning.planner import _midway_rotation
 from slax_drake.planning.waypoints import (CARRY_YAWS, TARGET_CLEARANCE, action_waypoints, carried_sweep,
                                            carry_options, pull_out_options, suction_rotation)
-from slax_drake.policies.actions import Suction
+from slax_drake.shelf.actions import Suction
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf, Target, planar_pose
 
@@ -92,7 +92,7 @@ def test_midway_rotation_halves_a_turn_and_keeps_an_unturned_segment_exact():
 def test_a_carry_the_arm_cannot_make_straight_is_planned_turned_and_checks():
     """Table I, 10 objects, scene 0: object_9 stands at the front right, straight ahead of the shoulder; its
     pull-out and translate poses had no IK solution at any carrying depth (benchmarks/diagnose_carry.py)."""
-    from slax_drake.policies.actions import apply_action
+    from slax_drake.shelf.actions import apply_action
     from table1_suction_plans import assert_motion_checks, plan_table1_suction
 
     checker, action, motion = plan_table1_suction(10, 0, "object_9", -0.05)

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from slax_drake.planning.waypoints import CUP_STANDOFF, SEAL_PRESS, action_waypoints
-from slax_drake.policies.actions import ActionModel, Suction, apply_action
-from slax_drake.policies.registry import tool_config
+from slax_drake.shelf.actions import ActionModel, Suction, apply_action
+from slax_drake.shelf.tool import tool_config
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene, SceneObject, planar_pose
 from slax_drake.scene.sampling import shelf_of

@@ -11,7 +11,8 @@ from slax_drake.errors import UserError
 def register(subparsers) -> None:
     from slax_drake import arguments
     from slax_drake.backends import add_backend_arguments
-    from slax_drake.policies.registry import DEFAULT_BENCHMARK_POLICIES, POLICY_NAMES, add_tool_rule_argument
+    from slax_drake.policies.registry import DEFAULT_BENCHMARK_POLICIES, POLICY_NAMES
+    from slax_drake.shelf.tool import add_tool_rule_argument
 
     p = subparsers.add_parser(
         "benchmark",
@@ -75,7 +76,8 @@ def _densities(text: str | None) -> list[int] | None:
 def run(args: argparse.Namespace) -> int:
     from slax_drake.backends import check_backend
     from slax_drake.config import load_scenario
-    from slax_drake.policies.registry import DEFAULT_BENCHMARK_POLICIES, POLICY_TABLE, parse_tool_rules
+    from slax_drake.policies.registry import DEFAULT_BENCHMARK_POLICIES, POLICY_TABLE
+    from slax_drake.shelf.tool import parse_tool_rules
 
     scenario = load_scenario(args.config)
     # the shelf simulator's Table I runs the scenario's profile; --physics (Drake trials) the station's

@@ -4,7 +4,7 @@ For every policy, density n and scene index, the scene seed is the shelf benchma
 (``slax_drake.evaluation.table1.scene_seed(protocol_seed, n, index)``) and the target is the protocol's first
 target size, so both simulators start from the very scene that ``slax-drake benchmark`` uses. Each scene runs
 
-- in the shelf simulator (``slax_drake.policies.simulator.run_trial``, H = horizon_per_object * n), and
+- in the shelf simulator (``slax_drake.shelf.simulator.run_trial``, H = horizon_per_object * n), and
 - as a full Drake trial (``slax_drake.systems.trial.run_trial``: station, PlannerSystem, point-contact physics,
   suction) with the same policy, horizon and target.
 
@@ -123,7 +123,7 @@ def _run_scene(job) -> dict:
     config, station, policy_name, density, index, seed, sleep, tool_rules, profile, sensor_noise = job
     from slax_drake.config import load_scenario
     from slax_drake.policies.registry import make_policy
-    from slax_drake.policies.simulator import run_trial as run_shelf_trial
+    from slax_drake.shelf.simulator import run_trial as run_shelf_trial
     from slax_drake.scene.sampling import sample_scene
     from slax_drake.evaluation.trial import TrialOptions, drake_info_silenced, run_trial
 

@@ -80,7 +80,7 @@ def protocol_settings(scenario, config: str, seed: int, perception: str, tool_ru
         "policies": policy_settings(policies),
     }
     if tool_rules.get("reach_map"):  # the rule names a file: its content is what decides, not its path
-        from slax_drake.policies.reach import reach_map_file
+        from slax_drake.shelf.reach import reach_map_file
 
         settings["reach_map_sha256"] = file_digest(reach_map_file(tool_rules["reach_map"]))
     return settings

@@ -37,7 +37,7 @@ PAPER_TABLE1_STEPS = {  # median steps (IQR low, high) for 4/6/8/10/All (paper T
 
 @dataclasses.dataclass(frozen=True)
 class CameraMode:
-    """``--observation camera``: the non-oracle policies see rendered frames (slax_drake.policies.simulator.
+    """``--observation camera``: the non-oracle policies see rendered frames (slax_drake.shelf.simulator.
     CameraObserver): ``segmentation`` "labels" (the render's object labels, idealised) or "depth"
     (segment_depth); ``sensor_noise``: the L515 model, seeded by the scene seed."""
 
@@ -69,7 +69,7 @@ def run_benchmark_trial(job) -> dict:
     """Runs one trial (in whichever process the backend chose); returns the trial file's content."""
     scenario, policy_name, density, index, seed, perception, tool_rules, camera, profile, oracle_seconds = job
     from slax_drake.policies.registry import make_policy
-    from slax_drake.policies.simulator import CameraObserver, run_trial
+    from slax_drake.shelf.simulator import CameraObserver, run_trial
     from slax_drake.scene.sampling import sample_scene
 
     size = tuple(scenario.target.sizes[0])
@@ -119,7 +119,7 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     ``oracle_seconds``: the oracles' CPU-time limit per decision (default: the Oracle's)."""
     from slax_drake.backends import check_backend, run_tasks
     from slax_drake.evaluation.settings import protocol_settings, record_or_refuse
-    from slax_drake.policies.registry import scenario_profile, without_defaults
+    from slax_drake.shelf.tool import scenario_profile, without_defaults
 
     out = Path(out)
     densities = list(densities or scenario.protocol.densities)

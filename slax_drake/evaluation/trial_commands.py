@@ -10,7 +10,7 @@ from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
 
 def register(subparsers) -> None:
     from slax_drake import arguments
-    from slax_drake.policies.registry import add_tool_rule_argument
+    from slax_drake.shelf.tool import add_tool_rule_argument
 
     p = subparsers.add_parser(
         "trial",
@@ -64,7 +64,7 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
 
 
 def run(args: argparse.Namespace) -> int:
-    from slax_drake.policies.registry import parse_tool_rules
+    from slax_drake.shelf.tool import parse_tool_rules
     from slax_drake.evaluation.trial import drake_info_silenced, run_trial, write_trial
     from slax_drake.systems.trial_summary import trial_summary
 

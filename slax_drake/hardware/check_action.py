@@ -77,7 +77,7 @@ class Checker:
 
     def resolve(self, spec: tuple, candidates=None):
         """The action model's Push or Suction for ``spec`` (:func:`parse_action`), or (None, why not)."""
-        from slax_drake.policies.actions import Push
+        from slax_drake.shelf.actions import Push
 
         kind, name = spec[0], spec[1]
         if name not in {o.name for o in self.scene.objects}:
@@ -136,8 +136,8 @@ def make_checker(scene, station_path: str | None = None) -> Checker:
     geometry and masses) and motion planner for ``scene``."""
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
-    from slax_drake.policies.actions import ActionModel
-    from slax_drake.policies.registry import tool_config
+    from slax_drake.shelf.actions import ActionModel
+    from slax_drake.shelf.tool import tool_config
     from slax_drake.station.plant import scene_camera
     from slax_drake.station.scenario import load_station_scenario, station_for
     from slax_drake.systems.trial import station_tool_rules

@@ -219,7 +219,7 @@ class StepPlanner:
         from slax_drake.perception.estimator import EstimatorConfig
         from slax_drake.perception.observation import Observation, occluder_segmentation
         from slax_drake.perception.segmentation import segment_depth
-        from slax_drake.policies.simulator import Observation as PolicyObservation
+        from slax_drake.shelf.simulator import Observation as PolicyObservation
         from slax_drake.scene.model import Scene
 
         camera = self.frame_camera(np.asarray(depth))
@@ -253,7 +253,7 @@ class StepPlanner:
     def motion_planner(self):
         if self._motion_planner is None:
             from slax_drake.planning.planner import MotionPlanner
-            from slax_drake.policies.registry import tool_config
+            from slax_drake.shelf.tool import tool_config
 
             self._motion_planner = MotionPlanner(self.station, tool_config(self.scenario, **self.tool_rules))
         return self._motion_planner
@@ -333,7 +333,7 @@ class StepPlanner:
         return exported
 
     def _record(self, action, belief, observation, rejected, report, history, timings, reason=None) -> dict:
-        from slax_drake.policies.distribution import support
+        from slax_drake.shelf.distribution import support
         from slax_drake.systems.planner import _describe
 
         steps = int(history.get("steps", 0)) if history else 0

@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.errors import PlacementError
-from slax_drake.policies.reach import LAYERS, ReachMap
+from slax_drake.shelf.reach import LAYERS, ReachMap
 
 OBSERVATION_CLEARANCE = 0.02  # m, robot-shelf and link-link distance at the observation pose
 POSITION_TOLERANCE = 1e-4  # m, the camera's position at q_obs
@@ -162,7 +162,7 @@ class PlacementSearch:
         from slax_drake.config import load_scenario
         from slax_drake.planning.reach import map_grid
         from slax_drake.planning.world import PlanningWorld
-        from slax_drake.policies.registry import tool_config
+        from slax_drake.shelf.tool import tool_config
         from slax_drake.scene.camera import Camera
         from slax_drake.scene.model import Scene
         from slax_drake.scene.sampling import shelf_of

@@ -52,8 +52,8 @@ from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
 from slax_drake.planning.world import PlanningWorld
-from slax_drake.policies.actions import Suction
-from slax_drake.policies.rules import ToolConfig
+from slax_drake.shelf.actions import Suction
+from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.model import Scene, state_key
 from slax_drake.station.plant import station_joint_limits
 from slax_drake.station.scenario import StationScenario, observation_positions

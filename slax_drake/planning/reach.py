@@ -1,4 +1,4 @@
-"""Computing a station's reach map (:class:`slax_drake.policies.reach.ReachMap`) with the motion planner.
+"""Computing a station's reach map (:class:`slax_drake.shelf.reach.ReachMap`) with the motion planner.
 
     python -m slax_drake.planning.reach --station sim_configs/station_sim_shelf.yaml \\
         --out models/reach/station_sim_shelf.json --png models/reach/station_sim_shelf.png
@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from slax_drake.policies.reach import LAYERS, ReachMap, grid, turned_cup_layers, turned_cup_params
+from slax_drake.shelf.reach import LAYERS, ReachMap, grid, turned_cup_layers, turned_cup_params
 
 CUP_HEIGHT = 0.10  # m, the cup layer's contact height (contacts sit 1.5-18.5 cm high)
 STEP = 0.05  # m
@@ -29,7 +29,7 @@ BACK_INSET = 0.05  # m: the deepest node from the back wall
 def layer_waypoint(layer: str, x: float, y: float, scene, tool):
     """The tool waypoint of ``layer`` at the action parameter (x, y) (S, m)."""
     from slax_drake.planning.waypoints import action_waypoints
-    from slax_drake.policies.actions import Push
+    from slax_drake.shelf.actions import Push
     from slax_drake.scene.model import SceneObject, planar_pose
 
     # action_waypoints reads the moved object's footprint (for a suction's carry); a small box behind the
@@ -49,7 +49,7 @@ def cup_waypoint(x: float, y: float, yaw: float, scene, tool, height: float = CU
     """The cup at the seal of a suction whose contact is (x, y, ``height``) (S, m) with the tool turned ``yaw``
     (rad) about S z."""
     from slax_drake.planning.waypoints import action_waypoints
-    from slax_drake.policies.actions import Suction
+    from slax_drake.shelf.actions import Suction
     from slax_drake.scene.model import SceneObject, planar_pose
 
     dummy = SceneObject("reach_probe", "box", (0.06, 0.06, 0.06), planar_pose(x, y + 0.03, 0.03, 0.0))
@@ -71,7 +71,7 @@ def compute_reach_map(station_path: str, step: float = STEP, progress: bool = Tr
     ``layers`` computed on that grid and added (e.g. the turned-cup layers)."""
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
-    from slax_drake.policies.registry import tool_config
+    from slax_drake.shelf.tool import tool_config
     from slax_drake.scene.camera import Camera
     from slax_drake.scene.model import Scene
     from slax_drake.scene.sampling import shelf_of
@@ -154,7 +154,7 @@ def main(argv=None) -> int:
                         help="read the map at --out and add the turned-cup layers it lacks, on its grid")
     args = parser.parse_args(argv)
     if args.add_turned_cup:
-        from slax_drake.policies.reach import load_reach_map
+        from slax_drake.shelf.reach import load_reach_map
 
         base = load_reach_map(args.out)
         layers = tuple(layer for layer in turned_cup_layers() if layer not in base.reach)

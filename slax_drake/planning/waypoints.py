@@ -6,7 +6,7 @@ free space to the observation pose. Each waypoint names the tool frame it places
 angle, whether the segment *arriving* at it may touch the manipulated object (``contact``) and the suction
 command from it on.
 
-Push (q, d) of ``slax_drake.policies.actions``: q = (x of the blade lane's centre, y of the blade's tip,
+Push (q, d) of ``slax_drake.shelf.actions``: q = (x of the blade lane's centre, y of the blade's tip,
 blade_height / 2). The blade (``blade_face_frame``, its faces normal to S x, hanging below the tube, the tube
 pointing along S +y) goes ``PUSH_STANDOFF`` beside the object's extreme x (so that the 3 cm tube above the blade
 clears a tall object) instead of the lane's centre, and pushes d + standoff, so the object moves by d: pre-approach in front of the opening (``APPROACH_MARGIN``), insert along +y to the tip
@@ -35,8 +35,8 @@ import dataclasses
 
 import numpy as np
 
-from slax_drake.policies.actions import BLADE_LIFT, TUBE_STANDOFF, Push, Suction
-from slax_drake.policies.rules import ToolConfig
+from slax_drake.shelf.actions import BLADE_LIFT, TUBE_STANDOFF, Push, Suction
+from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf
 from slax_drake.station import robot as robot_model

@@ -141,7 +141,7 @@ import time
 
 import numpy as np
 
-from slax_drake.policies.actions import Push, Suction, apply_action
+from slax_drake.shelf.actions import Push, Suction, apply_action
 from slax_drake.policies.hindsight import Hindsight, Worlds
 from slax_drake.policies.oracle_search import maximal_pushes_only
 from slax_drake.policies.protocol import Decision
@@ -452,7 +452,7 @@ class BeliefSearch(Hindsight):
         executed, self._executed = self._executed, None
         if executed is None or self.evidence != "outcome" or not self._consistent:
             return
-        from slax_drake.policies.simulator import execute
+        from slax_drake.shelf.simulator import execute
         from slax_drake.scene.model import Target, planar_pose
 
         a, before = executed

@@ -38,7 +38,7 @@ import time
 
 import numpy as np
 
-from slax_drake.policies.actions import ActionModel, Push, Suction, apply_action
+from slax_drake.shelf.actions import ActionModel, Push, Suction, apply_action
 from slax_drake.policies.policies import BluctionDAR
 from slax_drake.policies.protocol import Decision
 from slax_drake.scene.model import state_key

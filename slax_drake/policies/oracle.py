@@ -1,12 +1,12 @@
 """Oracle-P and Oracle-P+S (paper Sec. V-D): full-state A* search for the cheapest action sequence (cost
 pushes + psi suctions) that reveals the target, over the policies' own action set
-(:class:`~slax_drake.policies.actions.ActionModel`, computed on the full state with the target as a known
+(:class:`~slax_drake.shelf.actions.ActionModel`, computed on the full state with the target as a known
 obstacle that never moves).
 
 Goal (``goal``):
 
 - ``"visibility"`` (default): the target's visible fraction reaches the threshold v, computed exactly as the
-  simulator's success test (:mod:`slax_drake.policies.visibility`: a union of per-object 3D occlusions, cached
+  simulator's success test (:mod:`slax_drake.shelf.visibility`: a union of per-object 3D occlusions, cached
   per object pose). Objects below the line of sight do not count. The heuristic is the fewest objects whose
   removal would reveal the target (admissible: a plan of k actions moves at most k objects).
 - ``"triangle"``: the paper's overhead rule, widened to our visibility measure: no object footprint overlaps
@@ -27,11 +27,11 @@ from __future__ import annotations
 
 from shapely.geometry import Polygon
 
-from slax_drake.policies.actions import ActionModel, apply_action
+from slax_drake.shelf.actions import ActionModel, apply_action
 from slax_drake.policies.oracle_search import FALLBACK_SHARE, search_plan
 from slax_drake.policies.protocol import Decision, Exclusions
 from slax_drake.scene.model import state_key
-from slax_drake.policies.visibility import TargetOcclusion
+from slax_drake.shelf.visibility import TargetOcclusion
 from slax_drake.scene.footprint import Footprint
 
 

@@ -44,7 +44,7 @@ import math
 import time
 
 from slax_drake.caches import IdentityMemo
-from slax_drake.policies.actions import FRONT_MARGIN, ActionModel, Push, apply_action
+from slax_drake.shelf.actions import FRONT_MARGIN, ActionModel, Push, apply_action
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import state_key
 

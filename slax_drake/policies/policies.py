@@ -1,9 +1,9 @@
 """Distribution-based search policies: DAR, DER-k, Bluction-DAR (paper Sec. V-C).
 
-Each sees only the :class:`~slax_drake.policies.simulator.Observation` (coarse depth and labels, the objects
+Each sees only the :class:`~slax_drake.shelf.simulator.Observation` (coarse depth and labels, the objects
 seen, the 1D occupancy distribution P_t). It keeps the history encoding P'_t = min(P_t, P'_{t-1}) and scores a
 hypothetical action by the distribution its model predicts for the observed objects moved as the action says
-(:class:`~slax_drake.policies.distribution.DistributionModel`), min-ed with P'_t:
+(:class:`~slax_drake.shelf.distribution.DistributionModel`), min-ed with P'_t:
 
 - DAR: pushes only; the largest support reduction Delta r = r_t - r_{t+1}.
 - DER-k: pushes only; a k-step lookahead (beam search, ``beam`` best partial sequences per depth) that takes
@@ -38,8 +38,8 @@ import math
 
 import numpy as np
 
-from slax_drake.policies.actions import ActionModel, Push, Suction, apply_action
-from slax_drake.policies.distribution import DistributionModel, entropy, history_min, support
+from slax_drake.shelf.actions import ActionModel, Push, Suction, apply_action
+from slax_drake.shelf.distribution import DistributionModel, entropy, history_min, support
 from slax_drake.policies.protocol import Decision, Exclusions, read_only
 from slax_drake.policies.trial_memory import TrialMemory
 

@@ -1,12 +1,12 @@
 """The one interface every search policy implements, the oracles included: :class:`Policy`.
 
-A trial drives a policy the same way in the fast shelf simulator (:func:`slax_drake.policies.simulator.run_trial`)
+A trial drives a policy the same way in the fast shelf simulator (:func:`slax_drake.shelf.simulator.run_trial`)
 and in the Drake planner system (:class:`slax_drake.systems.planner.PlannerSystem`):
 
 1. ``reset(scene_or_observation)`` once at the start of a trial: the policy forgets everything of the last trial
    (its history, its plan, its exclusions).
 2. Per step, ``decide(observation) -> Decision``: the candidate actions ranked best first, or none and a stop
-   reason. ``observation`` is what the policy reads: an :class:`~slax_drake.policies.simulator.Observation` for
+   reason. ``observation`` is what the policy reads: an :class:`~slax_drake.shelf.simulator.Observation` for
    the distribution policies, the true :class:`~slax_drake.scene.model.Scene` for the policies that declare
    ``needs_true_scene`` (the oracles, which cannot run on a robot). ``decide`` is called once per step
    (a policy may keep a plan across steps), and again on the same observation after ``exclude``.
@@ -28,7 +28,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from slax_drake.policies.actions import Push
+from slax_drake.shelf.actions import Push
 
 
 @dataclasses.dataclass(frozen=True)

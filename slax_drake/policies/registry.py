@@ -14,15 +14,12 @@ import dataclasses
 import importlib
 import typing
 
-from slax_drake.errors import UnknownPolicyError, UserError
+from slax_drake.errors import UnknownPolicyError
 
 # The action model, the distributions and the scene sampler (OpenCV, shapely, trimesh, torch) are imported where
-# used: the command-line parser imports this module for add_tool_rule_argument and POLICY_NAMES.
+# used: the command-line parser imports this module for POLICY_NAMES.
 if typing.TYPE_CHECKING:
     from slax_drake.config import Scenario
-
-# The rules are plain data (no heavy imports): the parser needs their profile names and fields.
-from slax_drake.policies.rules import PROFILES, RULES, ToolConfig, flat_field_names, tool_config_problem  # noqa: E402
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,70 +72,6 @@ OUR_POLICIES = ("bluction-la2", "slax-hindsight", "slax-belief")  # the project'
 DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
 
 
-def add_tool_rule_argument(parser, note: str) -> None:
-    """The ``--profile NAME`` option and the repeatable ``--tool-rule FIELD=VALUE`` option of the commands that run
-    the action model (read them with :func:`parse_tool_rules`); ``note`` says what the rules apply to."""
-    parser.add_argument("--profile", choices=PROFILES, default=None,
-                        help="the action model's rule profile: 'paper' (the paper's first-order simulator) or "
-                        "'station' (our physical tool); default: the scenario's 'profile'")
-    parser.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
-                        help="override one rule of the profile (a rule of slax_drake/policies/rules.py, e.g. "
-                        "max_suction_moment=0.4 or blade_gap=0.035) or a geometry/discretisation field; "
-                        f"repeatable; {note}")
-
-
-def parse_tool_rules(items, profile: str = "station") -> dict:
-    """``["max_suction_moment=0.4", "tube_approach_check=false"]`` -> typed overrides of ``profile``'s rules (or
-    of a geometry/discretisation field); UserError for an unknown field or a value of the wrong type."""
-    fields = flat_field_names()
-    defaults = ToolConfig.build(profile)
-    rules = {}
-    for item in items or ():
-        key, sep, text = item.partition("=")
-        key, text = key.strip(), text.strip()
-        if not sep or key not in fields:
-            raise UserError(f"--tool-rule takes FIELD=VALUE with a rule or tool field (got {item!r}; fields: "
-                            f"{', '.join(fields)})")
-        kind = RULES[key].type if key in RULES else type(defaults.value(key))
-        try:
-            if kind is bool:
-                if text.lower() not in ("true", "false"):
-                    raise ValueError(text)
-                value = text.lower() == "true"
-            else:
-                value = kind(text)
-        except ValueError:
-            raise UserError(f"--tool-rule {key} needs a {kind.__name__} (got {text!r})") from None
-        rules[key] = value
-    problem = tool_config_problem(ToolConfig.build(profile, **rules))
-    if problem:
-        raise UserError(f"--tool-rule {problem}")
-    return rules
-
-
-def without_defaults(rules: dict, profile: str = "station") -> dict:
-    """``rules`` less the entries equal to ``profile``'s values, so that one set of rules has one record
-    (``max_suction_moment=inf`` is both profiles' value, recorded as no override)."""
-    defaults = ToolConfig.build(profile)
-    return {k: v for k, v in rules.items() if defaults.value(k) != v}
-
-
-def scenario_profile(scenario: Scenario, profile: str | None = None) -> str:
-    """The profile a run uses: ``profile`` when given (``--profile``), else the scenario's."""
-    return profile or scenario.profile
-
-
-def tool_config(scenario: Scenario, profile: str | None = None, **overrides) -> ToolConfig:
-    """The action model's configuration for ``scenario``: its profile (or ``profile``), its objects' density,
-    clearance and mass model, and single ``overrides`` (flat names, see ToolConfig.build)."""
-    physics = scenario.physics
-    fields = dict(object_density=scenario.objects.density, clearance=scenario.objects.clearance,
-                  mass_model=physics.mass_model, box_masses=tuple(tuple(r) for r in physics.box_masses),
-                  cylinder_masses=tuple(tuple(r) for r in physics.cylinder_masses))
-    fields.update(overrides)  # e.g. --tool-rule clearance=0: the action model's, not the scene sampler's
-    return ToolConfig.build(scenario_profile(scenario, profile), **fields)
-
-
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,
                 target_size=None, tool_overrides: dict | None = None, oracle_options: dict | None = None,
                 profile: str | None = None, policy_options: dict | None = None):
@@ -146,8 +79,9 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
     planning with ``profile``'s rules (default: the scenario's) and ``tool_overrides``. ``oracle_options``: extra
     constructor options of the oracles (e.g. ``seconds``, the search time limit); ``policy_options``: extra
     constructor options of a distribution policy (e.g. ``seconds``, the hindsight policy's time per decision)."""
-    from slax_drake.policies.actions import ActionModel
-    from slax_drake.policies.distribution import make_distribution_model
+    from slax_drake.shelf.actions import ActionModel
+    from slax_drake.shelf.distribution import make_distribution_model
+    from slax_drake.shelf.tool import tool_config
     from slax_drake.scene.camera import Camera
     from slax_drake.scene.sampling import shelf_of
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from slax_drake.policies.actions import apply_action
+from slax_drake.shelf.actions import apply_action
 
 
 @dataclasses.dataclass(frozen=True)

@@ -76,7 +76,7 @@ class StationScenario:
     suction: SuctionParameters = dataclasses.field(default_factory=SuctionParameters)
     camera: bool = True
     # The station's reach map (models/reach/*.json, slax_drake.planning.reach), "" for none: the action model's
-    # reach_map rule in Drake trials on this station (slax_drake.policies.reach).
+    # reach_map rule in Drake trials on this station (slax_drake.shelf.reach).
     reach_map: str = ""
 
 

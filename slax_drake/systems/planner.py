@@ -12,9 +12,10 @@ ended ``settle_time`` ago). When it is, the system decides:
    segmentation, target mask, camera), ``hypotheses`` (the estimator's objects ``segment_<id>``) and
    ``occupancy_1d`` (P_t); a hypothetical action's distribution comes from the predicted frame (segments shifted
    in the image) through the same distribution source as P_t;
-3. the policy (any :class:`~slax_drake.policies.protocol.Policy` that reads an Observation; the very code the shelf
-   simulator runs) ranks the candidates on the hypotheses with ``decide``; the best one is planned against the
-   believed scene (:class:`slax_drake.planning.planner.MotionPlanner`); an infeasible motion is logged with its
+3. the policy (any :class:`~slax_drake.policies.protocol.Policy` that reads a
+   :class:`~slax_drake.shelf.simulator.Observation`; the very code the shelf simulator runs) ranks the
+   candidates on the hypotheses with ``decide``; the best one is planned against the believed scene
+   (:class:`slax_drake.planning.planner.MotionPlanner`); an infeasible motion is logged with its
    reason and handed back with ``policy.exclude`` (the whole group when the tool could not reach the object), and
    the policy decides again (its next candidate). The planner touches the policy through the protocol only.
 
@@ -40,9 +41,9 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from slax_drake.perception.belief import ObservedBelief
 from slax_drake.planning.planner import MotionPlanner
-from slax_drake.policies.actions import Push
-from slax_drake.policies.distribution import support
-from slax_drake.policies.simulator import Observation
+from slax_drake.shelf.actions import Push
+from slax_drake.shelf.distribution import support
+from slax_drake.shelf.simulator import Observation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
 
@@ -230,7 +231,7 @@ def _describe(action) -> dict:
 
 
 def _predicted(objects, action) -> dict:
-    from slax_drake.policies.actions import apply_action
+    from slax_drake.shelf.actions import apply_action
 
     moved = next(o for o in apply_action(tuple(objects), action) if o.name == action.name)
     return {"object": action.name, "x": round(float(moved.center[0]), 5), "y": round(float(moved.center[1]), 5),

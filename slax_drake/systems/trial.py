@@ -51,7 +51,7 @@ class TrialOptions:
     tool_rules: dict | None = None  # rule overrides of the profile for the policy and the planner; they
     # take precedence over the station's own limits (see station_tool_rules)
     profile: str = "station"  # the action model's rule profile: a Drake trial plans with the physical tool's
-    # rules whatever the scene scenario's profile is (slax_drake.policies.rules)
+    # rules whatever the scene scenario's profile is (slax_drake.shelf.rules)
 
 
 @dataclasses.dataclass
@@ -80,7 +80,7 @@ def station_tool_rules(station, overrides: dict | None = None, profile: str = "s
     """The rule overrides of ``profile`` a trial on ``station`` plans with: the station cup's limits
     (``suction.max_held_moment`` as ``max_suction_moment`` when finite, ``suction.max_seal_angle_deg`` when under
     90) and its reach map (``reach_map`` when given), then ``overrides`` on top; entries equal to the profile's values are left out."""
-    from slax_drake.policies.registry import without_defaults
+    from slax_drake.shelf.tool import without_defaults
 
     rules = {}
     if math.isfinite(station.suction.max_held_moment):
@@ -99,7 +99,8 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
 
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
-    from slax_drake.policies.registry import make_policy, tool_config
+    from slax_drake.policies.registry import make_policy
+    from slax_drake.shelf.tool import tool_config
     from slax_drake.scene.sampling import sample_scene
     from slax_drake.station.plant import shelf_pose
     from slax_drake.station.scenario import load_station_scenario, station_for

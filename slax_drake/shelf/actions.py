@@ -15,7 +15,7 @@ default 3.5 cm: the 3 cm tube runs along the blade's upper edge, centred on its 
 reads it. The blade then moves a signed distance d along x and the object translates with it (first order: no
 rotation). The object stops ``clearance`` before a neighbour or a wall; the blade in its gap (dragged along)
 must touch no other object; exactly one object moves; no cell the object newly covers may be hidden from the
-camera by *another* object (:mod:`slax_drake.policies.floor`; ``hidden_space``: "3d", default, the point
+camera by *another* object (:mod:`slax_drake.shelf.floor`; ``hidden_space``: "3d", default, the point
 ``hidden_probe_height`` above the cell is not seen, i.e. an unseen object at least that tall could stand there;
 "overhead", the paper's 2D shadows of infinitely tall objects), counting only hidden space wide enough to hold an
 unseen object (``min_hidden_width``: a disc of the smallest object's size fits in it, clear of known objects).
@@ -32,7 +32,7 @@ cell hidden from the camera by any known object, the object's own old shadow inc
 it yet (``suction_hidden_rule`` "placement", the station profile; "path": the whole way in and out too; "none",
 the paper profile: no hidden-space rule for suctions).
 
-Configuration (:mod:`slax_drake.policies.rules`): the tool's geometry, the discretisation, the objects'
+Configuration (:mod:`slax_drake.shelf.rules`): the tool's geometry, the discretisation, the objects'
 physics and the rules, each rule a small class with its value in the ``paper`` and ``station`` profiles
 and a docstring saying what it refuses and why.
 
@@ -49,12 +49,12 @@ import math
 import numpy as np
 
 from slax_drake.caches import memo
-from slax_drake.policies.rules import RULES, ToolConfig, tool_config_problem
-from slax_drake.policies.floor import (
+from slax_drake.shelf.rules import RULES, ToolConfig, tool_config_problem
+from slax_drake.shelf.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
     push_end_hidden,
 )
-from slax_drake.policies.reach import load_reach_map
+from slax_drake.shelf.reach import load_reach_map
 from slax_drake.scene import mass as scene_mass
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import SceneObject, Shelf

@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from slax_drake.policies.actions import (
+from slax_drake.shelf.actions import (
     BLADE_CONTACT_CLEARANCE, ActionModel, Push, Suction, apply_action,
 )
 from slax_drake.scene.footprint import Footprint, clear_of
@@ -137,8 +137,8 @@ def on_true_object(action, hypotheses, scene: Scene, true_name: str):
 
 def observation_for(policy, scene: Scene, observer: CameraObserver | None = None):
     """What ``policy`` decides on in the shelf simulator: the true scene for a policy that declares
-    ``needs_true_scene`` (an oracle, always privileged), else the Observation from its own distribution model
-    (privileged: ``observer`` None) or from the camera frame (``observer``'s :meth:`CameraObserver.observe`)."""
+    ``needs_true_scene`` (an oracle, always privileged), else the Observation from its own distribution
+    model (privileged: ``observer`` None) or from the camera frame (``observer``'s :meth:`CameraObserver.observe`)."""
     if policy.needs_true_scene:
         return scene
     if observer is not None:
@@ -258,10 +258,10 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
               observer: CameraObserver | None = None) -> TrialResult:
     """Rolls ``policy`` out on ``scene`` until the target is revealed, H actions are spent or no action is left.
 
-    ``policy`` implements :class:`~slax_drake.policies.protocol.Policy`: it decides on
-    :func:`observation_for` the scene (the Observation, or the true scene for an oracle) and its best candidate is
-    executed with its own action model. ``observer``: the camera mode for a non-oracle policy (its actions name
-    hypotheses, executed on the true object each hypothesis is); None: privileged."""
+    ``policy`` implements :class:`~slax_drake.policies.protocol.Policy`: it decides on :func:`observation_for` the
+    scene (the Observation, or the true scene for an oracle) and its best candidate is executed with its own
+    action model. ``observer``: the camera mode for a non-oracle policy (its actions name hypotheses, executed on the
+    true object each hypothesis is); None: privileged."""
     policy.reset(scene)
     seconds, actions, notes = [], [], []
     pushes = suctions = 0
@@ -330,5 +330,5 @@ def objects_overlap(scene: Scene, clearance: float = 0.0) -> list[tuple[str, str
     return bad
 
 
-__all__ = ["Observation", "TrialResult", "apply_action", "execute", "objects_overlap", "observation_for", "observe",
-           "run_trial"]
+__all__ = ["Observation", "TrialResult", "apply_action", "execute", "objects_overlap", "observation_for",
+           "observe", "run_trial"]

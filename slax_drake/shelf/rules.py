@@ -3,7 +3,7 @@ contact physics, and the rules; and the two named profiles of the rules.
 
 A rule is one small class: its name (the ``--tool-rule`` key and the scenario's), its type, its value in each
 profile, the check where it is small enough to live here (otherwise the docstring names the
-:class:`~slax_drake.policies.actions.ActionModel` method that applies it), and a docstring that says what it
+:class:`~slax_drake.shelf.actions.ActionModel` method that applies it), and a docstring that says what it
 refuses, which profile has it and why. A new rule is one class with the ``@register`` decorator.
 
 Profiles (see ../DESIGN.md, "Two profiles of the action model"):
@@ -146,7 +146,7 @@ class PushTubeCheck(Rule):
 @register
 class PushHiddenCheck(Rule):
     """A push never moves its object into space hidden from the camera by other objects (it stops at its edge;
-    :func:`slax_drake.policies.floor.free_push_cells`). Both profiles: the paper's own rule ("objects may not be
+    :func:`slax_drake.shelf.floor.free_push_cells`). Both profiles: the paper's own rule ("objects may not be
     pushed behind other objects, as to not risk collisions with obscured objects", Sec. VI-A). Off only as an
     ablation."""
 
@@ -313,12 +313,12 @@ class MaxSealAngleDeg(Rule):
 
 @register
 class ReachMapRule(Rule):
-    """The station's precomputed reach map (a JSON path, :mod:`slax_drake.policies.reach`; "" for none): a push
+    """The station's precomputed reach map (a JSON path, :mod:`slax_drake.shelf.reach`; "" for none): a push
     whose blade, inserted or at the push's end, and a suction with the tube along y whose cup at the seal, lies
     where the motion planner found no IK solution from the observation pose on the empty shelf (every grid node
     around it unreached) is refused before the planner tries. Conservative: only what the map shows unreachable
     all around; a turned suction is refused only where the map's turned-cup layers of both yaw nodes around its
-    yaw refuse it (:meth:`slax_drake.policies.reach.ReachMap.refuses_cup`; not checked without those layers). The map belongs to a station
+    yaw refuse it (:meth:`slax_drake.shelf.reach.ReachMap.refuses_cup`; not checked without those layers). The map belongs to a station
     (the robot's placement): both profiles' value is "", and a Drake trial's station sets it (the station YAML's
     ``reach_map``, through ``station_tool_rules``)."""
 
@@ -327,7 +327,7 @@ class ReachMapRule(Rule):
     def problem(self, value) -> str | None:
         if not value:
             return None
-        from slax_drake.policies.reach import reach_map_file
+        from slax_drake.shelf.reach import reach_map_file
 
         return None if reach_map_file(value).is_file() else "no such reach map file"
 
