@@ -115,7 +115,8 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     on top of it; both recorded in each trial file. ``config``: the scenario's path, recorded beside its content's
     digest. A folder recorded with other settings (profile and rules included) is refused before anything runs
     (:func:`slax_drake.evaluation.settings.record_or_refuse`). ``camera``: the camera observation mode of the
-    non-oracle policies (None: privileged, today's Observation; the oracles are privileged always).
+    non-oracle policies (None: privileged, the seen objects with their true shapes and poses; the oracles are
+    privileged always).
     ``oracle_seconds``: the oracles' CPU-time limit per decision (default: the Oracle's)."""
     from slax_drake.backends import check_backend, run_tasks
     from slax_drake.evaluation.settings import protocol_settings, record_or_refuse

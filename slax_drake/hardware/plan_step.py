@@ -214,12 +214,13 @@ class StepPlanner:
         return self.camera.with_resolution(w, h)
 
     def perceive(self, depth: np.ndarray, mask: np.ndarray, joint_state=None):
-        """Frame -> (the policy's Observation, the ObservedBelief). Raises ObservationError for an unusable frame."""
+        """Frame -> (the policy's PolicyObservation, the ObservedBelief). Raises ObservationError for an unusable
+        frame."""
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.estimator import EstimatorConfig
         from slax_drake.perception.observation import Observation, occluder_segmentation
         from slax_drake.perception.segmentation import segment_depth
-        from slax_drake.shelf.simulator import Observation as PolicyObservation
+        from slax_drake.shelf.simulator import PolicyObservation
         from slax_drake.scene.model import Scene
 
         camera = self.frame_camera(np.asarray(depth))

@@ -1,6 +1,6 @@
 """Distribution-based search policies: DAR, DER-k, Bluction-DAR (paper Sec. V-C).
 
-Each sees only the :class:`~slax_drake.shelf.simulator.Observation` (coarse depth and labels, the objects
+Each sees only the :class:`~slax_drake.shelf.simulator.PolicyObservation` (coarse depth and labels, the objects
 seen, the 1D occupancy distribution P_t). It keeps the history encoding P'_t = min(P_t, P'_{t-1}) and scores a
 hypothetical action by the distribution its model predicts for the observed objects moved as the action says
 (:class:`~slax_drake.shelf.distribution.DistributionModel`), min-ed with P'_t:
@@ -45,8 +45,8 @@ from slax_drake.policies.trial_memory import TrialMemory
 
 
 class DistributionPolicy:
-    """Common machinery of the :class:`~slax_drake.policies.protocol.Policy` protocol for the policies that read an
-    Observation: keep P'_t (``history``), record exclusions, predict candidates' distributions. A subclass
+    """Common machinery of the :class:`~slax_drake.policies.protocol.Policy` protocol for the policies that read a
+    PolicyObservation: keep P'_t (``history``), record exclusions, predict candidates' distributions. A subclass
     implements ``rank(obs) -> Decision`` with ``self.history`` already updated for ``obs``."""
 
     name = "abstract"

@@ -6,7 +6,7 @@ and in the Drake planner system (:class:`slax_drake.systems.planner.PlannerSyste
 1. ``reset(scene_or_observation)`` once at the start of a trial: the policy forgets everything of the last trial
    (its history, its plan, its exclusions).
 2. Per step, ``decide(observation) -> Decision``: the candidate actions ranked best first, or none and a stop
-   reason. ``observation`` is what the policy reads: an :class:`~slax_drake.shelf.simulator.Observation` for
+   reason. ``observation`` is what the policy reads: an :class:`~slax_drake.shelf.simulator.PolicyObservation` for
    the distribution policies, the true :class:`~slax_drake.scene.model.Scene` for the policies that declare
    ``needs_true_scene`` (the oracles, which cannot run on a robot). ``decide`` is called once per step
    (a policy may keep a plan across steps), and again on the same observation after ``exclude``.
@@ -52,7 +52,7 @@ class Decision:
 @runtime_checkable
 class Policy(Protocol):
     """See the module docstring. Attributes: ``name`` (the registry name), ``needs_true_scene`` (True: ``decide``
-    takes the true Scene; False: an Observation), ``action_model`` (the ActionModel it enumerates with),
+    takes the true Scene; False: a PolicyObservation), ``action_model`` (the ActionModel it enumerates with),
     ``distribution`` (the model of the 1D distribution P_t its observations carry; None when it reads the true
     scene), ``observation_width`` (px of the coarse observation it reads)."""
 

@@ -17,7 +17,7 @@ _EXPORTS = {
     "ActionModel": "actions", "Push": "actions", "Rejected": "actions", "Suction": "actions", "ToolConfig": "rules",
     "apply_action": "actions", "tool_config": "tool",
     "DistributionModel": "distribution", "GroundTruthDistribution": "distribution",
-    "Observation": "simulator", "TrialResult": "simulator", "execute": "simulator", "observe": "simulator",
+    "PolicyObservation": "simulator", "TrialResult": "simulator", "execute": "simulator", "observe": "simulator",
     "run_trial": "simulator",
 }
 __all__ = sorted(_EXPORTS)

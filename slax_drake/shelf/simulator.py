@@ -1,6 +1,6 @@
 """The fast first-order shelf simulator: observe, execute an action, check the target's visibility.
 
-What a non-oracle policy observes (:class:`Observation`): the depth and label images rendered at a coarse
+What a non-oracle policy observes (:class:`PolicyObservation`): the depth and label images rendered at a coarse
 resolution (``observation_width`` px wide) from the scene's camera, the 1D occupancy distribution of the true
 scene from the :class:`DistributionModel`, and ``known``: every object of which at least one pixel is seen,
 with its exact footprint (an idealised segmentation and shape fit). Objects no pixel of which is seen, and the
@@ -32,7 +32,7 @@ from slax_drake.scene.sampling import target_visible_fraction
 
 
 @dataclasses.dataclass(frozen=True)
-class Observation:
+class PolicyObservation:
     """What a non-oracle policy may use (see the module docstring)."""
 
     depth: np.ndarray  # (H, W) float32, metres along the optical axis
@@ -43,7 +43,7 @@ class Observation:
     belief: object = None  # camera mode: the ObservedBelief that made ``known`` and ``p1d`` (predicts from the image)
 
 
-def observe(scene: Scene, distribution_model, observation_width: int = 160) -> Observation:
+def observe(scene: Scene, distribution_model, observation_width: int = 160) -> PolicyObservation:
     cam = scene.camera
     coarse = cam.with_resolution(observation_width, max(1, int(round(cam.height * observation_width / cam.width))))
     depth, labels = SceneRaycaster(scene).render(coarse)
@@ -51,7 +51,7 @@ def observe(scene: Scene, distribution_model, observation_width: int = 160) -> O
     known = tuple(o for i, o in enumerate(scene.objects) if i in seen)
     p1d = distribution_model.distribution(scene.with_objects(scene.objects))
     template = dataclasses.replace(scene, objects=known, target=None)
-    return Observation(depth, labels, known, p1d, template)
+    return PolicyObservation(depth, labels, known, p1d, template)
 
 
 OBSERVATION_MODES = ("privileged", "camera")
@@ -91,7 +91,7 @@ class CameraObserver:
         self.background = background_depth(shelf, self.camera)
         self.steps = 0
 
-    def observe(self, scene: Scene) -> tuple[Observation, dict]:
+    def observe(self, scene: Scene) -> tuple[PolicyObservation, dict]:
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.observation import Observation as Frame
         from slax_drake.perception.observation import occluder_segmentation
@@ -120,7 +120,7 @@ class CameraObserver:
             if len(owners):
                 names[h.object.name] = scene.objects[int(np.bincount(owners).argmax()) - 1].name
         template = dataclasses.replace(scene, objects=belief.known, target=None)
-        return Observation(depth, segments, belief.known, belief.p1d, template, belief), names
+        return PolicyObservation(depth, segments, belief.known, belief.p1d, template, belief), names
 
 
 def on_true_object(action, hypotheses, scene: Scene, true_name: str):
@@ -137,7 +137,7 @@ def on_true_object(action, hypotheses, scene: Scene, true_name: str):
 
 def observation_for(policy, scene: Scene, observer: CameraObserver | None = None):
     """What ``policy`` decides on in the shelf simulator: the true scene for a policy that declares
-    ``needs_true_scene`` (an oracle, always privileged), else the Observation from its own distribution
+    ``needs_true_scene`` (an oracle, always privileged), else the PolicyObservation from its own distribution
     model (privileged: ``observer`` None) or from the camera frame (``observer``'s :meth:`CameraObserver.observe`)."""
     if policy.needs_true_scene:
         return scene
@@ -259,7 +259,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
     """Rolls ``policy`` out on ``scene`` until the target is revealed, H actions are spent or no action is left.
 
     ``policy`` implements :class:`~slax_drake.policies.protocol.Policy`: it decides on :func:`observation_for` the
-    scene (the Observation, or the true scene for an oracle) and its best candidate is executed with its own
+    scene (the PolicyObservation, or the true scene for an oracle) and its best candidate is executed with its own
     action model. ``observer``: the camera mode for a non-oracle policy (its actions name hypotheses, executed on the
     true object each hypothesis is); None: privileged."""
     policy.reset(scene)
@@ -330,5 +330,5 @@ def objects_overlap(scene: Scene, clearance: float = 0.0) -> list[tuple[str, str
     return bad
 
 
-__all__ = ["Observation", "TrialResult", "apply_action", "execute", "objects_overlap", "observation_for",
+__all__ = ["PolicyObservation", "TrialResult", "apply_action", "execute", "objects_overlap", "observation_for",
            "observe", "run_trial"]

@@ -13,7 +13,7 @@ ended ``settle_time`` ago). When it is, the system decides:
    ``occupancy_1d`` (P_t); a hypothetical action's distribution comes from the predicted frame (segments shifted
    in the image) through the same distribution source as P_t;
 3. the policy (any :class:`~slax_drake.policies.protocol.Policy` that reads a
-   :class:`~slax_drake.shelf.simulator.Observation`; the very code the shelf simulator runs) ranks the
+   :class:`~slax_drake.shelf.simulator.PolicyObservation`; the very code the shelf simulator runs) ranks the
    candidates on the hypotheses with ``decide``; the best one is planned against the believed scene
    (:class:`slax_drake.planning.planner.MotionPlanner`); an infeasible motion is logged with its
    reason and handed back with ``policy.exclude`` (the whole group when the tool could not reach the object), and
@@ -43,7 +43,7 @@ from slax_drake.perception.belief import ObservedBelief
 from slax_drake.planning.planner import MotionPlanner
 from slax_drake.shelf.actions import Push
 from slax_drake.shelf.distribution import support
-from slax_drake.shelf.simulator import Observation
+from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
 
@@ -69,8 +69,8 @@ class TrialState:
 
 
 class PlannerSystem(LeafSystem):
-    """See the module docstring. ``policy``: a :class:`~slax_drake.policies.protocol.Policy` reading an
-    Observation, built with its action model; ``template``: the static world the robot knows (shelf and camera;
+    """See the module docstring. ``policy``: a :class:`~slax_drake.policies.protocol.Policy` reading a
+    PolicyObservation, built with its action model; ``template``: the static world the robot knows (shelf and camera;
     its objects and target are ignored); ``source``: the distribution source of the predictions (the one the
     PerceptionSystem computes ``occupancy_1d`` with; :mod:`slax_drake.perception.belief`); ``width``, ``height``:
     the PerceptionSystem's working resolution; ``suction_cost``: psi, the cost of a suction (a push costs 1)."""
@@ -166,7 +166,7 @@ class PlannerSystem(LeafSystem):
         belief = ObservedBelief(frame, self.template.shelf, self.source, background=self._background,
                                 hypotheses=hypotheses, p1d=p1d)
         believed = self.template.with_objects(belief.known)
-        obs = Observation(depth, labels, belief.known, belief.p1d, believed, belief)
+        obs = PolicyObservation(depth, labels, belief.known, belief.p1d, believed, belief)
         entry["hypotheses"] = {o.name: {"shape": o.shape, "size": [round(float(v), 4) for v in o.size],
                                         "x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                         "yaw": round(float(o.yaw), 5)} for o in belief.known}
