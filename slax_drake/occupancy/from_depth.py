@@ -15,8 +15,8 @@ The definitions of :mod:`slax_drake.occupancy.hidden` with the ray caster replac
 - p2d / p1d: as in ``compute_occupancy`` (the eye-facing samples of every hidden placement projected into
   ``camera``, counted per pixel, normalised; p1d = p2d.sum(axis=0)).
 
-For a noise-free depth image of a scene this is ``compute_occupancy`` with every ray replaced by a depth lookup
-at the nearest pixel: they differ at silhouettes, within about a pixel's footprint (tests/test_occupancy_from_depth.py
+For a noise-free depth image of a scene this is ``compute_occupancy`` with every ray replaced by a depth lookup at
+the nearest pixel: they differ at silhouettes, within about a pixel's footprint (tests/occupancy/test_from_depth.py
 and benchmarks/bench_occupancy_from_depth.py measure the agreement).
 
 How it stays fast: every sample point of every placement lies on one 3D lattice (the fine x-y lattice of

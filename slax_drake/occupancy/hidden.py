@@ -1,7 +1,7 @@
 """Ground-truth target occupancy: every hidden, collision-free target placement on a regular grid, and its
 image-space distribution (paper Sec. IV-A, Fig. 3 b-f).
 
-Definitions (the brute-force reference in tests/test_occupancy_reference.py checks these literally):
+Definitions (the brute-force reference in tests/occupancy/test_occupancy.py checks these literally):
 
 - Placements: target centres (x, y) on the lattice ``grid_step * Z^2`` of the shelf frame S (metres), target yaw
   0, resting on the support surface (z = size_z / 2), whose footprint lies inside the bay and clear of every

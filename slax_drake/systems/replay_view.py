@@ -15,7 +15,7 @@ import numpy as np
 # of the shelf's centre), a little to its right and above the top of the bay, where the robot's shoulder is; the
 # point looked at is just above the support surface, a third of the way into the bay. The tool in front of the
 # opening stays in the lower part of the picture and the whole bay above it (checked by a headless-Chromium
-# screenshot, tests/test_trial_view.py).
+# screenshot, tests/systems/test_trial_view.py).
 EYE_BEHIND_FRONT = 0.85  # m in front of the bay's open face (-y)
 EYE_RIGHT = 0.25  # m along +x
 EYE_ABOVE_TOP = 0.25  # m above the bay's top panel

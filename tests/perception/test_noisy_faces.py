@@ -20,7 +20,7 @@ from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.raycast import SceneRaycaster
 from slax_drake.scene.sampling import sample_scene
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 SEEDS = (31, 32, 33, 34, 35, 36, 37, 38)  # range offsets from -5.3 to +4.8 mm
 UNCORRECTED = EstimatorConfig(correct_range_offset=False, face_from_points=False)
 

@@ -12,7 +12,7 @@ from hypothesis import given, settings, strategies as st
 from slax_drake.errors import SceneFileError
 from slax_drake.scene import load_scene, sample_scene, save_scene, scene_to_dict
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ from slax_drake.station.plant import controller_plant
 from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario
 from slax_drake.station.scene_world import shelf_sdf
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 

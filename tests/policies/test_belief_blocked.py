@@ -84,7 +84,7 @@ def test_registry_v4_sets_the_risk_rule_and_the_default_keeps_the_box(paper):
 
 # ---- benchmarks/belief_missed_reveals.py's classification ------------------------------------------------------
 def missed_reveals():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "belief_missed_reveals.py"
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "belief_missed_reveals.py"
     spec = importlib.util.spec_from_file_location("bench_belief_missed_reveals", path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # its dataclass resolves its annotations through sys.modules

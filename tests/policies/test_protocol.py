@@ -75,7 +75,7 @@ def readme_example_policy():
     """The example policy of the README's "Adding a policy" section, executed from the README's text."""
     from pathlib import Path
 
-    text = Path(__file__).resolve().parents[1].joinpath("README.md").read_text()
+    text = Path(__file__).resolve().parents[2].joinpath("README.md").read_text()
     section = text[text.index("### Adding a policy"):]
     code = section[section.index("```python") + len("```python"):section.index("```", section.index("```python") + 3)]
     namespace = {"__name__": "readme_example"}
