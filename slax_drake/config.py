@@ -1,8 +1,8 @@
 """Typed scenario configuration, loaded from ``sim_configs/*.yaml`` with Drake's ``yaml_load_typed``.
 
 All lengths are metres, angles degrees where the key says ``_deg``, otherwise radians.
-The shelf frame S is defined in ../DESIGN.md: origin at the centre of the support surface, x to the right
-as seen from the camera, y into the shelf, z up.
+The shelf frame S: origin at the centre of the support surface, x to the right as seen from the camera, y into
+the shelf, z up.
 """
 
 # No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
@@ -78,7 +78,7 @@ HOUSEHOLD_CYLINDER_MASSES = [[0.5, 0.10, 0.50], [2.0, 0.20, 1.10], [8.0, 0.30, 2
 class PhysicsConfig:
     """The objects' physical properties.
 
-    ``mass_model``: "density" (mass = ``objects.density`` x volume: the earlier runs, reproducible) or "household"
+    ``mass_model``: "density" (mass = ``objects.density`` x volume; the default) or "household"
     (each object's mass drawn log-uniformly, per scene seed, between the lightest and heaviest of its shape's
     volume class in ``box_masses`` / ``cylinder_masses``: [[largest volume (L), lightest (kg), heaviest (kg)],
     ...] in increasing volume; see HOUSEHOLD_BOX_MASSES for the sources). ``object_friction``: the Coulomb

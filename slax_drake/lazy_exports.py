@@ -1,7 +1,7 @@
 """Package re-exports that import their submodule on first use (PEP 562 module ``__getattr__``).
 
 ``from slax_drake.scene import sample_scene`` keeps working, but importing ``slax_drake.scene.commands`` (which
-the command-line parser does for every command) no longer drags in trimesh, torch or Drake through the package's
+the command-line parser does for every command) does not drag in trimesh, torch or Drake through the package's
 ``__init__``: ``slax-drake --help`` answers without them.
 """
 

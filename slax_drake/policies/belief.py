@@ -1,5 +1,5 @@
 """slax-belief (ours): a belief-space beam search over short plans, choosing the plan that reveals the most
-probability mass of the target's placement per unit of expected cost (issue 19 item 5).
+probability mass of the target's placement per unit of expected cost.
 
 With a privileged observation and a known shelf, the only unknown that matters is where the target stands: a
 placement in the hidden region. The belief is the set of lattice placements consistent with every observation of
@@ -38,11 +38,11 @@ suction may place its object in hidden space, where an unseen object may stop it
 as ``hidden_risk`` times the share of hidden placements in its placement box (widened by half the target), and a
 placement that was put back or stopped short marks its box blocked for the rest of the trial.
 
-What the trial has shown (v3; ``slax-belief-v2`` in the registry turns all three off, the behaviour of
-docs/results/slax_belief_v2_*):
+What the trial has shown (``slax-belief-v2`` in the registry turns all three off):
+
 - ``remember_objects``: an object seen earlier and hidden now, that the robot has not moved since, is kept among
   the seen objects where it stood (:meth:`with_remembered`; in the first-order world nothing moves unless the
-  robot moves it). Without it the planner placed objects onto an object that a move had just hidden.
+  robot moves it). Without it the planner would place objects onto an object that a move had just hidden.
 - ``evidence="outcome"``: the outcome of each executed action updates the belief
   (:meth:`condition_on_outcome`). A robot sees, at the next observation, whether the object it moved ended where
   it was commanded to; the policy replays the action with the first-order executor for a target at each
@@ -52,85 +52,52 @@ docs/results/slax_belief_v2_*):
   it: Table I scenes of 8-10 objects hide about two), and those that would have stopped a push earlier impossible.
   The worlds are then drawn from the weighted belief (:meth:`draw`). The policy never reads the target's pose or
   the simulator's notes: only the next observation of the object it moved.
-
 - ``widen_beam``: when no plan of the beam reveals anything within ``max_depth`` actions, the search runs once
-  more with a beam of ``widen_beam`` (``decision_log`` records ``widened``). At 10 objects the narrow beam often
-  found no revealing plan and the policy wandered: a small first move that makes room for a suction (a push of
-  2 cm) ranks low by V and falls out of a beam of 6.
+  more with a beam of ``widen_beam`` (``decision_log`` records ``widened``): a small first move that makes room
+  for a suction (a push of 2 cm) ranks low by V and falls out of a narrow beam.
 
-``stuck_select`` (measured, not the default): the rule when no plan of either search reveals anything. "value"
-(the default) takes the plan of least V; since every action adds to G while the distances rarely fall, that is
-nearly always a single cheap move that changes nothing (at 10 objects, mostly pushes of 1-4 cm, some undoing
-earlier ones, until the horizon: the failures 10_0004, 10_0011, 10_0012 and 10_0020 of
-docs/results/slax_belief_v3_paper25 took 9-19 of their 20 actions so). "progress" takes the plan whose end is
-nearest to revealing, the least V - G (the worlds' distances, lost and failed worlds, the suctions' risk),
-whatever it costs, ties by V; the rest of that plan stays in the next decision's beam; every other decision is
-unchanged. On Table I's 25 scenes per density (paper profile, privileged, ground truth) it reveals the target in
-100 / 92 / 92 / 72 %, 89 %, exactly as "value" does: 9 of the 100 trials act differently, 2 flip each way
-(10_0003 and 10_0004 won, 10_0007 and 10_0018 lost), so the default stays "value"
-(docs/results/slax_belief_stuck_progress_paper25: ``slax-drake benchmark --policies slax-belief --profile paper
---observation privileged --scenes-per-density 25 --workers 1`` at commit a4a5725, where "progress" was the
-registry's; ``benchmarks/belief_variants.py --options '{"stuck_select": "progress"}' --trials 10:0-24`` runs the
-same trials). Two more variants
-of the stalled decisions, measured on the first 10 of those scenes and dropped (commit 36b564c): a push-room term
-in the widened search's ranking (5 of 10 revealed) and refusing a first move back to a pose seen since the belief
-last shrank (6 of 10; "value" 6, "progress" 7).
+``stuck_select``: the rule when no plan of either search reveals anything. "value" (the default) takes the plan of
+least V; since every action adds to G while the distances rarely fall, that is nearly always a single cheap move
+that changes nothing. "progress" takes the plan whose end is nearest to revealing, the least V - G (the worlds'
+distances, lost and failed worlds, the suctions' risk), whatever it costs, ties by V; the rest of that plan stays
+in the next decision's beam; every other decision is unchanged.
 
-``blocked_rule`` (what a failed placement's box refuses; measured, not the default: ``slax-belief-v4`` sets
-"risk"). A placement put back or stopped short marks its placement box blocked (:meth:`note_outcome`); "box" (the
-default) refuses every later placement, of any object, that overlaps such a box, for the rest of the trial. But
-what stopped it stands somewhere along the way in, not necessarily in that box, and only in space the camera has
-not seen. ``benchmarks/belief_missed_reveals.py`` on the 15 Table I failures where Oracle-P+S reveals the target in
-1-3 actions (docs/results/slax_belief_missed_reveals) found the oracle's revealing plan refused by a blocked box
-at 40 of their decisions (7 trials: 06_0089, 08_0035, 08_0087, 10_0041, 10_0076, 10_0085, 10_0097) where slax-belief's
-own rule (R / G) ranks it above the plan it took; 08_0087 lost its best move (R / G 0.23 against 0.05) at its
-second decision and wandered for 14 actions. "hidden": an overlap refuses only where it meets space still hidden
-(a possible target placement's footprint; :meth:`holds_hidden_space`); "risk": nothing is refused, and a placement
-overlapping a blocked region in hidden space fails with ``blocked_risk`` more (:meth:`placement_risk`), so the
-reveals after it count for less. Unlike a refusal, a risk lets a move that reveals much outrank the cheap moves
-left; an identical failed action is still excluded by the corrections. Measured ("risk", ``blocked_risk`` 0.5,
-``slax-belief-v4``; docs/results/slax_belief_missed_reveals): on Table I's first 25 scenes per density 100 / 92 / 92
-/ 80 %, 90 % (default 100 / 92 / 92 / 72 %, 89 %; won 10_0004 and 10_0009, lost 10_0014), and 10 of the default's
-47 failures on the 100 scenes per density revealed (06_0089, 08_0030, 08_0055, 08_0087, 10_0004, 10_0009, 10_0035,
-10_0041, 10_0068, 10_0076): ``python benchmarks/belief_variants.py --policy slax-belief-v4 --trials ... --compare
-results/table1_paper100``. "hidden" alone revealed 1 of 3 of those trials tried (06_0089; not 08_0087, whose
-oracle move meets the blocked box in hidden space, nor 10_0041).
+``blocked_rule`` (what a failed placement's box refuses; ``slax-belief-v4`` sets "risk"). A placement put back or
+stopped short marks its placement box blocked (:meth:`note_outcome`); "box" (the default) refuses every later
+placement, of any object, that overlaps such a box, for the rest of the trial. But what stopped it stands somewhere
+along the way in, not necessarily in that box, and only in space the camera has not seen. "hidden": an overlap
+refuses only where it meets space still hidden (a possible target placement's footprint;
+:meth:`holds_hidden_space`); "risk": nothing is refused, and a placement overlapping a blocked region in hidden
+space fails with ``blocked_risk`` more (:meth:`placement_risk`), so the reveals after it count for less. Unlike a
+refusal, a risk lets a move that reveals much outrank the cheap moves left; an identical failed action is still
+excluded by the corrections.
 
 Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses ``segment_<id>``, never true
-objects). Where camera trials diverged from privileged ones (``benchmarks/camera_divergence.py`` on the 25-per-density
-runs, 8 and 10 objects): 158 of the camera trials' 232 wasted actions (put back, stopped, blocked; 68 %) ran into
-an object the frame showed, reaching beyond its hypothesis (mostly its unseen depth: the observer's hypotheses
-assume the least depth an object can have, 0.06 m), 17 (7 %) into an object seen before and hidden now, 20 (9 %)
-beyond the walls (an object wider than its hypothesis), 7 into objects never seen. Hence the options below, all
-off in the registry's ``slax-belief``; ``slax-belief-camera-depth`` sets all but ``maybe_occupied``. On the first
-10 scenes at 8 and 10 objects that variant revealed 7 and 5 (``slax-belief`` 6 and 4; docs/results/
-slax_belief_camera_first10), but on all 25 scenes per density it reveals 92 / 76 / 68 / 40 %, 69 %, against
-``slax-belief``'s 100 / 88 / 72 / 32 %, 73 % (docs/results/slax_belief_camera_depth25): better at 10 objects,
-worse at 4 and 6 (not analysed; a candidate: the deeper prior fills space where the target stands, and a true
-placement that leaves the belief at the first frame never comes back: at 8 objects it did so in 6 of 25 first
-frames), so it is not the default:
+objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
+object the frame showed, reaching beyond its hypothesis, into an object seen before and hidden now, or beyond the
+walls. The options below address these; all are off in the registry's ``slax-belief``;
+``slax-belief-camera-depth`` sets all but ``maybe_occupied``:
+
 - ``camera_depth`` (m): the hypotheses are estimated again from the frame assuming each at least this deep behind
   its visible surfaces (:meth:`with_camera_hypotheses`; the estimator's ``DepthPrior(rule="fixed")``, shortened at
   the walls and the other hypotheses); the actions are checked and replayed on them;
 - ``maybe_occupied``: the target's placements are judged against the observer's (shallow) hypotheses, so a
   placement in the part of a hypothesis that only the assumed depth fills stays possible, at this weight
-  (:meth:`placements`); with ``camera_depth`` alone such placements are excluded, the true one among them in 6 of
-  25 first frames at 8 objects (on the first 10 scenes at 8 and 10 objects, 0.5 did worse than none: 6 and 4
-  successes against 7 and 5);
+  (:meth:`placements`); with ``camera_depth`` alone such placements are excluded;
 - ``camera_memory``: :meth:`with_remembered` in camera mode, a hypothesis matched across frames by where it
   stands (segment ids are not kept by a real segmentation), remembered as ``remembered_<name>``, an obstacle the
   policy takes no action on (:meth:`remembered_in_frame`);
 - ``camera_outcome_tolerance`` (m): the outcome evidence and the placement check compare estimated poses, within
   this tolerance rather than the 3 mm (5 mm) that exact poses allow.
-The privileged path does not read any of them.
+
+The privileged path does not read any of them. The measurements behind each option's default are in the
+research note docs/research/slax_belief.md.
 
 The first action of the chosen plan is taken; the next decision searches again on the new observation, the rest
 of the last plan kept in the beam at every depth (so it is kept unless a better one is found). Deterministic: no
 random number is drawn but from the seeded generator, and ties keep enumeration order. ``seconds`` caps a
 decision's CPU time (checked per expanded node: the search stops and takes the best plan so far; ``decision_log``
-records ``capped``); the default, 30 s, bound in none of the README's runs (the longest decision took 6 s of wall
-time for v2, 19 s for v3's 25 scenes per density on the loaded shared machine), so those results do not depend on
-the machine.
+records ``capped``); a result that no decision's cap bound does not depend on the machine.
 """
 
 from __future__ import annotations

@@ -1,9 +1,8 @@
-"""slax-hindsight (ours): hindsight optimisation over sampled target placements with a one-move lookahead
-(issue 19 item 5).
+"""slax-hindsight (ours): hindsight optimisation over sampled target placements with a one-move lookahead.
 
-The oracles reach 98-100 % with the full state while the distribution policies stay far lower: what they miss is
-the target's position, not mobility. This policy reads only the PolicyObservation (the seen objects; never the
-target) and determinises the unknown, as in hindsight optimisation:
+The oracles, which read the full state, nearly always reveal the target while the distribution policies stay far
+lower: what they miss is the target's position, not mobility. This policy reads only the PolicyObservation (the seen
+objects; never the target) and determinises the unknown, as in hindsight optimisation:
 
 1. Where the target may stand (:func:`possible_placements`): the lattice placements (``grid_step``) of the target
    box clear of the seen objects and wholly hidden at the first observation (the scene generator hides it), seen

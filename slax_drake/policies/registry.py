@@ -51,17 +51,14 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
     "slax-belief": PolicyEntry("slax_drake.policies.belief:BeliefSearch"),
     # camera mode (belief.py's docstring): hypotheses assumed 0.13 m deep, hidden ones remembered, outcome evidence
-    # within 1 cm; the privileged path reads none of these. Measured, not the default: 25 per density, camera,
-    # 69 % against slax-belief's 73 % (docs/results/slax_belief_camera_depth25; first 10 at 8/10 objects:
-    # docs/results/slax_belief_camera_first10)
+    # within 1 cm; the privileged path reads none of these. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-camera-depth": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
                                             {"camera_depth": 0.13, "camera_memory": True,
                                              "camera_outcome_tolerance": 0.01}),
     # a failed placement's box no longer refuses later placements; one overlapping it in hidden space fails with 0.5
-    # more (belief.py's blocked_rule="risk"). Measured, not the default: first 25 per density 90 % (default 89 %),
-    # 10 of the default's 47 failures of 100 per density revealed (docs/results/slax_belief_missed_reveals)
+    # more (belief.py's blocked_rule="risk"). Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry("slax_drake.policies.belief:BeliefSearch", {"blocked_rule": "risk"}),
-    # slax-belief before v3 (remembered objects, actions' outcomes, wider beam): docs/results/slax_belief_v2_*
+    # slax-belief without remembered objects, actions' outcomes and the wider beam (belief.py's docstring)
     "slax-belief-v2": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
                                   {"evidence": "none", "remember_objects": False, "widen_beam": 0}),
 }

@@ -1,5 +1,5 @@
 """What a distribution policy remembers of its own trial: the arrangements it has observed and the action it last
-proposed, so that it can tell an action that failed from one that went as predicted (issue 19 item 3).
+proposed, so that it can tell an action that failed from one that went as predicted.
 
 The paper's DAR and Bluction-DAR (Sec. V-C) keep only the history encoding P'_t. An implementation needs more,
 because the first-order model can be wrong about the true shelf (an unseen object stops a push; a placement is put

@@ -1,4 +1,4 @@
-"""Object masses: from a density (the earlier runs) or drawn from household goods' published masses.
+"""Object masses: from a density (the default) or drawn from household goods' published masses.
 
 A scene's objects weigh ``density x volume`` unless the scenario's ``physics.mass_model`` is "household": then
 :func:`sample_masses` draws each object's mass, log-uniformly between the lightest and the heaviest of its

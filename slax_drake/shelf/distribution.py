@@ -1,11 +1,11 @@
-"""Target occupancy distributions for the policies: one interface for ground truth and (later) the network.
+"""Target occupancy distributions for the policies: one interface for ground truth and the network.
 
 A :class:`DistributionModel` maps what the policy believes the shelf looks like to a 1D distribution P(u)
 over the columns u of a coarse image (paper Sec. V-B: P(x) = sum_y p(x, y)). The belief is a :class:`Scene`
 holding only the objects the policy has seen, moved as hypothetical actions say; for the current state of the
 simulator it is the true scene. ``GroundTruthDistribution`` runs :func:`slax_drake.occupancy.compute_occupancy`
-on it at coarse settings; a learned model (a later issue) renders the same scene's depth image and runs the
-network, behind the same ``distribution(scene)`` call.
+on it at coarse settings; the learned model (:class:`slax_drake.perception.distribution_model.LearnedDistribution`)
+renders the same scene's depth image and runs the network, behind the same ``distribution(scene)`` call.
 
 History encoding and the policies' scores: P'_t = min(P_t, P'_{t-1}); support r = |{u : P'(u) > 0}|;
 entropy of P' normalised to sum 1.

@@ -6,7 +6,7 @@ profile, the check where it is small enough to live here (otherwise the docstrin
 :class:`~slax_drake.shelf.actions.ActionModel` method that applies it), and a docstring that says what it
 refuses, which profile has it and why. A new rule is one class with the ``@register`` decorator.
 
-Profiles (see ../DESIGN.md, "Two profiles of the action model"):
+The two profiles:
 
 - ``paper``: the paper's first-order shelf simulator (FOSS) literally (Sec. III, VI-A): objects move exactly as
   commanded, never topple, one object per action; a push moves its object along x at most until the neighbour,

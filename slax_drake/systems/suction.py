@@ -1,6 +1,8 @@
 """The suction cup of the bluction tool as a force element (a LeafSystem feeding the plant's applied forces).
 
-Model (after the pressure model of Drake issue 13977 and the suction-gripper example of PR 19491):
+Model (after the pressure model discussed in Drake's issue tracker,
+https://github.com/RobotLocomotion/drake/issues/13977, and Drake's suction-gripper example,
+https://github.com/RobotLocomotion/drake/pull/19491):
 
 - A vacuum of ``vacuum_pressure`` (Pa) acts over the cup's area A = pi * cup_radius^2, so a sealed cup pulls
   with at most F_max = vacuum_pressure * A (60 kPa over a 0.03 m cup: 42.4 N).
