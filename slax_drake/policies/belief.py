@@ -241,6 +241,21 @@ class BeliefSearch(Hindsight):
         self._remembered = {}
         self._as_observed, self._maybe = {}, frozenset()
 
+    @property
+    def worlds(self) -> "PackedWorlds | None":
+        """The sampled worlds of the last decision (None before the first one or after the belief was redrawn)."""
+        return self._worlds
+
+    @property
+    def scene_template(self):
+        """The last observation's scene template (shelf and camera, the seen objects; None before a decision)."""
+        return self._template
+
+    def placement_weight(self, key: tuple[int, int]) -> float:
+        """The weight in the belief of the target placement with lattice key ``key`` (1 unless an action's outcome
+        made it likelier; see :meth:`condition_on_outcome`)."""
+        return float(self._weights.get(key, 1.0))
+
     def worlds_for(self, template, placements: np.ndarray, seed: int):
         """(the worlds, (K,) bool: those still consistent with every observation). The worlds drawn at the first
         decision are kept while at least half of ``samples`` of them stay consistent: the consistent ones are a

@@ -102,6 +102,12 @@ class Hindsight(BluctionDAR):
             self._consistent = keys  # the seen objects' estimate moved: start the intersection again
         return np.array(sorted(self._consistent), dtype=float).reshape(-1, 2) * self.grid_step
 
+    @property
+    def consistent_placements(self) -> frozenset:
+        """The lattice keys (i, j) of the target placements still consistent with every observation of the trial
+        (placement centre (i, j) * ``grid_step`` in the shelf frame S, metres); empty before the first decision."""
+        return frozenset(self._consistent or ())
+
     def lattice_keys(self, placements) -> list[tuple[int, int]]:
         """The lattice indices (x / grid_step, y / grid_step, rounded) of (x, y) placements (m), in their order."""
         step = self.grid_step

@@ -91,7 +91,7 @@ def test_midway_rotation_halves_a_turn_and_keeps_an_unturned_segment_exact():
 @pytest.mark.slow
 def test_a_carry_the_arm_cannot_make_straight_is_planned_turned_and_checks():
     """Table I, 10 objects, scene 0: object_9 stands at the front right, straight ahead of the shoulder; its
-    pull-out and translate poses had no IK solution at any carrying depth (benchmarks/diagnose_carry.py)."""
+    pull-out and translate poses had no IK solution at any carrying depth (research/diagnose_carry.py)."""
     from slax_drake.shelf.actions import apply_action
     from table1_suction_plans import assert_motion_checks, plan_table1_suction
 

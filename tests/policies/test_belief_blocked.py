@@ -1,5 +1,5 @@
 """slax-belief's rule for a failed placement's box (belief.py's ``blocked_rule``; ``slax-belief-v4`` sets "risk"),
-and the classification of benchmarks/belief_missed_reveals.py on hand-built decisions."""
+and the classification of research/belief_missed_reveals.py on hand-built decisions."""
 
 import importlib.util
 import sys
@@ -82,10 +82,10 @@ def test_registry_v4_sets_the_risk_rule_and_the_default_keeps_the_box(paper):
         make_policy("slax-belief", paper, horizon=4, policy_options={"blocked_risk": 1.5})
 
 
-# ---- benchmarks/belief_missed_reveals.py's classification ------------------------------------------------------
+# ---- research/belief_missed_reveals.py's classification ------------------------------------------------------
 def missed_reveals():
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "belief_missed_reveals.py"
-    spec = importlib.util.spec_from_file_location("bench_belief_missed_reveals", path)
+    path = Path(__file__).resolve().parents[2] / "research" / "belief_missed_reveals.py"
+    spec = importlib.util.spec_from_file_location("research_belief_missed_reveals", path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # its dataclass resolves its annotations through sys.modules
     spec.loader.exec_module(module)

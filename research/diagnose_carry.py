@@ -15,7 +15,7 @@ it, how many of ``--probe-seeds`` seeded random configurations give an IK soluti
 those are collision-free, and the bodies the colliding ones meet most often. A diagnostic, not a benchmark: the
 variants are not planner settings.
 
-    python benchmarks/diagnose_carry.py --objects 10 --index 0 --object object_9 --dx -0.05
+    python research/diagnose_carry.py --objects 10 --index 0 --object object_9 --dx -0.05
 """
 
 from __future__ import annotations

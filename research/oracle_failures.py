@@ -3,7 +3,7 @@ objects that hide the target (and how much of it each hides alone), and, for eac
 says about pushing it either way in the initial state (the longest push and what stops it, or the rule that
 refuses it); optionally a top-down picture of each scene. Prints Markdown.
 
-    python benchmarks/oracle_failures.py results/table1 [--policy oracle-p] [--densities 8,10]
+    python research/oracle_failures.py results/table1 [--policy oracle-p] [--densities 8,10]
         [--config sim_configs/table1.yaml] [--pictures docs/results/oracle_p_failures] [--variant NAME]
 
 ``--variant``: a folder made by benchmarks/table1_ablation.py under one of its variants (OUT/<variant>): the
@@ -53,7 +53,8 @@ def main():
     args = ap.parse_args()
     scenario = load_scenario(args.config)
     if args.variant:
-        from table1_ablation import VARIANTS, scenario_with  # this folder's script (run as a script: on sys.path)
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # table1_ablation's folder
+        from table1_ablation import VARIANTS, scenario_with
 
         if args.variant not in VARIANTS:
             print(f"error: --variant {args.variant!r} is not a variant of benchmarks/table1_ablation.py (known: "

@@ -1,7 +1,7 @@
 """Where a policy's camera-mode Table I trials diverge from its privileged ones, and what its wasted actions ran
 into. Prints Markdown.
 
-    python benchmarks/camera_divergence.py CAMERA_FOLDER PRIVILEGED_FOLDER [--policy slax-belief]
+    python research/camera_divergence.py CAMERA_FOLDER PRIVILEGED_FOLDER [--policy slax-belief]
         [--densities 8,10] [--config sim_configs/table1.yaml] [--profile paper] [--privileged-policy NAME]
 
 Both folders hold ``trials/<policy>/DD_NNNN.json`` for the same scenes (same protocol seed). Per scene: both

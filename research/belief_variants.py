@@ -5,7 +5,7 @@ policy with the protocol's horizon, privileged observation, ground-truth distrib
 simulator; only the options differ. It is how the variants of issue 19 item 5 were measured one by one without a
 registry row each.
 
-    python benchmarks/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
+    python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
 
 ``--compare``: a `slax-drake benchmark` results folder run with the same protocol seed; each trial also prints

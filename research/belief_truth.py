@@ -6,7 +6,7 @@ decision at which the nearest node left the belief and the first at which every 
 
 A belief that lost the target could never find it; one that kept it and still failed spent its actions badly.
 
-    python benchmarks/belief_truth.py 10:9 6:29 [--profile paper] [--seed 0] [--config sim_configs/table1.yaml]
+    python research/belief_truth.py 10:9 6:29 [--profile paper] [--seed 0] [--config sim_configs/table1.yaml]
         [--quiet]
 """
 
@@ -33,9 +33,9 @@ def truth_rows(policy, truth_xy: np.ndarray, decide):
 
     def wrapped(obs):
         decision = decide(obs)
-        keys = policy._consistent or set()
+        keys = policy.consistent_placements
         near = sum(1 for k in keys if abs(k[0] * step - truth_xy[0]) <= step and abs(k[1] * step - truth_xy[1]) <= step)
-        rows.append((len(keys), node in keys, near, policy._weights.get(node, 1.0),
+        rows.append((len(keys), node in keys, near, policy.placement_weight(node),
                      decision.best.describe() if decision.best is not None else None))
         return decision
 

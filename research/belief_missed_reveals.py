@@ -17,7 +17,7 @@ Each decision gets a cause (:func:`classify`): "truth left the belief", "not a c
 "risk penalty", "oracle found no plan" or "other"; a trial's cause is its first decision's (the oracle's plan
 from the scene as generated), and the counts over all its decisions are printed too. Prints Markdown.
 
-    python benchmarks/belief_missed_reveals.py 6:29 10:9 [--policy slax-belief] [--options JSON] [--profile paper]
+    python research/belief_missed_reveals.py 6:29 10:9 [--policy slax-belief] [--options JSON] [--profile paper]
         [--seed 0] [--oracle-seconds 5] [--decisions N] [--config sim_configs/table1.yaml]
 """
 
@@ -193,7 +193,7 @@ def first_move_status(policy, known, action, cands: list, first: list) -> str:
         from slax_drake.shelf.actions import apply_action
 
         moved = next(o for o in apply_action(known, action) if o.name == action.name)
-        tap_worlds = policy._worlds
+        tap_worlds = policy.worlds
         if tap_worlds is not None and tap_worlds.mask(moved) is None:
             return "pruned: aside (hides no world's target, not the least risky)"
         return "pruned: placements_per_object"
@@ -206,11 +206,11 @@ def belief_share(policy, template, plan: list, known) -> float:
     from slax_drake.shelf.actions import apply_action
     from slax_drake.policies.hindsight import Worlds
 
-    keys = sorted(policy._consistent or ())
+    keys = sorted(policy.consistent_placements)
     if not keys:
         return 0.0
     centers = np.array(keys, dtype=float) * policy.grid_step
-    weights = np.array([policy._weights.get(k, 1.0) for k in keys])
+    weights = np.array([policy.placement_weight(k) for k in keys])
     worlds = Worlds(template, centers, policy.target_size(), policy.threshold)
     shown = np.zeros(len(keys), bool)
     blocked = np.zeros(len(keys), bool)
@@ -249,14 +249,14 @@ def probe_decision(policy, tap: SearchTap, scene, step: int, oracle, remaining: 
     step_size = policy.grid_step
     truth = np.asarray(scene.target.X_ST[:2, 3], dtype=float)
     node_key = (int(round(truth[0] / step_size)), int(round(truth[1] / step_size)))
-    keys = policy._consistent or set()
+    keys = policy.consistent_placements
     near = sum(1 for k in keys if abs(k[0] * step_size - truth[0]) <= step_size + 1e-9
                and abs(k[1] * step_size - truth[1]) <= step_size + 1e-9)
     oracle.reset(scene)
     plan = oracle.search(scene, remaining)
     status = oracle.search_log[-1].get("status", "") if oracle.search_log else ""
     p = Probe(step=step, truth_kept=node_key in keys, truth_near=near,
-              truth_weight=float(policy._weights.get(node_key, 1.0)),
+              truth_weight=policy.placement_weight(node_key),
               oracle_plan=[a.describe() for a in plan] if plan else None, oracle_status=str(status),
               first_status="", in_search=False)
     log = policy.decision_log[-1] if policy.decision_log else {}
@@ -283,7 +283,7 @@ def probe_decision(policy, tap: SearchTap, scene, step: int, oracle, remaining: 
     p.oracle_r, p.oracle_g, p.oracle_v = node.revealed, node.g, node.value
     p.oracle_r_norisk = chain(policy, worlds, root, plan, last["remaining"], risk=False).revealed
     p.oracle_risk = policy.placement_risk(known, plan[0])
-    p.belief_share = belief_share(policy, policy._template, plan, known)
+    p.belief_share = belief_share(policy, policy.scene_template, plan, known)
     return p
 
 
