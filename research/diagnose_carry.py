@@ -2,7 +2,7 @@
 
 For the suction candidates of ``--object`` (optionally only those with ``--dx``) that the station's action model
 offers on the initial state of Table I scene ``--index`` at ``--objects`` objects (the protocol's scene seeds, as in
-``bench_reach_rule.py``), prints the planner's verdict as shipped and under two variants that test the usual
+``research/reach_rule.py``), prints the planner's verdict as shipped and under two variants that test the usual
 suspects of a carry failure, each on a fresh planner:
 
 - ``loose-hold``: the IK tolerances while the cup holds the object set to IK's defaults (0.5 mm, 0.01 rad)

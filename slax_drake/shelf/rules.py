@@ -443,4 +443,4 @@ STRICT_RULES = dict(min_hidden_width=0.0, blade_gap=0.065, shaft_lane_check=True
                     hidden_space="overhead", suction_lift="slight", suction_hidden_rule="path", max_suction_mass=2.0,
                     min_seal_radius=0.04)
 """The strictest variant of each rule (the blade turned flat in the gap, 2D shadows, ...), for
-benchmarks/bench_rule_ablation.py."""
+research/rule_ablation.py."""

@@ -14,8 +14,8 @@ removes none); the rejected rate of the baseline model is printed beside. The JS
 (verdict, planning seconds); ``--compare EARLIER.json`` prints the candidates whose verdict changed since that run
 and the planning times of those both runs planned.
 
-    python benchmarks/bench_reach_rule.py --station sim_configs/station_sim_shelf.yaml --scenes 2
-    python benchmarks/bench_reach_rule.py --config sim_configs/table2.yaml \\
+    python research/reach_rule.py --station sim_configs/station_sim_shelf.yaml --scenes 2
+    python research/reach_rule.py --config sim_configs/table2.yaml \\
         --station sim_configs/station_physical_shelf.yaml --densities 8 10 12 --scenes 2
 """
 

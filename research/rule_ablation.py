@@ -6,7 +6,7 @@ strict rule alone and all strict rules together (slax_drake.shelf.rules.STRICT_R
 - the fraction of scenes a single action reveals (the one-step optimum: exact, every candidate is checked
   against the simulator's own visibility test), with pushes only (P) and with suctions too (P+S).
 
-    python benchmarks/bench_rule_ablation.py [--scenes 10] [--densities 4,6,8,10]
+    python research/rule_ablation.py [--scenes 10] [--densities 4,6,8,10]
 """
 
 import argparse

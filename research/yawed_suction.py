@@ -1,7 +1,7 @@
 """Which box-face angles the cup seals and holds in Drake, with the tool turned toward the face (issue 17 item 1)
 and, for comparison, with the tube kept along the shelf's y.
 
-    python benchmarks/bench_yawed_suction.py [--angles 3,7,13,17,23,27,33,37,41,44] [--out results/yaw.json]
+    python research/yawed_suction.py [--angles 3,7,13,17,23,27,33,37,41,44] [--out results/yaw.json]
 
 One box (0.08 x 0.10 x 0.12 m, 0.38 kg at 400 kg/m^3) alone on the sim shelf, turned by each angle, at two spots
 (front left turned +angle, front right turned -angle). For each, the action model (``station`` profile with the

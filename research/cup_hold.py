@@ -1,6 +1,6 @@
 """The cup's holding limit confirmed in Drake (issue 17 item 2): which held moments the sealed cup carries.
 
-    python benchmarks/bench_cup_hold.py [--masses 0.2,0.3,0.35,0.4,0.45,0.5,0.6,0.7,0.8]
+    python research/cup_hold.py [--masses 0.2,0.3,0.35,0.4,0.45,0.5,0.6,0.7,0.8]
 
 The cup's model (slax_drake.station.scenario.SuctionParameters): 60 kPa on a 15 mm-radius cup pulls
 F = 42.4 N; acting at the rim it resists F x r = 0.64 N m before the lip peels; the station plans with at most

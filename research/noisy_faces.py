@@ -2,7 +2,7 @@
 on rendered Table I frames with and without the L515 noise model. No physics: a cheap look at why suctions on a
 noisy frame do not seal.
 
-    python benchmarks/bench_noisy_faces.py [--scenes-per-density 10] [--seed 0] [--densities 4,6,8,10]
+    python research/noisy_faces.py [--scenes-per-density 10] [--seed 0] [--densities 4,6,8,10]
         [--no-offset-correction] [--no-face-correction]
 
 Per scene (Table I's scenes, ``sim_configs/table1.yaml``, the physics benchmark's seeds): the scene is ray-cast at

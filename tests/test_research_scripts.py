@@ -1,0 +1,36 @@
+"""Bad arguments of the research scripts: one line on stderr and exit code 2, before any long run."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+RESEARCH = Path(__file__).resolve().parents[1] / "research"
+
+
+def script(name):
+    """The module of ``research/<name>.py`` (the scripts are not a package)."""
+    spec = importlib.util.spec_from_file_location(f"research_script_{name}", RESEARCH / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("content", [None, "not json", '{"n": 1}', '{"candidates": [{"n": 6}]}'])
+def test_reach_rule_refuses_an_unreadable_compare_file_before_planning(tmp_path, capsys, content):
+    earlier = tmp_path / "earlier.json"
+    if content is not None:
+        earlier.write_text(content)
+    assert script("reach_rule").main(["--compare", str(earlier), "--densities", "6", "--scenes", "1"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""  # refused before the first scene is planned
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: --compare ")
+
+
+@pytest.mark.parametrize("densities", ["4,x", "", "0,4"])
+def test_noisy_faces_refuses_bad_densities(capsys, densities):
+    with pytest.raises(SystemExit) as exit_info:
+        script("noisy_faces").main(["--densities", densities])
+    assert exit_info.value.code == 2
+    assert "--densities: takes comma-separated whole numbers" in capsys.readouterr().err
