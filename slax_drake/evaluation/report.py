@@ -202,10 +202,15 @@ def _protocol(folder: ResultFolder) -> tuple:
     return (meta.get("seed"), meta.get("scenes_per_density"), folder.profile, meta.get("perception") or "ground-truth")
 
 
+def _policy_record(folder: ResultFolder, policy: str) -> dict | None:
+    """The policy's class and options as the folder's settings record them (None: not recorded)."""
+    return (folder.settings.get("policies") or {}).get(policy)
+
+
 def observation_mode_rows(folders: list[ResultFolder]) -> list[tuple[ResultFolder, ResultFolder, str]]:
     """(privileged folder, camera folder, policy) for every non-oracle policy of every camera folder, paired with
-    a privileged folder of the same protocol that holds the policy: one with the camera folder's very policy set
-    if given (its counterpart run), else the first given."""
+    a privileged folder of the same protocol that holds the policy with the same recorded class and options: one
+    with the camera folder's very policy set if given (its counterpart run), else the first given."""
     table1 = [f for f in folders if f.kind == "table1"]
     privileged = [f for f in table1 if (f.meta.get("observation") or "privileged") == "privileged"]
     rows, seen = [], set()
@@ -215,7 +220,8 @@ def observation_mode_rows(folders: list[ResultFolder]) -> list[tuple[ResultFolde
                 continue
             # The privileged run of the same policy set (the camera run's counterpart) first, then the first
             # privileged folder given that holds the policy.
-            candidates = [f for f in privileged if _protocol(f) == _protocol(cam) and policy in f.summary["policies"]]
+            candidates = [f for f in privileged if _protocol(f) == _protocol(cam) and policy in f.summary["policies"]
+                          and _policy_record(f, policy) in (None, _policy_record(cam, policy))]
             candidates.sort(key=lambda f: set(f.summary["policies"]) != set(cam.summary["policies"]))
             match = candidates[0] if candidates else None
             if match is not None:
@@ -246,8 +252,8 @@ def observation_modes_section(folders: list[ResultFolder]) -> str:
         for priv, cam, p in group:
             cells = []
             for k in KEYS:
-                a = priv.summary["policies"][p][k]["success_rate"]
-                b = cam.summary["policies"][p][k]["success_rate"]
+                a = (priv.summary["policies"][p].get(k) or {}).get("success_rate")
+                b = (cam.summary["policies"][p].get(k) or {}).get("success_rate")
                 cells.append("-" if a is None or b is None else f"{100 * a:.0f} / {100 * b:.0f} ({100 * (b - a):+.0f})")
             t = [f.summary["policies"][p]["all"].get("mean_decision_seconds") for f in (priv, cam)]
             times = " / ".join("-" if s is None else f"{s:.3f}" for s in t)
@@ -333,7 +339,7 @@ def headline_table(folder: ResultFolder) -> str:
     for p in _policy_order(table["policies"]):
         cells = []
         for i, key in enumerate(KEYS):
-            rate = table["policies"][p][key]["success_rate"]
+            rate = (table["policies"][p].get(key) or {}).get("success_rate")
             paper = f" ({PAPER_TABLE1[p][i]})" if p in PAPER_TABLE1 else ""
             cells.append(("-" if rate is None else f"{100 * rate:.0f}") + paper)
         lines.append(f"| {_display(p)} | " + " | ".join(cells) + " |")
