@@ -22,6 +22,7 @@ COMMAND_MODULES = (
     "slax_drake.systems.commands",
     "slax_drake.evaluation.commands",
     "slax_drake.evaluation.trial_commands",
+    "slax_drake.evaluation.report_commands",
     "slax_drake.hardware.commands",
 )
 

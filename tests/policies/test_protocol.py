@@ -72,19 +72,18 @@ def test_history_is_read_only_and_follows_the_observations(sim_scenario, scene):
 
 
 def readme_example_policy():
-    """The example policy of the README's "Adding a policy" section, executed from the README's text."""
+    """The example policy of the docs' "Add a policy" page, executed from the page's text."""
     from pathlib import Path
 
-    text = Path(__file__).resolve().parents[2].joinpath("README.md").read_text()
-    section = text[text.index("### Adding a policy"):]
+    section = Path(__file__).resolve().parents[2].joinpath("docs", "how-to", "add-a-policy.md").read_text()
     code = section[section.index("```python") + len("```python"):section.index("```", section.index("```python") + 3)]
     namespace = {"__name__": "readme_example"}
-    exec(compile(code, "README.md", "exec"), namespace)
+    exec(compile(code, "docs/how-to/add-a-policy.md", "exec"), namespace)
     return namespace["PushFirst"]
 
 
 def test_a_new_policy_is_one_class_and_one_table_line(sim_scenario, scene, monkeypatch):
-    """The README's example policy, registered by one table row, runs in the shelf simulator like any other."""
+    """The docs' example policy, registered by one table row, runs in the shelf simulator like any other."""
     import sys
     import types
 

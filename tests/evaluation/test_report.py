@@ -1,0 +1,74 @@
+"""slax-drake report: the results pages and the README's headline table, generated from committed result folders."""
+
+from pathlib import Path
+
+import pytest
+
+from slax_drake.cli import main
+from slax_drake.evaluation.report import README_BEGIN, README_END, load_folder, observation_mode_rows
+
+RESULTS = Path(__file__).resolve().parents[2] / "docs" / "results"
+
+
+def test_report_writes_every_page_from_the_folders_it_is_given(tmp_path, capsys):
+    folders = [str(RESULTS / n) for n in ("table1_privileged", "table1_camera", "table2_physics")]
+    assert main(["report", *folders, "--docs", str(tmp_path / "docs")]) == 0
+    pages = tmp_path / "docs" / "results"
+    assert sorted(p.name for p in pages.iterdir()) == [
+        "index.md", "observation-modes.md", "physics-benchmark.md", "table-i.md", "table-ii.md"]
+    modes = (pages / "observation-modes.md").read_text()
+    # Bluction-DAR, 100 scenes per density: 46.0 % privileged, 36.25 % camera.
+    assert "| bluction-dar | ground-truth | 78 / 67 (-11) | 58 / 42 (-16) | 29 / 24 (-5) | 19 / 12 (-7) | 46 / 36 (-10) |" in modes
+    table2 = (pages / "table-ii.md").read_text()
+    assert "| 8 | der-3 | 0/3 | 1/3 | 1/3 | 0/3 |" in table2
+    assert "| all | bluction-dar | 9/9 | 1/9 | 0/9 | 1/9 |" in table2
+    table1 = (pages / "table-i.md").read_text()
+    assert "--profile paper --observation camera" in table1  # the command each table was made with
+    # Every page names the command that regenerates it, folders included.
+    for page in pages.iterdir():
+        assert f"slax-drake report {' '.join(folders)} --docs {tmp_path / 'docs'}" in page.read_text()
+    assert capsys.readouterr().out.count("wrote ") == 5
+
+
+def test_a_camera_run_pairs_with_the_privileged_run_of_its_own_policy_set():
+    folders = [load_folder(RESULTS / n) for n in ("table1_paper", "table1_privileged", "table1_camera",
+                                                   "belief100_camera")]
+    pairs = {policy: (priv.path.name, cam.path.name) for priv, cam, policy in observation_mode_rows(folders)}
+    assert pairs == {"bluction-dar": ("table1_privileged", "table1_camera"),
+                     "dar": ("table1_privileged", "table1_camera"),
+                     "der-3": ("table1_privileged", "table1_camera"),
+                     "slax-belief": ("table1_paper", "belief100_camera")}
+
+
+def test_report_replaces_only_the_readme_headline(tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# title\n\nbefore\n{README_BEGIN}\nold table\n{README_END}\nafter\n")
+    assert main(["report", str(RESULTS / "table1_paper"), "--readme", str(readme)]) == 0
+    text = readme.read_text()
+    assert text.startswith("# title\n\nbefore\n") and text.endswith(f"{README_END}\nafter\n")
+    assert "old table" not in text
+    assert "| Oracle-P+S | 100 (100) | 100 (100) | 98 (100) | 92 (100) | 98 (100) |" in text
+    assert "profile `paper`, privileged observation, ground-truth distributions, 100 scenes per density" in text
+    assert f"slax-drake report {RESULTS / 'table1_paper'} --readme {readme}" in text
+
+
+@pytest.mark.parametrize("setup, message", [
+    ("empty", "holds neither table1.json nor physics.json"),
+    ("no-markers", "has no <!-- results:begin --> ... <!-- results:end --> section"),
+    ("bad-json", "not a JSON file"),
+])
+def test_report_refuses_bad_input_in_one_line_before_writing(tmp_path, capsys, setup, message):
+    folder = tmp_path / "run"
+    folder.mkdir()
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{README_BEGIN}\n{README_END}\n" if setup != "no-markers" else "no markers\n")
+    args = [str(folder)]
+    if setup == "no-markers":
+        args = [str(RESULTS / "table1_paper")]
+    if setup == "bad-json":
+        (folder / "table1.json").write_text("{not json")
+    code = main(["report", *args, "--docs", str(tmp_path / "docs"), "--readme", str(readme)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "docs").exists()
