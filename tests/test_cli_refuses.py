@@ -1,0 +1,37 @@
+"""Bad input the command line refuses with one line on stderr and exit code 2, before doing any work."""
+
+from __future__ import annotations
+
+import pytest
+
+from slax_drake.cli import main
+
+
+@pytest.fixture(scope="module")
+def scene_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("scene") / "scene.json"
+    assert main(["scene", "--objects", "3", "--seed", "1", "--out", str(path)]) == 0
+    return path
+
+
+def _one_error_line(capsys, command: str) -> str:
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert err[0].startswith(f"slax-drake {command}: error:")
+    return err[0]
+
+
+@pytest.mark.parametrize("option, value", [("--grid-step", "10"), ("--surface-spacing", "5.0"),
+                                           ("--grid-step", "0.031")])
+def test_occupancy_refuses_a_step_coarser_than_half_the_target(scene_file, tmp_path, capsys, option, value):
+    out = tmp_path / "occ.npz"
+    assert main(["occupancy", str(scene_file), option, value, "--out", str(out)]) == 2
+    line = _one_error_line(capsys, "occupancy")
+    assert option in line and "0.03" in line
+    assert not out.exists()
+
+
+def test_occupancy_accepts_a_coarse_but_meaningful_grid(scene_file, tmp_path, capsys):
+    out = tmp_path / "occ.npz"
+    assert main(["occupancy", str(scene_file), "--grid-step", "0.03", "--out", str(out)]) == 0
+    assert out.exists()
