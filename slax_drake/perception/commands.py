@@ -25,10 +25,10 @@ def register(subparsers) -> None:
     p.add_argument("--device", default="auto", choices=["auto", "cpu", "cuda"], help="default: auto")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the split, initialisation and shuffles (default: 0)")
     p.add_argument("--batch-size", type=int, default=16, help="default: 16")
-    p.add_argument("--lr", type=float, default=3e-3, help="peak learning rate of the one-cycle schedule (default: 3e-3)")
+    p.add_argument("--lr", type=arguments.positive_float, default=3e-3, help="peak learning rate of the one-cycle schedule (default: 3e-3)")
     p.add_argument("--channels", type=int, default=16, help="channels of the first U-Net level (default: 16)")
     p.add_argument("--levels", type=int, default=4, help="U-Net levels; image sides must divide by 2^levels (default: 4)")
-    p.add_argument("--val-fraction", type=float, default=0.1, help="validation share of the samples (default: 0.1)")
+    p.add_argument("--val-fraction", type=arguments.positive_float, default=0.1, help="validation share of the samples (default: 0.1)")
     p.add_argument("--limit", type=int, help="use only the first N samples of the dataset")
     p.add_argument("--threads", type=int, help="torch CPU threads (default: torch's choice)")
     p.add_argument("--resume", action="store_true", help="continue from --out/checkpoint.pt (same options and data)")
@@ -57,7 +57,7 @@ def register(subparsers) -> None:
 def _positive(value, name: str) -> None:
     from slax_drake.errors import UserError
 
-    if value is not None and value <= 0:
+    if value is not None and not value > 0:
         raise UserError(f"{name} must be positive, got {value}")
 
 
