@@ -35,3 +35,21 @@ def test_occupancy_accepts_a_coarse_but_meaningful_grid(scene_file, tmp_path, ca
     out = tmp_path / "occ.npz"
     assert main(["occupancy", str(scene_file), "--grid-step", "0.03", "--out", str(out)]) == 0
     assert out.exists()
+
+
+@pytest.mark.parametrize("where", ["object", "target", "top"])
+def test_a_scene_file_with_an_unknown_key_is_refused(scene_file, tmp_path, capsys, where):
+    import json
+
+    data = json.loads(scene_file.read_text())
+    if where == "object":
+        data["objects"][0]["mas"] = 2.0  # a misspelt mass
+    elif where == "target":
+        data["target"]["colour"] = "red"
+    else:
+        data["objekts"] = []
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(data))
+    assert main(["occupancy", str(bad), "--out", str(tmp_path / "occ.npz")]) == 2
+    line = _one_error_line(capsys, "occupancy")
+    assert {"object": "objects[0].mas", "target": "target.colour", "top": "objekts"}[where] in line
