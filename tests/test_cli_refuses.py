@@ -53,3 +53,19 @@ def test_a_scene_file_with_an_unknown_key_is_refused(scene_file, tmp_path, capsy
     assert main(["occupancy", str(bad), "--out", str(tmp_path / "occ.npz")]) == 2
     line = _one_error_line(capsys, "occupancy")
     assert {"object": "objects[0].mas", "target": "target.colour", "top": "objekts"}[where] in line
+
+
+@pytest.mark.parametrize("action", ["push:object_0:nan", "push:object_0:inf", "suction:object_0:0.1:nan"])
+def test_check_action_refuses_a_distance_that_is_not_a_finite_number(scene_file, capsys, action):
+    assert main(["check-action", "--scene", str(scene_file), "--action", action]) == 2
+    assert "finite" in _one_error_line(capsys, "check-action")
+
+
+def test_diagram_refuses_a_negative_depth_before_making_the_folder(tmp_path, capsys):
+    out = tmp_path / "diagrams"
+    with pytest.raises(SystemExit) as exit_:
+        main(["diagram", "--depth", "-1", "--out", str(out)])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--depth" in err[0]
+    assert not out.exists()

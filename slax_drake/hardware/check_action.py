@@ -18,6 +18,7 @@ admits in that direction.
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 from slax_drake.errors import ActionSpecError
@@ -54,11 +55,17 @@ def parse_action(text: str) -> tuple:
     parts = text.split(":")
     try:
         if parts[0] == "push" and len(parts) == 3 and parts[1]:
-            return "push", parts[1], float(parts[2])
-        if parts[0] == "suction" and len(parts) == 4 and parts[1]:
-            return "suction", parts[1], float(parts[2]), float(parts[3])
+            spec = "push", parts[1], float(parts[2])
+        elif parts[0] == "suction" and len(parts) == 4 and parts[1]:
+            spec = "suction", parts[1], float(parts[2]), float(parts[3])
+        else:
+            spec = None
     except ValueError:
-        pass
+        spec = None
+    if spec is not None:
+        if not all(math.isfinite(v) for v in spec[2:]):
+            raise ActionSpecError(f"--action {text!r}: distances must be finite numbers in metres")
+        return spec
     raise ActionSpecError(f"--action {text!r}: expected push:OBJECT:D or suction:OBJECT:DX:DZ (metres, e.g. "
                           "push:object_2:+0.10)")
 
