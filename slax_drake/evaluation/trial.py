@@ -189,7 +189,10 @@ def executed_trajectory(planner, motions, t_end: float):
 
 def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -> list[Path]:
     """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, step_depth.npz (the depth image
-    of every decision), and the HTML replay."""
+    of every decision), and the HTML replay; returns their paths, trial.json first.
+
+    trial.json is written last, after every file it describes, and an older one in ``out`` is removed first: a
+    write stopped part-way (Ctrl-C, a full disk) leaves no complete-looking record beside missing or stale files."""
     from slax_drake.io import write_bytes_atomic, write_text_atomic
     from slax_drake.scene.io import save_scene
     from slax_drake.systems.step_figure import step_png_of_record
@@ -197,7 +200,7 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "trial.json"]
-    write_text_atomic(out / "trial.json", json.dumps(record.data, indent=1))
+    (out / "trial.json").unlink(missing_ok=True)
     if record.scene is not None:
         save_scene(record.scene, out / "scene.json")
         written.append(out / "scene.json")
@@ -216,4 +219,5 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
         Path(html).parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(Path(html), record.html)
         written.append(Path(html))
+    write_text_atomic(out / "trial.json", json.dumps(record.data, indent=1))
     return written
