@@ -198,7 +198,9 @@ def table(checks: list[ActionCheck]) -> str:
     feasible = sum(c.feasible for c in checks)
     motion = sum(c.stage == "motion" for c in checks)
     model = sum(c.stage == "action model" for c in checks)
-    return "\n".join(lines + [f"{len(checks)} candidates: {feasible} feasible, {motion} without a motion, {model} "
+    from slax_drake.io import plural
+
+    return "\n".join(lines + [f"{plural(len(checks), 'candidate')}: {feasible} feasible, {motion} without a motion, {model} "
                               "refused by the action model"]) + "\n"
 
 

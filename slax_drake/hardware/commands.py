@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 from slax_drake import arguments
+from slax_drake.io import plural
 from slax_drake.hardware.trajectory_file import FORMATS
 
 BYTES_PER_CONFIGURATION = 400  # one interpolated configuration to check: times, positions, index arrays
@@ -132,7 +133,8 @@ def run_export(args: argparse.Namespace) -> int:
         save_scene(scene, args.write_scene)
     points = sum(len(m.times) for m in traj.motions)
     events = sum(len(m.suction_events) for m in traj.motions)
-    print(f"wrote {args.out} ({fmt}): {len(traj.motions)} motions, {points} points, {events} suction events, "
+    print(f"wrote {args.out} ({fmt}): {plural(len(traj.motions), 'motion')}, {plural(points, 'point')}, "
+          f"{plural(events, 'suction event')}, "
           f"{'trial records' if args.rate is None else f'{args.rate:g} Hz'}")
     return 0
 
@@ -218,7 +220,7 @@ def run_replay(args: argparse.Namespace) -> int:
         if args.meshcat:
             print(f"meshcat: {meshcat.web_url()}", flush=True)
     result = replay(traj, station, scene, meshcat=meshcat)
-    print(f"replayed {len(traj.motions)} motions: {result.sim_time:.2f} s simulated in {result.wall_s:.1f} s")
+    print(f"replayed {plural(len(traj.motions), 'motion')}: {result.sim_time:.2f} s simulated in {result.wall_s:.1f} s")
     recorded = traj.metadata.get("final_objects")
     diffs = compare_final_objects(result.final_objects, recorded) if recorded else {}
     for name, p in result.final_objects.items():
@@ -248,7 +250,7 @@ def run_plan_step(args: argparse.Namespace) -> int:
     a = result.action
     params = f"d={a['d']:+.3f} m" if a["type"] == "push" else f"dx={a['dx']:+.3f} m, to y={a['dz']:+.3f} m"
     motion = result.trajectory.motions[0]
-    print(f"{a['type']} {a['object']} ({params}): motion {motion.duration:.2f} s, {len(motion.times)} points, "
+    print(f"{a['type']} {a['object']} ({params}): motion {motion.duration:.2f} s, {plural(len(motion.times), 'point')}, "
           "checked (limits, jerk, continuity, collisions with the believed scene)")
     print(f"perception {t['perception_s']:.3f} s, decision {t['decision_s']:.3f} s, planning and check "
           f"{t['planning_s']:.2f} s; wrote {args.out}")

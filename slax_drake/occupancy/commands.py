@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     from slax_drake.occupancy.hidden import occupancy_memory_bytes
     from slax_drake.resources import check_memory
     from slax_drake.scene import load_scene
-    from slax_drake.io import write_bytes_atomic
+    from slax_drake.io import plural, write_bytes_atomic
 
     scene = load_scene(args.scene)
     if scene.target is None:
@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     np.savez_compressed(buf, hidden_xy=occ.hidden_xy, p2d=occ.p2d, p1d=occ.p1d,
                         target_size=np.array(occ.target_size), grid_step=occ.grid_step)
     write_bytes_atomic(args.out, buf.getvalue())
-    print(f"wrote {args.out}: {occ.num_hidden} hidden placements of the {scene.target.size} m target "
+    print(f"wrote {args.out}: {plural(occ.num_hidden, 'hidden placement')} of the {scene.target.size} m target "
           f"(grid {args.grid_step} m), p2d {occ.p2d.shape}")
     if args.png:
         from slax_drake.occupancy.plot import save_occupancy_png

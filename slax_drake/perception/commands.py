@@ -7,6 +7,8 @@ import argparse
 import json
 import sys
 
+from slax_drake.io import plural
+
 
 def register(subparsers) -> None:
     from slax_drake import arguments
@@ -95,7 +97,7 @@ def run_train(args: argparse.Namespace) -> int:
     _check_training_memory(args)
     data = load_dataset(args.data, limit=args.limit, progress=not args.no_progress)
     w, h = data.resolution
-    print(f"{len(data)} samples at {w}x{h} from {args.data}", flush=True)
+    print(f"{plural(len(data), 'sample')} at {w}x{h} from {args.data}", flush=True)
     options = TrainOptions(
         epochs=args.epochs, batch_size=args.batch_size, learning_rate=args.lr, val_fraction=args.val_fraction,
         seed=args.seed, device=args.device, num_threads=args.threads, base_channels=args.channels, levels=args.levels,
@@ -122,7 +124,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
     model = load_weights(args.model)
     data = load_dataset(args.data, limit=args.limit)
     metrics, predictions = evaluate_model(model, data, num_threads=args.threads)
-    print(f"model {model.path} on {len(data)} samples of {args.data} ({data.resolution[0]}x{data.resolution[1]}):")
+    print(f"model {model.path} on {plural(len(data), 'sample')} of {args.data} ({data.resolution[0]}x{data.resolution[1]}):")
     print(f"  KL divergence 2D        {metrics['kl_2d']:.4f} nats")
     print(f"  KL divergence 1D        {metrics['kl_1d']:.4f} nats")
     print(f"  1D support IoU          {metrics['iou_1d']:.4f}  (threshold {metrics['support_threshold_1d']:g} x uniform)")

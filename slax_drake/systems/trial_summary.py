@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from slax_drake.io import plural
+
 # What the trial's ``result`` means, as a user reads it.
 OUTCOMES = {
     "revealed": "target revealed",
@@ -26,8 +28,7 @@ def outcome_line(data: dict) -> str:
             + f" ({data['visible_fraction'] * 100:.0f}% of it visible at the end)")
 
 
-def _plural(n: int, word: str) -> str:
-    return f"{n} {word}{'' if n == 1 else 's'}"
+_plural = plural
 
 
 def _size(path: Path) -> str:
