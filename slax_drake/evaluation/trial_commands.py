@@ -10,7 +10,7 @@ from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
 
 def register(subparsers) -> None:
     from slax_drake import arguments
-    from slax_drake.policies.registry import add_tool_rule_argument
+    from slax_drake.policies.registry import POLICY_NAMES, add_tool_rule_argument
 
     p = subparsers.add_parser(
         "trial",
@@ -27,8 +27,16 @@ def register(subparsers) -> None:
                    help="the scene INDEX of N objects of the Table I protocol in --config (e.g. --config "
                    "sim_configs/table1.yaml --benchmark-scene 8:1): the scene seed, target size, horizon and station "
                    "that 'slax-drake benchmark' and the physics benchmark use; replaces --objects and --seed")
-    p.add_argument("--policy", default="bluction-dar", help="policy name (default bluction-dar)")
-    p.add_argument("--perception", default="ground-truth", choices=("ground-truth", "learned"))
+    p.add_argument("--policy", default="bluction-dar", metavar="NAME",
+                   help=f"the search policy, one of: {', '.join(POLICY_NAMES)}. The oracles (oracle-p, oracle-p+s) "
+                   "read the true scene and cannot run behind the camera; slax-belief is the project's own "
+                   "(default: bluction-dar)")
+    p.add_argument("--perception", default="ground-truth", choices=("ground-truth", "learned"),
+                   help="how the policy turns its belief of the scene (the objects segmented in the camera frame) "
+                   "into the target's occupancy distribution along the image's x: ground-truth computes every "
+                   "hidden placement of the target behind the believed objects geometrically; learned renders the "
+                   "believed scene's depth image and runs the shipped network (models/perception/unet128) on it "
+                   "(default: ground-truth)")
     p.add_argument("--meshcat", action="store_true", help="serve a live view on localhost and print its URL (it lasts while the command runs)")
     p.add_argument("--html", default=None, help="write a self-contained Meshcat replay (e.g. out/trial.html)")
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
