@@ -40,6 +40,7 @@ class ActionCheck:
     duration_s: float | None = None
     timings: dict = dataclasses.field(default_factory=dict)
     planned: object = None  # the Push or Suction checked (None when the action model knows no such action)
+    object_name: str = ""  # the object of a candidate the action model refuses
 
     def line(self) -> str:
         if self.feasible:
@@ -67,7 +68,7 @@ def parse_action(text: str) -> tuple:
             raise ActionSpecError(f"--action {text!r}: distances must be finite numbers in metres")
         return spec
     raise ActionSpecError(f"--action {text!r}: expected push:OBJECT:D or suction:OBJECT:DX:DZ (metres, e.g. "
-                          "push:object_2:+0.10)")
+                          "push:object_5:-0.10)")
 
 
 @dataclasses.dataclass
@@ -97,7 +98,8 @@ class Checker:
                 raise ActionSpecError("a push needs a non-zero distance D")
             same = [a for a in cands.feasible if isinstance(a, Push) and a.name == name and (a.d > 0) == (d > 0)]
             if not same:
-                why = [r.reason for r in cands.rejected if r.what.startswith(f"push {name} {'+x' if d > 0 else '-x'}")]
+                why = [r.reason for r in cands.rejected if r.action_kind == "push" and r.object_name == name
+                       and r.direction == (1 if d > 0 else -1)]
                 return None, (why[0] if why else f"the action model lists no push of {name} toward "
                               f"{'+' if d > 0 else '-'}x")
             longest = max(abs(a.d) for a in same)
@@ -113,7 +115,7 @@ class Checker:
             return None, (f"no suction of {name} places it at dx = {dx:+.3f}, y = {dz:+.3f} (its {len(mine)} "
                           "placements are on the model's lattice, e.g. " +
                           ", ".join(f"{a.dx:+.3f}:{a.dz:+.3f}" for a in mine[:3]) + ")")
-        why = [r.reason for r in cands.rejected if r.what.startswith(f"suction {name}")]
+        why = [r.reason for r in cands.rejected if r.action_kind == "suction" and r.object_name == name]
         return None, why[0] if why else f"the action model lists no suction of {name}"
 
     def check(self, spec: tuple, text: str, candidates=None) -> ActionCheck:
@@ -177,7 +179,8 @@ def check_all(scene_path: str | Path, station: str | None = None) -> tuple[Check
     checker = make_checker(load_scene(scene_path), station)
     cands = checker.candidates()
     checks = [checker.plan(a) for a in cands.feasible]
-    checks += [ActionCheck(r.what, False, "action model", r.reason) for r in cands.rejected]
+    checks += [ActionCheck(r.spec(), False, "action model", r.reason, object_name=r.object_name)
+               for r in cands.rejected]
     return checker, checks
 
 
@@ -224,7 +227,7 @@ def verdict_png(checker: Checker, checks: list[ActionCheck]) -> bytes:
     shelf = scene.shelf
     fig, ax = plt.subplots(figsize=(7, 7 * shelf.depth / shelf.width + 0.8))
     ax.add_patch(Rectangle((-shelf.width / 2, -shelf.depth / 2), shelf.width, shelf.depth, fill=False, lw=1.5))
-    refused = {c.action.split()[1] for c in checks if c.stage == "action model" and len(c.action.split()) > 1}
+    refused = {c.object_name for c in checks if c.stage == "action model"}
     centres = {}
     for o in scene.objects:
         fp = Footprint.of(o)

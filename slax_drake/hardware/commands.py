@@ -89,7 +89,8 @@ def register(subparsers) -> None:
     what = a.add_mutually_exclusive_group(required=True)
     what.add_argument("--action", default=None,
                       help="push:OBJECT:D (blade push by D m along the shelf's x) or suction:OBJECT:DX:DZ (move by "
-                      "DX along x, place at depth y = DZ), e.g. push:object_2:+0.10")
+                      "DX along x, place at depth y = DZ), e.g. push:object_5:-0.10, feasible on the scene that "
+                      "`slax-drake scene` writes by default")
     what.add_argument("--all", action="store_true", help="every candidate action of the scene")
     a.add_argument("--png", default=None, help="with --all: write the top-down verdict picture here")
     a.add_argument("--json", default=None, help="also write the verdict(s) as JSON here")
@@ -259,19 +260,23 @@ def run_plan_step(args: argparse.Namespace) -> int:
 
 def run_check_action(args: argparse.Namespace) -> int:
     from slax_drake.errors import ActionSpecError
+    from slax_drake.evaluation.trial import drake_info_silenced
     from slax_drake.hardware.check_action import check_action, check_all, table, verdict_png
     from slax_drake.io import write_bytes_atomic, write_text_atomic
 
     if args.png and not args.all:
         raise ActionSpecError("--png applies to --all only")
+    with drake_info_silenced():
+        if args.all:
+            checker, checks = check_all(args.scene, args.station)
+        else:
+            checks = [check_action(args.scene, args.action, args.station)]
     if args.all:
-        checker, checks = check_all(args.scene, args.station)
         print(table(checks), end="")
         if args.png:
             write_bytes_atomic(Path(args.png), verdict_png(checker, checks))
             print(f"wrote {args.png}")
     else:
-        checks = [check_action(args.scene, args.action, args.station)]
         print(checks[0].line())
     if args.json:
         write_text_atomic(Path(args.json), json.dumps([
