@@ -74,3 +74,11 @@ def test_a_collision_names_what_the_robot_meets(default_scene):
     pairs = world.collision_pairs(q)
     assert any(other == "in_the_way" for _, other in pairs), pairs
     assert world.first_collision_on(q, q) == pairs
+
+
+@pytest.mark.slow
+def test_all_candidates_show_a_progress_bar_while_planning(default_scene, capfd):
+    from slax_drake.hardware.check_action import check_all
+
+    check_all(default_scene, progress=True)
+    assert "planning candidates" in capfd.readouterr().err

@@ -171,14 +171,19 @@ def check_action(scene_path: str | Path, action: str, station: str | None = None
     return checker.check(spec, action)
 
 
-def check_all(scene_path: str | Path, station: str | None = None) -> tuple[Checker, list[ActionCheck]]:
+def check_all(scene_path: str | Path, station: str | None = None,
+              progress: bool | None = False) -> tuple[Checker, list[ActionCheck]]:
     """Every candidate action of the scene with its verdict: the action model's feasible candidates planned in
-    its order, then one line per candidate (group) it refuses, with its reason."""
+    its order, then one line per candidate (group) it refuses, with its reason. ``progress``: a progress bar of
+    the candidates planned on stderr (None: when stderr is a terminal)."""
+    from tqdm import tqdm
+
     from slax_drake.scene.io import load_scene
 
     checker = make_checker(load_scene(scene_path), station)
     cands = checker.candidates()
-    checks = [checker.plan(a) for a in cands.feasible]
+    checks = [checker.plan(a) for a in tqdm(cands.feasible, desc="planning candidates", unit="candidate",
+                                            disable=None if progress is None else not progress, leave=False)]
     checks += [ActionCheck(r.spec(), False, "action model", r.reason, object_name=r.object_name)
                for r in cands.rejected]
     return checker, checks

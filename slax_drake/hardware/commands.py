@@ -220,7 +220,7 @@ def run_replay(args: argparse.Namespace) -> int:
         meshcat = Meshcat()
         if args.meshcat:
             print(f"meshcat: {meshcat.web_url()}", flush=True)
-    result = replay(traj, station, scene, meshcat=meshcat)
+    result = replay(traj, station, scene, meshcat=meshcat, progress=None)
     print(f"replayed {plural(len(traj.motions), 'motion')}: {result.sim_time:.2f} s simulated in {result.wall_s:.1f} s")
     recorded = traj.metadata.get("final_objects")
     diffs = compare_final_objects(result.final_objects, recorded) if recorded else {}
@@ -268,7 +268,7 @@ def run_check_action(args: argparse.Namespace) -> int:
         raise ActionSpecError("--png applies to --all only")
     with drake_info_silenced():
         if args.all:
-            checker, checks = check_all(args.scene, args.station)
+            checker, checks = check_all(args.scene, args.station, progress=None)
         else:
             checks = [check_action(args.scene, args.action, args.station)]
     if args.all:
