@@ -65,13 +65,36 @@ def register(subparsers) -> None:
         description="From one camera frame only (no object poses): validate the frame, segment it, estimate the "
         "objects, compute the target distribution, let the policy choose an action, plan, Ruckig-time and check its "
         "joint trajectory, and write it in the export format (check it again with 'slax-drake check-trajectory "
-        "OUT'), with the chosen action and the updated history under metadata.plan_step. An unusable frame is "
-        "refused (exit code 2).")
-    s.add_argument("--scenario", required=True, help="station YAML (e.g. sim_configs/station_sim_shelf.yaml)")
-    s.add_argument("--depth", required=True, help="depth frame: .npy (float metres) or .png (16-bit millimetres)")
-    s.add_argument("--target-mask", required=True, help="target mask: .png or .npy, non-zero where the target is seen")
-    s.add_argument("--joint-state", required=True,
+        "OUT'), with the chosen action and the updated history under metadata.plan_step. When the target already "
+        "counts as revealed (the mask's pixels against those the target's known size covers where the mask is "
+        "seen, at least the scenario's visibility threshold v) it says so and plans nothing. An unusable frame or a "
+        "joint state outside the robot's limits is refused (exit code 2). --from-trial DIR --step N builds the four "
+        "inputs from a simulated trial's decision N as a worked example.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="where each input comes from on a robot:\n"
+        "  --scenario     the station YAML of this robot, shelf and camera (its scene_config holds the camera's\n"
+        "                 intrinsics and its pose relative to the shelf; observation_configuration the arm pose\n"
+        "                 from which the camera sees the shelf that way)\n"
+        "  --depth        one depth image of the tool camera at the observation pose, e.g. the RealSense topic\n"
+        "                 /camera/depth/image_rect_raw (16UC1, millimetres) saved as a 16-bit PNG, or metres as\n"
+        "                 .npy; any resolution with the camera's aspect ratio\n"
+        "  --target-mask  the target's pixels in that depth image, e.g. a colour threshold of the RGB image\n"
+        "                 aligned to depth (/camera/color/image_raw registered to the depth frame), non-zero\n"
+        "                 where the target's colour is seen\n"
+        "  --joint-state  the arm's positions when the frame was taken, from /joint_states (sensor_msgs/\n"
+        "                 JointState: name and position fields), as {\"joint_names\": [...], \"positions\": [...]}\n"
+        "  --history      the previous step's OUT, so that the policy's history carries over between steps")
+    s.add_argument("--scenario", default=None,
+                   help="station YAML (e.g. sim_configs/station_sim_shelf.yaml; with --from-trial: the trial's)")
+    s.add_argument("--depth", default=None, help="depth frame: .npy (float metres) or .png (16-bit millimetres)")
+    s.add_argument("--target-mask", default=None, help="target mask: .png or .npy, non-zero where the target is seen")
+    s.add_argument("--joint-state", default=None,
                    help='joint state JSON: {"joint_names": [...], "positions": [...]} (rad, m for torso and shaft)')
+    s.add_argument("--from-trial", default=None, metavar="DIR",
+                   help="instead of --depth, --target-mask and --joint-state: build them from decision --step of "
+                   "the trial in DIR (written beside OUT in OUT_STEM_inputs/)")
+    s.add_argument("--step", type=arguments.positive_int, default=None,
+                   help="with --from-trial: the decision, 1 to the trial's count (as its 'step N/H' lines count)")
     s.add_argument("--history", default=None, help="the previous step's OUT (carries the policy's history over)")
     s.add_argument("--policy", default="bluction-dar", help="a non-oracle policy name (default bluction-dar)")
     s.add_argument("--out", required=True, help="output step JSON (the export format, ros-json)")
@@ -240,11 +263,43 @@ def run_replay(args: argparse.Namespace) -> int:
 
 
 def run_plan_step(args: argparse.Namespace) -> int:
+    from slax_drake.errors import PlanStepError
     from slax_drake.hardware.plan_step import plan_step_files
 
-    result = plan_step_files(args.scenario, args.depth, args.target_mask, args.joint_state, args.out,
-                             history=args.history, policy=args.policy)
+    frame_inputs = (args.depth, args.target_mask, args.joint_state)
+    scenario = args.scenario
+    if args.from_trial is not None:
+        from slax_drake.hardware.plan_step import inputs_from_trial
+
+        if any(v is not None for v in frame_inputs):
+            raise PlanStepError("--from-trial builds --depth, --target-mask and --joint-state: give one or the other")
+        if args.step is None:
+            raise PlanStepError("--from-trial needs --step N (the trial's decision, from 1)")
+        out = Path(args.out)
+        inputs = inputs_from_trial(args.from_trial, args.step, out.parent / f"{out.stem}_inputs")
+        scenario = scenario or inputs.station
+        frame_inputs = (str(inputs.depth), str(inputs.target_mask), str(inputs.joint_state))
+        print(f"inputs of decision {args.step} (t = {inputs.time_s:.2f} s) of {args.from_trial}: "
+              f"{', '.join(frame_inputs)}; station {scenario}")
+    else:
+        if args.step is not None:
+            raise PlanStepError("--step applies to --from-trial only")
+        missing = [flag for flag, v in zip(("--depth", "--target-mask", "--joint-state"), frame_inputs) if v is None]
+        if args.scenario is None:
+            missing.insert(0, "--scenario")
+        if missing:
+            raise PlanStepError(f"missing {', '.join(missing)} (or give --from-trial DIR --step N)")
+    from slax_drake.evaluation.trial import drake_info_silenced
+
+    with drake_info_silenced():
+        result = plan_step_files(scenario, *frame_inputs, args.out, history=args.history, policy=args.policy)
     t = result.timings
+    vis = result.visibility or {}
+    if vis.get("share") is not None:
+        print(f"target: {vis['seen']} of the {vis['expected']} pixels its size covers are seen ({vis['share']:.0%}; "
+              f"revealed from {vis['threshold']:.0%})")
+    elif vis:
+        print("target: not seen in the frame")
     if result.action is None:
         print(f"no action: {result.reason}; wrote {args.out} (no motion)")
         return 0

@@ -205,6 +205,18 @@ def _check_files_and_limits(scenario: StationScenario, source: str) -> None:
                               f"limits [{lo:g}, {hi:g}] in {robot_file.name}")
 
 
+def joint_position_limits(scenario: StationScenario) -> tuple[dict, dict]:
+    """Lower and upper position limits {joint name: value} (rad; m for the torso) of the planned joints of the
+    robot model the station loads (continuous joints: -inf, inf)."""
+    for directive in scenario.directives:
+        model = directive.add_model
+        if model is not None and model.name == scenario.robot_model:
+            file = _model_file(model.file)
+            if file is not None:
+                return _position_limits(str(file))
+    return {}, {}
+
+
 @functools.lru_cache(maxsize=8)
 def _position_limits(robot_file: str) -> tuple[dict, dict]:
     """Lower and upper position limits (rad or m) of the planned joints of the robot model in ``robot_file``."""
