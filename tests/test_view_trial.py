@@ -81,3 +81,9 @@ def test_a_folder_missing_its_records_is_one_line(trial_folder, capsys, remove):
     assert main(["view-trial", str(trial_folder)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and remove in err[0]
+
+
+def test_replay_given_a_trial_record_points_to_view_trial(trial_folder, capsys):
+    assert main(["replay", str(trial_folder / "trial.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "slax-drake view-trial" in err[0]

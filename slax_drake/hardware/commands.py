@@ -51,7 +51,8 @@ def register(subparsers) -> None:
     r = subparsers.add_parser(
         "replay", help="play an exported trajectory open loop in the Drake station",
         description="Feed the exported motions and suction events to the station (the trial's scene) and report the "
-        "final object poses; compares with the trial's final poses when the file carries them.")
+        "final object poses; compares with the trial's final poses when the file carries them. To watch a trial "
+        "(its trial.json) without simulating it again: slax-drake view-trial.")
     r.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv)")
     r.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export)")
     r.add_argument("--station", default=None, help="station YAML (default: the trial's, or the scene's shelf's)")
@@ -226,12 +227,27 @@ def run_check(args: argparse.Namespace) -> int:
     return 0 if report.ok else 1
 
 
+def _is_trial_record(path: str) -> bool:
+    """Whether ``path`` is a JSON trial record of ``slax-drake trial`` (it holds ``executed_trajectory``)."""
+    if not str(path).endswith(".json"):
+        return False
+    try:
+        doc = json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(doc, dict) and "executed_trajectory" in doc
+
+
 def run_replay(args: argparse.Namespace) -> int:
     from slax_drake.hardware.replay import compare_final_objects, replay
     from slax_drake.errors import TrajectoryFileError
     from slax_drake.hardware.trajectory_file import load_trajectory
     from slax_drake.io import write_text_atomic
 
+    if _is_trial_record(args.trajectory):
+        raise TrajectoryFileError(f"{args.trajectory} is a trial record, not an exported trajectory: "
+                                  f"'slax-drake view-trial {args.trajectory}' draws its replay without simulating, "
+                                  "'slax-drake export' makes the file this command plays")
     traj = load_trajectory(args.trajectory)
     scene, station = _scene_and_station(traj, args.scene, args.station)
     if scene is None:
