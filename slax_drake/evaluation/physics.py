@@ -262,6 +262,10 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
         with tqdm(total=len(jobs), desc="physics trials", unit="scene", disable=not progress) as bar:
             for job, result in run_tasks(_run_scene, jobs, workers=workers, backend=backend, ray_address=ray_address):
                 write_text_atomic(trial_path(out, job[2], job[3], job[4]), json.dumps(result, indent=1, sort_keys=True))
+                drake = result.get("drake", {})
+                bar.set_postfix_str(f"last: {job[2]}, {job[3]} objects #{job[4]}, Drake "
+                                    f"{'revealed' if drake.get('success') else drake.get('result', 'not revealed')}",
+                                    refresh=False)
                 bar.update(1)
     elapsed = time.perf_counter() - start
     trials = load_results(out, policies, densities, scenes_per_density)
