@@ -42,3 +42,10 @@ def test_trial_json_is_written_after_everything_it_describes(tmp_path, monkeypat
     assert json.loads((tmp_path / "trial.json").read_text())["success"] is True
     newest = max(p.stat().st_mtime_ns for p in written)
     assert (tmp_path / "trial.json").stat().st_mtime_ns == newest
+
+
+def test_an_older_trials_object_poses_are_not_left_beside_a_new_record(tmp_path, monkeypatch):
+    monkeypatch.setattr(step_figure, "step_png_of_record", lambda *args: b"png")
+    (tmp_path / "object_poses.npz").write_bytes(b"an earlier trial's")
+    write_trial(_record(), tmp_path)
+    assert not (tmp_path / "object_poses.npz").exists()

@@ -245,6 +245,7 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "trial.json"]
     (out / "trial.json").unlink(missing_ok=True)
+    (out / OBJECT_POSES_FILE).unlink(missing_ok=True)  # an older trial's poses would replay with this one
     if record.scene is not None:
         save_scene(record.scene, out / "scene.json")
         written.append(out / "scene.json")
