@@ -87,3 +87,26 @@ def test_replay_given_a_trial_record_points_to_view_trial(trial_folder, capsys):
     assert main(["replay", str(trial_folder / "trial.json")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "slax-drake view-trial" in err[0]
+
+
+@pytest.mark.slow
+def test_the_replay_of_the_default_trial_ends_with_the_target_in_view(tmp_path):
+    import shutil
+    import subprocess
+
+    import cv2
+
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.skip("Debian's chromium package is not installed (apt-get install chromium)")
+    assert main(["trial", "--quiet", "--out", str(tmp_path / "t")]) == 0
+    assert main(["view-trial", str(tmp_path / "t")]) == 0
+    shot = tmp_path / "shot.png"
+    subprocess.run([browser, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                    "--no-first-run", f"--user-data-dir={tmp_path / 'chromium'}", "--window-size=800,600",
+                    "--virtual-time-budget=60000", f"--screenshot={shot}", (tmp_path / "t" / "trial.html").as_uri()],
+                   check=True, timeout=180, capture_output=True)
+    image = cv2.imread(str(shot))
+    b, g, r = (image[..., i].astype(int) for i in range(3))
+    assert np.count_nonzero((r > 150) & (g < 90) & (b < 90)) > 50  # the revealed target, red
