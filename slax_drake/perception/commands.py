@@ -122,8 +122,9 @@ def run_evaluate(args: argparse.Namespace) -> int:
     _positive(args.limit, "--limit")
     _positive(args.examples, "--examples")
     model = load_weights(args.model)
-    data = load_dataset(args.data, limit=args.limit)
-    metrics, predictions = evaluate_model(model, data, num_threads=args.threads)
+    bars = sys.stderr.isatty()  # progress bars on a terminal only
+    data = load_dataset(args.data, limit=args.limit, progress=bars)
+    metrics, predictions = evaluate_model(model, data, num_threads=args.threads, progress=bars)
     print(f"model {model.path} on {plural(len(data), 'sample')} of {args.data} ({data.resolution[0]}x{data.resolution[1]}):")
     print(f"  KL divergence 2D        {metrics['kl_2d']:.4f} nats")
     print(f"  KL divergence 1D        {metrics['kl_1d']:.4f} nats")
