@@ -5,7 +5,7 @@ a plain module-level function of one picklable argument; :func:`run_tasks` yield
 finish, in completion order, so the caller writes each result as it comes (a stopped run keeps what is done).
 
 - ``backend="local"``: ``workers`` = 1 runs the tasks in this process, one after the other; more starts a pool
-  of ``workers`` spawned processes.
+  of spawned processes, never more than there are tasks (:func:`pool_size`).
 - ``backend="ray"``: one Ray task per job (1 CPU each). Without ``ray_address`` a Ray instance with ``workers``
   CPUs is started on this machine for the run and shut down after it; with ``ray_address`` (e.g.
   ``ray://head:10001`` or ``auto``) the tasks run on that existing cluster, whose nodes need this package
@@ -24,7 +24,8 @@ BACKENDS = ("local", "ray")
 def add_backend_arguments(parser, what: str) -> None:
     """``--workers``, ``--backend`` and ``--ray-address`` of a command that runs ``what`` as tasks."""
     parser.add_argument("--workers", type=int, default=1,
-                        help="parallel local processes, or the CPUs of the Ray instance started here (default: 1)")
+                        help="parallel local processes, or the CPUs of the Ray instance started here; never more "
+                        "than there are tasks (default: 1)")
     parser.add_argument("--backend", choices=BACKENDS, default="local",
                         help=f"run the {what} as local processes or as Ray tasks (extra 'cluster') (default: local)")
     parser.add_argument("--ray-address", default=None, metavar="ADDRESS",
@@ -54,6 +55,7 @@ def run_tasks(task: Callable, jobs: Iterable, workers: int = 1, backend: str = "
     check_backend(backend, workers, ray_address)
     if not jobs:
         return
+    workers = pool_size(workers, len(jobs))
     if backend == "ray":
         yield from _run_ray(task, jobs, workers, ray_address)
     elif workers <= 1:
@@ -64,6 +66,12 @@ def run_tasks(task: Callable, jobs: Iterable, workers: int = 1, backend: str = "
 
         with multiprocessing.get_context("spawn").Pool(workers) as pool:
             yield from pool.imap_unordered(_Tagged(task), jobs, chunksize=1)
+
+
+def pool_size(workers: int, tasks: int) -> int:
+    """The processes (or local Ray CPUs) worth starting for ``tasks`` tasks when ``workers`` were asked for: never
+    more than there are tasks, since an extra one would only idle (and cost its start and memory)."""
+    return max(1, min(int(workers), int(tasks)))
 
 
 class _Tagged:

@@ -89,3 +89,13 @@ def set_default_file_mode(path) -> None:
     umask = os.umask(0)
     os.umask(umask)
     os.chmod(path, 0o666 & ~umask)
+
+
+def plural(n: int, word: str, many: str | None = None) -> str:
+    """``n`` and ``word`` in the number it takes, for output lines: "1 motion", "2 motions", "2 pushes",
+    "0 suction events". ``many``: the plural when it is not ``word`` + "s" or "es" (after s, x, z, ch, sh)."""
+    if n == 1:
+        return f"{n} {word}"
+    if many is None:
+        many = word + ("es" if word.endswith(("s", "x", "z", "ch", "sh")) else "s")
+    return f"{n} {many}"

@@ -49,6 +49,7 @@ def run(args: argparse.Namespace) -> int:
     from slax_drake.dataset.generate import dataset_memory_bytes
     from slax_drake.resources import check_memory
     from slax_drake.errors import DatasetError
+    from slax_drake.io import plural
 
     if args.scenes < 1:
         raise DatasetError(f"--scenes {args.scenes}: must be at least 1")
@@ -65,6 +66,6 @@ def run(args: argparse.Namespace) -> int:
                  f"and --workers {args.workers}", "use a smaller resolution or shard, a coarser grid or fewer workers")
     manifest = generate(spec, args.out, workers=args.workers, backend=args.backend,
                         progress=not args.no_progress)
-    print(f"wrote {args.out}: {manifest['num_scenes']} scenes in {len(manifest['shards'])} shards "
+    print(f"wrote {args.out}: {plural(manifest['num_scenes'], 'scene')} in {plural(len(manifest['shards']), 'shard')} "
           f"({manifest['elapsed_s']:.1f} s this run)")
     return 0

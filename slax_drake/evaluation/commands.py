@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from slax_drake.errors import UserError
+from slax_drake.io import plural
 
 
 def register(subparsers) -> None:
@@ -118,13 +119,13 @@ def run(args: argparse.Namespace) -> int:
                           tool_rules=tool_rules, config=args.config, ray_address=args.ray_address, camera=camera,
                           profile=profile, oracle_seconds=args.oracle_seconds)
     meta = table["meta"]
-    print(f"kept {meta['trials_kept']} trials already in {args.out}, ran {meta['trials_run']}")
+    print(f"kept {plural(meta['trials_kept'], 'trial')} already in {args.out}, ran {meta['trials_run']}")
     for p, per in table["policies"].items():
         e = per["all"]
         rate = "-" if e["success_rate"] is None else f"{100 * e['success_rate']:.0f} %"
         note = "" if p in policies else " (from an earlier run in this folder)"
         searches = f"; oracle searches {e['oracle_status']}" if e.get("oracle_status") else ""
-        print(f"{p:>18}: success {rate} over {e['trials']} trials, median steps {e['median_steps']}{searches}{note}")
+        print(f"{p:>18}: success {rate} over {plural(e['trials'], 'trial')}, median steps {e['median_steps']}{searches}{note}")
     print(f"profile: {profile}" + (f", rule overrides {tool_rules}" if tool_rules else ""))
     print(f"wrote {args.out}/table1.md, table1.json, table1.png")
     return 0
@@ -148,12 +149,12 @@ def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: in
                                     ray_address=args.ray_address, profile=profile,
                                     sensor_noise=args.sensor_noise)
     meta = summary["meta"]
-    print(f"kept {meta['scenes_kept']} scenes already in {args.out}, ran {meta['scenes_run']}")
+    print(f"kept {plural(meta['scenes_kept'], 'scene')} already in {args.out}, ran {meta['scenes_run']}")
     for p, per in summary["policies"].items():
         e = per["all"]
         match = "-" if e["match_rate"] is None else f"{100 * e['match_rate']:.0f} %"
         print(f"{p:>18}: success shelf {100 * e['shelf_success_rate']:.0f} %, Drake "
-              f"{100 * e['drake_success_rate']:.0f} % over {e['trials']} scenes; actions matching prediction "
+              f"{100 * e['drake_success_rate']:.0f} % over {plural(e['trials'], 'scene')}; actions matching prediction "
               f"{match}; toppled {e['toppled']}, dropped {e['dropped']}")
     print(f"wrote {args.out}/physics.md, physics.json, physics.png")
     return 0

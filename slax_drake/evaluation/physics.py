@@ -231,6 +231,13 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     densities = [int(n) for n in (densities or scenario.protocol.densities)]
     if any(n < 1 for n in densities):
         raise PhysicsBenchmarkError(f"--densities must be object counts of at least 1 (got {densities})")
+    from slax_drake.evaluation.table1 import check_protocol_request
+    from slax_drake.errors import BenchmarkError
+
+    try:
+        check_protocol_request(scenario, policies, densities)
+    except BenchmarkError as e:
+        raise PhysicsBenchmarkError(str(e)) from None
     if station is None:
         from slax_drake.station.scenario import station_for
 
@@ -255,6 +262,10 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
         with tqdm(total=len(jobs), desc="physics trials", unit="scene", disable=not progress) as bar:
             for job, result in run_tasks(_run_scene, jobs, workers=workers, backend=backend, ray_address=ray_address):
                 write_text_atomic(trial_path(out, job[2], job[3], job[4]), json.dumps(result, indent=1, sort_keys=True))
+                drake = result.get("drake", {})
+                bar.set_postfix_str(f"last: {job[2]}, {job[3]} objects #{job[4]}, Drake "
+                                    f"{'revealed' if drake.get('success') else drake.get('result', 'not revealed')}",
+                                    refresh=False)
                 bar.update(1)
     elapsed = time.perf_counter() - start
     trials = load_results(out, policies, densities, scenes_per_density)
@@ -282,6 +293,13 @@ def load_results(out: Path, policies, densities, scenes_per_density) -> list[dic
                     _ = (r["shelf"]["success"], r["drake"]["success"], r["drake"]["actions"])
                 except (OSError, json.JSONDecodeError, KeyError, TypeError) as e:
                     raise PhysicsBenchmarkError(f"{path}: unreadable result file ({e}); delete it to rerun that scene")
+                for side in ("shelf", "drake"):
+                    if not isinstance(r[side]["success"], bool):
+                        raise PhysicsBenchmarkError(f"{path}: field '{side}.success' is {r[side]['success']!r}, not "
+                                                    "true or false; delete the file to rerun that scene")
+                if not isinstance(r["drake"]["actions"], list):
+                    raise PhysicsBenchmarkError(f"{path}: field 'drake.actions' is not a list; delete the file to "
+                                                "rerun that scene")
                 results.append(r)
     return results
 

@@ -127,6 +127,7 @@ def run_benchmark(scenario: Scenario, policies, scenes_per_density: int, seed: i
     profile = scenario_profile(scenario, profile)
     tool_rules = without_defaults(dict(tool_rules or {}), profile)
     check_backend(backend, workers, ray_address)
+    check_protocol_request(scenario, policies, densities)
     settings = protocol_settings(scenario, config or "?", seed, perception, tool_rules, policies, camera, profile,
                                  oracle_seconds)
     record_or_refuse(out, settings, has_results=bool(present_policies(out)))
@@ -181,6 +182,44 @@ def table_policies(out: Path, policies) -> list[str]:
     return sorted(names, key=lambda n: (order.get(n, len(order)), n))
 
 
+def check_protocol_request(scenario: Scenario, policies, densities) -> None:
+    """BenchmarkError for a request that cannot be run as asked, before anything is written: a policy or density
+    named twice (each trial would run twice), or a density of more objects than fit in the scenario's bay."""
+    from slax_drake.config import max_placeable_objects
+
+    for what, values in (("--policies", list(policies)), ("--densities", [int(n) for n in densities])):
+        twice = sorted({str(v) for v in values if values.count(v) > 1})
+        if twice:
+            raise BenchmarkError(f"{what} names {', '.join(twice)} more than once")
+    bound = max_placeable_objects(scenario)
+    for n in densities:
+        if not 1 <= scenario.protocol.occluders(n) <= bound:
+            raise BenchmarkError(f"--densities {n}: a scene of {n} objects cannot be drawn in this bay (at least 1 "
+                                 f"and at most {bound} objects of at least {scenario.objects.min_size} m fit on the "
+                                 f"{scenario.shelf.width} x {scenario.shelf.depth} m shelf besides the target)")
+
+
+def check_trial_record(path, record) -> dict:
+    """``record`` (the content of a trial file at ``path``) if its fields have the types the table reads, else a
+    BenchmarkError naming the first one that does not (a file edited or written by something else)."""
+    def fail(field, why):
+        raise BenchmarkError(f"{path}: field '{field}' {why}; delete the file to rerun that trial")
+
+    if not isinstance(record, dict):
+        raise BenchmarkError(f"{path}: not a trial record (a JSON object); delete the file to rerun that trial")
+    for field, kind in (("policy", str), ("success", bool), ("density", int), ("steps", int)):
+        if field not in record:
+            fail(field, "is missing")
+        value = record[field]
+        if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
+            fail(field, f"is {value!r}, not {'true or false' if kind is bool else kind.__name__}")
+    seconds = record.get("decision_seconds")
+    if not (isinstance(seconds, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                              for v in seconds)):
+        fail("decision_seconds", "is not a list of numbers")
+    return record
+
+
 def load_trials(out: Path, policies, densities, scenes_per_density) -> tuple[list[dict], dict]:
     """The trial files of scenes 0 .. scenes_per_density - 1 of every density for ``policies``; and per policy the
     number of those that are not in the folder (a policy that an earlier run ran on fewer scenes)."""
@@ -193,9 +232,10 @@ def load_trials(out: Path, policies, densities, scenes_per_density) -> tuple[lis
                     missing[policy] = missing.get(policy, 0) + 1
                     continue
                 try:
-                    trials.append(json.loads(path.read_text()))
+                    record = json.loads(path.read_text())
                 except (OSError, json.JSONDecodeError) as e:
                     raise BenchmarkError(f"{path}: unreadable trial file ({e}); delete it to rerun that trial")
+                trials.append(check_trial_record(path, record))
     return trials, missing
 
 

@@ -46,11 +46,21 @@ class TrialRecord:
     step_images: list  # (step, depth, labels, history, p1d)
     html: str | None = None
     scene: object = None  # the trial's initial Scene (written as scene.json)
+    # (times (N,) s, poses (N, K, 7): x, y, z m and quaternion w, x, y, z of the K scene objects in S), every
+    # POSE_PERIOD of simulated time, when run_trial was asked to record them (written as object_poses.npz)
+    object_poses: tuple | None = None
 
 
-def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
+OBJECT_POSES_FILE = "object_poses.npz"
+POSE_PERIOD = 0.1  # s of simulated time between recorded object poses
+
+
+def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: bool = False) -> TrialRecord:
     """Runs the trial ``opts`` describes (see the module docstring); ``meshcat``: record it there for the HTML
-    replay."""
+    replay; ``progress``: a stream (e.g. ``sys.stderr``) to write one line per decision to as it happens
+    (:class:`slax_drake.evaluation.trial_progress.DecisionPrinter`); ``record_poses``: keep every object's pose
+    every ``POSE_PERIOD`` s (``TrialRecord.object_poses``), from which ``slax-drake view-trial`` draws the replay
+    later without simulating again. The simulation is the same either way (only where it pauses differs)."""
     from pydrake.systems.analysis import Simulator
 
     from slax_drake.systems.trial import build_trial
@@ -74,10 +84,40 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         meshcat.StartRecording(frames_per_second=30.0)
     max_time = opts.max_sim_time or (40.0 * horizon + 5.0)
     t_wall = time.perf_counter()
+    printer = None
+    if progress is not None:
+        from slax_drake.evaluation.trial_progress import DecisionPrinter
+
+        printer = DecisionPrinter(horizon, progress)
     simulator.Initialize()
     context = simulator.get_mutable_context()
+    pose_times, poses = [], []
+    object_bodies = [plant.get_body(b) for b in bodies]
+    plant_context = plant.GetMyContextFromRoot(context)
+    X_SW = X_WS.inverse()
+
+    def record():
+        pose_times.append(context.get_time())
+        frame = []
+        for body in object_bodies:
+            X = X_SW @ plant.EvalBodyPoseInWorld(plant_context, body)
+            frame.append(np.concatenate([X.translation(), X.rotation().ToQuaternion().wxyz()]))
+        poses.append(frame)
+
+    if record_poses:
+        record()
     while not planner_system.trial_state(context).done and context.get_time() < max_time:
-        simulator.AdvanceTo(context.get_time() + 1.0)
+        t_next = context.get_time() + 1.0
+        if record_poses:
+            t0 = context.get_time()
+            for k in range(1, round(1.0 / POSE_PERIOD)):
+                simulator.AdvanceTo(t0 + k * POSE_PERIOD)
+                record()
+        simulator.AdvanceTo(t_next)
+        if record_poses:
+            record()
+        if printer is not None:
+            printer.update(planner_system.trial_state(context).log, trial.evaluator.snapshots(context))
     state = planner_system.trial_state(context)
     snapshots = trial.evaluator.snapshots(context)
     wall = time.perf_counter() - t_wall
@@ -99,6 +139,9 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
                          "upright": bool(abs(X[2, 2]) > math.cos(math.radians(20.0))),
                          "inside": bool(abs(X[0, 3]) < scene.shelf.width / 2 and abs(X[1, 3]) < scene.shelf.depth / 2
                                         and -0.02 < X[2, 3] < scene.shelf.height)}
+    if printer is not None:
+        printer.update(state.log, snapshots)
+        printer.finish(final)
     log = [_with_ground_truth(entry, snapshots) for entry in state.log]
     actions = []
     for entry in log:
@@ -154,7 +197,8 @@ def run_trial(opts: TrialOptions, meshcat=None) -> TrialRecord:
         "executed_trajectory_note": f"the commanded (planned) joint trajectory, every {opts.stride} ms and at the "
                                     "first commanded sample of each motion",
     }
-    return TrialRecord(data, trial.step_images, html, scene)
+    object_poses = (np.array(pose_times), np.array(poses, dtype=np.float32)) if record_poses else None
+    return TrialRecord(data, trial.step_images, html, scene, object_poses)
 
 
 def _with_ground_truth(entry: dict, snapshots) -> dict:
@@ -189,7 +233,10 @@ def executed_trajectory(planner, motions, t_end: float):
 
 def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -> list[Path]:
     """Writes trial.json, scene.json (the initial scene), step_<k>.png per decision, step_depth.npz (the depth image
-    of every decision), and the HTML replay."""
+    of every decision), and the HTML replay; returns their paths, trial.json first.
+
+    trial.json is written last, after every file it describes, and an older one in ``out`` is removed first: a
+    write stopped part-way (Ctrl-C, a full disk) leaves no complete-looking record beside missing or stale files."""
     from slax_drake.io import write_bytes_atomic, write_text_atomic
     from slax_drake.scene.io import save_scene
     from slax_drake.systems.step_figure import step_png_of_record
@@ -197,7 +244,8 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "trial.json"]
-    write_text_atomic(out / "trial.json", json.dumps(record.data, indent=1))
+    (out / "trial.json").unlink(missing_ok=True)
+    (out / OBJECT_POSES_FILE).unlink(missing_ok=True)  # an older trial's poses would replay with this one
     if record.scene is not None:
         save_scene(record.scene, out / "scene.json")
         written.append(out / "scene.json")
@@ -212,8 +260,15 @@ def write_trial(record: TrialRecord, out: str | Path, html: str | None = None) -
                             depth=np.stack([np.asarray(d, np.float32) for _, d, _, _, _ in record.step_images]))
         write_bytes_atomic(out / "step_depth.npz", buf.getvalue())
         written.append(out / "step_depth.npz")
+    if record.object_poses is not None:
+        times, poses = record.object_poses
+        buf = io.BytesIO()
+        np.savez_compressed(buf, times=times, poses=poses, names=np.array([o.name for o in record.scene.objects]))
+        write_bytes_atomic(out / OBJECT_POSES_FILE, buf.getvalue())
+        written.append(out / OBJECT_POSES_FILE)
     if html and record.html:
         Path(html).parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(Path(html), record.html)
         written.append(Path(html))
+    write_text_atomic(out / "trial.json", json.dumps(record.data, indent=1))
     return written

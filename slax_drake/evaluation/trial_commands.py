@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from slax_drake.errors import TrialError
 from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
@@ -10,6 +11,7 @@ from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
 
 def register(subparsers) -> None:
     from slax_drake import arguments
+    from slax_drake.policies.registry import POLICY_NAMES
     from slax_drake.shelf.tool import add_tool_rule_argument
 
     p = subparsers.add_parser(
@@ -27,8 +29,16 @@ def register(subparsers) -> None:
                    help="the scene INDEX of N objects of the Table I protocol in --config (e.g. --config "
                    "sim_configs/table1.yaml --benchmark-scene 8:1): the scene seed, target size, horizon and station "
                    "that 'slax-drake benchmark' and the physics benchmark use; replaces --objects and --seed")
-    p.add_argument("--policy", default="bluction-dar", help="policy name (default bluction-dar)")
-    p.add_argument("--perception", default="ground-truth", choices=("ground-truth", "learned"))
+    p.add_argument("--policy", default="bluction-dar", metavar="NAME",
+                   help=f"the search policy, one of: {', '.join(POLICY_NAMES)}. The oracles (oracle-p, oracle-p+s) "
+                   "read the true scene and cannot run behind the camera; slax-belief is the project's own "
+                   "(default: bluction-dar)")
+    p.add_argument("--perception", default="ground-truth", choices=("ground-truth", "learned"),
+                   help="how the policy turns its belief of the scene (the objects segmented in the camera frame) "
+                   "into the target's occupancy distribution along the image's x: ground-truth computes every "
+                   "hidden placement of the target behind the believed objects geometrically; learned renders the "
+                   "believed scene's depth image and runs the shipped network (models/perception/unet128) on it "
+                   "(default: ground-truth)")
     p.add_argument("--meshcat", action="store_true", help="serve a live view on localhost and print its URL (it lasts while the command runs)")
     p.add_argument("--html", default=None, help="write a self-contained Meshcat replay (e.g. out/trial.html)")
     p.add_argument("--out", default="out/trial", help="output folder for trial.json and step PNGs")
@@ -42,7 +52,43 @@ def register(subparsers) -> None:
     p.add_argument("--sleep", action="store_true",
                    help="lock resting objects out of the physics step until something comes near (faster; "
                    "see slax_drake/systems/sleep.py)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no line per decision on stderr (by default each decision prints its action, planning time "
+                   "and outcome as it happens)")
     p.set_defaults(func=run)
+    register_view(subparsers)
+
+
+def register_view(subparsers) -> None:
+    v = subparsers.add_parser(
+        "view-trial",
+        help="write the Meshcat HTML replay of a finished trial from its records (no simulation)",
+        description="Draw a finished trial (the folder `slax-drake trial` wrote) as a self-contained Meshcat HTML "
+        "replay without simulating it again: the robot follows the trial's commanded joint trajectory, the objects "
+        "their recorded poses (object_poses.npz, every 0.1 s; older trial folders without it: the poses at each "
+        "decision and at the end).",
+    )
+    v.add_argument("trial", help="trial.json (or the trial's folder)")
+    v.add_argument("--html", default=None, help="HTML file to write (default: trial.html beside trial.json)")
+    v.add_argument("--station", default=None, help="station YAML (default: the one the trial names)")
+    v.set_defaults(func=run_view)
+
+
+def run_view(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from slax_drake.evaluation.trial_replay import trial_replay
+    from slax_drake.io import write_text_atomic
+
+    path = Path(args.trial)
+    folder = path if path.is_dir() else path.parent
+    html = Path(args.html) if args.html else folder / "trial.html"
+    replay = trial_replay(path, station=args.station)
+    html.parent.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(html, replay.html)
+    print(f"wrote {html}: {replay.duration_s:.1f} s of the trial, objects from its {replay.objects_from}; open it "
+          f"in a web browser ({html.resolve().as_uri()})")
+    return 0
 
 
 def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
@@ -88,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
             meshcat = Meshcat()
             if args.meshcat:
                 print(f"meshcat: {meshcat.web_url()} (a live view while this command runs)", flush=True)
-        record = run_trial(opts, meshcat=meshcat)
+        record = run_trial(opts, meshcat=meshcat, progress=None if args.quiet else sys.stderr, record_poses=True)
     written = write_trial(record, args.out, html=args.html)
     print(trial_summary(record.data, written, html=args.html,
                         meshcat_url=meshcat.web_url() if args.meshcat else None))

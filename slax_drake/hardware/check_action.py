@@ -18,6 +18,7 @@ admits in that direction.
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 from slax_drake.errors import ActionSpecError
@@ -39,6 +40,7 @@ class ActionCheck:
     duration_s: float | None = None
     timings: dict = dataclasses.field(default_factory=dict)
     planned: object = None  # the Push or Suction checked (None when the action model knows no such action)
+    object_name: str = ""  # the object of a candidate the action model refuses
 
     def line(self) -> str:
         if self.feasible:
@@ -54,13 +56,19 @@ def parse_action(text: str) -> tuple:
     parts = text.split(":")
     try:
         if parts[0] == "push" and len(parts) == 3 and parts[1]:
-            return "push", parts[1], float(parts[2])
-        if parts[0] == "suction" and len(parts) == 4 and parts[1]:
-            return "suction", parts[1], float(parts[2]), float(parts[3])
+            spec = "push", parts[1], float(parts[2])
+        elif parts[0] == "suction" and len(parts) == 4 and parts[1]:
+            spec = "suction", parts[1], float(parts[2]), float(parts[3])
+        else:
+            spec = None
     except ValueError:
-        pass
+        spec = None
+    if spec is not None:
+        if not all(math.isfinite(v) for v in spec[2:]):
+            raise ActionSpecError(f"--action {text!r}: distances must be finite numbers in metres")
+        return spec
     raise ActionSpecError(f"--action {text!r}: expected push:OBJECT:D or suction:OBJECT:DX:DZ (metres, e.g. "
-                          "push:object_2:+0.10)")
+                          "push:object_5:-0.10)")
 
 
 @dataclasses.dataclass
@@ -90,7 +98,8 @@ class Checker:
                 raise ActionSpecError("a push needs a non-zero distance D")
             same = [a for a in cands.feasible if isinstance(a, Push) and a.name == name and (a.d > 0) == (d > 0)]
             if not same:
-                why = [r.reason for r in cands.rejected if r.what.startswith(f"push {name} {'+x' if d > 0 else '-x'}")]
+                why = [r.reason for r in cands.rejected if r.action_kind == "push" and r.object_name == name
+                       and r.direction == (1 if d > 0 else -1)]
                 return None, (why[0] if why else f"the action model lists no push of {name} toward "
                               f"{'+' if d > 0 else '-'}x")
             longest = max(abs(a.d) for a in same)
@@ -106,7 +115,7 @@ class Checker:
             return None, (f"no suction of {name} places it at dx = {dx:+.3f}, y = {dz:+.3f} (its {len(mine)} "
                           "placements are on the model's lattice, e.g. " +
                           ", ".join(f"{a.dx:+.3f}:{a.dz:+.3f}" for a in mine[:3]) + ")")
-        why = [r.reason for r in cands.rejected if r.what.startswith(f"suction {name}")]
+        why = [r.reason for r in cands.rejected if r.action_kind == "suction" and r.object_name == name]
         return None, why[0] if why else f"the action model lists no suction of {name}"
 
     def check(self, spec: tuple, text: str, candidates=None) -> ActionCheck:
@@ -162,15 +171,21 @@ def check_action(scene_path: str | Path, action: str, station: str | None = None
     return checker.check(spec, action)
 
 
-def check_all(scene_path: str | Path, station: str | None = None) -> tuple[Checker, list[ActionCheck]]:
+def check_all(scene_path: str | Path, station: str | None = None,
+              progress: bool | None = False) -> tuple[Checker, list[ActionCheck]]:
     """Every candidate action of the scene with its verdict: the action model's feasible candidates planned in
-    its order, then one line per candidate (group) it refuses, with its reason."""
+    its order, then one line per candidate (group) it refuses, with its reason. ``progress``: a progress bar of
+    the candidates planned on stderr (None: when stderr is a terminal)."""
+    from tqdm import tqdm
+
     from slax_drake.scene.io import load_scene
 
     checker = make_checker(load_scene(scene_path), station)
     cands = checker.candidates()
-    checks = [checker.plan(a) for a in cands.feasible]
-    checks += [ActionCheck(r.what, False, "action model", r.reason) for r in cands.rejected]
+    checks = [checker.plan(a) for a in tqdm(cands.feasible, desc="planning candidates", unit="candidate",
+                                            disable=None if progress is None else not progress, leave=False)]
+    checks += [ActionCheck(r.spec(), False, "action model", r.reason, object_name=r.object_name)
+               for r in cands.rejected]
     return checker, checks
 
 
@@ -191,7 +206,9 @@ def table(checks: list[ActionCheck]) -> str:
     feasible = sum(c.feasible for c in checks)
     motion = sum(c.stage == "motion" for c in checks)
     model = sum(c.stage == "action model" for c in checks)
-    return "\n".join(lines + [f"{len(checks)} candidates: {feasible} feasible, {motion} without a motion, {model} "
+    from slax_drake.io import plural
+
+    return "\n".join(lines + [f"{plural(len(checks), 'candidate')}: {feasible} feasible, {motion} without a motion, {model} "
                               "refused by the action model"]) + "\n"
 
 
@@ -215,7 +232,7 @@ def verdict_png(checker: Checker, checks: list[ActionCheck]) -> bytes:
     shelf = scene.shelf
     fig, ax = plt.subplots(figsize=(7, 7 * shelf.depth / shelf.width + 0.8))
     ax.add_patch(Rectangle((-shelf.width / 2, -shelf.depth / 2), shelf.width, shelf.depth, fill=False, lw=1.5))
-    refused = {c.action.split()[1] for c in checks if c.stage == "action model" and len(c.action.split()) > 1}
+    refused = {c.object_name for c in checks if c.stage == "action model"}
     centres = {}
     for o in scene.objects:
         fp = Footprint.of(o)

@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 from slax_drake import arguments
+from slax_drake.io import plural
 from slax_drake.hardware.trajectory_file import FORMATS
 
 BYTES_PER_CONFIGURATION = 400  # one interpolated configuration to check: times, positions, index arrays
@@ -50,7 +51,8 @@ def register(subparsers) -> None:
     r = subparsers.add_parser(
         "replay", help="play an exported trajectory open loop in the Drake station",
         description="Feed the exported motions and suction events to the station (the trial's scene) and report the "
-        "final object poses; compares with the trial's final poses when the file carries them.")
+        "final object poses; compares with the trial's final poses when the file carries them. To watch a trial "
+        "(its trial.json) without simulating it again: slax-drake view-trial.")
     r.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv)")
     r.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export)")
     r.add_argument("--station", default=None, help="station YAML (default: the trial's, or the scene's shelf's)")
@@ -64,13 +66,36 @@ def register(subparsers) -> None:
         description="From one camera frame only (no object poses): validate the frame, segment it, estimate the "
         "objects, compute the target distribution, let the policy choose an action, plan, Ruckig-time and check its "
         "joint trajectory, and write it in the export format (check it again with 'slax-drake check-trajectory "
-        "OUT'), with the chosen action and the updated history under metadata.plan_step. An unusable frame is "
-        "refused (exit code 2).")
-    s.add_argument("--scenario", required=True, help="station YAML (e.g. sim_configs/station_sim_shelf.yaml)")
-    s.add_argument("--depth", required=True, help="depth frame: .npy (float metres) or .png (16-bit millimetres)")
-    s.add_argument("--target-mask", required=True, help="target mask: .png or .npy, non-zero where the target is seen")
-    s.add_argument("--joint-state", required=True,
+        "OUT'), with the chosen action and the updated history under metadata.plan_step. When the target already "
+        "counts as revealed (the mask's pixels against those the target's known size covers where the mask is "
+        "seen, at least the scenario's visibility threshold v) it says so and plans nothing. An unusable frame or a "
+        "joint state outside the robot's limits is refused (exit code 2). --from-trial DIR --step N builds the four "
+        "inputs from a simulated trial's decision N as a worked example.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="where each input comes from on a robot:\n"
+        "  --scenario     the station YAML of this robot, shelf and camera (its scene_config holds the camera's\n"
+        "                 intrinsics and its pose relative to the shelf; observation_configuration the arm pose\n"
+        "                 from which the camera sees the shelf that way)\n"
+        "  --depth        one depth image of the tool camera at the observation pose, e.g. the RealSense topic\n"
+        "                 /camera/depth/image_rect_raw (16UC1, millimetres) saved as a 16-bit PNG, or metres as\n"
+        "                 .npy; any resolution with the camera's aspect ratio\n"
+        "  --target-mask  the target's pixels in that depth image, e.g. a colour threshold of the RGB image\n"
+        "                 aligned to depth (/camera/color/image_raw registered to the depth frame), non-zero\n"
+        "                 where the target's colour is seen\n"
+        "  --joint-state  the arm's positions when the frame was taken, from /joint_states (sensor_msgs/\n"
+        "                 JointState: name and position fields), as {\"joint_names\": [...], \"positions\": [...]}\n"
+        "  --history      the previous step's OUT, so that the policy's history carries over between steps")
+    s.add_argument("--scenario", default=None,
+                   help="station YAML (e.g. sim_configs/station_sim_shelf.yaml; with --from-trial: the trial's)")
+    s.add_argument("--depth", default=None, help="depth frame: .npy (float metres) or .png (16-bit millimetres)")
+    s.add_argument("--target-mask", default=None, help="target mask: .png or .npy, non-zero where the target is seen")
+    s.add_argument("--joint-state", default=None,
                    help='joint state JSON: {"joint_names": [...], "positions": [...]} (rad, m for torso and shaft)')
+    s.add_argument("--from-trial", default=None, metavar="DIR",
+                   help="instead of --depth, --target-mask and --joint-state: build them from decision --step of "
+                   "the trial in DIR (written beside OUT in OUT_STEM_inputs/)")
+    s.add_argument("--step", type=arguments.positive_int, default=None,
+                   help="with --from-trial: the decision, 1 to the trial's count (as its 'step N/H' lines count)")
     s.add_argument("--history", default=None, help="the previous step's OUT (carries the policy's history over)")
     s.add_argument("--policy", default="bluction-dar", help="a non-oracle policy name (default bluction-dar)")
     s.add_argument("--out", required=True, help="output step JSON (the export format, ros-json)")
@@ -88,7 +113,8 @@ def register(subparsers) -> None:
     what = a.add_mutually_exclusive_group(required=True)
     what.add_argument("--action", default=None,
                       help="push:OBJECT:D (blade push by D m along the shelf's x) or suction:OBJECT:DX:DZ (move by "
-                      "DX along x, place at depth y = DZ), e.g. push:object_2:+0.10")
+                      "DX along x, place at depth y = DZ), e.g. push:object_5:-0.10, feasible on the scene that "
+                      "`slax-drake scene` writes by default")
     what.add_argument("--all", action="store_true", help="every candidate action of the scene")
     a.add_argument("--png", default=None, help="with --all: write the top-down verdict picture here")
     a.add_argument("--json", default=None, help="also write the verdict(s) as JSON here")
@@ -132,7 +158,8 @@ def run_export(args: argparse.Namespace) -> int:
         save_scene(scene, args.write_scene)
     points = sum(len(m.times) for m in traj.motions)
     events = sum(len(m.suction_events) for m in traj.motions)
-    print(f"wrote {args.out} ({fmt}): {len(traj.motions)} motions, {points} points, {events} suction events, "
+    print(f"wrote {args.out} ({fmt}): {plural(len(traj.motions), 'motion')}, {plural(points, 'point')}, "
+          f"{plural(events, 'suction event')}, "
           f"{'trial records' if args.rate is None else f'{args.rate:g} Hz'}")
     return 0
 
@@ -200,12 +227,27 @@ def run_check(args: argparse.Namespace) -> int:
     return 0 if report.ok else 1
 
 
+def _is_trial_record(path: str) -> bool:
+    """Whether ``path`` is a JSON trial record of ``slax-drake trial`` (it holds ``executed_trajectory``)."""
+    if not str(path).endswith(".json"):
+        return False
+    try:
+        doc = json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(doc, dict) and "executed_trajectory" in doc
+
+
 def run_replay(args: argparse.Namespace) -> int:
     from slax_drake.hardware.replay import compare_final_objects, replay
     from slax_drake.errors import TrajectoryFileError
     from slax_drake.hardware.trajectory_file import load_trajectory
     from slax_drake.io import write_text_atomic
 
+    if _is_trial_record(args.trajectory):
+        raise TrajectoryFileError(f"{args.trajectory} is a trial record, not an exported trajectory: "
+                                  f"'slax-drake view-trial {args.trajectory}' draws its replay without simulating, "
+                                  "'slax-drake export' makes the file this command plays")
     traj = load_trajectory(args.trajectory)
     scene, station = _scene_and_station(traj, args.scene, args.station)
     if scene is None:
@@ -217,8 +259,8 @@ def run_replay(args: argparse.Namespace) -> int:
         meshcat = Meshcat()
         if args.meshcat:
             print(f"meshcat: {meshcat.web_url()}", flush=True)
-    result = replay(traj, station, scene, meshcat=meshcat)
-    print(f"replayed {len(traj.motions)} motions: {result.sim_time:.2f} s simulated in {result.wall_s:.1f} s")
+    result = replay(traj, station, scene, meshcat=meshcat, progress=None)
+    print(f"replayed {plural(len(traj.motions), 'motion')}: {result.sim_time:.2f} s simulated in {result.wall_s:.1f} s")
     recorded = traj.metadata.get("final_objects")
     diffs = compare_final_objects(result.final_objects, recorded) if recorded else {}
     for name, p in result.final_objects.items():
@@ -237,18 +279,50 @@ def run_replay(args: argparse.Namespace) -> int:
 
 
 def run_plan_step(args: argparse.Namespace) -> int:
+    from slax_drake.errors import PlanStepError
     from slax_drake.hardware.plan_step import plan_step_files
 
-    result = plan_step_files(args.scenario, args.depth, args.target_mask, args.joint_state, args.out,
-                             history=args.history, policy=args.policy)
+    frame_inputs = (args.depth, args.target_mask, args.joint_state)
+    scenario = args.scenario
+    if args.from_trial is not None:
+        from slax_drake.hardware.plan_step import inputs_from_trial
+
+        if any(v is not None for v in frame_inputs):
+            raise PlanStepError("--from-trial builds --depth, --target-mask and --joint-state: give one or the other")
+        if args.step is None:
+            raise PlanStepError("--from-trial needs --step N (the trial's decision, from 1)")
+        out = Path(args.out)
+        inputs = inputs_from_trial(args.from_trial, args.step, out.parent / f"{out.stem}_inputs")
+        scenario = scenario or inputs.station
+        frame_inputs = (str(inputs.depth), str(inputs.target_mask), str(inputs.joint_state))
+        print(f"inputs of decision {args.step} (t = {inputs.time_s:.2f} s) of {args.from_trial}: "
+              f"{', '.join(frame_inputs)}; station {scenario}")
+    else:
+        if args.step is not None:
+            raise PlanStepError("--step applies to --from-trial only")
+        missing = [flag for flag, v in zip(("--depth", "--target-mask", "--joint-state"), frame_inputs) if v is None]
+        if args.scenario is None:
+            missing.insert(0, "--scenario")
+        if missing:
+            raise PlanStepError(f"missing {', '.join(missing)} (or give --from-trial DIR --step N)")
+    from slax_drake.evaluation.trial import drake_info_silenced
+
+    with drake_info_silenced():
+        result = plan_step_files(scenario, *frame_inputs, args.out, history=args.history, policy=args.policy)
     t = result.timings
+    vis = result.visibility or {}
+    if vis.get("share") is not None:
+        print(f"target: {vis['seen']} of the {vis['expected']} pixels its size covers are seen ({vis['share']:.0%}; "
+              f"revealed from {vis['threshold']:.0%})")
+    elif vis:
+        print("target: not seen in the frame")
     if result.action is None:
         print(f"no action: {result.reason}; wrote {args.out} (no motion)")
         return 0
     a = result.action
     params = f"d={a['d']:+.3f} m" if a["type"] == "push" else f"dx={a['dx']:+.3f} m, to y={a['dz']:+.3f} m"
     motion = result.trajectory.motions[0]
-    print(f"{a['type']} {a['object']} ({params}): motion {motion.duration:.2f} s, {len(motion.times)} points, "
+    print(f"{a['type']} {a['object']} ({params}): motion {motion.duration:.2f} s, {plural(len(motion.times), 'point')}, "
           "checked (limits, jerk, continuity, collisions with the believed scene)")
     print(f"perception {t['perception_s']:.3f} s, decision {t['decision_s']:.3f} s, planning and check "
           f"{t['planning_s']:.2f} s; wrote {args.out}")
@@ -257,19 +331,23 @@ def run_plan_step(args: argparse.Namespace) -> int:
 
 def run_check_action(args: argparse.Namespace) -> int:
     from slax_drake.errors import ActionSpecError
+    from slax_drake.evaluation.trial import drake_info_silenced
     from slax_drake.hardware.check_action import check_action, check_all, table, verdict_png
     from slax_drake.io import write_bytes_atomic, write_text_atomic
 
     if args.png and not args.all:
         raise ActionSpecError("--png applies to --all only")
+    with drake_info_silenced():
+        if args.all:
+            checker, checks = check_all(args.scene, args.station, progress=None)
+        else:
+            checks = [check_action(args.scene, args.action, args.station)]
     if args.all:
-        checker, checks = check_all(args.scene, args.station)
         print(table(checks), end="")
         if args.png:
             write_bytes_atomic(Path(args.png), verdict_png(checker, checks))
             print(f"wrote {args.png}")
     else:
-        checks = [check_action(args.scene, args.action, args.station)]
         print(checks[0].line())
     if args.json:
         write_text_atomic(Path(args.json), json.dumps([

@@ -48,6 +48,8 @@ PANEL_MARGIN = 0.015
 # m^2: the estimator's footprint overlap allowed between hypotheses; the exported scene (the checker's world) must
 # hold no two bodies interpenetrating by more than 1 mm (slax_drake.scene.io), a looser area bound lets through.
 HYPOTHESIS_OVERLAP = 1e-6
+# rad (m for the torso): a measured joint this far beyond its limit (encoder noise at a hard stop) is still taken
+JOINT_LIMIT_TOLERANCE = 1e-3
 
 
 @dataclasses.dataclass
@@ -59,6 +61,7 @@ class StepResult:
     action: dict | None
     reason: str | None
     timings: dict
+    visibility: dict | None = None  # StepPlanner.target_visibility of the frame
 
 
 def _existing(path: str | Path, what: str) -> Path:
@@ -259,16 +262,68 @@ class StepPlanner:
             self._motion_planner = MotionPlanner(self.station, tool_config(self.scenario, **self.tool_rules))
         return self._motion_planner
 
+    def check_joint_state(self, q, source: str = "joint state") -> None:
+        """PlanStepError when a planned joint lies outside the station robot's position limits by more than
+        ``JOINT_LIMIT_TOLERANCE`` (no motion can start there)."""
+        from slax_drake.station.robot import PLANNED_JOINTS
+        from slax_drake.station.scenario import joint_position_limits
+
+        lower, upper = joint_position_limits(self.station)
+        for name, value in zip(PLANNED_JOINTS, np.asarray(q, float)):
+            lo, hi = lower.get(name, -np.inf), upper.get(name, np.inf)
+            if not lo - JOINT_LIMIT_TOLERANCE <= value <= hi + JOINT_LIMIT_TOLERANCE:
+                raise PlanStepError(f"{source}: {name} = {value:g} lies outside its limits [{lo:g}, {hi:g}] (rad, "
+                                    "m for the torso): no motion can start there")
+
+    def target_visibility(self, depth, mask) -> dict:
+        """How much of the target the frame shows: ``seen`` (mask pixels), ``expected`` (the pixels the target's
+        known size covers, unoccluded, standing on the shelf floor where the mask's centre is seen, at the mask's
+        median depth: its front face at that depth; ray-cast like the referee's count), ``share`` = seen /
+        expected (None when the mask is empty or has no valid depth) and ``revealed``: share >= the scenario's
+        ``target.visibility_threshold`` v."""
+        from slax_drake.scene.model import Scene, Target
+        from slax_drake.scene.raycast import SceneRaycaster
+
+        depth = np.asarray(depth, float)
+        mask = np.asarray(mask, bool)
+        threshold = float(self.scenario.target.visibility_threshold)
+        seen = int(np.count_nonzero(mask))
+        valid = mask & np.isfinite(depth) & (depth > 0)
+        if not valid.any():
+            return {"seen": seen, "expected": None, "share": None, "revealed": False, "threshold": threshold}
+        camera = self.frame_camera(depth)
+        z = float(np.median(depth[valid]))
+        rows, cols = np.nonzero(valid)
+        u, v = float(np.mean(cols)) + 0.5, float(np.mean(rows)) + 0.5
+        point_C = np.array([(u - camera.cx) / camera.fx * z, (v - camera.cy) / camera.fy * z, z, 1.0])
+        point_S = np.asarray(camera.X_SC, float) @ point_C
+        sx, sy, sz = self.target_size
+        X_ST = np.eye(4)
+        X_ST[:3, 3] = [point_S[0], point_S[1] + sy / 2.0, sz / 2.0]
+        alone = Scene(self.shelf, camera, (), Target(tuple(self.target_size), X_ST))
+        _, labels = SceneRaycaster(alone, include_target=True).render(camera)
+        expected = int(np.count_nonzero(labels == 1))
+        share = seen / expected if expected else None
+        return {"seen": seen, "expected": expected, "share": share, "threshold": threshold,
+                "revealed": share is not None and share >= threshold}
+
     def plan_step(self, depth, mask, q, history: dict | None = None, source: str | None = None,
                   collision_step: float = 0.005) -> StepResult:
-        """Perceive, decide, plan, export and check (module docstring)."""
+        """Perceive, decide, plan, export and check (module docstring). A target already revealed (its visible
+        share, :meth:`target_visibility`, at least v) plans nothing."""
         from slax_drake.hardware.check import check_trajectory
         from slax_drake.hardware.collision import CollisionWorld
 
+        self.check_joint_state(q)
         timings = {}
         t0 = time.perf_counter()
         observation, belief = self.perceive(depth, mask, q)
+        visibility = self.target_visibility(depth, mask)
         timings["perception_s"] = time.perf_counter() - t0
+        if visibility["revealed"]:
+            reason = (f"the target is revealed: {visibility['share']:.0%} of the {visibility['expected']} pixels "
+                      f"its size covers are seen (v = {visibility['threshold']:.0%})")
+            return self._nothing(q, source, belief, observation, [], history, timings, reason, visibility)
         t0 = time.perf_counter()
         decision = self.decide(observation, history)
         timings["decision_s"] = time.perf_counter() - t0
@@ -289,8 +344,8 @@ class StepPlanner:
                 if report.ok:
                     timings["planning_s"] = time.perf_counter() - t0
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
-                                                              history, timings)
-                    return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings)
+                                                              history, timings, visibility=visibility)
+                    return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings, visibility)
                 why = "check: " + report.summary().splitlines()[-1]
             else:
                 why = motion.reason
@@ -301,13 +356,17 @@ class StepPlanner:
             decision = self.policy.decide(observation)
             reason = "no feasible motion"
         timings["planning_s"] = time.perf_counter() - t0
+        return self._nothing(q, source, belief, observation, rejected, history, timings, reason, visibility)
+
+    def _nothing(self, q, source, belief, observation, rejected, history, timings, reason, visibility):
+        """The step file of a step that plans no motion, with ``reason``."""
         from slax_drake.hardware.trajectory_file import ExportedTrajectory
 
         empty = ExportedTrajectory([], {"source": source, "station": self.station_path,
                                         "initial_positions": list(map(float, q))})
         empty.metadata["plan_step"] = self._record(None, belief, observation, rejected, None, history, timings,
-                                                   reason)
-        return StepResult(empty, None, reason, timings)
+                                                   reason, visibility)
+        return StepResult(empty, None, reason, timings, visibility)
 
     # ---------------------------------------------------------------------------------------------------------
     def _export(self, action, motion, belief, q, source):
@@ -333,7 +392,8 @@ class StepPlanner:
         exported.metadata["initial_positions"] = list(map(float, q))
         return exported
 
-    def _record(self, action, belief, observation, rejected, report, history, timings, reason=None) -> dict:
+    def _record(self, action, belief, observation, rejected, report, history, timings, reason=None,
+                visibility=None) -> dict:
         from slax_drake.shelf.distribution import support
         from slax_drake.systems.planner import _describe
 
@@ -350,6 +410,7 @@ class StepPlanner:
                                              "yaw": round(float(hyp.object.yaw), 5), "pixels": hyp.pixels}
                            for hyp in belief.hypotheses},
             "target_pixels": int(np.count_nonzero(observation.belief.observation.target_mask)),
+            "target_visibility": visibility,
             "support": support(h) if h is not None else None,
             "rejected": rejected,
             "check": None if report is None else {"ok": report.ok, "checked": report.checked},
@@ -370,6 +431,90 @@ def plan_step_files(station: str, depth: str, mask: str, joint_state: str, out: 
     frame = read_depth(depth)
     target = read_mask(mask)
     planner = StepPlanner(station, policy=policy)
+    planner.check_joint_state(q, joint_state)
     result = planner.plan_step(frame, target, q, previous, source=str(depth))
     write_text_atomic(Path(out), dumps(result.trajectory, "ros-json"))
     return result
+
+
+@dataclasses.dataclass
+class TrialStepInputs:
+    """The files of plan-step's inputs built from a simulated trial's decision (:func:`inputs_from_trial`)."""
+
+    station: str
+    depth: Path
+    target_mask: Path
+    joint_state: Path
+    time_s: float  # the decision's simulated time
+
+
+def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> TrialStepInputs:
+    """plan-step's inputs at decision ``step`` (1-based, as the trial's lines "step N/H" count) of the trial in
+    ``trial_dir``, written to ``out_dir`` as a robot's driver would write them:
+
+    - ``depth.npy``: the depth image the trial's perception received at that decision (``step_depth.npz``; m);
+    - ``target_mask.png``: the target's pixels in that image, ray-cast from the trial's scene with each object where
+      the trial recorded it at that decision (its planar pose; an object that had toppled is drawn upright);
+    - ``joint_state.json``: the commanded joint positions at that moment (``executed_trajectory``).
+
+    The station is the trial's. The policy's history is not carried over (plan-step starts it afresh)."""
+    from slax_drake.io import write_bytes_atomic, write_text_atomic
+    from slax_drake.scene.io import load_scene
+    from slax_drake.scene.raycast import SceneRaycaster
+    from slax_drake.station.robot import PLANNED_JOINTS
+
+    trial_dir = Path(trial_dir)
+    data = _load_json(_existing(trial_dir / "trial.json", "trial"), "trial")
+    scene = load_scene(_existing(trial_dir / "scene.json", "scene"))
+    decisions = [e for e in data.get("steps_log", []) if isinstance(e, dict) and "time" in e]
+    if not 1 <= step <= len(decisions):
+        raise PlanStepError(f"--step {step}: the trial in {trial_dir} has decisions 1 to {len(decisions)}")
+    entry = decisions[step - 1]
+    depth_file = _existing(trial_dir / "step_depth.npz", "step-depth")
+    try:
+        with np.load(depth_file) as f:
+            times, depths = np.asarray(f["times"], float), np.asarray(f["depth"], np.float32)
+    except (OSError, KeyError, ValueError) as e:
+        raise PlanStepError(f"{depth_file}: unreadable ({e})") from None
+    k = int(np.argmin(np.abs(times - float(entry["time"]))))
+    if abs(times[k] - float(entry["time"])) > 1e-3:
+        raise PlanStepError(f"{depth_file}: holds no depth image of decision {step} (t = {entry['time']} s)")
+    depth = depths[k]
+    h, w = depth.shape
+    poses = entry.get("poses_before") or {}
+    objects = []
+    for o in scene.objects:
+        p = poses.get(o.name)
+        if p is not None:
+            turn = p["yaw"] - float(o.yaw)
+            c, s_ = np.cos(turn), np.sin(turn)
+            X = np.array(o.X_SO, float)
+            X[:3, :3] = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]]) @ X[:3, :3]
+            X[0, 3], X[1, 3] = p["x"], p["y"]
+            o = dataclasses.replace(o, X_SO=X)
+        objects.append(o)
+    at_step = dataclasses.replace(scene, objects=tuple(objects))
+    _, labels = SceneRaycaster(at_step, include_target=True).render(scene.camera.with_resolution(w, h))
+    mask = labels == len(objects) + 1
+    et = data.get("executed_trajectory") or {}
+    try:
+        t, q = np.asarray(et["times"], float), np.asarray(et["positions"], float)
+        names = list(et["joint_names"])
+        q_now = {n: float(np.interp(float(entry["time"]), t, q[:, names.index(n)])) for n in PLANNED_JOINTS}
+    except (KeyError, ValueError, IndexError, TypeError) as e:
+        raise PlanStepError(f"{trial_dir / 'trial.json'}: executed_trajectory is malformed ({e})") from None
+    import cv2
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    import io as _io
+
+    buf = _io.BytesIO()
+    np.save(buf, depth)
+    write_bytes_atomic(out_dir / "depth.npy", buf.getvalue())
+    ok, png = cv2.imencode(".png", (mask * 255).astype(np.uint8))
+    write_bytes_atomic(out_dir / "target_mask.png", png.tobytes())
+    write_text_atomic(out_dir / "joint_state.json", json.dumps(
+        {"joint_names": list(PLANNED_JOINTS), "positions": [q_now[n] for n in PLANNED_JOINTS]}, indent=1))
+    return TrialStepInputs(str(data.get("station") or ""), out_dir / "depth.npy", out_dir / "target_mask.png",
+                           out_dir / "joint_state.json", float(entry["time"]))

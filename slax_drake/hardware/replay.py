@@ -76,8 +76,9 @@ class ReplayResult:
 
 
 def replay(traj: ExportedTrajectory, station, scene, meshcat=None, log_period: float = 0.01,
-           end_time: float | None = None) -> ReplayResult:
-    """Plays ``traj`` in ``MakeStation(station, scene)`` from t = 0 to ``end_time`` (default: the trajectory's)."""
+           end_time: float | None = None, progress: bool | None = False) -> ReplayResult:
+    """Plays ``traj`` in ``MakeStation(station, scene)`` from t = 0 to ``end_time`` (default: the trajectory's).
+    ``progress``: a progress bar of the simulated seconds on stderr (None: when stderr is a terminal)."""
     import time
 
     from pydrake.math import RigidTransform
@@ -118,7 +119,13 @@ def replay(traj: ExportedTrajectory, station, scene, meshcat=None, log_period: f
         meshcat.StartRecording(frames_per_second=30.0)
     wall = time.perf_counter()
     simulator.Initialize()
-    simulator.AdvanceTo(t_end)
+    from tqdm import tqdm
+
+    with tqdm(total=round(t_end, 1), desc="replaying", unit="sim s", disable=None if progress is None else not progress,
+              leave=False, bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} simulated s") as bar:
+        while context.get_time() < t_end:
+            simulator.AdvanceTo(min(t_end, context.get_time() + 1.0))
+            bar.update(round(context.get_time(), 1) - bar.n)
     wall = time.perf_counter() - wall
     html = None
     if meshcat is not None:

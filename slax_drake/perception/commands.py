@@ -7,6 +7,8 @@ import argparse
 import json
 import sys
 
+from slax_drake.io import plural
+
 
 def register(subparsers) -> None:
     from slax_drake import arguments
@@ -25,10 +27,10 @@ def register(subparsers) -> None:
     p.add_argument("--device", default="auto", choices=["auto", "cpu", "cuda"], help="default: auto")
     p.add_argument("--seed", type=arguments.seed, default=0, help="seed of the split, initialisation and shuffles (default: 0)")
     p.add_argument("--batch-size", type=int, default=16, help="default: 16")
-    p.add_argument("--lr", type=float, default=3e-3, help="peak learning rate of the one-cycle schedule (default: 3e-3)")
+    p.add_argument("--lr", type=arguments.positive_float, default=3e-3, help="peak learning rate of the one-cycle schedule (default: 3e-3)")
     p.add_argument("--channels", type=int, default=16, help="channels of the first U-Net level (default: 16)")
     p.add_argument("--levels", type=int, default=4, help="U-Net levels; image sides must divide by 2^levels (default: 4)")
-    p.add_argument("--val-fraction", type=float, default=0.1, help="validation share of the samples (default: 0.1)")
+    p.add_argument("--val-fraction", type=arguments.positive_float, default=0.1, help="validation share of the samples (default: 0.1)")
     p.add_argument("--limit", type=int, help="use only the first N samples of the dataset")
     p.add_argument("--threads", type=int, help="torch CPU threads (default: torch's choice)")
     p.add_argument("--resume", action="store_true", help="continue from --out/checkpoint.pt (same options and data)")
@@ -57,7 +59,7 @@ def register(subparsers) -> None:
 def _positive(value, name: str) -> None:
     from slax_drake.errors import UserError
 
-    if value is not None and value <= 0:
+    if value is not None and not value > 0:
         raise UserError(f"{name} must be positive, got {value}")
 
 
@@ -95,7 +97,7 @@ def run_train(args: argparse.Namespace) -> int:
     _check_training_memory(args)
     data = load_dataset(args.data, limit=args.limit, progress=not args.no_progress)
     w, h = data.resolution
-    print(f"{len(data)} samples at {w}x{h} from {args.data}", flush=True)
+    print(f"{plural(len(data), 'sample')} at {w}x{h} from {args.data}", flush=True)
     options = TrainOptions(
         epochs=args.epochs, batch_size=args.batch_size, learning_rate=args.lr, val_fraction=args.val_fraction,
         seed=args.seed, device=args.device, num_threads=args.threads, base_channels=args.channels, levels=args.levels,
@@ -120,9 +122,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
     _positive(args.limit, "--limit")
     _positive(args.examples, "--examples")
     model = load_weights(args.model)
-    data = load_dataset(args.data, limit=args.limit)
-    metrics, predictions = evaluate_model(model, data, num_threads=args.threads)
-    print(f"model {model.path} on {len(data)} samples of {args.data} ({data.resolution[0]}x{data.resolution[1]}):")
+    bars = sys.stderr.isatty()  # progress bars on a terminal only
+    data = load_dataset(args.data, limit=args.limit, progress=bars)
+    metrics, predictions = evaluate_model(model, data, num_threads=args.threads, progress=bars)
+    print(f"model {model.path} on {plural(len(data), 'sample')} of {args.data} ({data.resolution[0]}x{data.resolution[1]}):")
     print(f"  KL divergence 2D        {metrics['kl_2d']:.4f} nats")
     print(f"  KL divergence 1D        {metrics['kl_1d']:.4f} nats")
     print(f"  1D support IoU          {metrics['iou_1d']:.4f}  (threshold {metrics['support_threshold_1d']:g} x uniform)")

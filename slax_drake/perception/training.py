@@ -161,6 +161,8 @@ def train(data: TrainingData, out: str | Path, options: TrainOptions = TrainOpti
     best: dict | None = None
     start_epoch = 0
     checkpoint_path = out / "checkpoint.pt"
+    if not resume:
+        _refuse_other_training(out, options, data)
     if resume and checkpoint_path.is_file():
         state = _load_checkpoint(checkpoint_path, options, data)
         network.load_state_dict(state["network"])
@@ -262,6 +264,33 @@ def _save_checkpoint(path, network, optimizer, schedule, history, best, epoch, o
         buffer,
     )
     write_bytes_atomic(Path(path), buffer.getvalue())
+
+
+def _refuse_other_training(out: Path, options: TrainOptions, data: TrainingData) -> None:
+    """WeightFileError when ``out`` already holds the output of a training with other options or data (a run
+    without resume would overwrite its model.pt, checkpoint.pt and metrics.json). A folder whose checkpoint was made
+    with the same options and data is retrained from scratch to the same result, so it is let through."""
+    checkpoint_path = out / "checkpoint.pt"
+    if checkpoint_path.is_file():
+        try:
+            state = torch.load(checkpoint_path, map_location="cpu", weights_only=True)
+            saved = json.loads(state["options"])
+            same_data = json.loads(state["data"]) == data.describe()
+        except Exception:
+            raise WeightFileError(f"{checkpoint_path}: unreadable checkpoint in the output folder; use a new --out "
+                                  "folder") from None
+        now = dataclasses.asdict(options)
+        differ = [k for k in now if k not in ("device", "num_threads") and saved.get(k) != now[k]]
+        if not same_data:
+            differ.append("data")
+        if differ:
+            was = ", ".join(f"{k} {saved[k]}" for k in differ if k in saved)
+            raise WeightFileError(f"{out} already holds a model trained with other {', '.join(differ)}"
+                                  f"{f' ({was})' if was else ''} that this run would overwrite; use a new --out "
+                                  "folder (or --resume with the same options)")
+    elif any((out / name).exists() for name in ("model.pt", "metrics.json")):
+        raise WeightFileError(f"{out} already holds a model.pt or metrics.json without the checkpoint that says how "
+                              "it was trained; use a new --out folder")
 
 
 def _load_checkpoint(path: Path, options: TrainOptions, data: TrainingData) -> dict:

@@ -51,7 +51,7 @@ from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
-from slax_drake.planning.world import PlanningWorld
+from slax_drake.planning.world import PlanningWorld, pairs_text
 from slax_drake.shelf.actions import Suction
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.model import Scene, state_key
@@ -261,7 +261,8 @@ class MotionPlanner:
                         return q
             finally:
                 world.ik_tool_contact(name, False)
-            hits = ", ".join(world.colliding_bodies(colliding[0])) or "the environment"
+            hits = (pairs_text(world.collision_pairs(colliding[0])) or ", ".join(world.colliding_bodies(colliding[0]))
+                    or "the environment")
             raise _Reject(f"{wp.label}: every IK solution collides: {hits}")
         raise _Reject(f"{wp.label}: tool pose out of reach (no IK solution)")
 
@@ -417,7 +418,8 @@ class MotionPlanner:
                         hits = _carried_hits(world, qa, qb)
                         if hits is not None:
                             raise _Reject(f"segment to {where}: the carried {name} collides with {hits}")
-                    raise _Reject(f"segment to {where} collides")
+                    pairs = world.first_collision_on(qa, qb)
+                    raise _Reject(f"segment to {where} collides" + (f": {pairs_text(pairs)}" if pairs else ""))
                 segments.append((np.asarray(qa).copy(), np.asarray(qb).copy(), contact, carry))
         finally:
             world.drop()
@@ -495,7 +497,9 @@ def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q) -> None:
     every other solution of that tool pose meets it too."""
     tool_hits = world.tool_environment_hits(q)
     if tool_hits:
-        raise _PoseReject(f"{wp.label}: the tool collides at its pose: {', '.join(tool_hits)} (environment)")
+        pairs = [(a, b) for a, b in world.collision_pairs(q) if a in tool_hits]
+        raise _PoseReject(f"{wp.label}: the tool collides at its pose: "
+                          + (pairs_text(pairs) if pairs else f"{', '.join(tool_hits)} (environment)"))
 
 
 def _carried_hits(world, qa, qb) -> str | None:

@@ -237,6 +237,46 @@ class PlanningWorld:
                 RobotCollisionType.kEnvironmentAndSelfCollision: "environment and itself"}
         return [f"{self.plant.get_body(_body_index(i)).name()} ({what[t]})" for i, t in enumerate(types) if t in what]
 
+    def collision_pairs(self, q_planned) -> list[tuple[str, str]]:
+        """What collides at q within the paddings: (robot body, what it meets) per pair, what it meets being a
+        scene object's name, "the shelf" or a robot link (a shape added to the tool, a carried object, counts as
+        the tool's body); empty when q is free. :func:`pairs_text` words them."""
+        clearance = self.checker.CalcRobotClearance(self.full_q(q_planned),
+                                                    influence_distance=max(self.padding, self.self_padding))
+        objects = {int(body.index()): name for name, body in self.object_bodies.items()}
+        pairs = []
+        for r, o, d in zip(clearance.robot_indices(), clearance.other_indices(), clearance.distances()):
+            if d >= 0.0:
+                continue
+            other = self.plant.get_body(_body_index(int(o)))
+            if int(o) in objects:
+                what = objects[int(o)]
+            elif other.model_instance() == self.robot:
+                what = other.name()
+            else:
+                what = "the shelf"
+            pair = (self.plant.get_body(_body_index(int(r))).name(), what)
+            if pair not in pairs:
+                pairs.append(pair)
+        return pairs
+
+    def first_collision_on(self, q0, q1) -> list[tuple[str, str]]:
+        """:meth:`collision_pairs` at the first configuration of the segment q0 -> q1 (``edge_step`` apart in
+        the largest joint change) that collides; empty when none of those does."""
+        q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+        step = self.checker.edge_step_size()
+        n = max(1, int(np.ceil(float(np.max(np.abs(q1 - q0))) / step)))
+        for s in np.linspace(0.0, 1.0, n + 1):
+            q = q0 + s * (q1 - q0)
+            if not self.config_free(q):
+                return self.collision_pairs(q)
+        return []
+
+
+def pairs_text(pairs) -> str:
+    """``[(robot body, other), ...]`` of :meth:`PlanningWorld.collision_pairs` as "A with B, C with D"."""
+    return ", ".join(f"{a} with {b}" for a, b in pairs)
+
 
 def rest_gap(obj, scene: Scene) -> float:
     """The smallest horizontal gap (m; negative when overlapping) between ``obj``'s footprint and the side and

@@ -6,6 +6,7 @@ import argparse
 
 from slax_drake import arguments
 from slax_drake.config import DEFAULT_CONFIG
+from slax_drake.io import plural
 
 
 def register(subparsers) -> None:
@@ -31,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
     scene = sample_scene(scenario, args.objects, args.seed)
     save_scene(scene, args.out)
     print(
-        f"wrote {args.out}: {len(scene.objects)} objects, hidden {scene.target.size} m target at "
+        f"wrote {args.out}: {plural(len(scene.objects), 'object')}, hidden {scene.target.size} m target at "
         f"({scene.target.center[0]:+.3f}, {scene.target.center[1]:+.3f}) m in the shelf frame"
     )
     if args.png:

@@ -11,7 +11,8 @@ Layout (all lengths metres, poses 4x4 row-major nested lists in the shelf frame 
 Camera frame C: z along the optical axis, x right and y down in the image. Object frames sit at the object's
 centre. ``wall_thickness``, ``near``, ``far`` and ``seed`` are optional on reading.
 
-Validation on reading: every field's type and range, every object and the target resting upright on the support
+Validation on reading: no key beyond those above (a misspelt ``mass`` would otherwise be ignored silently), every
+field's type and range, every object and the target resting upright on the support
 surface inside the bay, and no two of them interpenetrating by more than ``OVERLAP_TOLERANCE`` (1 mm). Objects
 stand on the floor only (nothing is stacked), so two bodies interpenetrate exactly when their footprints do; the
 exact footprints of :mod:`slax_drake.scene.footprint` (oriented rectangles, discs) decide, and the penetration
@@ -79,10 +80,12 @@ def scene_from_dict(data) -> Scene:
     """Builds a Scene from its JSON dictionary; raises SceneFileError naming the bad field."""
     if not isinstance(data, dict):
         raise SceneFileError("the scene must be a JSON object")
+    _known_keys(data, ("schema_version", "seed", "shelf", "camera", "objects", "target"), "")
     version = data.get("schema_version")
     if version != SCHEMA_VERSION:
         raise SceneFileError(f"field 'schema_version' = {version!r}: this version of slax-drake reads version {SCHEMA_VERSION}")
     shelf_d = _field(data, "shelf", dict)
+    _known_keys(shelf_d, ("width", "height", "depth", "wall_thickness"), "shelf")
     shelf = Shelf(
         width=_positive(shelf_d, "width", "shelf"),
         height=_positive(shelf_d, "height", "shelf"),
@@ -90,6 +93,7 @@ def scene_from_dict(data) -> Scene:
         wall_thickness=_positive(shelf_d, "wall_thickness", "shelf", default=0.02),
     )
     cam_d = _field(data, "camera", dict)
+    _known_keys(cam_d, ("X_SC", "width", "height", "fx", "fy", "cx", "cy", "near", "far"), "camera")
     camera = Camera(
         width=int(_positive(cam_d, "width", "camera")),
         height=int(_positive(cam_d, "height", "camera")),
@@ -107,6 +111,7 @@ def scene_from_dict(data) -> Scene:
         where = f"objects[{i}]"
         if not isinstance(obj_d, dict):
             raise SceneFileError(f"field '{where}' must be an object")
+        _known_keys(obj_d, ("name", "shape", "size", "X_SO", "mass"), where)
         name = obj_d.get("name")
         if not isinstance(name, str) or not name or name in names or name == "target":
             raise SceneFileError(f"field '{where}.name' = {name!r}: must be a unique non-empty string other than 'target'")
@@ -124,6 +129,7 @@ def scene_from_dict(data) -> Scene:
     target = None
     if data.get("target") is not None:
         t_d = _field(data, "target", dict)
+        _known_keys(t_d, ("size", "X_ST"), "target")
         size = _size(t_d, "target")
         X_ST = _pose(t_d, "X_ST", "target")
         _check_on_shelf(shelf, size, X_ST, "target")
@@ -146,6 +152,14 @@ def _rounded(value):
     if isinstance(value, np.generic):
         return _rounded(value.item())
     return value
+
+
+def _known_keys(data: dict, known, where: str) -> None:
+    """SceneFileError naming the first key of ``data`` that the schema does not have at ``where``."""
+    for key in data:
+        if key not in known:
+            field = f"{where}.{key}" if where else str(key)
+            raise SceneFileError(f"unknown field '{field}' (known here: {', '.join(known)})")
 
 
 def _field(data: dict, key: str, kind: type, where: str = ""):

@@ -44,6 +44,7 @@ candidate with the reason.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -118,10 +119,28 @@ Action = Push | Suction
 
 @dataclasses.dataclass(frozen=True)
 class Rejected:
-    """A candidate that was skipped: what it was and why."""
+    """A candidate that was skipped: what it was and why. ``action_kind`` ("push" or "suction"), ``object_name``,
+    ``direction`` (a push's side along the shelf's x: +1 or -1; 0 for a suction) and ``distance`` (the refused
+    push distance in metres, signed along x, when one distance was refused; None when the whole direction or every
+    placement was) say the same as ``what`` as values."""
 
     what: str
     reason: str
+    action_kind: str = ""
+    object_name: str = ""
+    direction: int = 0
+    distance: float | None = None
+
+    def spec(self) -> str:
+        """The refused candidate in the ``kind:object:value`` form of an action: ``push:OBJECT:+0.1000`` for one
+        refused distance, ``push:OBJECT:+x`` (or ``-x``) for every push toward that side, ``suction:OBJECT:*:*``
+        for every placement."""
+        if self.action_kind == "push":
+            value = f"{self.distance:+.4f}" if self.distance is not None else ("+x" if self.direction > 0 else "-x")
+            return f"push:{self.object_name}:{value}"
+        if self.action_kind == "suction":
+            return f"suction:{self.object_name}:*:*"
+        return self.what
 
 
 @dataclasses.dataclass
@@ -230,11 +249,12 @@ class ActionModel:
         x, y = fp.x, fp.y
         side = "left" if sign > 0 else "right"
         what = f"push {obj.name} {'+x' if sign > 0 else '-x'}"
+        refused = functools.partial(Rejected, action_kind="push", object_name=obj.name, direction=sign)
         rects = self.push_swept_rects(fp, sign)
         lane_x = self.push_tool_rects(fp, sign)[0][0]
         gap_x = rects[0][0]
         if abs(gap_x) + rects[0][2] > shelf.width / 2 + 1e-9:
-            rejected.append(Rejected(what, f"blade does not fit between {obj.name} and the {side} wall"))
+            rejected.append(refused(what, f"blade does not fit between {obj.name} and the {side} wall"))
             return
         y_lo = min([y - ey] + [r[1] - r[3] for r in rects]) - t.physics.clearance - 1e-6
         y_hi = max([y + ey] + [r[1] + r[3] for r in rects]) + t.physics.clearance + 1e-6
@@ -250,12 +270,12 @@ class ActionModel:
             k_r = self._pair(("lane", ctx.ids[i], sign, ctx.ids[j]), lambda: lane_blocked(ctx.all_fps[j]))
             if k_r >= 0:
                 where = "gap" if k_r == 0 else "shaft's way in"
-                rejected.append(Rejected(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
+                rejected.append(refused(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
                 return
         if t.rules.push_tube_check:
             blocker = self.push_tube_blocker(ctx, i, sign)
             if blocker is not None:
-                rejected.append(Rejected(what, f"the tube's way in {side} of {obj.name} is blocked by {blocker}"))
+                rejected.append(refused(what, f"the tube's way in {side} of {obj.name} is blocked by {blocker}"))
                 return
         n = int(math.ceil(shelf.width / t.grid.cell)) + 1
         k = np.arange(1, n + 1)
@@ -294,7 +314,7 @@ class ActionModel:
         if self.reach is not None:
             layer = "push+x" if sign > 0 else "push-x"
             if self.reach.refuses(layer, q[0], q[1], REACH_MARGIN):
-                rejected.append(Rejected(what, f"the arm cannot reach the blade beside {obj.name} at "
+                rejected.append(refused(what, f"the arm cannot reach the blade beside {obj.name} at "
                                                f"({q[0]:+.2f}, {q[1]:+.2f}) m (reach map)"))
                 return
             k_reach = _first_false(np.array([not self.reach.refuses(layer, q[0] + sign * kk * t.grid.cell, q[1],
@@ -306,7 +326,7 @@ class ActionModel:
         if t.rules.push_stop == "exact" and first_bad < n and stopper not in ("hidden space", "the arm's reach"):
             d_max = self._exact_stop(fp, sign, rects, [ctx.all_fps[j] for j in band], d_max, t.grid.cell)
         if d_max < t.grid.min_push - 1e-12:
-            rejected.append(Rejected(what, f"no room: {obj.name} is stopped by {stopper} at once"))
+            rejected.append(refused(what, f"no room: {obj.name} is stopped by {stopper} at once"))
             return
         ds = list(np.arange(1, int(d_max / step + 1e-9) + 1) * step)
         if end_ok is not None:  # only the lattice distances at which the object may come to rest
@@ -317,7 +337,8 @@ class ActionModel:
             feasible.append(Push(obj.name, q, round(float(sign * d), 6)))
         d = (int(d_max / step + 1e-9) + 1) * step
         if d < shelf.width:
-            rejected.append(Rejected(f"{what} by {d:.3f}", f"{obj.name} would hit {stopper} after {d_max:.3f} m"))
+            rejected.append(refused(f"{what} by {d:.3f}", f"{obj.name} would hit {stopper} after {d_max:.3f} m",
+                                     distance=round(float(sign * d), 6)))
 
     def _exact_stop(self, fp: Footprint, sign: int, rects, others, d_ok: float, step: float) -> float:
         """The longest push distance (m, floored to 1 micrometre) in [d_ok, d_ok + step) at which ``fp`` keeps
@@ -356,9 +377,10 @@ class ActionModel:
         t = self.tool
         obj, fp = ctx.objects[i], ctx.fps[i]
         what = f"suction {obj.name}"
+        refused = functools.partial(Rejected, action_kind="suction", object_name=obj.name)
         lat = self.suction_lattice(obj, fp, ctx.masks[i])
         if lat.refusal is not None:
-            rejected.append(Rejected(what, lat.refusal))
+            rejected.append(refused(what, lat.refusal))
             return
         cz = lat.q[2]
         tube_r = t.geometry.tube_diameter / 2
@@ -368,7 +390,7 @@ class ActionModel:
             if not self._pair(("approach", ctx.ids[i], tuple(obj.size), ctx.ids[j]), lambda: bool(
                     clear_of("box", lat.corridor, lat.yaw, lat.corridor_half, ctx.all_fps[j],
                              BLADE_CONTACT_CLEARANCE)[0])):
-                rejected.append(Rejected(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
+                rejected.append(refused(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
                 return
         ex = fp.extents()[0]
         blocking = [j for j in ctx.others(i) if not self.passes_over(obj, ctx.all_heights[j])]
@@ -377,16 +399,16 @@ class ActionModel:
                 continue
             if not self._pair(("out", ctx.ids[i], ctx.ids[j]), lambda: bool(clear_of(
                     fp.shape, lat.path_out, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all())):
-                rejected.append(Rejected(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
+                rejected.append(refused(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
                 return
         path_rule = t.rules.suction_hidden_rule == "path"
         if path_rule:
             hidden_o = ctx.hidden_others(i)
             if any(hidden_o[:r, c].any() for c, r in zip(lat.cols, lat.first_rows)):
-                rejected.append(Rejected(what, "path out of the shelf crosses space hidden from the camera"))
+                rejected.append(refused(what, "path out of the shelf crosses space hidden from the camera"))
                 return
         if lat.lattice_empty:
-            rejected.append(Rejected(what, "no placement fits in the shelf"))
+            rejected.append(refused(what, "no placement fits in the shelf"))
             return
         ok = lat.base.copy()
         for j in blocking:  # reachable on the way in past each object it cannot pass over
@@ -399,7 +421,7 @@ class ActionModel:
             ok &= self._suction_hidden_ok(ctx, i, lat, path_rule)
         a_index, b_index = np.nonzero(ok)
         if len(a_index) == 0:
-            rejected.append(Rejected(what, f"no collision-free placement for {obj.name} in known free space"))
+            rejected.append(refused(what, f"no collision-free placement for {obj.name} in known free space"))
             return
         feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
 

@@ -11,6 +11,7 @@ robot of the directives; it rejects with ConfigError a configuration whose camer
 
 # No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
 import dataclasses
+import functools
 import math
 import typing
 from pathlib import Path
@@ -94,6 +95,7 @@ def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario
     except Exception as e:
         raise ConfigError(f"{path}: {' '.join(str(e).split())}") from None
     _validate(scenario, str(path))
+    _check_files_and_limits(scenario, str(path))
     return scenario
 
 
@@ -161,6 +163,80 @@ def _validate(scenario: StationScenario, source: str) -> None:
     if not 0 <= p.max_seal_angle_deg <= 90:
         raise ConfigError(f"{source}: key 'suction.max_seal_angle_deg' = {p.max_seal_angle_deg!r}: must lie in "
                           "[0, 90] (90 for no limit)")
+
+
+def _model_file(uri: str) -> Path | None:
+    """The file a directive's ``file`` names (``package://slax_drake_models/...``, ``file://...`` or a path), or
+    None for another package's, which Drake's own package map resolves when the station is built."""
+    package = f"package://{robot_model.PACKAGE_NAME}/"
+    if uri.startswith(package):
+        return robot_model.MODELS_DIR / uri[len(package):]
+    if uri.startswith("package://"):
+        return None
+    return Path(uri[len("file://"):] if uri.startswith("file://") else uri)
+
+
+def _check_files_and_limits(scenario: StationScenario, source: str) -> None:
+    """ConfigError when a model file or the reach map the station names does not exist, or when its observation
+    configuration lies outside the position limits of the robot model it loads (rad, m)."""
+    robot_file = None
+    for directive in scenario.directives:
+        model = directive.add_model
+        if model is None:
+            continue
+        file = _model_file(model.file)
+        if file is not None and not file.is_file():
+            raise ConfigError(f"{source}: key 'directives' adds model {model.name!r} from {model.file}, which does not "
+                              "exist")
+        if model.name == scenario.robot_model:
+            robot_file = file
+    if scenario.reach_map:
+        reach = Path(scenario.reach_map)
+        if not (reach.is_file() or (not reach.is_absolute() and (REPO_ROOT / reach).is_file())):
+            raise ConfigError(f"{source}: key 'reach_map' = {scenario.reach_map!r}: no such file (give a path from "
+                              "the repository root, or \"\" for none)")
+    if robot_file is None:
+        return
+    lower, upper = _position_limits(str(robot_file))
+    for name, value in scenario.observation_configuration.items():
+        lo, hi = lower.get(name, -math.inf), upper.get(name, math.inf)
+        if not (math.isfinite(value) and lo <= value <= hi):
+            raise ConfigError(f"{source}: key 'observation_configuration.{name}' = {value!r}: outside the joint's "
+                              f"limits [{lo:g}, {hi:g}] in {robot_file.name}")
+
+
+def joint_position_limits(scenario: StationScenario) -> tuple[dict, dict]:
+    """Lower and upper position limits {joint name: value} (rad; m for the torso) of the planned joints of the
+    robot model the station loads (continuous joints: -inf, inf)."""
+    for directive in scenario.directives:
+        model = directive.add_model
+        if model is not None and model.name == scenario.robot_model:
+            file = _model_file(model.file)
+            if file is not None:
+                return _position_limits(str(file))
+    return {}, {}
+
+
+@functools.lru_cache(maxsize=8)
+def _position_limits(robot_file: str) -> tuple[dict, dict]:
+    """Lower and upper position limits (rad or m) of the planned joints of the robot model in ``robot_file``."""
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import MultibodyPlant
+
+    plant = MultibodyPlant(0.0)
+    parser = Parser(plant)
+    robot_model.add_package(parser)
+    try:
+        parser.AddModels(robot_file)
+        plant.Finalize()
+    except Exception as e:
+        raise ConfigError(f"{robot_file}: the robot model cannot be parsed: {' '.join(str(e).split())[:200]}") from None
+    lower, upper = {}, {}
+    for name in robot_model.PLANNED_JOINTS:
+        if plant.HasJointNamed(name):
+            joint = plant.GetJointByName(name)
+            lower[name], upper[name] = float(joint.position_lower_limits()[0]), float(joint.position_upper_limits()[0])
+    return lower, upper
 
 
 def observation_positions(scenario: StationScenario) -> np.ndarray:

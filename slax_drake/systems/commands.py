@@ -21,7 +21,10 @@ def register(subparsers) -> None:
     )
     p.add_argument("--out", default="diagrams", help="output folder (default: diagrams)")
     p.add_argument("--station", default=DEFAULT_STATION, help=f"station YAML (default: {DEFAULT_STATION})")
-    p.add_argument("--depth", type=int, default=1, help="levels of subsystems to expand (default: 1)")
+    from slax_drake import arguments
+
+    p.add_argument("--depth", type=arguments.non_negative_int, default=1,
+                   help="levels of subsystems to expand, 0 or more (default: 1)")
     p.set_defaults(func=run)
 
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from slax_drake.io import plural
+
 # What the trial's ``result`` means, as a user reads it.
 OUTCOMES = {
     "revealed": "target revealed",
@@ -26,8 +28,7 @@ def outcome_line(data: dict) -> str:
             + f" ({data['visible_fraction'] * 100:.0f}% of it visible at the end)")
 
 
-def _plural(n: int, word: str) -> str:
-    return f"{n} {word}{'' if n == 1 else 's'}"
+_plural = plural
 
 
 def _size(path: Path) -> str:
@@ -100,7 +101,10 @@ def trial_summary(data: dict, written: list[Path], html: str | Path | None = Non
         lines.append(f"  open {html_path} in a web browser ({html_path.resolve().as_uri()}); it needs no server "
                      "and plays the trial once (Open Controls > Animations: play, pause, time)")
     else:
-        lines.append("  add --html out/trial.html to write a replay that opens in any web browser")
+        trial_json = next((p for p in written if p.name == "trial.json"), None)
+        where = str(trial_json.parent) if trial_json is not None else "OUT"
+        lines.append(f"  slax-drake view-trial {where} writes a replay that opens in any web browser, from the "
+                     "trial's records (no simulation)")
     if pngs:
         lines.append(f"  the step images in any image viewer, e.g. {pngs[0]}")
     if meshcat_url:

@@ -65,7 +65,7 @@ def test_another_config_content_is_refused_but_the_same_content_elsewhere_is_not
     assert main([*argv, "--config", str(other)]) == 2
     assert f"made with another {named}" in capsys.readouterr().err
     assert main([*argv, "--config", str(same)]) == 0
-    assert "kept 1 trials" in capsys.readouterr().out
+    assert "kept 1 trial " in capsys.readouterr().out
 
 
 def test_a_reach_map_is_recorded_by_content_not_path(tmp_path, capsys):
@@ -83,7 +83,7 @@ def test_a_reach_map_is_recorded_by_content_not_path(tmp_path, capsys):
     assert bench(out, *argv) == 2
     assert "made with another reach map" in capsys.readouterr().err
     rmap.write_text(shipped.read_text())
-    assert bench(out, *argv) == 0 and "kept 1 trials" in capsys.readouterr().out
+    assert bench(out, *argv) == 0 and "kept 1 trial " in capsys.readouterr().out
     assert json.loads((out / "settings.json").read_text())["reach_map_sha256"] == recorded
 
 

@@ -66,7 +66,7 @@ def test_summary_block_says_outcome_steps_cost_files_and_how_to_view(tmp_path):
 def test_summary_says_why_the_target_was_not_revealed(tmp_path, result, phrase):
     text = trial_summary(_record(result), _written(tmp_path, html=False))
     assert f"outcome: {phrase} (20% of it visible at the end)" in text
-    assert "add --html out/trial.html" in text  # no replay written: say how to get one
+    assert "slax-drake view-trial" in text and "(no simulation)" in text  # no replay written: say how to get one
 
 
 def test_summary_says_the_live_view_dies_with_the_process(tmp_path):

@@ -1,0 +1,74 @@
+"""A trial prints one line per decision as it happens: the action on its camera segment, the planning time and,
+once the next decision shows it, the outcome against the prediction."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+
+from slax_drake.evaluation.trial_progress import DecisionPrinter
+from slax_drake.systems.evaluator import Snapshot
+
+
+def _snap(t, x, lost=(), visible=0.0):
+    return Snapshot(t, visible, tuple(lost), {"object_4": (x, 0.1, 0.0), "object_1": (0.2, 0.0, 0.0)},
+                    {"segment_2": "object_4"})
+
+
+def _decision(step, t, d=-0.10, rejected=0, predicted_x=-0.05):
+    return {"step": step, "time": t, "action": {"type": "push", "object": "segment_2", "d": d},
+            "planning_s": 0.42, "rejected": [{}] * rejected,
+            "predicted_objects": {"object": "segment_2", "x": predicted_x, "y": 0.1, "yaw": 0.0}}
+
+
+def test_a_line_opens_at_the_decision_and_closes_with_the_outcome():
+    out = io.StringIO()
+    printer = DecisionPrinter(12, out)
+    log = (_decision(0, 0.5, rejected=1),)
+    snaps = (_snap(0.5, 0.05),)
+    printer.update(log, snaps)
+    assert out.getvalue() == "step 1/12: push segment_2 -0.100 m, planned in 0.4 s after 1 rejected candidate, "
+    log += (_decision(1, 20.0, d=+0.05, predicted_x=0.0),)
+    snaps += (_snap(20.0, -0.045),)
+    printer.update(log, snaps)
+    lines = out.getvalue().splitlines()
+    assert lines[0].endswith("executed, object_4 moved as predicted")
+    assert lines[1] == "step 2/12: push segment_2 +0.050 m, planned in 0.4 s, "
+    log += ({"step": 2, "time": 40.0, "final": True, "result": "revealed"},)
+    snaps += (_snap(40.0, 0.04, visible=0.96),)
+    printer.update(log, snaps)
+    lines = out.getvalue().splitlines()
+    assert lines[1].endswith("executed, object_4 ended 4.0 cm from the prediction")
+    assert lines[2] == "done after 2 actions: target revealed (96% of it visible)"
+
+
+def test_a_lost_object_and_a_trial_stopped_during_a_motion():
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    printer.update((_decision(0, 0.5),), (_snap(0.5, 0.05),))
+    printer.finish({"object_4": {"x": 0.4, "y": 0.1, "yaw": 0.0, "upright": False, "inside": False},
+                    "object_1": {"x": 0.2, "y": 0.0, "yaw": 0.0, "upright": True, "inside": True}})
+    assert out.getvalue().endswith("executed, object_4 was lost (toppled or off the shelf)\n")
+
+
+def test_no_feasible_action_says_how_many_candidates_had_no_motion():
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    printer.update(({"step": 0, "time": 0.5, "final": True, "result": "no feasible motion",
+                     "rejected": [{}, {}]},), (_snap(0.5, 0.0),))
+    assert out.getvalue() == ("done after 0 actions: target not revealed: no candidate action had a collision-free "
+                              "motion (0% of it visible); 2 candidates without a motion\n")
+
+
+@pytest.mark.slow
+def test_the_default_trial_prints_its_decisions_on_stderr(tmp_path, capfd):
+    from slax_drake.cli import main
+
+    assert main(["trial", "--out", str(tmp_path / "t")]) == 0
+    out, err = capfd.readouterr()
+    lines = [line for line in err.splitlines() if line.startswith(("step ", "done after"))]
+    assert lines[0].startswith("step 1/") and "planned in" in lines[0] and "executed" in lines[0]
+    assert lines[-1].startswith("done after")
+    assert "== trial summary ==" in out and "step 1/" not in out
+    assert (tmp_path / "t" / "object_poses.npz").is_file()  # what view-trial replays the objects from
