@@ -27,8 +27,8 @@ import dataclasses
 
 import numpy as np
 
+from slax_drake.errors import TrajectoryFileError
 from slax_drake.hardware.fetch_limits import FetchLimits
-from slax_drake.hardware.interpolation import quintic_hermite
 from slax_drake.hardware.trajectory_file import ExportedTrajectory
 
 POSITION_TOL = 1e-6  # rad or m
@@ -38,8 +38,13 @@ JERK_ROUNDING = 2e-6  # rad/s^2: two accelerations rounded to 1e-6
 CONTINUITY_TOL = 1e-6  # rad or m
 REST_TOL = 1e-6  # rad/s and rad/s^2
 COLLISION_STEP = 0.005  # s
+POSITION_RESOLUTION = 1e-6  # rad or m: trial.json rounds positions to 1e-6; resampling (--rate) stays within it
+FIELD_TOL_Q = 2 * POSITION_RESOLUTION + 1e-7  # rad or m: two rounded positions, plus the fields' rounding
+FIELD_TOL_V = 4e-6  # rad/s: two velocities and two accelerations (times h) rounded to 1e-6
 
-KINDS = ("position", "velocity", "acceleration", "jerk", "discontinuity", "collision")
+OBJECTS_BEFORE_NOTE = 0.002  # m: the summary notes objects_before further than this from the checked world
+
+KINDS = ("position", "velocity", "acceleration", "jerk", "discontinuity", "fields", "collision")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,9 +80,21 @@ class CheckReport:
     def summary(self, max_lines: int = 5) -> str:
         lines = [f"checked {self.checked['motions']} motions, {self.checked['points']} points "
                  f"({', '.join(self.checked['checks'])})"]
-        if self.checked.get("structural_pairs"):
-            lines.append("self-collision pairs overlapping at the reference pose (not checked): "
-                         + ", ".join(f"{a}/{b}" for a, b in self.checked["structural_pairs"]))
+        reasons = self.checked.get("structural_reasons") or {}
+        for a, b in self.checked.get("structural_pairs") or ():
+            lines.append(f"self-collision pair not checked: {a}/{b}: {reasons.get(f'{a}/{b}', '')}")
+        for k, entry in enumerate((self.checked.get("objects") or {}).get("motions", [])):
+            touched = entry.get("touched")
+            what = (f"may touch {touched}" + (f" (pushed {entry['pushed_m'] * 1000:.0f} mm)" if "pushed_m" in entry
+                                              else " (carried)" if entry.get("carried") else "")) if touched \
+                else f"touches nothing ({entry.get('association')})"
+            offset = entry.get("objects_before_offset_m")
+            if offset is not None and offset > OBJECTS_BEFORE_NOTE:
+                what += f"; the file's objects_before lie up to {offset * 1000:.0f} mm from the checked world"
+            lines.append(f"motion {k}: the tool {what}")
+        if self.checked.get("claimed_lost"):
+            lines.append("the file calls lost: " + ", ".join(self.checked["claimed_lost"])
+                         + " (checked anyway, at their last pose in the checked world)")
         if self.ok:
             lines.append("OK: no violation")
             return "\n".join(lines)
@@ -100,9 +117,13 @@ class CheckReport:
 
 def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits | None = None, margin: float = 0.0,
                      collision_step: float = COLLISION_STEP) -> CheckReport:
-    """Runs every check (module docstring); ``world``: a CollisionWorld, or None to skip collisions."""
+    """Runs every check (module docstring); ``world``: a CollisionWorld, or None to skip collisions. Raises
+    TrajectoryFileError when there is nothing to check (no motion) or ``margin`` leaves no room."""
     lim = limits or FetchLimits.real_fetch()
     names = lim.names
+    if not traj.motions:
+        raise TrajectoryFileError("the trajectory has no motion: nothing to check (and nothing to send to a robot)")
+    check_margin(margin, lim)
     out: list[Violation] = []
     lower = lim.position_lower + margin
     upper = lim.position_upper - margin
@@ -132,6 +153,8 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
                 out.append(Violation("discontinuity", m_index, float(t[k]), names[j], float(step[k, j]), float(allowed[k, j]),
                                      f"{names[j]} jumps by {step[k, j]:.6g} between t = {t[k]:.4f} and {t[k + 1]:.4f} s "
                                      f"(at most {allowed[k, j]:.6g} at the velocity limit)"))
+            _from_positions(out, m_index, t, q, lim)
+            _fields_agree(out, m_index, t, q, v, a, lim)
         for label, idx in (("start", 0), ("end", -1)):
             moving = np.maximum(np.abs(v[idx]), np.abs(a[idx]))
             for j in np.flatnonzero(moving > REST_TOL):
@@ -145,13 +168,89 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
                 out.append(Violation("discontinuity", m_index, 0.0, names[j], float(gap[j]), CONTINUITY_TOL,
                                      f"{names[j]} starts {gap[j]:.6g} away from {where}"))
         previous_end = q[-1]
-    checks = ["position", "velocity", "acceleration", "jerk", "continuity"]
+    checks = ["position", "velocity", "acceleration", "jerk", "continuity",
+              "derivatives from positions", "fields against positions"]
     checked = {"motions": len(traj.motions), "points": points, "margin": margin, "checks": checks}
+    claimed_lost = sorted({n for m in traj.motions for n in m.lost})
+    if claimed_lost:
+        checked["claimed_lost"] = claimed_lost
     if world is not None:
         checks.append("collision" + (" (robot, shelf, objects)" if world.objects else " (robot only)"))
         checked["structural_pairs"] = world.structural_pairs
-        checked["collision_configurations"] = _collisions(out, traj, world, collision_step)
+        checked["structural_reasons"] = world.structural_reasons
+        checked["collision_configurations"] = world.check_motions(traj, out, collision_step, Violation)
+        checked["objects"] = world.report
     return CheckReport(out, checked, dict(zip(names, low_margin.tolist())))
+
+
+def check_margin(margin: float, limits: FetchLimits | None = None) -> None:
+    """Refuses a position margin (rad, m for the torso) that is not a finite number >= 0 or that leaves less than
+    half of any limited joint's range (the narrowest: the torso, 0.386 m) to move in."""
+    lim = limits or FetchLimits.real_fetch()
+    span = lim.position_upper - lim.position_lower
+    finite = np.isfinite(span)
+    largest = float(np.min(span[finite]) / 4.0)
+    if not (np.isfinite(margin) and 0.0 <= margin <= largest):
+        narrow = lim.names[int(np.flatnonzero(finite)[np.argmin(span[finite])])]
+        raise TrajectoryFileError(f"--margin {margin:g} is not between 0 and {largest:.4g} (a quarter of the narrowest "
+                                  f"range, {narrow}'s {4 * largest:.4g}; rad, m for the torso)")
+
+
+def _from_positions(out, motion, t, q, lim) -> None:
+    """Velocity, acceleration and jerk as divided differences of the positions on the file's own time grid.
+
+    v = q[t0, t1], a = 2 q[t0, t1, t2], j = 6 q[t0, .., t3]: each is a positively weighted mean of the true
+    derivative over its points' span, so a motion within the limits never exceeds them. The tolerance is the
+    limit's LIMIT_REL_TOL plus the worst effect of positions rounded to ``POSITION_RESOLUTION`` carried through
+    the differences (at 10 ms: 1e-4 /s, 0.02 /s^2, 4 /s^3)."""
+    names = lim.names
+    h = np.diff(t)[:, None]
+    vel = np.diff(q, axis=0) / h
+    e_v = np.broadcast_to(POSITION_RESOLUTION / h, vel.shape)
+    _bounds(out, "velocity", motion, t[:-1], vel, -(lim.velocity * (1 + LIMIT_REL_TOL) + e_v),
+            lim.velocity * (1 + LIMIT_REL_TOL) + e_v, names, "/s (from positions)")
+    if len(t) < 3:
+        return
+    span2 = (t[2:] - t[:-2])[:, None]
+    acc = 2.0 * np.diff(vel, axis=0) / span2
+    e_a = 2.0 * (e_v[1:] + e_v[:-1]) / span2
+    amax = lim.acceleration * (1 + LIMIT_REL_TOL) + e_a
+    _bounds(out, "acceleration", motion, t[1:-1], acc, -amax, amax, names, "/s^2 (from positions)")
+    if len(t) < 4:
+        return
+    span3 = (t[3:] - t[:-3])[:, None]
+    jerk = 3.0 * np.diff(acc, axis=0) / span3
+    e_j = 3.0 * (e_a[1:] + e_a[:-1]) / span3
+    jmax = lim.jerk * (1 + JERK_REL_TOL) + e_j
+    _bounds(out, "jerk", motion, t[1:-2], jerk, -jmax, jmax, names, "/s^3 (from positions)")
+
+
+def _fields_agree(out, motion, t, q, v, a, lim) -> None:
+    """The file's velocity and acceleration fields must agree with its positions (they are what a controller
+    feeds forward): on each interval of length h,
+
+    - q1 - q0 = h (v0 + v1) / 2 + h^2 (a0 - a1) / 12 within ``FIELD_TOL_Q`` + j_max h^4 / 24 (exact for a cubic,
+      i.e. a jerk-limited profile without a switch inside the interval);
+    - v1 - v0 = h (a0 + a1) / 2 within ``FIELD_TOL_V`` + j_max h^2 / 4 (exact for a linear acceleration; a jerk
+      switch inside the interval costs at most j_max h^2 / 4).
+
+    One violation (kind ``fields``) per joint and motion: the first interval where they contradict."""
+    names = lim.names
+    h = np.diff(t)[:, None]
+    jmax = lim.jerk * (1 + JERK_REL_TOL)
+    rq = np.diff(q, axis=0) - (h / 2 * (v[1:] + v[:-1]) + h ** 2 / 12 * (a[:-1] - a[1:]))
+    tol_q = FIELD_TOL_Q + jmax * h ** 4 / 24
+    rv = np.diff(v, axis=0) - h / 2 * (a[1:] + a[:-1])
+    tol_v = FIELD_TOL_V + jmax * h ** 2 / 4
+    for label, r, tol, unit in (("position change", rq, tol_q, ""), ("velocity change", rv, tol_v, "/s")):
+        bad = np.abs(r) > tol
+        for j in np.flatnonzero(bad.any(axis=0)):
+            k = int(np.argmax(bad[:, j]))
+            field = "velocities" if label == "position change" else "accelerations"
+            out.append(Violation("fields", motion, float(t[k]), names[j], float(r[k, j]), float(tol[k, j]),
+                                 f"{names[j]}'s {field} contradict its {'positions' if field == 'velocities' else 'velocities'}: "
+                                 f"the {label} from t = {t[k]:.4f} to {t[k + 1]:.4f} s differs by {r[k, j]:.6g}{unit} "
+                                 f"from the fields' integral (tolerance {tol[k, j]:.3g}; {int(bad[:, j].sum())} intervals)"))
 
 
 def _bounds(out, kind, motion, t, x, lo, hi, names, unit) -> None:
@@ -161,19 +260,3 @@ def _bounds(out, kind, motion, t, x, lo, hi, names, unit) -> None:
         limit = lo[k, j] if x[k, j] < lo[k, j] else hi[k, j]
         out.append(Violation(kind, motion, float(t[k]), names[j], float(x[k, j]), float(limit),
                              f"{names[j]} {kind} {x[k, j]:.6g} {unit} beyond the limit {limit:.6g} at t = {t[k]:.4f} s"))
-
-
-def _collisions(out, traj, world, step) -> int:
-    count = 0
-    for m_index, m in enumerate(traj.motions):
-        world.place_objects(m.objects_before, m.lost)
-        allowed = (m.action or {}).get("object")
-        extra = np.arange(0.0, m.duration, step) if step and step > 0 else np.zeros(0)
-        times = np.union1d(m.times, extra)
-        qs, _, _ = quintic_hermite(m.times, m.q, m.v, m.a, times)
-        for t, q in zip(times, qs):
-            count += 1
-            for a, b, depth in world.collisions(q, touching_allowed=allowed):
-                out.append(Violation("collision", m_index, float(t), f"{a}/{b}", depth, world.tolerance,
-                                     f"{a} penetrates {b} by {depth * 1000:.1f} mm at t = {t:.4f} s"))
-    return count

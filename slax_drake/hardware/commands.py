@@ -173,12 +173,17 @@ def _station_frames(data: dict, scene):
 
 
 def run_check(args: argparse.Namespace) -> int:
-    from slax_drake.hardware.check import check_trajectory
+    from slax_drake.errors import TrajectoryFileError
+    from slax_drake.hardware.check import check_margin, check_trajectory
     from slax_drake.hardware.collision import CollisionWorld
     from slax_drake.hardware.trajectory_file import load_trajectory
     from slax_drake.io import write_text_atomic
 
+    check_margin(args.margin)
     traj = load_trajectory(args.trajectory)
+    if not traj.motions:
+        raise TrajectoryFileError(f"{args.trajectory}: the file has no motion: nothing to check (and nothing to "
+                                  "send to a robot)")
     world = None
     if not args.no_collision and args.collision_step > 0:
         from slax_drake.resources import check_memory
@@ -188,8 +193,7 @@ def run_check(args: argparse.Namespace) -> int:
                      "configurations)", "use a longer step")
     if not args.no_collision:
         scene, station = _scene_and_station(traj, args.scene, args.station)
-        q_ref = traj.metadata.get("initial_positions") or (traj.motions[0].q[0] if traj.motions else None)
-        world = CollisionWorld(station, scene, q_reference=q_ref)
+        world = CollisionWorld(station, scene)
     report = check_trajectory(traj, world, margin=args.margin, collision_step=args.collision_step)
     print(report.summary())
     if args.json:

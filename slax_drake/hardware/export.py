@@ -136,6 +136,11 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
         for on, off in action["motion"].get("suction_intervals") or []:
             events += [(float(on), True), (float(off), False)]
         act = {k: action[k] for k in ("type", "object", "d", "dx", "dz", "yaw") if k in action}
+        estimate = (entry.get("hypotheses") or {}).get(action.get("object"))
+        if isinstance(estimate, dict):  # what the planner believed of the object it acts on
+            act["estimate"] = {k: estimate[k] for k in ("shape", "size", "x", "y", "yaw") if k in estimate}
+        if action.get("true_object") is not None:  # the simulator's association of the segment to a scene object
+            act["scene_object"] = action["true_object"]
         motions.append(Motion(t0, mt, mq, mv, ma, events, act, entry.get("poses_before"), list(entry.get("lost", []))))
     metadata = {
         "source": source, "config": data.get("config"), "station": data.get("station"),
