@@ -37,7 +37,8 @@ def register(subparsers) -> None:
         description="Independent of the planner: positions (with --margin), velocities, accelerations, jerk (finite "
         "differences of the sampled accelerations), continuity within and between motions, collisions of the robot "
         "with itself, the shelf and the scene's objects. Exit code 0 when all pass, 1 with a report otherwise.")
-    c.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv)")
+    c.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv) or the ROS 2 bag folder (or its "
+                   ".mcap) of 'export --format mcap'")
     c.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export, if any)")
     c.add_argument("--station", default=None, help="station YAML (default: the trial's, or the scene's shelf's)")
     c.add_argument("--margin", type=arguments.non_negative_float, default=0.0, help="position margin inside the limits (rad, m for the torso)")
@@ -121,10 +122,19 @@ def run_export(args: argparse.Namespace) -> int:
     from slax_drake.hardware.trajectory_file import format_of, save_trajectory
     from slax_drake.scene.io import load_scene, save_scene
 
+    from slax_drake.errors import TrialFileError
+
+    if not args.out.strip():
+        raise TrialFileError("--out is empty: give the output file (.json, .yaml or .csv), or the bag folder for "
+                             "--format mcap")
+    if args.format != "mcap":
+        fmt = format_of(args.out)  # refuses an unknown extension before any work
+        if args.format is not None and args.format != fmt:
+            raise TrialFileError(f"--out {args.out} has the extension of {fmt} but --format is {args.format}: the "
+                                 f"extension must match the format (use {Path(args.out).with_suffix(FORMATS[args.format])})")
     data = read_trial(args.trial)
     if args.format == "mcap":
         return _export_bag(args, data)
-    fmt = args.format or format_of(args.out)
     scene = load_scene(args.scene) if args.scene else trial_scene(data)
     traj = export_trial(data, rate=args.rate, source=str(args.trial), scene=scene)
     save_trajectory(traj, args.out, fmt)
@@ -140,7 +150,7 @@ def run_export(args: argparse.Namespace) -> int:
 def _export_bag(args: argparse.Namespace, data: dict) -> int:
     from slax_drake.errors import TrialFileError
     from slax_drake.hardware.export import trial_scene
-    from slax_drake.hardware.rosbag_export import STEP_DEPTH_FILE, read_step_depth, write_trial_bag
+    from slax_drake.hardware.rosbag_export import STEP_DEPTH_FILE, read_step_depth, robot_description, write_trial_bag
     from slax_drake.scene.io import load_scene, save_scene
 
     out = Path(args.out)
@@ -148,9 +158,9 @@ def _export_bag(args: argparse.Namespace, data: dict) -> int:
         raise TrialFileError(f"{out} exists: a bag is never overwritten (remove it or choose another --out)")
     scene = load_scene(args.scene) if args.scene else trial_scene(data)
     depth = read_step_depth(Path(args.trial).parent / STEP_DEPTH_FILE)
-    X_WS, X_WB = _station_frames(data, scene)
+    X_WS, X_WB, station = _station_frames(data, scene)
     summary = write_trial_bag(data, out, scene=scene, depth=depth, X_WS=X_WS, X_WB=X_WB, rate=args.rate,
-                              source=str(args.trial))
+                              source=str(args.trial), robot_description=robot_description(station))
     if args.write_scene:
         save_scene(scene, args.write_scene)
     counts = ", ".join(f"{topic} {n}" for topic, n in summary.counts.items())
@@ -163,13 +173,13 @@ def _export_bag(args: argparse.Namespace, data: dict) -> int:
 
 
 def _station_frames(data: dict, scene):
-    """X_WS (the shelf in the world) and X_WB (the robot's base weld) as 4x4 from the trial's station file."""
+    """X_WS (the shelf in the world) and X_WB (the robot's base weld) as 4x4, and the trial's station."""
     from slax_drake.station.plant import base_pose, shelf_pose
     from slax_drake.station.scenario import load_station_scenario
     from slax_drake.station.scenario import station_for
 
     station = load_station_scenario(data.get("station") or station_for(data.get("config") or "sim_configs/sim_shelf.yaml"))
-    return shelf_pose(station, scene.camera).GetAsMatrix4(), base_pose(station).GetAsMatrix4()
+    return shelf_pose(station, scene.camera).GetAsMatrix4(), base_pose(station).GetAsMatrix4(), station
 
 
 def run_check(args: argparse.Namespace) -> int:

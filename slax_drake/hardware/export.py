@@ -55,7 +55,13 @@ def trial_scene(data: dict):
     from slax_drake.config import load_scenario
     from slax_drake.scene.sampling import sample_scene
 
-    scene = sample_scene(load_scenario(data["config"]), int(data["objects"]), seed=int(data["seed"]))
+    for key in ("objects", "seed"):
+        value = data.get(key)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise TrialFileError(f"the trial's {key!r} must be an integer (got {value!r}); pass --scene")
+    if not isinstance(data.get("config"), str):
+        raise TrialFileError(f"the trial's 'config' must be a scenario path (got {data.get('config')!r}); pass --scene")
+    scene = sample_scene(load_scenario(data["config"]), data["objects"], seed=data["seed"])
     recorded = data.get("initial_objects") or {}
     for o in scene.objects:
         r = recorded.get(o.name)
@@ -87,6 +93,11 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
         raise TrialFileError(f"{source or 'trial'}: executed_trajectory joints {list(names)} are not {list(FETCH_JOINTS)}")
     if times.ndim != 1 or len(times) < 2 or any(x.shape != (len(times), len(names)) for x in (q, v, a)):
         raise TrialFileError(f"{source or 'trial'}: executed_trajectory arrays have inconsistent shapes")
+    for label, x in (("times", times), ("positions", q), ("velocities", v), ("accelerations", a)):
+        if not np.all(np.isfinite(x)):
+            where = np.argwhere(~np.isfinite(x))[0]
+            raise TrialFileError(f"{source or 'trial'}: executed_trajectory.{label} holds a non-finite value "
+                                 f"({float(x[tuple(where)])!r} at index {', '.join(map(str, where))})")
     if not np.all(np.diff(times) > 0):
         raise TrialFileError(f"{source or 'trial'}: executed_trajectory times are not strictly increasing")
     starts = [e for e in data["steps_log"] if "action" in e]
