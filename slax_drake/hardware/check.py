@@ -1,29 +1,39 @@
 """The trajectory checker, written independently of the planner: real Fetch limits, jerk, continuity, collisions.
 
-Checks on every point of every motion of an :class:`~slax_drake.hardware.trajectory_file.ExportedTrajectory`
-(limits from :mod:`slax_drake.hardware.fetch_limits`, never from our model or the planner):
+The checker trusts nothing it checks: the file's positions and times are the motion; its velocity and
+acceleration fields are checked against them, and its claims about the world (``objects_before``, ``lost``, the
+action's names) never make it check less (:mod:`slax_drake.hardware.collision`). Checks on every point of every
+motion of an :class:`~slax_drake.hardware.trajectory_file.ExportedTrajectory` (limits from
+:mod:`slax_drake.hardware.fetch_limits`, never from our model or the planner):
 
-- ``position``: lower + margin <= q <= upper - margin (``margin`` in rad, m for the torso; default 0), with
-  ``POSITION_TOL`` for rounding; continuous joints are unlimited;
-- ``velocity`` and ``acceleration``: |v| <= v_max, |a| <= a_max (relative tolerance ``LIMIT_REL_TOL`` = 0.01 %,
-  covering rounding and the quintic resampling of ``export --rate``);
-- ``jerk``: finite differences of the sampled accelerations, (a[k+1] - a[k]) / (t[k+1] - t[k]), against j_max.
-  For jerk-limited (Ruckig) profiles the difference quotient is the mean jerk over the interval, so it never
-  exceeds j_max; the tolerance is ``JERK_REL_TOL`` of j_max plus 2e-6 / dt for accelerations rounded to 1e-6
-  (trial.json) -- 2e-4 rad/s^3 at 100 Hz;
+- ``position``: lower + margin <= q <= upper - margin (``margin`` in rad, m for the torso; default 0, at most a
+  quarter of the torso's range), with ``POSITION_TOL`` for rounding; continuous joints are unlimited;
+- ``velocity``, ``acceleration``, ``jerk`` from positions: divided differences of the positions on the file's own
+  time grid (v = q[t0, t1], a = 2 q[t0, t1, t2], j = 6 q[t0, .., t3]: weighted means of the true derivative, so a
+  motion within the limits never exceeds them) against the limits, with the limit's relative tolerance plus the
+  effect of positions rounded to ``POSITION_RESOLUTION`` (at 10 ms: 1e-4 /s, 0.02 /s^2, 4 /s^3);
+- ``fields``: the velocity and acceleration fields (what a controller feeds forward) must integrate to the
+  positions and velocities on every interval (:func:`_fields_agree`: tolerance ``FIELD_TOL_Q`` + j_max h^4 / 24
+  and ``FIELD_TOL_V`` + j_max h^2 / 4 for an interval of h s);
+- the fields themselves, once they agree with the positions: |v| <= v_max, |a| <= a_max (relative tolerance
+  ``LIMIT_REL_TOL`` = 0.01 %), and jerk as (a[k+1] - a[k]) / (t[k+1] - t[k]) against j_max (the mean jerk over
+  the interval; tolerance ``JERK_REL_TOL`` of j_max plus 2e-6 / dt for accelerations rounded to 1e-6);
 - ``discontinuity``: within a motion |q[k+1] - q[k]| <= v_max (t[k+1] - t[k]) (1 + LIMIT_REL_TOL) + POSITION_TOL;
   between motions the next motion starts where the previous one ended (``CONTINUITY_TOL``) and each motion
   starts and ends at rest (|v|, |a| <= ``REST_TOL``), since the robot holds still between motions; the first
   motion starts at the trajectory's initial positions when the metadata gives them;
-- ``collision``: :class:`~slax_drake.hardware.collision.CollisionWorld` at every point and at quintic Hermite
-  interpolated configurations every ``collision_step`` seconds in between.
+- ``collision``: :meth:`~slax_drake.hardware.collision.CollisionWorld.check_motions` at every point and at
+  quintic Hermite interpolated configurations every ``collision_step`` seconds in between, in the world of the
+  scene given (the objects moved only by the checker's own model of each push and suction).
 
-Time monotonicity is enforced when the file is read (a non-monotonic file is rejected as malformed).
+A file with no motion, or a margin that leaves no room, is refused (TrajectoryFileError, exit code 2). Time
+monotonicity is enforced when the file is read (a non-monotonic file is rejected as malformed).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -44,7 +54,7 @@ FIELD_TOL_V = 4e-6  # rad/s: two velocities and two accelerations (times h) roun
 
 OBJECTS_BEFORE_NOTE = 0.002  # m: the summary notes objects_before further than this from the checked world
 
-KINDS = ("position", "velocity", "acceleration", "jerk", "discontinuity", "fields", "collision")
+KINDS = ("position", "velocity", "acceleration", "jerk", "discontinuity", "fields", "world", "collision")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -89,8 +99,10 @@ class CheckReport:
                                               else " (carried)" if entry.get("carried") else "")) if touched \
                 else f"touches nothing ({entry.get('association')})"
             offset = entry.get("objects_before_offset_m")
-            if offset is not None and offset > OBJECTS_BEFORE_NOTE:
+            if offset is not None and math.isfinite(offset) and offset > OBJECTS_BEFORE_NOTE:
                 what += f"; the file's objects_before lie up to {offset * 1000:.0f} mm from the checked world"
+            elif offset is not None and not math.isfinite(offset):
+                what += "; the file's objects_before do not name the scene's objects"
             lines.append(f"motion {k}: the tool {what}")
         if self.checked.get("claimed_lost"):
             lines.append("the file calls lost: " + ", ".join(self.checked["claimed_lost"])

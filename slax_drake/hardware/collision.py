@@ -7,10 +7,15 @@ its primitive box or cylinder, standing on the shelf (shelf frame S; z = half th
 object-shelf contacts are filtered out (they rest on each other); what is reported are penetrations deeper than
 ``tolerance`` of the robot into the shelf, the objects and itself.
 
-The world is the scene the checker is given, never the file's claims: the objects start at the scene's poses and
-move only as the checker's own model of each motion moves them (:meth:`CollisionWorld.check_motions`). The file's
-``objects_before`` and ``lost`` are compared with that world and reported, never used to place or remove an
-object: an object the file calls lost (toppled or dropped) is still checked, at its last pose in the world.
+The world is the scene the checker is given, never the file's claims: the first motion is checked with the
+objects at the scene's poses (whatever the file's ``objects_before`` says), and the objects move only as the
+checker's own model of each motion moves them (:meth:`CollisionWorld.check_motions`). Before each later motion
+the file's ``objects_before`` (where the simulator or the robot saw the objects) must agree with that world within
+``WORLD_TOL`` for every object: then they are adopted (the checker's rigid push and carry model drifts from
+real contact by a few millimetres per motion; adopting confirmed poses keeps the drift from adding up); otherwise
+the motion gets a ``world`` violation (it was planned for a world the checker cannot confirm) and is checked in
+the checker's own world. ``lost`` never removes an object: an object the file calls lost (toppled or dropped) is
+still checked, at its pose in the world.
 
 The object an action may touch (``touched`` below) rests on geometry:
 
@@ -27,9 +32,10 @@ The object an action may touch (``touched`` below) rests on geometry:
   most |d| + ``PUSH_SLACK`` in all. A contact while the tool does not advance along the direction (inserting,
   lowering, backing off) or that such a shift cannot clear is a collision;
 - a suction (``type`` suction): before the suction comes on and after it goes off only the cup (its body and rim)
-  may touch the object, by at most ``CUP_PRESS``; while it is on, the object is carried rigidly with the tool from
-  its pose at the suction's start, and the robot's other links must stay clear of it; when the suction goes off,
-  the object stands on the shelf at the released x, y and yaw.
+  may touch the object, by at most ``CUP_PRESS``; once the suction is on and the cup is within ``CUP_REACH`` of
+  the object (the suction comes on before the cup arrives), the object is carried rigidly with the tool, and the
+  robot's other links must stay clear of it; when the suction goes off, the object stands on the shelf at the
+  released x, y and yaw.
 
 Self-collision: bodies joined by a joint are not checked (Drake's default); the model's primitive link shapes also
 overlap structurally at some joints: pairs that penetrate at the station's observation configuration (never a
@@ -47,8 +53,10 @@ TOLERANCE = 0.001  # m of penetration depth before a contact counts as a collisi
 ASSOCIATION_TOL = 0.02  # m: footprint growth when matching an action's estimate to a scene object
 PUSH_SLACK = 0.02  # m: how much further than |d| a pushed object may be moved by the blade
 CUP_PRESS = 0.005  # m: how deep the cup may press into the object it sucks
+CUP_REACH = 0.002  # m: the suction holds the object once the cup is this close to it (and the suction is on)
 PUSH_STEP_SLACK = 0.002  # m: how much further than the tool's own advance one checked step may push the object
 PUSH_BISECTIONS = 10
+WORLD_TOL = 0.02  # m: how far the file's objects_before may lie from the checker's own world and be adopted
 SAMPLES_ACROSS_RANGE = 5  # joint positions tried across a joint's range for a structural pair
 
 
@@ -260,8 +268,19 @@ class CollisionWorld:
         count = 0
         motions = []
         for m_index, m in enumerate(traj.motions):
+            offset, worst = self._offset(m.objects_before)
+            if m_index > 0 and offset is not None:
+                if offset <= WORLD_TOL:
+                    self._adopt(m.objects_before)
+                else:
+                    what = (f"the file's objects_before has no pose for {worst}" if not math.isfinite(offset) else
+                            f"the file's objects_before puts {worst} {offset * 1000:.0f} mm from where the scene and "
+                            f"the checked motions before leave it (more than {WORLD_TOL * 1000:.0f} mm)")
+                    out.append(violation("world", m_index, 0.0, worst, offset, WORLD_TOL,
+                                         what + ": this motion was planned for another world; it is checked in the "
+                                         "checker's own world"))
             name, why = self.associate(m.action)
-            entry = {"touched": name, "association": why, "objects_before_offset_m": self._offset(m.objects_before)}
+            entry = {"touched": name, "association": why, "objects_before_offset_m": offset}
             motions.append(entry)
             extra = np.arange(0.0, m.duration, step) if step and step > 0 else np.zeros(0)
             times = np.union1d(m.times, extra)
@@ -285,15 +304,22 @@ class CollisionWorld:
         self.report = {"motions": motions}
         return count
 
-    def _offset(self, poses) -> float | None:
-        if not isinstance(poses, dict):
-            return None
-        worst = 0.0
+    def _offset(self, poses):
+        """(largest distance m between the file's planar poses and the world's, that object), or (None, None)."""
+        if not isinstance(poses, dict) or not self.objects:
+            return None, None
+        worst, which = 0.0, None
         for name, (x, y, _) in self.poses.items():
             p = poses.get(name)
-            if isinstance(p, dict):
-                worst = max(worst, math.hypot(float(p["x"]) - x, float(p["y"]) - y))
-        return round(worst, 5)
+            d = math.inf if not isinstance(p, dict) else math.hypot(float(p["x"]) - x, float(p["y"]) - y)
+            if which is None or d > worst:
+                worst, which = d, name
+        return (round(worst, 5) if math.isfinite(worst) else math.inf), which
+
+    def _adopt(self, poses) -> None:
+        for name in self.objects:
+            p = poses[name]
+            self.set_planar(name, float(p["x"]), float(p["y"]), float(p["yaw"]))
 
 
 class _Push:
@@ -373,9 +399,9 @@ class _Suction:
     def resolve(self, t):
         w = self.w
         inside = any(a <= t <= b for a, b in self.intervals)
-        if inside and self.X_TO is None:
-            self.X_TO = w.tool_pose().inverse() @ w.pose(self.name)
-        if inside:
+        if inside and self.X_TO is None and self._cup_distance() <= CUP_REACH:
+            self.X_TO = w.tool_pose().inverse() @ w.pose(self.name)  # the cup holds it from here on
+        if inside and self.X_TO is not None:
             w.set_pose(self.name, w.tool_pose() @ self.X_TO)
             self.carried = True
         elif self.X_TO is not None:
@@ -384,10 +410,17 @@ class _Suction:
         keep = []
         for a, b, depth, n in pens:
             if w.object_of_geometry.get(b) == self.name and a in w.tool_geometries:
-                if inside or (a in w.cup_geometries and depth <= CUP_PRESS):
+                if (inside and self.X_TO is not None) or (a in w.cup_geometries and depth <= CUP_PRESS):
                     continue
             keep.append((a, b, depth, n))
         return keep
+
+    def _cup_distance(self) -> float:
+        """The smallest signed distance (m) between the cup's geometries and the object."""
+        w = self.w
+        query = w.scene_graph.get_query_output_port().Eval(w.sg_context)
+        return min(query.ComputeSignedDistancePairClosestPoints(c, g).distance
+                   for c in w.cup_geometries for g, n in w.object_of_geometry.items() if n == self.name)
 
     def _release(self):
         from pydrake.math import RollPitchYaw
