@@ -13,7 +13,7 @@ from slax_drake.cli import main
 pytestmark = pytest.mark.slow
 
 # The default trial and three 6-object trials whose searches are short and take actions (pushes and suctions).
-TRIALS = [(3, 7), (6, 1), (6, 4), (6, 6)]
+TRIALS = [(3, 7), (6, 1), (6, 5), (6, 6)]
 FORMATS = ["t.json", "t.yaml", "t.csv"]
 
 

@@ -246,7 +246,7 @@ def _fields_agree(out, motion, t, q, v, a, lim) -> None:
     - v1 - v0 = h (a0 + a1) / 2 within ``FIELD_TOL_V`` + j_max h^2 / 4 (exact for a linear acceleration; a jerk
       switch inside the interval costs at most j_max h^2 / 4).
 
-    One violation (kind ``fields``) per joint and motion: the first interval where they contradict."""
+    One violation (kind ``fields``) per joint and motion: the interval where they contradict most."""
     names = lim.names
     h = np.diff(t)[:, None]
     jmax = lim.jerk * (1 + JERK_REL_TOL)
@@ -257,7 +257,7 @@ def _fields_agree(out, motion, t, q, v, a, lim) -> None:
     for label, r, tol, unit in (("position change", rq, tol_q, ""), ("velocity change", rv, tol_v, "/s")):
         bad = np.abs(r) > tol
         for j in np.flatnonzero(bad.any(axis=0)):
-            k = int(np.argmax(bad[:, j]))
+            k = int(np.argmax(np.abs(r[:, j]) - tol[:, j]))  # the worst interval
             field = "velocities" if label == "position change" else "accelerations"
             out.append(Violation("fields", motion, float(t[k]), names[j], float(r[k, j]), float(tol[k, j]),
                                  f"{names[j]}'s {field} contradict its {'positions' if field == 'velocities' else 'velocities'}: "
