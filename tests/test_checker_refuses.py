@@ -227,3 +227,21 @@ def test_the_bag_written_by_export_is_checked(traj, tmp_path, scene, capsys):
         assert conns and "transient_local" in str(conns[0].ext.offered_qos_profiles).lower()
         (conn, _, raw), = list(reader.messages(connections=conns))
         assert store.deserialize_cdr(raw, conn.msgtype).data == urdf and "<robot" in urdf
+
+
+def test_objects_before_that_do_not_name_the_scenes_objects_are_a_world_violation(traj, scene, tmp_path, capsys):
+    from slax_drake.scene.io import save_scene
+
+    t = copy.deepcopy(traj)
+    for m in t.motions:
+        m.objects_before = {"segment_9": {"x": 0.0, "y": 0.0, "yaw": 0.0}}
+    path = tmp_path / "t.json"
+    save_trajectory(t, path)
+    save_scene(scene, tmp_path / "scene.json")
+    assert main(["check-trajectory", str(path), "--scene", str(tmp_path / "scene.json"), "--collision-step", "0.05",
+                 "--json", str(tmp_path / "report.json")]) == 1
+    out = capsys.readouterr().out
+    assert "world: 1 in 1" in out and "has no pose for object_" in out  # the second motion; the first uses the scene
+    report = json.loads((tmp_path / "report.json").read_text(), parse_constant=lambda c: pytest.fail(c))
+    world = [v for v in report["violations"] if v["kind"] == "world"]
+    assert len(world) == 1 and world[0]["motion"] == 1 and world[0]["value"] is None

@@ -207,11 +207,23 @@ def run_check(args: argparse.Namespace) -> int:
     report = check_trajectory(traj, world, margin=args.margin, collision_step=args.collision_step)
     print(report.summary())
     if args.json:
-        write_text_atomic(Path(args.json), json.dumps({
-            "ok": report.ok, "checked": report.checked,
-            "margins": {k: (None if v == float("inf") else v) for k, v in report.margins.items()},
-            "violations": [v.__dict__ for v in report.violations]}, indent=1))
+        write_text_atomic(Path(args.json), json.dumps(_finite({
+            "ok": report.ok, "checked": report.checked, "margins": report.margins,
+            "violations": [v.__dict__ for v in report.violations]}), indent=1, allow_nan=False))
     return 0 if report.ok else 1
+
+
+def _finite(x):
+    """``x`` with every non-finite float (an unlimited joint's margin, a missing pose's offset) as None (JSON)."""
+    import math
+
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    return x
 
 
 def run_replay(args: argparse.Namespace) -> int:
