@@ -27,16 +27,20 @@ def register(subparsers) -> None:
                    help="ros-json, ros-yaml (FollowJointTrajectory goals), csv (default: from --out's extension), "
                    "or mcap (a ROS 2 bag folder)")
     p.add_argument("--rate", type=arguments.positive_float, default=None, help="resample at this rate in Hz (default: the trial's records)")
-    p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv), or the bag folder for mcap")
+    p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv; the extension must match "
+                   "--format), or the bag folder for mcap")
     p.add_argument("--scene", default=None, help="scene JSON to embed (default: sampled again from the trial's config and seed)")
     p.add_argument("--write-scene", default=None, help="also write the trial's initial scene as a scene JSON here")
     p.set_defaults(func=run_export)
 
     c = subparsers.add_parser(
         "check-trajectory", help="check an exported trajectory against the real Fetch's limits and for collisions",
-        description="Independent of the planner: positions (with --margin), velocities, accelerations, jerk (finite "
-        "differences of the sampled accelerations), continuity within and between motions, collisions of the robot "
-        "with itself, the shelf and the scene's objects. Exit code 0 when all pass, 1 with a report otherwise.")
+        description="Independent of the planner, trusting nothing in the file: positions (with --margin), velocity, "
+        "acceleration and jerk from the positions on the file's time grid, the velocity and acceleration fields "
+        "against the positions, continuity within and between motions, collisions of the robot with itself, the "
+        "shelf and the scene's objects (the scene given is the world; an object may be touched only by the tool, as "
+        "the action's recorded estimate and the checker's own push and suction model allow). Exit code 0 when all "
+        "pass, 1 with a report otherwise, 2 for an unusable file.")
     c.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv) or the ROS 2 bag folder (or its "
                    ".mcap) of 'export --format mcap'")
     c.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export, if any)")

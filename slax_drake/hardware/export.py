@@ -3,7 +3,10 @@
 The trial records ``executed_trajectory``: the commanded joint trajectory over the whole trial (holds between
 motions), every ``stride``-th 1 ms sample (10 ms by default), rounded to 1e-6. Each action's motion starts at its
 decision time (``steps_log[*].time`` of the entries with an action) and lasts ``actions[*].motion.duration_s``;
-its suction command is on over ``actions[*].motion.suction_intervals`` (seconds from the motion's start).
+its suction command is on over ``actions[*].motion.suction_intervals`` (seconds from the motion's start). Each
+motion's ``action`` carries ``estimate``, the hypothesis the planner acted on (shape, size, x, y, yaw in the shelf
+frame, from the decision's ``hypotheses``), and ``scene_object``, the scene object the trial associated the
+segment with; the checker matches the estimate to its own scene and checks the association.
 
 Export cuts the record into motions: the samples from the motion's start to its end; when the start or the end
 (multiples of 1 ms) falls between two records, the point is added from the record before the start or after the

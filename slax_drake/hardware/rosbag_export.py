@@ -4,6 +4,8 @@ The bag is a folder ``<out>/`` holding ``metadata.yaml`` and ``<out name>.mcap``
 directly, ``ros2 bag play <out>`` plays the folder (ROS 2 Jazzy message definitions, rosbag2 metadata version 9,
 MCAP chunks compressed with zstd).
 
+The bag's ``metadata.yaml`` names ``ros_distro: jazzy`` (the message definitions it is written with).
+
 Clock: every stamp (each message's ``header.stamp`` and its log time in the bag) is the trial's simulation time,
 t = 0 at the start of the simulation, in nanoseconds rounded from the trial's seconds (so the bag starts on
 1970-01-01 in tools that show dates). Messages are written in time order; log times never decrease.
@@ -29,6 +31,13 @@ Topics (one ``rosbags`` connection each):
   the object's height, the object standing on the shelf; a toppled or dropped object, listed in the decision's
   ``lost``, keeps this planar pose), and once more at the trial's end from its final poses (x, y, z, yaw) when
   that is later than the last decision.
+- ``/robot_description`` (std_msgs/String, transient-local QoS), one message at t = 0: the robot's URDF (the
+  station's robot model, ``package://`` mesh paths as in ``models/``), so that RViz and Foxglove draw the robot
+  from ``/joint_states`` and ``/tf_static``.
+- ``/slax_drake/trajectory`` (std_msgs/String, transient-local QoS), one message at t = 0: the exported
+  trajectory's document without its points (JSON, as the CSV's ``# meta`` line: metadata with the scene, and per
+  motion its action with the planner's estimate, objects_before, lost and suction events), so that
+  ``slax-drake check-trajectory`` and ``replay`` read the bag (:func:`read_trajectory_bag`).
 - ``/camera/depth/image`` (sensor_msgs/Image, encoding ``32FC1``, metres along the optical axis, little-endian;
   Drake's values outside the depth range: +inf beyond the far plane, 0 nearer than the near plane) and ``/camera/depth/camera_info`` (sensor_msgs/CameraInfo:
   ``plumb_bob`` with zero distortion, K and P from the scene camera's intrinsics with pixel centres at integer

@@ -7,7 +7,12 @@ own (the suction valve is not a joint). Between motions the robot holds the last
 Joints (:data:`~slax_drake.hardware.fetch_limits.FETCH_JOINTS`): torso_lift_joint (m), the seven arm joints and
 the bluction tool's tool_shaft_joint (rad), named as on the real robot.
 
-Formats (chosen by the file's extension):
+A motion's ``action`` is ``{"type": "push" | "suction", "object": the policy's name for it, "d" | "dx", "dz",
+"yaw", "estimate": {"shape", "size", "x", "y", "yaw"} (what the planner believed of it, shelf frame), "scene_object":
+the scene object it was associated with (optional)}``.
+
+Formats (chosen by the file's extension; a folder or a ``.mcap`` is the ROS 2 bag of ``export --format mcap``,
+read by :func:`slax_drake.hardware.rosbag_export.read_trajectory_bag`):
 
 - ``.json`` (ros-json): ``{"format": "slax-drake-fetch-trajectory", "version": 1, "joint_names": [...],
   "metadata": {...}, "motions": [{"index", "start_time", "action", "objects_before", "lost", "suction_events":
@@ -24,7 +29,8 @@ Formats (chosen by the file's extension):
 
 Floats are written with full precision (Python's repr), so every format parses back to the same numbers
 (YAML times to 1 ns). Loading is strict: any malformed or truncated file, wrong joint names, non-finite numbers
-or non-monotonic time raise :class:`TrajectoryFileError` naming the file and the problem.
+(positions, fields, times, objects_before, the action's numbers, initial positions), an unknown action type or
+non-monotonic time raise :class:`TrajectoryFileError` naming the file and the problem.
 """
 
 from __future__ import annotations
