@@ -245,3 +245,40 @@ def test_objects_before_that_do_not_name_the_scenes_objects_are_a_world_violatio
     report = json.loads((tmp_path / "report.json").read_text(), parse_constant=lambda c: pytest.fail(c))
     world = [v for v in report["violations"] if v["kind"] == "world"]
     assert len(world) == 1 and world[0]["motion"] == 1 and world[0]["value"] is None
+
+
+def test_a_carried_object_must_clear_the_shelf_and_the_other_objects(scene):
+    """A suction motion built for the purpose: the cup reaches object_0 at the observation pose, the suction comes
+    on, and the arm swings; object_1 stands where the carried object passes."""
+    from slax_drake.station.scenario import load_station_scenario
+
+    traj = export_trial(fake_trial())
+    m = copy.deepcopy(traj.motions[1])  # the suction motion of the fake trial
+    station = load_station_scenario(STATION)
+    probe = CollisionWorld(station, scene)
+    probe.set_robot(m.q[0])
+    cup = probe.X_WS.inverse() @ probe.tool_pose()
+    tip = cup.translation() + cup.rotation().matrix()[:, 0] * 0.42  # the cup's tip, 0.42 m along the shaft
+    k = int(np.argmax(np.linalg.norm(m.q - m.q[0], axis=1)))  # the farthest configuration
+    probe.set_robot(m.q[k])
+    far = probe.X_WS.inverse() @ probe.tool_pose()
+    far_tip = far.translation() + far.rotation().matrix()[:, 0] * 0.42
+    objects = []
+    for o in scene.objects:
+        X = np.array(o.X_SO)
+        size = (0.05, 0.05, 2 * max(tip[2], far_tip[2]) + 0.1)
+        if o.name == "object_0":  # touching the cup's tip
+            X[:3, 3] = (tip[0], tip[1] + 0.025, size[2] / 2)
+        else:  # where the carried object will be at the farthest configuration
+            X[:3, 3] = (far_tip[0], far_tip[1] + 0.025, size[2] / 2)
+        objects.append(dataclasses.replace(o, X_SO=X, shape="box", size=size))
+    built = scene.with_objects(objects)
+    m.suction_events = [(0.0, True), (m.duration, False)]
+    m.action = {"type": "suction", "object": "segment_1", "dx": 0.0, "dz": 0.0,
+                "estimate": {"shape": "box", "size": list(objects[0].size), "x": float(tip[0]),
+                             "y": float(tip[1] + 0.025), "yaw": 0.0}}
+    t = ExportedTrajectory([m], {})
+    report = check_trajectory(t, CollisionWorld(station, built), collision_step=0.02)
+    assert report.checked["objects"]["motions"][0]["touched"] == "object_0"
+    hits = {v.what for v in report.violations if v.kind == "collision"}
+    assert "object_0/object_1" in hits, report.summary()

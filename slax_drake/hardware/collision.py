@@ -34,8 +34,10 @@ The object an action may touch (``touched`` below) rests on geometry:
 - a suction (``type`` suction): before the suction comes on and after it goes off only the cup (its body and rim)
   may touch the object, by at most ``CUP_PRESS``; once the suction is on and the cup is within ``CUP_REACH`` of
   the object (the suction comes on before the cup arrives), the object is carried rigidly with the tool, and the
-  robot's other links must stay clear of it; when the suction goes off, the object stands on the shelf at the
-  released x, y and yaw.
+  robot's other links, the shelf's walls and top and the other objects must stay clear of it (it may slide on the
+  support surface); when the suction goes off, the object stands on the shelf at the released x, y and yaw.
+  A pushed object's own contacts with the shelf and the other objects are not checked (pushing it against them
+  is the action model's business).
 
 Self-collision: bodies joined by a joint are not checked (Drake's default); the model's primitive link shapes also
 overlap structurally at some joints: pairs that penetrate at the station's observation configuration (never a
@@ -110,6 +112,7 @@ class CollisionWorld:
         self.cup_geometries = {g for g, n in local.items() if n.startswith("cup")}
         self.object_of_geometry = {g: name for name, (_, b) in self.objects.items() for g in plant.GetCollisionGeometriesForBody(b)}
         self.shelf_geometries = set(geometries([plant.get_body(b) for b in plant.GetBodyIndices(shelf)]))
+        self.shelf_obstacles = {g for g in self.shelf_geometries if inspector.GetName(g).split("::")[-1] != "support"}
         self.body_name = {g: plant.GetBodyFromFrameId(inspector.GetFrameId(g)).name() for g in self.object_of_geometry}
         self.body_name.update({g: plant.GetBodyFromFrameId(inspector.GetFrameId(g)).name() for g in self.robot_geometries})
         self.body_name.update({g: "shelf" for g in self.shelf_geometries})
@@ -292,9 +295,7 @@ class CollisionWorld:
                 count += 1
                 self.set_robot(q)
                 pens = model.resolve(t) if model is not None else self._penetrations()
-                for a, b, depth, _ in pens:
-                    if a not in self.robot_geometries:
-                        continue
+                for a, b, depth, _ in pens:  # robot pairs, and a carried object's (the only other ones allowed)
                     what = f"{self.body_name[a]}/{self.body_name.get(b, '?')}"
                     out.append(violation("collision", m_index, float(t), what, depth, self.tolerance,
                                          f"{self.body_name[a]} penetrates {self.body_name.get(b, '?')} by "
@@ -401,6 +402,7 @@ class _Suction:
         inside = any(a <= t <= b for a, b in self.intervals)
         if inside and self.X_TO is None and self._cup_distance() <= CUP_REACH:
             self.X_TO = w.tool_pose().inverse() @ w.pose(self.name)  # the cup holds it from here on
+            self._filter(carried=True)
         if inside and self.X_TO is not None:
             w.set_pose(self.name, w.tool_pose() @ self.X_TO)
             self.carried = True
@@ -412,8 +414,22 @@ class _Suction:
             if w.object_of_geometry.get(b) == self.name and a in w.tool_geometries:
                 if (inside and self.X_TO is not None) or (a in w.cup_geometries and depth <= CUP_PRESS):
                     continue
+            if a not in w.robot_geometries and w.object_of_geometry.get(b) == self.name:
+                a, b, n = b, a, -n  # the carried object first: "object_3 penetrates object_0"
             keep.append((a, b, depth, n))
         return keep
+
+    def _filter(self, carried: bool) -> None:
+        """While carried, the object's contacts with the shelf's walls and top and with the other objects count
+        (its support surface does not: a carried object may slide on it)."""
+        from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
+
+        w = self.w
+        mine = GeometrySet([g for g, n in w.object_of_geometry.items() if n == self.name])
+        others = GeometrySet([g for g, n in w.object_of_geometry.items() if n != self.name] + list(w.shelf_obstacles))
+        decl = CollisionFilterDeclaration()
+        decl = decl.AllowBetween(mine, others) if carried else decl.ExcludeBetween(mine, others)
+        w.scene_graph.collision_filter_manager(w.sg_context).Apply(decl)
 
     def _cup_distance(self) -> float:
         """The smallest signed distance (m) between the cup's geometries and the object."""
@@ -430,6 +446,7 @@ class _Suction:
         yaw = float(RollPitchYaw(X.rotation()).yaw_angle())
         w.set_planar(self.name, float(X.translation()[0]), float(X.translation()[1]), yaw)
         self.X_TO = None
+        self._filter(carried=False)
 
     def finish(self, entry):
         if self.X_TO is not None:
