@@ -282,3 +282,9 @@ def test_a_carried_object_must_clear_the_shelf_and_the_other_objects(scene):
     assert report.checked["objects"]["motions"][0]["touched"] == "object_0"
     hits = {v.what for v in report.violations if v.kind == "collision"}
     assert "object_0/object_1" in hits, report.summary()
+
+
+@pytest.mark.parametrize("rate", [1000.0, 250.0, 30.0, 7.0])
+def test_resampled_exports_keep_fields_that_agree_with_their_positions(rate):
+    report = check_trajectory(export_trial(fake_trial(), rate=rate))
+    assert report.ok, report.summary()

@@ -51,6 +51,8 @@ COLLISION_STEP = 0.005  # s
 POSITION_RESOLUTION = 1e-6  # rad or m: trial.json rounds positions to 1e-6; resampling (--rate) stays within it
 FIELD_TOL_Q = 2 * POSITION_RESOLUTION + 1e-7  # rad or m: two rounded positions, plus the fields' rounding
 FIELD_TOL_V = 4e-6  # rad/s: two velocities and two accelerations (times h) rounded to 1e-6
+FIELD_ACCEL_REL = 0.05  # of a_max: how far the acceleration fields may lie from the positions' profile
+FIELD_VELOCITY_S = 0.0025  # s, times a_max: how far the velocity fields may lie from it
 
 OBJECTS_BEFORE_NOTE = 0.002  # m: the summary notes objects_before further than this from the checked world
 
@@ -241,19 +243,28 @@ def _fields_agree(out, motion, t, q, v, a, lim) -> None:
     """The file's velocity and acceleration fields must agree with its positions (they are what a controller
     feeds forward): on each interval of length h,
 
-    - q1 - q0 = h (v0 + v1) / 2 + h^2 (a0 - a1) / 12 within ``FIELD_TOL_Q`` + j_max h^4 / 24 (exact for a cubic,
-      i.e. a jerk-limited profile without a switch inside the interval);
-    - v1 - v0 = h (a0 + a1) / 2 within ``FIELD_TOL_V`` + j_max h^2 / 4 (exact for a linear acceleration; a jerk
-      switch inside the interval costs at most j_max h^2 / 4).
+    - q1 - q0 = h (v0 + v1) / 2 + h^2 (a0 - a1) / 12 within ``FIELD_TOL_Q`` + j_max h^4 / 24 + h dv + h^2 da / 6
+      (exact for a cubic, i.e. a jerk-limited profile without a switch inside the interval; a jerk switch costs at
+      most j_max h^4 / 62);
+    - v1 - v0 = h (a0 + a1) / 2 within ``FIELD_TOL_V`` + j_max h^2 / 4 + h da (exact for a linear acceleration; a
+      jerk switch inside the interval costs at most j_max h^2 / 4);
+
+    where da = ``FIELD_ACCEL_REL`` a_max and dv = ``FIELD_VELOCITY_S`` a_max are how far the fields may lie from
+    the profile through the positions: ``export --rate`` interpolates accelerations linearly between 10 ms
+    records, off by up to j_max * 5 ms = 5 % of a_max at a jerk switch (the Fetch's j_max is 10 a_max per s).
+    A chattering joint (+-0.01 rad every 10 ms: 0.02 rad against about 1e-5) or zero fields on a moving joint
+    (v h against h dv: caught above 0.4 % of a_max per s, about 4 mrad/s) stand far outside.
 
     One violation (kind ``fields``) per joint and motion: the interval where they contradict most."""
     names = lim.names
     h = np.diff(t)[:, None]
     jmax = lim.jerk * (1 + JERK_REL_TOL)
+    da = FIELD_ACCEL_REL * lim.acceleration  # what the fields may be off by: export --rate's resampling error
+    dv = FIELD_VELOCITY_S * lim.acceleration
     rq = np.diff(q, axis=0) - (h / 2 * (v[1:] + v[:-1]) + h ** 2 / 12 * (a[:-1] - a[1:]))
-    tol_q = FIELD_TOL_Q + jmax * h ** 4 / 24
+    tol_q = FIELD_TOL_Q + jmax * h ** 4 / 24 + h * dv + h ** 2 * da / 6
     rv = np.diff(v, axis=0) - h / 2 * (a[1:] + a[:-1])
-    tol_v = FIELD_TOL_V + jmax * h ** 2 / 4
+    tol_v = FIELD_TOL_V + jmax * h ** 2 / 4 + h * da
     for label, r, tol, unit in (("position change", rq, tol_q, ""), ("velocity change", rv, tol_v, "/s")):
         bad = np.abs(r) > tol
         for j in np.flatnonzero(bad.any(axis=0)):

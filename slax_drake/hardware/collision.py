@@ -226,13 +226,6 @@ class CollisionWorld:
             out.append((a, b, float(p.depth), -n))  # -n: from the robot-side geometry into the other
         return out
 
-    def collisions(self, q) -> list[tuple[str, str, float]]:
-        """(body A, body B, depth m) of every robot penetration deeper than the tolerance at robot positions q
-        (9), with the objects where they are now."""
-        self.set_robot(q)
-        return [(self.body_name[a], self.body_name.get(b, "?"), d) for a, b, d, _ in self._penetrations()
-                if a in self.robot_geometries]
-
     # -- association ----------------------------------------------------------------------------------------
     def associate(self, action: dict | None):
         """(scene object name or None, reason) for the object the action may touch (module docstring)."""
