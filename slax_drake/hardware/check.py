@@ -13,8 +13,8 @@ motion of an :class:`~slax_drake.hardware.trajectory_file.ExportedTrajectory` (l
   motion within the limits never exceeds them) against the limits, with the limit's relative tolerance plus the
   effect of positions rounded to ``POSITION_RESOLUTION`` (at 10 ms: 1e-4 /s, 0.02 /s^2, 4 /s^3);
 - ``fields``: the velocity and acceleration fields (what a controller feeds forward) must integrate to the
-  positions and velocities on every interval (:func:`_fields_agree`: tolerance ``FIELD_TOL_Q`` + j_max h^4 / 24
-  and ``FIELD_TOL_V`` + j_max h^2 / 4 for an interval of h s);
+  positions and velocities on every interval, within rounding, a jerk switch inside the interval and the
+  resampling error of ``export --rate`` (:func:`_fields_agree`);
 - the fields themselves, once they agree with the positions: |v| <= v_max, |a| <= a_max (relative tolerance
   ``LIMIT_REL_TOL`` = 0.01 %), and jerk as (a[k+1] - a[k]) / (t[k+1] - t[k]) against j_max (the mean jerk over
   the interval; tolerance ``JERK_REL_TOL`` of j_max plus 2e-6 / dt for accelerations rounded to 1e-6);
