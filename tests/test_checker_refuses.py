@@ -13,7 +13,7 @@ from slax_drake.hardware.check import check_trajectory
 from slax_drake.hardware.collision import CollisionWorld
 from slax_drake.hardware.export import export_trial
 from slax_drake.hardware.fetch_limits import FETCH_JOINTS
-from slax_drake.hardware.trajectory_file import ExportedTrajectory, load_trajectory, save_trajectory
+from slax_drake.hardware.trajectory_file import ExportedTrajectory, Motion, load_trajectory, save_trajectory
 
 J = {n: i for i, n in enumerate(FETCH_JOINTS)}
 STATION = "sim_configs/station_sim_shelf.yaml"
@@ -288,3 +288,52 @@ def test_a_carried_object_must_clear_the_shelf_and_the_other_objects(scene):
 def test_resampled_exports_keep_fields_that_agree_with_their_positions(rate):
     report = check_trajectory(export_trial(fake_trial(), rate=rate))
     assert report.ok, report.summary()
+
+
+def test_a_push_is_allowed_only_along_the_commanded_direction(scene):
+    """A push motion built for the purpose: the fake push swings the tool 16 mm along -x_S and back along +x_S
+    (its shaft lies along x_S); checked from the turn on, with a small box 0.5 mm beyond the cup's tip (+x) there.
+    Commanded d > 0 the tool pushes it (and it moves); commanded d < 0 the same contact is a collision."""
+    from pydrake.math import RigidTransform
+
+    from slax_drake.station.scenario import load_station_scenario
+
+    traj = export_trial(fake_trial())
+    m = traj.motions[0]
+    station = load_station_scenario(STATION)
+    size = (0.03, 0.03, 0.3)
+    objects = []
+    for o in scene.objects:
+        X = np.eye(4)
+        X[:3, 3] = (5.0, 5.0, size[2] / 2)  # out of the way until placed below
+        objects.append(dataclasses.replace(o, X_SO=X, shape="box", size=size))
+    world = CollisionWorld(station, scene.with_objects(objects))
+    xs = []
+    for q in m.q:
+        world.set_robot(q)
+        xs.append((world.X_WS.inverse() @ world.tool_pose()).translation()[0])
+    turn = int(np.argmin(xs))  # from here the tool moves along +x_S: the motion checked starts here
+    m = Motion(0.0, m.times[turn:] - m.times[turn], m.q[turn:], m.v[turn:], m.a[turn:])
+    world.set_robot(m.q[0])
+    tip = (world.X_WS.inverse() @ world.tool_pose() @ RigidTransform([0.42, 0.0, 0.0])).translation()
+    touching = lambda x: (world.set_planar("object_0", x, tip[1], 0.0),  # noqa: E731
+                          any(world.object_of_geometry.get(b) == "object_0" for _, b, _, _ in world._penetrations()))[1]
+    lo, hi = tip[0], tip[0] + 0.2  # find the box's x where it first touches the tool, coming from +x
+    assert touching(lo) and not touching(hi), "the probe must straddle the tool"
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if touching(mid) else (lo, mid)
+    x0 = hi + 0.0005
+    objects[0] = dataclasses.replace(objects[0], X_SO=np.array([[1, 0, 0, x0], [0, 1, 0, tip[1]],
+                                                                  [0, 0, 1, size[2] / 2], [0, 0, 0, 1.0]]))
+    world = CollisionWorld(station, scene.with_objects(objects))
+    estimate = {"shape": "box", "size": list(size), "x": x0, "y": float(tip[1]), "yaw": 0.0}
+    results = {}
+    for d in (0.05, -0.05):
+        m.action = {"type": "push", "object": "segment_1", "d": d, "estimate": estimate}
+        results[d] = check_trajectory(ExportedTrajectory([m], {}), world, collision_step=0.0)
+    entry = results[0.05].checked["objects"]["motions"][0]
+    assert entry["touched"] == "object_0" and entry["pushed_m"] > 0.005, results[0.05].summary()
+    assert not [v for v in results[0.05].violations if v.what.endswith("/object_0")], results[0.05].summary()
+    hits = [v for v in results[-0.05].violations if v.kind == "collision" and v.what.endswith("/object_0")]
+    assert hits and results[-0.05].checked["objects"]["motions"][0]["pushed_m"] == 0.0, results[-0.05].summary()
