@@ -1,34 +1,44 @@
 """The trajectory checker, written independently of the planner: real Fetch limits, jerk, continuity, collisions.
 
-Checks on every point of every motion of an :class:`~slax_drake.hardware.trajectory_file.ExportedTrajectory`
-(limits from :mod:`slax_drake.hardware.fetch_limits`, never from our model or the planner):
+The checker trusts nothing it checks: the file's positions and times are the motion; its velocity and
+acceleration fields are checked against them, and its claims about the world (``objects_before``, ``lost``, the
+action's names) never make it check less (:mod:`slax_drake.hardware.collision`). Checks on every point of every
+motion of an :class:`~slax_drake.hardware.trajectory_file.ExportedTrajectory` (limits from
+:mod:`slax_drake.hardware.fetch_limits`, never from our model or the planner):
 
-- ``position``: lower + margin <= q <= upper - margin (``margin`` in rad, m for the torso; default 0), with
-  ``POSITION_TOL`` for rounding; continuous joints are unlimited;
-- ``velocity`` and ``acceleration``: |v| <= v_max, |a| <= a_max (relative tolerance ``LIMIT_REL_TOL`` = 0.01 %,
-  covering rounding and the quintic resampling of ``export --rate``);
-- ``jerk``: finite differences of the sampled accelerations, (a[k+1] - a[k]) / (t[k+1] - t[k]), against j_max.
-  For jerk-limited (Ruckig) profiles the difference quotient is the mean jerk over the interval, so it never
-  exceeds j_max; the tolerance is ``JERK_REL_TOL`` of j_max plus 2e-6 / dt for accelerations rounded to 1e-6
-  (trial.json) -- 2e-4 rad/s^3 at 100 Hz;
+- ``position``: lower + margin <= q <= upper - margin (``margin`` in rad, m for the torso; default 0, at most a
+  quarter of the torso's range), with ``POSITION_TOL`` for rounding; continuous joints are unlimited;
+- ``velocity``, ``acceleration``, ``jerk`` from positions: divided differences of the positions on the file's own
+  time grid (v = q[t0, t1], a = 2 q[t0, t1, t2], j = 6 q[t0, .., t3]: weighted means of the true derivative, so a
+  motion within the limits never exceeds them) against the limits, with the limit's relative tolerance plus the
+  effect of positions rounded to ``POSITION_RESOLUTION`` (at 10 ms: 1e-4 /s, 0.02 /s^2, 4 /s^3);
+- ``fields``: the velocity and acceleration fields (what a controller feeds forward) must integrate to the
+  positions and velocities on every interval, within rounding, a jerk switch inside the interval and the
+  resampling error of ``export --rate`` (:func:`_fields_agree`);
+- the fields themselves, once they agree with the positions: |v| <= v_max, |a| <= a_max (relative tolerance
+  ``LIMIT_REL_TOL`` = 0.01 %), and jerk as (a[k+1] - a[k]) / (t[k+1] - t[k]) against j_max (the mean jerk over
+  the interval; tolerance ``JERK_REL_TOL`` of j_max plus 2e-6 / dt for accelerations rounded to 1e-6);
 - ``discontinuity``: within a motion |q[k+1] - q[k]| <= v_max (t[k+1] - t[k]) (1 + LIMIT_REL_TOL) + POSITION_TOL;
   between motions the next motion starts where the previous one ended (``CONTINUITY_TOL``) and each motion
   starts and ends at rest (|v|, |a| <= ``REST_TOL``), since the robot holds still between motions; the first
   motion starts at the trajectory's initial positions when the metadata gives them;
-- ``collision``: :class:`~slax_drake.hardware.collision.CollisionWorld` at every point and at quintic Hermite
-  interpolated configurations every ``collision_step`` seconds in between.
+- ``collision``: :meth:`~slax_drake.hardware.collision.CollisionWorld.check_motions` at every point and at
+  quintic Hermite interpolated configurations every ``collision_step`` seconds in between, in the world of the
+  scene given (the objects moved only by the checker's own model of each push and suction).
 
-Time monotonicity is enforced when the file is read (a non-monotonic file is rejected as malformed).
+A file with no motion, or a margin that leaves no room, is refused (TrajectoryFileError, exit code 2). Time
+monotonicity is enforced when the file is read (a non-monotonic file is rejected as malformed).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
+from slax_drake.errors import TrajectoryFileError
 from slax_drake.hardware.fetch_limits import FetchLimits
-from slax_drake.hardware.interpolation import quintic_hermite
 from slax_drake.hardware.trajectory_file import ExportedTrajectory
 
 POSITION_TOL = 1e-6  # rad or m
@@ -38,8 +48,15 @@ JERK_ROUNDING = 2e-6  # rad/s^2: two accelerations rounded to 1e-6
 CONTINUITY_TOL = 1e-6  # rad or m
 REST_TOL = 1e-6  # rad/s and rad/s^2
 COLLISION_STEP = 0.005  # s
+POSITION_RESOLUTION = 1e-6  # rad or m: trial.json rounds positions to 1e-6; resampling (--rate) stays within it
+FIELD_TOL_Q = 2 * POSITION_RESOLUTION + 1e-7  # rad or m: two rounded positions, plus the fields' rounding
+FIELD_TOL_V = 4e-6  # rad/s: two velocities and two accelerations (times h) rounded to 1e-6
+FIELD_ACCEL_REL = 0.05  # of a_max: how far the acceleration fields may lie from the positions' profile
+FIELD_VELOCITY_S = 0.0025  # s, times a_max: how far the velocity fields may lie from it
 
-KINDS = ("position", "velocity", "acceleration", "jerk", "discontinuity", "collision")
+OBJECTS_BEFORE_NOTE = 0.002  # m: the summary notes objects_before further than this from the checked world
+
+KINDS = ("position", "velocity", "acceleration", "jerk", "discontinuity", "fields", "world", "collision")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,9 +92,23 @@ class CheckReport:
     def summary(self, max_lines: int = 5) -> str:
         lines = [f"checked {self.checked['motions']} motions, {self.checked['points']} points "
                  f"({', '.join(self.checked['checks'])})"]
-        if self.checked.get("structural_pairs"):
-            lines.append("self-collision pairs overlapping at the reference pose (not checked): "
-                         + ", ".join(f"{a}/{b}" for a, b in self.checked["structural_pairs"]))
+        reasons = self.checked.get("structural_reasons") or {}
+        for a, b in self.checked.get("structural_pairs") or ():
+            lines.append(f"self-collision pair not checked: {a}/{b}: {reasons.get(f'{a}/{b}', '')}")
+        for k, entry in enumerate((self.checked.get("objects") or {}).get("motions", [])):
+            touched = entry.get("touched")
+            what = (f"may touch {touched}" + (f" (pushed {entry['pushed_m'] * 1000:.0f} mm)" if "pushed_m" in entry
+                                              else " (carried)" if entry.get("carried") else "")) if touched \
+                else f"touches nothing ({entry.get('association')})"
+            offset = entry.get("objects_before_offset_m")
+            if offset is not None and math.isfinite(offset) and offset > OBJECTS_BEFORE_NOTE:
+                what += f"; the file's objects_before lie up to {offset * 1000:.0f} mm from the checked world"
+            elif offset is not None and not math.isfinite(offset):
+                what += "; the file's objects_before do not name the scene's objects"
+            lines.append(f"motion {k}: the tool {what}")
+        if self.checked.get("claimed_lost"):
+            lines.append("the file calls lost: " + ", ".join(self.checked["claimed_lost"])
+                         + " (checked anyway, at their last pose in the checked world)")
         if self.ok:
             lines.append("OK: no violation")
             return "\n".join(lines)
@@ -100,9 +131,13 @@ class CheckReport:
 
 def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits | None = None, margin: float = 0.0,
                      collision_step: float = COLLISION_STEP) -> CheckReport:
-    """Runs every check (module docstring); ``world``: a CollisionWorld, or None to skip collisions."""
+    """Runs every check (module docstring); ``world``: a CollisionWorld, or None to skip collisions. Raises
+    TrajectoryFileError when there is nothing to check (no motion) or ``margin`` leaves no room."""
     lim = limits or FetchLimits.real_fetch()
     names = lim.names
+    if not traj.motions:
+        raise TrajectoryFileError("the trajectory has no motion: nothing to check (and nothing to send to a robot)")
+    check_margin(margin, lim)
     out: list[Violation] = []
     lower = lim.position_lower + margin
     upper = lim.position_upper - margin
@@ -132,6 +167,8 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
                 out.append(Violation("discontinuity", m_index, float(t[k]), names[j], float(step[k, j]), float(allowed[k, j]),
                                      f"{names[j]} jumps by {step[k, j]:.6g} between t = {t[k]:.4f} and {t[k + 1]:.4f} s "
                                      f"(at most {allowed[k, j]:.6g} at the velocity limit)"))
+            _from_positions(out, m_index, t, q, lim)
+            _fields_agree(out, m_index, t, q, v, a, lim)
         for label, idx in (("start", 0), ("end", -1)):
             moving = np.maximum(np.abs(v[idx]), np.abs(a[idx]))
             for j in np.flatnonzero(moving > REST_TOL):
@@ -145,13 +182,98 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
                 out.append(Violation("discontinuity", m_index, 0.0, names[j], float(gap[j]), CONTINUITY_TOL,
                                      f"{names[j]} starts {gap[j]:.6g} away from {where}"))
         previous_end = q[-1]
-    checks = ["position", "velocity", "acceleration", "jerk", "continuity"]
+    checks = ["position", "velocity", "acceleration", "jerk", "continuity",
+              "derivatives from positions", "fields against positions"]
     checked = {"motions": len(traj.motions), "points": points, "margin": margin, "checks": checks}
+    claimed_lost = sorted({n for m in traj.motions for n in m.lost})
+    if claimed_lost:
+        checked["claimed_lost"] = claimed_lost
     if world is not None:
         checks.append("collision" + (" (robot, shelf, objects)" if world.objects else " (robot only)"))
         checked["structural_pairs"] = world.structural_pairs
-        checked["collision_configurations"] = _collisions(out, traj, world, collision_step)
+        checked["structural_reasons"] = world.structural_reasons
+        checked["collision_configurations"] = world.check_motions(traj, out, collision_step, Violation)
+        checked["objects"] = world.report
     return CheckReport(out, checked, dict(zip(names, low_margin.tolist())))
+
+
+def check_margin(margin: float, limits: FetchLimits | None = None) -> None:
+    """Refuses a position margin (rad, m for the torso) that is not a finite number >= 0 or that leaves less than
+    half of any limited joint's range (the narrowest: the torso, 0.386 m) to move in."""
+    lim = limits or FetchLimits.real_fetch()
+    span = lim.position_upper - lim.position_lower
+    finite = np.isfinite(span)
+    largest = float(np.min(span[finite]) / 4.0)
+    if not (np.isfinite(margin) and 0.0 <= margin <= largest):
+        narrow = lim.names[int(np.flatnonzero(finite)[np.argmin(span[finite])])]
+        raise TrajectoryFileError(f"--margin {margin:g} is not between 0 and {largest:.4g} (a quarter of the narrowest "
+                                  f"range, {narrow}'s {4 * largest:.4g}; rad, m for the torso)")
+
+
+def _from_positions(out, motion, t, q, lim) -> None:
+    """Velocity, acceleration and jerk as divided differences of the positions on the file's own time grid.
+
+    v = q[t0, t1], a = 2 q[t0, t1, t2], j = 6 q[t0, .., t3]: each is a positively weighted mean of the true
+    derivative over its points' span, so a motion within the limits never exceeds them. The tolerance is the
+    limit's LIMIT_REL_TOL plus the worst effect of positions rounded to ``POSITION_RESOLUTION`` carried through
+    the differences (at 10 ms: 1e-4 /s, 0.02 /s^2, 4 /s^3)."""
+    names = lim.names
+    h = np.diff(t)[:, None]
+    vel = np.diff(q, axis=0) / h
+    e_v = np.broadcast_to(POSITION_RESOLUTION / h, vel.shape)
+    _bounds(out, "velocity", motion, t[:-1], vel, -(lim.velocity * (1 + LIMIT_REL_TOL) + e_v),
+            lim.velocity * (1 + LIMIT_REL_TOL) + e_v, names, "/s (from positions)")
+    if len(t) < 3:
+        return
+    span2 = (t[2:] - t[:-2])[:, None]
+    acc = 2.0 * np.diff(vel, axis=0) / span2
+    e_a = 2.0 * (e_v[1:] + e_v[:-1]) / span2
+    amax = lim.acceleration * (1 + LIMIT_REL_TOL) + e_a
+    _bounds(out, "acceleration", motion, t[1:-1], acc, -amax, amax, names, "/s^2 (from positions)")
+    if len(t) < 4:
+        return
+    span3 = (t[3:] - t[:-3])[:, None]
+    jerk = 3.0 * np.diff(acc, axis=0) / span3
+    e_j = 3.0 * (e_a[1:] + e_a[:-1]) / span3
+    jmax = lim.jerk * (1 + JERK_REL_TOL) + e_j
+    _bounds(out, "jerk", motion, t[1:-2], jerk, -jmax, jmax, names, "/s^3 (from positions)")
+
+
+def _fields_agree(out, motion, t, q, v, a, lim) -> None:
+    """The file's velocity and acceleration fields must agree with its positions (they are what a controller
+    feeds forward): on each interval of length h,
+
+    - q1 - q0 = h (v0 + v1) / 2 + h^2 (a0 - a1) / 12 within ``FIELD_TOL_Q`` + j_max h^4 / 24 + h dv + h^2 da / 6
+      (exact for a cubic, i.e. a jerk-limited profile without a switch inside the interval; a jerk switch costs at
+      most j_max h^4 / 62);
+    - v1 - v0 = h (a0 + a1) / 2 within ``FIELD_TOL_V`` + j_max h^2 / 4 + h da (exact for a linear acceleration; a
+      jerk switch inside the interval costs at most j_max h^2 / 4);
+
+    where da = ``FIELD_ACCEL_REL`` a_max and dv = ``FIELD_VELOCITY_S`` a_max are how far the fields may lie from
+    the profile through the positions: ``export --rate`` interpolates accelerations linearly between 10 ms
+    records, off by up to j_max * 5 ms = 5 % of a_max at a jerk switch (the Fetch's j_max is 10 a_max per s).
+    A chattering joint (+-0.01 rad every 10 ms: 0.02 rad against about 1e-5) or zero fields on a moving joint
+    (v h against h dv: caught above 0.4 % of a_max per s, about 4 mrad/s) stand far outside.
+
+    One violation (kind ``fields``) per joint and motion: the interval where they contradict most."""
+    names = lim.names
+    h = np.diff(t)[:, None]
+    jmax = lim.jerk * (1 + JERK_REL_TOL)
+    da = FIELD_ACCEL_REL * lim.acceleration  # what the fields may be off by: export --rate's resampling error
+    dv = FIELD_VELOCITY_S * lim.acceleration
+    rq = np.diff(q, axis=0) - (h / 2 * (v[1:] + v[:-1]) + h ** 2 / 12 * (a[:-1] - a[1:]))
+    tol_q = FIELD_TOL_Q + jmax * h ** 4 / 24 + h * dv + h ** 2 * da / 6
+    rv = np.diff(v, axis=0) - h / 2 * (a[1:] + a[:-1])
+    tol_v = FIELD_TOL_V + jmax * h ** 2 / 4 + h * da
+    for label, r, tol, unit in (("position change", rq, tol_q, ""), ("velocity change", rv, tol_v, "/s")):
+        bad = np.abs(r) > tol
+        for j in np.flatnonzero(bad.any(axis=0)):
+            k = int(np.argmax(np.abs(r[:, j]) - tol[:, j]))  # the worst interval
+            field = "velocities" if label == "position change" else "accelerations"
+            out.append(Violation("fields", motion, float(t[k]), names[j], float(r[k, j]), float(tol[k, j]),
+                                 f"{names[j]}'s {field} contradict its {'positions' if field == 'velocities' else 'velocities'}: "
+                                 f"the {label} from t = {t[k]:.4f} to {t[k + 1]:.4f} s differs by {r[k, j]:.6g}{unit} "
+                                 f"from the fields' integral (tolerance {tol[k, j]:.3g}; {int(bad[:, j].sum())} intervals)"))
 
 
 def _bounds(out, kind, motion, t, x, lo, hi, names, unit) -> None:
@@ -161,19 +283,3 @@ def _bounds(out, kind, motion, t, x, lo, hi, names, unit) -> None:
         limit = lo[k, j] if x[k, j] < lo[k, j] else hi[k, j]
         out.append(Violation(kind, motion, float(t[k]), names[j], float(x[k, j]), float(limit),
                              f"{names[j]} {kind} {x[k, j]:.6g} {unit} beyond the limit {limit:.6g} at t = {t[k]:.4f} s"))
-
-
-def _collisions(out, traj, world, step) -> int:
-    count = 0
-    for m_index, m in enumerate(traj.motions):
-        world.place_objects(m.objects_before, m.lost)
-        allowed = (m.action or {}).get("object")
-        extra = np.arange(0.0, m.duration, step) if step and step > 0 else np.zeros(0)
-        times = np.union1d(m.times, extra)
-        qs, _, _ = quintic_hermite(m.times, m.q, m.v, m.a, times)
-        for t, q in zip(times, qs):
-            count += 1
-            for a, b, depth in world.collisions(q, touching_allowed=allowed):
-                out.append(Violation("collision", m_index, float(t), f"{a}/{b}", depth, world.tolerance,
-                                     f"{a} penetrates {b} by {depth * 1000:.1f} mm at t = {t:.4f} s"))
-    return count

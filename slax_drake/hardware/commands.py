@@ -28,17 +28,22 @@ def register(subparsers) -> None:
                    help="ros-json, ros-yaml (FollowJointTrajectory goals), csv (default: from --out's extension), "
                    "or mcap (a ROS 2 bag folder)")
     p.add_argument("--rate", type=arguments.positive_float, default=None, help="resample at this rate in Hz (default: the trial's records)")
-    p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv), or the bag folder for mcap")
+    p.add_argument("--out", required=True, help="output file (.json, .yaml or .csv; the extension must match "
+                   "--format), or the bag folder for mcap")
     p.add_argument("--scene", default=None, help="scene JSON to embed (default: sampled again from the trial's config and seed)")
     p.add_argument("--write-scene", default=None, help="also write the trial's initial scene as a scene JSON here")
     p.set_defaults(func=run_export)
 
     c = subparsers.add_parser(
         "check-trajectory", help="check an exported trajectory against the real Fetch's limits and for collisions",
-        description="Independent of the planner: positions (with --margin), velocities, accelerations, jerk (finite "
-        "differences of the sampled accelerations), continuity within and between motions, collisions of the robot "
-        "with itself, the shelf and the scene's objects. Exit code 0 when all pass, 1 with a report otherwise.")
-    c.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv)")
+        description="Independent of the planner, trusting nothing in the file: positions (with --margin), velocity, "
+        "acceleration and jerk from the positions on the file's time grid, the velocity and acceleration fields "
+        "against the positions, continuity within and between motions, collisions of the robot with itself, the "
+        "shelf and the scene's objects (the scene given is the world; an object may be touched only by the tool, as "
+        "the action's recorded estimate and the checker's own push and suction model allow). Exit code 0 when all "
+        "pass, 1 with a report otherwise, 2 for an unusable file.")
+    c.add_argument("trajectory", help="exported trajectory (.json, .yaml or .csv) or the ROS 2 bag folder (or its "
+                   ".mcap) of 'export --format mcap'")
     c.add_argument("--scene", default=None, help="scene JSON (default: the scene embedded by export, if any)")
     c.add_argument("--station", default=None, help="station YAML (default: the trial's, or the scene's shelf's)")
     c.add_argument("--margin", type=arguments.non_negative_float, default=0.0, help="position margin inside the limits (rad, m for the torso)")
@@ -147,10 +152,19 @@ def run_export(args: argparse.Namespace) -> int:
     from slax_drake.hardware.trajectory_file import format_of, save_trajectory
     from slax_drake.scene.io import load_scene, save_scene
 
+    from slax_drake.errors import TrialFileError
+
+    if not args.out.strip():
+        raise TrialFileError("--out is empty: give the output file (.json, .yaml or .csv), or the bag folder for "
+                             "--format mcap")
+    if args.format != "mcap":
+        fmt = format_of(args.out)  # refuses an unknown extension before any work
+        if args.format is not None and args.format != fmt:
+            raise TrialFileError(f"--out {args.out} has the extension of {fmt} but --format is {args.format}: the "
+                                 f"extension must match the format (use {Path(args.out).with_suffix(FORMATS[args.format])})")
     data = read_trial(args.trial)
     if args.format == "mcap":
         return _export_bag(args, data)
-    fmt = args.format or format_of(args.out)
     scene = load_scene(args.scene) if args.scene else trial_scene(data)
     traj = export_trial(data, rate=args.rate, source=str(args.trial), scene=scene)
     save_trajectory(traj, args.out, fmt)
@@ -167,7 +181,7 @@ def run_export(args: argparse.Namespace) -> int:
 def _export_bag(args: argparse.Namespace, data: dict) -> int:
     from slax_drake.errors import TrialFileError
     from slax_drake.hardware.export import trial_scene
-    from slax_drake.hardware.rosbag_export import STEP_DEPTH_FILE, read_step_depth, write_trial_bag
+    from slax_drake.hardware.rosbag_export import STEP_DEPTH_FILE, read_step_depth, robot_description, write_trial_bag
     from slax_drake.scene.io import load_scene, save_scene
 
     out = Path(args.out)
@@ -175,9 +189,9 @@ def _export_bag(args: argparse.Namespace, data: dict) -> int:
         raise TrialFileError(f"{out} exists: a bag is never overwritten (remove it or choose another --out)")
     scene = load_scene(args.scene) if args.scene else trial_scene(data)
     depth = read_step_depth(Path(args.trial).parent / STEP_DEPTH_FILE)
-    X_WS, X_WB = _station_frames(data, scene)
+    X_WS, X_WB, station = _station_frames(data, scene)
     summary = write_trial_bag(data, out, scene=scene, depth=depth, X_WS=X_WS, X_WB=X_WB, rate=args.rate,
-                              source=str(args.trial))
+                              source=str(args.trial), robot_description=robot_description(station))
     if args.write_scene:
         save_scene(scene, args.write_scene)
     counts = ", ".join(f"{topic} {n}" for topic, n in summary.counts.items())
@@ -190,22 +204,27 @@ def _export_bag(args: argparse.Namespace, data: dict) -> int:
 
 
 def _station_frames(data: dict, scene):
-    """X_WS (the shelf in the world) and X_WB (the robot's base weld) as 4x4 from the trial's station file."""
+    """X_WS (the shelf in the world) and X_WB (the robot's base weld) as 4x4, and the trial's station."""
     from slax_drake.station.plant import base_pose, shelf_pose
     from slax_drake.station.scenario import load_station_scenario
     from slax_drake.station.scenario import station_for
 
     station = load_station_scenario(data.get("station") or station_for(data.get("config") or "sim_configs/sim_shelf.yaml"))
-    return shelf_pose(station, scene.camera).GetAsMatrix4(), base_pose(station).GetAsMatrix4()
+    return shelf_pose(station, scene.camera).GetAsMatrix4(), base_pose(station).GetAsMatrix4(), station
 
 
 def run_check(args: argparse.Namespace) -> int:
-    from slax_drake.hardware.check import check_trajectory
+    from slax_drake.errors import TrajectoryFileError
+    from slax_drake.hardware.check import check_margin, check_trajectory
     from slax_drake.hardware.collision import CollisionWorld
     from slax_drake.hardware.trajectory_file import load_trajectory
     from slax_drake.io import write_text_atomic
 
+    check_margin(args.margin)
     traj = load_trajectory(args.trajectory)
+    if not traj.motions:
+        raise TrajectoryFileError(f"{args.trajectory}: the file has no motion: nothing to check (and nothing to "
+                                  "send to a robot)")
     world = None
     if not args.no_collision and args.collision_step > 0:
         from slax_drake.resources import check_memory
@@ -215,15 +234,13 @@ def run_check(args: argparse.Namespace) -> int:
                      "configurations)", "use a longer step")
     if not args.no_collision:
         scene, station = _scene_and_station(traj, args.scene, args.station)
-        q_ref = traj.metadata.get("initial_positions") or (traj.motions[0].q[0] if traj.motions else None)
-        world = CollisionWorld(station, scene, q_reference=q_ref)
+        world = CollisionWorld(station, scene)
     report = check_trajectory(traj, world, margin=args.margin, collision_step=args.collision_step)
     print(report.summary())
     if args.json:
-        write_text_atomic(Path(args.json), json.dumps({
-            "ok": report.ok, "checked": report.checked,
-            "margins": {k: (None if v == float("inf") else v) for k, v in report.margins.items()},
-            "violations": [v.__dict__ for v in report.violations]}, indent=1))
+        write_text_atomic(Path(args.json), json.dumps(_finite({
+            "ok": report.ok, "checked": report.checked, "margins": report.margins,
+            "violations": [v.__dict__ for v in report.violations]}), indent=1, allow_nan=False))
     return 0 if report.ok else 1
 
 
@@ -236,6 +253,19 @@ def _is_trial_record(path: str) -> bool:
     except (OSError, ValueError):
         return False
     return isinstance(doc, dict) and "executed_trajectory" in doc
+
+
+def _finite(x):
+    """``x`` with every non-finite float (an unlimited joint's margin, a missing pose's offset) as None (JSON)."""
+    import math
+
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    return x
 
 
 def run_replay(args: argparse.Namespace) -> int:

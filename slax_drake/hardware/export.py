@@ -3,7 +3,10 @@
 The trial records ``executed_trajectory``: the commanded joint trajectory over the whole trial (holds between
 motions), every ``stride``-th 1 ms sample (10 ms by default), rounded to 1e-6. Each action's motion starts at its
 decision time (``steps_log[*].time`` of the entries with an action) and lasts ``actions[*].motion.duration_s``;
-its suction command is on over ``actions[*].motion.suction_intervals`` (seconds from the motion's start).
+its suction command is on over ``actions[*].motion.suction_intervals`` (seconds from the motion's start). Each
+motion's ``action`` carries ``estimate``, the hypothesis the planner acted on (shape, size, x, y, yaw in the shelf
+frame, from the decision's ``hypotheses``), and ``scene_object``, the scene object the trial associated the
+segment with; the checker matches the estimate to its own scene and checks the association.
 
 Export cuts the record into motions: the samples from the motion's start to its end; when the start or the end
 (multiples of 1 ms) falls between two records, the point is added from the record before the start or after the
@@ -55,7 +58,13 @@ def trial_scene(data: dict):
     from slax_drake.config import load_scenario
     from slax_drake.scene.sampling import sample_scene
 
-    scene = sample_scene(load_scenario(data["config"]), int(data["objects"]), seed=int(data["seed"]))
+    for key in ("objects", "seed"):
+        value = data.get(key)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise TrialFileError(f"the trial's {key!r} must be an integer (got {value!r}); pass --scene")
+    if not isinstance(data.get("config"), str):
+        raise TrialFileError(f"the trial's 'config' must be a scenario path (got {data.get('config')!r}); pass --scene")
+    scene = sample_scene(load_scenario(data["config"]), data["objects"], seed=data["seed"])
     recorded = data.get("initial_objects") or {}
     for o in scene.objects:
         r = recorded.get(o.name)
@@ -87,6 +96,11 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
         raise TrialFileError(f"{source or 'trial'}: executed_trajectory joints {list(names)} are not {list(FETCH_JOINTS)}")
     if times.ndim != 1 or len(times) < 2 or any(x.shape != (len(times), len(names)) for x in (q, v, a)):
         raise TrialFileError(f"{source or 'trial'}: executed_trajectory arrays have inconsistent shapes")
+    for label, x in (("times", times), ("positions", q), ("velocities", v), ("accelerations", a)):
+        if not np.all(np.isfinite(x)):
+            where = np.argwhere(~np.isfinite(x))[0]
+            raise TrialFileError(f"{source or 'trial'}: executed_trajectory.{label} holds a non-finite value "
+                                 f"({float(x[tuple(where)])!r} at index {', '.join(map(str, where))})")
     if not np.all(np.diff(times) > 0):
         raise TrialFileError(f"{source or 'trial'}: executed_trajectory times are not strictly increasing")
     starts = [e for e in data["steps_log"] if "action" in e]
@@ -136,6 +150,11 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
         for on, off in action["motion"].get("suction_intervals") or []:
             events += [(float(on), True), (float(off), False)]
         act = {k: action[k] for k in ("type", "object", "d", "dx", "dz", "yaw") if k in action}
+        estimate = (entry.get("hypotheses") or {}).get(action.get("object"))
+        if isinstance(estimate, dict):  # what the planner believed of the object it acts on
+            act["estimate"] = {k: estimate[k] for k in ("shape", "size", "x", "y", "yaw") if k in estimate}
+        if action.get("true_object") is not None:  # the simulator's association of the segment to a scene object
+            act["scene_object"] = action["true_object"]
         motions.append(Motion(t0, mt, mq, mv, ma, events, act, entry.get("poses_before"), list(entry.get("lost", []))))
     metadata = {
         "source": source, "config": data.get("config"), "station": data.get("station"),

@@ -339,7 +339,7 @@ class StepPlanner:
             motion = self.motion_planner.plan(action, believed, q_start=q)
             if motion.feasible:
                 traj = self._export(action, motion, belief, q, source)
-                world = world or CollisionWorld(self.station, believed, q_reference=q)
+                world = world or CollisionWorld(self.station, believed)
                 report = check_trajectory(traj, world, collision_step=collision_step)
                 if report.ok:
                     timings["planning_s"] = time.perf_counter() - t0
@@ -383,7 +383,10 @@ class StepPlanner:
             "executed_trajectory": record.to_dict(stride=10, keep_times=[0.0]),
             "actions": [{**_describe(action), "motion": {"duration_s": round(motion.trajectory.duration, 3),
                                                          "suction_intervals": motion.suction_intervals}}],
-            "steps_log": [{"time": 0.0, "action": _describe(action), "poses_before": poses, "lost": []}],
+            "steps_log": [{"time": 0.0, "action": _describe(action), "poses_before": poses, "lost": [],
+                           "hypotheses": {o.name: {"shape": o.shape, "size": [float(v) for v in o.size],
+                                                   "x": float(o.center[0]), "y": float(o.center[1]),
+                                                   "yaw": float(o.yaw)} for o in belief.known}}],
             "station": self.station_path, "config": self.station.scene_config, "policy": self.policy_name,
         }
         data["actions"][0]["motion"]["duration_s"] = float(motion.trajectory.duration)

@@ -4,6 +4,8 @@ The bag is a folder ``<out>/`` holding ``metadata.yaml`` and ``<out name>.mcap``
 directly, ``ros2 bag play <out>`` plays the folder (ROS 2 Jazzy message definitions, rosbag2 metadata version 9,
 MCAP chunks compressed with zstd).
 
+The bag's ``metadata.yaml`` names ``ros_distro: jazzy`` (the message definitions it is written with).
+
 Clock: every stamp (each message's ``header.stamp`` and its log time in the bag) is the trial's simulation time,
 t = 0 at the start of the simulation, in nanoseconds rounded from the trial's seconds (so the bag starts on
 1970-01-01 in tools that show dates). Messages are written in time order; log times never decrease.
@@ -29,6 +31,13 @@ Topics (one ``rosbags`` connection each):
   the object's height, the object standing on the shelf; a toppled or dropped object, listed in the decision's
   ``lost``, keeps this planar pose), and once more at the trial's end from its final poses (x, y, z, yaw) when
   that is later than the last decision.
+- ``/robot_description`` (std_msgs/String, transient-local QoS), one message at t = 0: the robot's URDF (the
+  station's robot model, ``package://`` mesh paths as in ``models/``), so that RViz and Foxglove draw the robot
+  from ``/joint_states`` and ``/tf_static``.
+- ``/slax_drake/trajectory`` (std_msgs/String, transient-local QoS), one message at t = 0: the exported
+  trajectory's document without its points (JSON, as the CSV's ``# meta`` line: metadata with the scene, and per
+  motion its action with the planner's estimate, objects_before, lost and suction events), so that
+  ``slax-drake check-trajectory`` and ``replay`` read the bag (:func:`read_trajectory_bag`).
 - ``/camera/depth/image`` (sensor_msgs/Image, encoding ``32FC1``, metres along the optical axis, little-endian;
   Drake's values outside the depth range: +inf beyond the far plane, 0 nearer than the near plane) and ``/camera/depth/camera_info`` (sensor_msgs/CameraInfo:
   ``plumb_bob`` with zero distortion, K and P from the scene camera's intrinsics with pixel centres at integer
@@ -42,6 +51,7 @@ camera, y into the shelf, z up); ``world`` is the Drake station's world frame.
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import os
 import shutil
@@ -63,6 +73,9 @@ TOPIC_TF = "/tf"
 TOPIC_TF_STATIC = "/tf_static"
 TOPIC_DEPTH = "/camera/depth/image"
 TOPIC_CAMERA_INFO = "/camera/depth/camera_info"
+TOPIC_ROBOT_DESCRIPTION = "/robot_description"
+TOPIC_TRAJECTORY_DOCUMENT = "/slax_drake/trajectory"
+ROS_DISTRO = "jazzy"  # the message definitions the bag is written with (rosbags' Stores.ROS2_JAZZY)
 
 FRAME_WORLD = "world"
 FRAME_BASE = "base_link"
@@ -78,7 +91,10 @@ MSG_TYPES = {
     TOPIC_TF: "tf2_msgs/msg/TFMessage",
     TOPIC_DEPTH: "sensor_msgs/msg/Image",
     TOPIC_CAMERA_INFO: "sensor_msgs/msg/CameraInfo",
+    TOPIC_ROBOT_DESCRIPTION: "std_msgs/msg/String",
+    TOPIC_TRAJECTORY_DOCUMENT: "std_msgs/msg/String",
 }
+LATCHED = (TOPIC_TF_STATIC, TOPIC_ROBOT_DESCRIPTION, TOPIC_TRAJECTORY_DOCUMENT)  # transient-local QoS
 
 
 @dataclasses.dataclass
@@ -170,6 +186,9 @@ class _Messages:
         return self.T["trajectory_msgs/msg/JointTrajectory"](
             header=self.header(motion.start_time, FRAME_BASE), joint_names=list(names), points=points)
 
+    def string(self, text: str):
+        return self.T["std_msgs/msg/String"](data=text)
+
     def bool(self, on: bool):
         return self.T["std_msgs/msg/Bool"](data=bool(on))
 
@@ -217,10 +236,12 @@ def _object_transforms(poses: dict, sizes: dict, what: str) -> list:
 
 
 def trial_messages(data: dict, msgs: _Messages, *, scene, depth: StepDepth | None = None, X_WS=None, X_WB=None,
-                   rate: float | None = None, source: str | None = None) -> list:
+                   rate: float | None = None, source: str | None = None, robot_description: str | None = None) -> list:
     """The bag's messages [(time s, topic, message)] in time order (stable: equal times keep topic order)."""
+    from slax_drake.hardware.trajectory_file import header_document
+
     what = source or "trial"
-    traj = export_trial(data, rate=rate, source=source)  # validates the executed trajectory and the motions
+    traj = export_trial(data, rate=rate, source=source, scene=scene)  # validates the executed trajectory and motions
     et = data["executed_trajectory"]
     times = np.asarray(et["times"], float)
     q, v = np.asarray(et["positions"], float), np.asarray(et["velocities"], float)
@@ -233,6 +254,9 @@ def trial_messages(data: dict, msgs: _Messages, *, scene, depth: StepDepth | Non
     if X_WB is not None:
         statics.insert(0, (FRAME_WORLD, FRAME_BASE, X_WB))
     out.append((0.0, TOPIC_TF_STATIC, msgs.tf(0.0, statics)))
+    if robot_description is not None:
+        out.append((0.0, TOPIC_ROBOT_DESCRIPTION, msgs.string(robot_description)))
+    out.append((0.0, TOPIC_TRAJECTORY_DOCUMENT, msgs.string(json.dumps(header_document(traj), allow_nan=False))))
     out.append((0.0, TOPIC_SUCTION, msgs.bool(False)))
     for t, qk, vk in zip(times, q, v):
         out.append((float(t), TOPIC_JOINT_STATES, msgs.joint_state(t, FETCH_JOINTS, qk, vk)))
@@ -280,25 +304,30 @@ def _tf_static_qos():
 
 
 def write_trial_bag(data: dict, out: str | Path, *, scene, depth: StepDepth | None = None, X_WS=None, X_WB=None,
-                    rate: float | None = None, source: str | None = None) -> BagSummary:
+                    rate: float | None = None, source: str | None = None,
+                    robot_description: str | None = None) -> BagSummary:
     """Writes the trial ``data`` (a trial.json) as the bag folder ``out`` (module docstring). ``scene``: the trial's
     initial Scene (object sizes, camera, target); ``X_WS``, ``X_WB``: 4x4 poses of the shelf and of the robot's
     base in the world, or None to leave ``world`` out. The folder is written under a temporary name beside ``out``
     and renamed when complete; an existing ``out`` is refused."""
-    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer, WriterError
     from rosbags.typesys import Stores, get_typestore
 
     out = Path(out)
+    if not str(out).strip() or out.name in ("", ".", ".."):
+        raise TrialFileError(f"--out {str(out)!r} names no bag folder")
     if out.exists() or out.is_symlink():
         raise TrialFileError(f"{out} exists: a bag is never overwritten (remove it or choose another --out)")
     if out.suffix.lower() == ".mcap":
         raise TrialFileError(f"{out}: a ROS 2 bag is a folder (metadata.yaml and <name>.mcap): give --out without .mcap")
     typestore = get_typestore(Stores.ROS2_JAZZY)
     msgs = _Messages(typestore)
-    messages = trial_messages(data, msgs, scene=scene, depth=depth, X_WS=X_WS, X_WB=X_WB, rate=rate, source=source)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
+    messages = trial_messages(data, msgs, scene=scene, depth=depth, X_WS=X_WS, X_WB=X_WB, rate=rate, source=source,
+                              robot_description=robot_description)
+    staging = None
     try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".partial"))
         counts = {}
         writer = Writer(staging / out.name, version=9, storage_plugin=StoragePlugin.MCAP)
         writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)  # MCAP chunks compressed by zstd
@@ -306,14 +335,78 @@ def write_trial_bag(data: dict, out: str | Path, *, scene, depth: StepDepth | No
             connections = {}
             for topic, msgtype in MSG_TYPES.items():  # a topic without messages gets no connection
                 if any(m[1] == topic for m in messages):
-                    qos = (_tf_static_qos(),) if topic == TOPIC_TF_STATIC else ()
+                    qos = (_tf_static_qos(),) if topic in LATCHED else ()
                     connections[topic] = writer.add_connection(topic, msgtype, typestore=typestore,
                                                                offered_qos_profiles=qos)
                     counts[topic] = 0
             for t, topic, message in messages:
                 writer.write(connections[topic], _ns(t), typestore.serialize_cdr(message, MSG_TYPES[topic]))
                 counts[topic] += 1
+        _set_ros_distro(staging / out.name / "metadata.yaml")
         os.rename(staging / out.name, out)
+    except (OSError, WriterError) as e:
+        text = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
+        if staging is not None:
+            text = text.replace(str(staging / out.name), str(out)).replace(str(staging), str(out.parent))
+        raise TrialFileError(f"{out}: cannot write the bag ({text})") from None
     finally:
-        shutil.rmtree(staging, ignore_errors=True)
+        if staging is not None:
+            shutil.rmtree(staging, ignore_errors=True)
     return BagSummary(out, counts, messages[0][0], messages[-1][0])
+
+
+def _set_ros_distro(metadata: Path) -> None:
+    """rosbags writes ``ros_distro: rosbags``; the bag's messages are ROS 2 Jazzy's (``ROS_DISTRO``)."""
+    text = metadata.read_text(encoding="utf-8")
+    fixed = text.replace("ros_distro: rosbags", f"ros_distro: {ROS_DISTRO}")
+    if fixed == text:
+        raise RuntimeError(f"{metadata}: no 'ros_distro: rosbags' line to set (rosbags changed its metadata)")
+    metadata.write_text(fixed, encoding="utf-8")
+
+
+def robot_description(station) -> str | None:
+    """The URDF text of the station's robot model (``/robot_description``), or None when it is not a URDF."""
+    from slax_drake.station.robot import MODELS_DIR
+
+    for d in station.directives:
+        model = getattr(d, "add_model", None)
+        if model is not None and model.name == station.robot_model and model.file.endswith(".urdf"):
+            prefix = "package://slax_drake_models/"
+            path = MODELS_DIR / model.file[len(prefix):] if model.file.startswith(prefix) else Path(model.file)
+            return path.read_text(encoding="utf-8")
+    return None
+
+
+def read_trajectory_bag(path: str | Path):
+    """The motions of a bag written by :func:`write_trial_bag` as an ExportedTrajectory: the points of each
+    ``/planned_trajectory`` message, the motions' headers (action, objects, suction events) and the metadata from
+    ``/slax_drake/trajectory``. ``path``: the bag folder or the ``.mcap`` file in it. Raises TrajectoryFileError."""
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    from slax_drake.errors import TrajectoryFileError
+    from slax_drake.hardware.trajectory_file import trajectory_from_bag_messages
+
+    path = Path(path)
+    folder = path.parent if path.suffix.lower() == ".mcap" else path
+    if not (folder / "metadata.yaml").is_file():
+        raise TrajectoryFileError(f"{path}: not a ROS 2 bag folder (no metadata.yaml; 'export --format mcap' writes one)")
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    document, trajectories = None, []
+    try:
+        with Reader(folder) as reader:
+            wanted = [c for c in reader.connections if c.topic in (TOPIC_TRAJECTORY_DOCUMENT, TOPIC_PLANNED_TRAJECTORY)]
+            for connection, _, raw in reader.messages(connections=wanted):
+                msg = typestore.deserialize_cdr(raw, connection.msgtype)
+                if connection.topic == TOPIC_TRAJECTORY_DOCUMENT:
+                    document = msg.data
+                else:
+                    trajectories.append(msg)
+    except TrajectoryFileError:
+        raise
+    except Exception as e:  # noqa: BLE001 - rosbags raises many kinds for a damaged bag
+        raise TrajectoryFileError(f"{path}: cannot read the bag ({type(e).__name__}: {e})") from None
+    if document is None:
+        raise TrajectoryFileError(f"{path}: the bag has no {TOPIC_TRAJECTORY_DOCUMENT} message (not written by "
+                                  "'slax-drake export --format mcap')")
+    return trajectory_from_bag_messages(document, trajectories, str(path))

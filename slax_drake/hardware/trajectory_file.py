@@ -7,7 +7,12 @@ own (the suction valve is not a joint). Between motions the robot holds the last
 Joints (:data:`~slax_drake.hardware.fetch_limits.FETCH_JOINTS`): torso_lift_joint (m), the seven arm joints and
 the bluction tool's tool_shaft_joint (rad), named as on the real robot.
 
-Formats (chosen by the file's extension):
+A motion's ``action`` is ``{"type": "push" | "suction", "object": the policy's name for it, "d" | "dx", "dz",
+"yaw", "estimate": {"shape", "size", "x", "y", "yaw"} (what the planner believed of it, shelf frame), "scene_object":
+the scene object it was associated with (optional)}``.
+
+Formats (chosen by the file's extension; a folder or a ``.mcap`` is the ROS 2 bag of ``export --format mcap``,
+read by :func:`slax_drake.hardware.rosbag_export.read_trajectory_bag`):
 
 - ``.json`` (ros-json): ``{"format": "slax-drake-fetch-trajectory", "version": 1, "joint_names": [...],
   "metadata": {...}, "motions": [{"index", "start_time", "action", "objects_before", "lost", "suction_events":
@@ -24,7 +29,8 @@ Formats (chosen by the file's extension):
 
 Floats are written with full precision (Python's repr), so every format parses back to the same numbers
 (YAML times to 1 ns). Loading is strict: any malformed or truncated file, wrong joint names, non-finite numbers
-or non-monotonic time raise :class:`TrajectoryFileError` naming the file and the problem.
+(positions, fields, times, objects_before, the action's numbers, initial positions), an unknown action type or
+non-monotonic time raise :class:`TrajectoryFileError` naming the file and the problem.
 """
 
 from __future__ import annotations
@@ -113,6 +119,11 @@ def _document(traj: ExportedTrajectory, points: bool) -> dict:
             "metadata": traj.metadata, "motions": motions}
 
 
+def header_document(traj: ExportedTrajectory) -> dict:
+    """The document without the points (the CSV's ``# meta`` line, the bag's ``/slax_drake/trajectory``)."""
+    return _document(traj, points=False)
+
+
 def _ros_duration(t: float) -> dict:
     ns = int(round(t * 1e9))
     return {"secs": ns // 1_000_000_000, "nsecs": ns % 1_000_000_000}
@@ -167,7 +178,8 @@ def format_of(path: str | Path) -> str:
     for name, e in FORMATS.items():
         if ext == e or (name == "ros-yaml" and ext == ".yml"):
             return name
-    raise TrajectoryFileError(f"{path}: unknown trajectory file extension {ext!r} (use .json, .yaml/.yml or .csv)")
+    raise TrajectoryFileError(f"{path}: unknown trajectory file extension {ext!r} (use .json, .yaml/.yml or .csv, "
+                              "or a ROS 2 bag folder written by 'export --format mcap')")
 
 
 def dumps(traj: ExportedTrajectory, fmt: str) -> str:
@@ -193,6 +205,10 @@ def save_trajectory(traj: ExportedTrajectory, path: str | Path, fmt: str | None 
 def load_trajectory(path: str | Path) -> ExportedTrajectory:
     """Reads a trajectory file of any of the three formats; raises TrajectoryFileError on any problem."""
     path = Path(path)
+    if path.is_dir() or path.suffix.lower() == ".mcap":
+        from slax_drake.hardware.rosbag_export import read_trajectory_bag
+
+        return read_trajectory_bag(path)
     fmt = format_of(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -347,11 +363,96 @@ def _motion(entry, what, times, q, v, a, events) -> Motion:
     if isinstance(count, int) and not isinstance(count, bool) and count != len(times):
         raise _Bad(f"{what} has {len(times)} points but its header says {count} (truncated?)")
     lost = entry.get("lost") or []
+    if not isinstance(lost, list) or not all(isinstance(n, str) for n in lost):
+        raise _Bad(f"{what}.lost must be a list of object names")
+    _check_poses(entry.get("objects_before"), f"{what}.objects_before")
+    _check_action(entry.get("action"), f"{what}.action")
     return Motion(start, times, np.asarray(q, float), np.asarray(v, float), np.asarray(a, float),
                   sorted(events, key=lambda e: e[0]), entry.get("action"), entry.get("objects_before"), list(lost))
 
 
+def _check_poses(poses, what) -> None:
+    if poses is None:
+        return
+    if not isinstance(poses, dict):
+        raise _Bad(f"{what} must be a mapping of object names to poses")
+    for name, p in poses.items():
+        for key in ("x", "y", "yaw"):
+            _number(_get(p, key, f"{what}.{name}"), f"{what}.{name}.{key}")
+
+
+def _check_action(action, what) -> None:
+    if action is None:
+        return
+    if not isinstance(action, dict):
+        raise _Bad(f"{what} must be a mapping")
+    if action.get("type") not in ("push", "suction"):
+        raise _Bad(f"{what}.type must be push or suction (got {action.get('type')!r})")
+    if not isinstance(action.get("object"), str):
+        raise _Bad(f"{what}.object must be a name")
+    for key in ("d", "dx", "dz", "yaw"):
+        if key in action:
+            _number(action[key], f"{what}.{key}")
+    if action["type"] == "push" and "d" not in action:
+        raise _Bad(f"{what} is a push without its distance d")
+    if "scene_object" in action and not isinstance(action["scene_object"], str):
+        raise _Bad(f"{what}.scene_object must be a name")
+    est = action.get("estimate")
+    if est is not None:
+        if not isinstance(est, dict) or est.get("shape") not in ("box", "cylinder"):
+            raise _Bad(f"{what}.estimate must be a mapping with shape box or cylinder")
+        for key in ("x", "y", "yaw"):
+            _number(_get(est, key, f"{what}.estimate"), f"{what}.estimate.{key}")
+        size = _vector(_get(est, "size", f"{what}.estimate"), 3, f"{what}.estimate.size")
+        if min(size) <= 0:
+            raise _Bad(f"{what}.estimate.size must be positive")
+
+
+def _check_metadata(metadata) -> None:
+    initial = metadata.get("initial_positions")
+    if initial is not None:
+        _vector(initial, len(FETCH_JOINTS), "metadata.initial_positions")
+
+
+def trajectory_from_bag_messages(document: str, messages: list, source: str) -> ExportedTrajectory:
+    """An ExportedTrajectory from a bag's ``/slax_drake/trajectory`` document (JSON, no points) and its
+    ``/planned_trajectory`` JointTrajectory messages, one per motion in order."""
+    try:
+        doc = _parse_json(document)
+        if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
+            raise _Bad("the /slax_drake/trajectory message is not a slax-drake trajectory header")
+        _check_names(doc.get("joint_names"), "joint_names")
+        headers = doc.get("motions")
+        if not isinstance(headers, list) or len(headers) != len(messages):
+            raise _Bad(f"the header lists {len(headers) if isinstance(headers, list) else 'no'} motions but the bag "
+                       f"has {len(messages)} /planned_trajectory messages")
+        motions = []
+        for k, (entry, msg) in enumerate(zip(headers, messages)):
+            what = f"motion {k}"
+            _check_names(list(msg.joint_names), f"{what}: /planned_trajectory joint_names")
+            if not msg.points:
+                raise _Bad(f"{what} has no points")
+            n = len(FETCH_JOINTS)
+            times = [p.time_from_start.sec + p.time_from_start.nanosec * 1e-9 for p in msg.points]
+            q = [_vector([float(x) for x in p.positions], n, f"{what}.positions") for p in msg.points]
+            v = [_vector([float(x) for x in p.velocities], n, f"{what}.velocities") for p in msg.points]
+            a = [_vector([float(x) for x in p.accelerations], n, f"{what}.accelerations") for p in msg.points]
+            if not isinstance(entry, dict):
+                raise _Bad(f"{what}'s header must be a mapping")
+            entry = dict(entry)
+            stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+            if abs(stamp - _number(_get(entry, "start_time", what), f"{what}.start_time")) > 1e-6:
+                raise _Bad(f"{what}: the message's stamp {stamp} s is not the header's start_time {entry['start_time']} s")
+            entry["duration"] = None if entry.get("duration") is None else round(float(entry["duration"]), 9)
+            events = _events(entry.get("suction_events", []), what)
+            motions.append(_motion(entry, what, times, q, v, a, events))
+        return _finish(motions, doc.get("metadata") or {})
+    except _Bad as e:
+        raise TrajectoryFileError(f"{source}: {e}") from None
+
+
 def _finish(motions, metadata) -> ExportedTrajectory:
+    _check_metadata(metadata)
     for k in range(1, len(motions)):
         if motions[k].start_time < motions[k - 1].end_time - 1e-9:
             raise _Bad(f"motions[{k}] starts at {motions[k].start_time} s, before motions[{k - 1}] ends "

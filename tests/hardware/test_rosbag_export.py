@@ -97,7 +97,7 @@ def test_bag_is_a_rosbag2_mcap_folder_with_every_topic(trial_files, bag):
     msgs, order = _read(out)
     n_records = len(data["executed_trajectory"]["times"])
     expected = {"/joint_states": n_records, "/planned_trajectory": 2, "/suction_command": 1 + 2, "/tf_static": 1,
-                "/tf": 3 + 1, "/camera/depth/image": 3, "/camera/depth/camera_info": 3}
+                "/tf": 3 + 1, "/camera/depth/image": 3, "/camera/depth/camera_info": 3, "/slax_drake/trajectory": 1}
     assert {t: len(m) for t, m in msgs.items()} == expected == summary.counts
     stored = _file_order(out)
     assert len(stored) == len(order) and stored == sorted(stored)
