@@ -290,13 +290,11 @@ class StepPlanner:
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
                                                               history, timings)
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings)
-                why = "check: " + report.summary().splitlines()[-1]
+                why, early = "check: " + report.summary().splitlines()[-1], False
             else:
-                why = motion.reason
+                why, early = motion.reason, motion.failure.early  # before the tool reaches the object: the group
             rejected.append({"action": action.describe(), "reason": why})
-            from slax_drake.systems.planner import EARLY_FAILURES
-
-            self.policy.exclude(action, why, whole_group=why.startswith(EARLY_FAILURES))
+            self.policy.exclude(action, why, whole_group=early)
             decision = self.policy.decide(observation)
             reason = "no feasible motion"
         timings["planning_s"] = time.perf_counter() - t0
