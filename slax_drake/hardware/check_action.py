@@ -90,7 +90,7 @@ class Checker:
                 raise ActionSpecError("a push needs a non-zero distance D")
             same = [a for a in cands.feasible if isinstance(a, Push) and a.name == name and (a.d > 0) == (d > 0)]
             if not same:
-                why = [r.reason for r in cands.rejected if r.what.startswith(f"push {name} {'+x' if d > 0 else '-x'}")]
+                why = [r.reason for r in cands.rejected if r.name == name and r.direction == (1 if d > 0 else -1)]
                 return None, (why[0] if why else f"the action model lists no push of {name} toward "
                               f"{'+' if d > 0 else '-'}x")
             longest = max(abs(a.d) for a in same)
@@ -106,7 +106,7 @@ class Checker:
             return None, (f"no suction of {name} places it at dx = {dx:+.3f}, y = {dz:+.3f} (its {len(mine)} "
                           "placements are on the model's lattice, e.g. " +
                           ", ".join(f"{a.dx:+.3f}:{a.dz:+.3f}" for a in mine[:3]) + ")")
-        why = [r.reason for r in cands.rejected if r.what.startswith(f"suction {name}")]
+        why = [r.reason for r in cands.rejected if r.name == name and r.direction == 0]
         return None, why[0] if why else f"the action model lists no suction of {name}"
 
     def check(self, spec: tuple, text: str, candidates=None) -> ActionCheck:

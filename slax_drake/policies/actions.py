@@ -118,10 +118,13 @@ Action = Push | Suction
 
 @dataclasses.dataclass(frozen=True)
 class Rejected:
-    """A candidate that was skipped: what it was and why."""
+    """A candidate that was skipped: what it was and why; the object it would move (``name``) and, for a push, its
+    direction along S x (``direction``: +1 or -1; 0 for a suction)."""
 
     what: str
     reason: str
+    name: str = ""
+    direction: int = 0
 
 
 @dataclasses.dataclass
@@ -180,11 +183,15 @@ class ActionModel:
         for i in range(len(objects)):
             if only is not None and objects[i].name not in only:
                 continue
+            n = len(rejected)
             if pushes:
                 for sign in (+1, -1):
                     self._pushes(ctx, i, sign, feasible, rejected)
+                    rejected[n:] = [dataclasses.replace(r, name=objects[i].name, direction=sign) for r in rejected[n:]]
+                    n = len(rejected)
             if suctions:
                 self._suctions(ctx, i, feasible, rejected)
+                rejected[n:] = [dataclasses.replace(r, name=objects[i].name) for r in rejected[n:]]
         return Candidates(feasible, rejected)
 
     # ----------------------------------------------------------------------------------------------------
