@@ -27,10 +27,12 @@ from slax_drake.policies.rules import PROFILES, RULES, ToolConfig, flat_field_na
 
 @dataclasses.dataclass(frozen=True)
 class PolicyEntry:
-    """One row of the policy table: ``cls`` as "module:Class" and the options its constructor gets."""
+    """One row of the policy table: ``cls`` as "module:Class" and the options its constructor gets; ``oracle``:
+    the policy reads the true scene and searches it (it takes ``oracle_options`` such as a time limit)."""
 
     cls: str
     options: dict = dataclasses.field(default_factory=dict)
+    oracle: bool = False
 
     def load(self) -> type:
         module, _, name = self.cls.partition(":")
@@ -39,8 +41,8 @@ class PolicyEntry:
 
 _POLICIES = "slax_drake.policies.policies"
 POLICY_TABLE: dict[str, PolicyEntry] = {
-    "oracle-p": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": False}),
-    "oracle-p+s": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": True}),
+    "oracle-p": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": False}, oracle=True),
+    "oracle-p+s": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": True}, oracle=True),
     # DAR and Bluction-DAR with the corrections any implementation needs (policies.py's docstring: a failed action
     # is excluded, no return to an observed arrangement, no zero-reduction action while another reveals unseen
     # space); the "-literal" rows are the paper's text alone, kept so that the corrections' effect is visible.
@@ -73,6 +75,12 @@ PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # t
 LITERAL_POLICIES = ("dar-literal", "bluction-dar-literal")  # the paper's text without the corrections
 OUR_POLICIES = ("bluction-la2", "slax-hindsight", "slax-belief")  # the project's own (slax-belief: our best)
 DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
+
+
+def is_oracle(name: str) -> bool:
+    """Whether the policy named ``name`` is an oracle (reads the true scene; takes ``oracle_options``)."""
+    entry = POLICY_TABLE.get(name)
+    return entry is not None and entry.oracle
 
 
 def add_tool_rule_argument(parser, note: str) -> None:
