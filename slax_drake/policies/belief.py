@@ -148,11 +148,11 @@ from slax_drake.policies.protocol import Decision
 from slax_drake.scene.model import state_key
 
 
-REMEMBERED = "remembered_"  # camera mode: the name prefix of a remembered hypothesis (hidden now; not acted on)
+REMEMBERED = "remembered_"  # camera mode: the name prefix of a remembered hypothesis (SceneObject.remembered)
 
 
 class _NoActionsOnRemembered:
-    """The policy's action model, enumerating no action on a remembered hypothesis (:data:`REMEMBERED`: the camera
+    """The policy's action model, enumerating no action on a remembered hypothesis (``remembered``: the camera
     shows no segment of it to act on); it stays an obstacle. Everything else is the wrapped model's. Privileged
     observations name no object so: there it is the wrapped model."""
 
@@ -166,8 +166,8 @@ class _NoActionsOnRemembered:
 
     def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None):
         objects = tuple(objects)
-        if only is None and any(o.name.startswith(REMEMBERED) for o in objects):
-            only = {o.name for o in objects if not o.name.startswith(REMEMBERED)}
+        if only is None and any(o.remembered for o in objects):
+            only = {o.name for o in objects if not o.remembered}
         return self._model.enumerate(objects, fixed, pushes, suctions, only)
 
 
@@ -372,7 +372,7 @@ class BeliefSearch(Hindsight):
 
     def remembered_in_frame(self, obs, moved: str | None) -> tuple:
         """Camera mode: the hypotheses of the last decision (seen then, or remembered) that stand for an object
-        hidden now, named ``remembered_<k>`` (:data:`REMEMBERED`; the policy takes no action on them: it sees no
+        hidden now, flagged ``remembered`` and named ``remembered_<k>`` (:data:`REMEMBERED`; the policy takes no action on them: it sees no
         segment to act on). A segment's id says nothing across frames (a real segmentation renumbers them), so
         a hypothesis is matched by where it stands: it is the object of a hypothesis of this frame when their
         footprints overlap (more than ``overlap_share`` of the smaller one); the hypothesis the last action moved
@@ -402,11 +402,11 @@ class BeliefSearch(Hindsight):
         names = {o.name for o in obs.known}
         out = []
         for k, o in enumerate(kept):
-            label = o.name if o.name.startswith(REMEMBERED) else f"{REMEMBERED}{o.name}"
+            label = o.name if o.remembered else f"{REMEMBERED}{o.name}"
             while label in names:
                 label = f"{REMEMBERED}{k}_{label}"
             names.add(label)
-            out.append(o if label == o.name else dataclasses.replace(o, name=label))
+            out.append(o if label == o.name else dataclasses.replace(o, name=label, remembered=True))
         return tuple(out)
 
     def placements(self, obs) -> np.ndarray:
