@@ -1,8 +1,10 @@
 """Policies by name, built for a scenario: the one place that maps a command-line name to a policy object.
 
-:data:`POLICY_TABLE` is the table: name -> (class, options). A distribution policy's class is called as
-``cls(action_model, distribution_model, psi=psi, **options)`` (plus ``horizon=horizon`` for a class with
-``uses_horizon``), an oracle's (``needs_true_scene``) as
+:data:`POLICY_TABLE` is the table: name -> (class, options). Options are a dict of constructor arguments, or a
+frozen options dataclass (slax-belief's :class:`~slax_drake.policies.belief_options.BeliefOptions`), whose named
+variants are built with ``dataclasses.replace`` of the defaults. A distribution policy's class is called as
+``cls(action_model, distribution_model, psi=psi, **options)`` (``options=options`` for a dataclass; plus
+``horizon=horizon`` for a class with ``uses_horizon``), an oracle's (``needs_true_scene``) as
 ``cls(action_model, psi=psi, horizon=horizon, threshold=v, **options)``. Every class implements
 :class:`slax_drake.policies.protocol.Policy`. Classes are named by import path so that listing the names imports
 nothing heavy. A new policy is one class and one line here.
@@ -15,6 +17,7 @@ import importlib
 import typing
 
 from slax_drake.errors import UnknownPolicyError, UserError
+from slax_drake.policies.belief_options import DEFAULT_BELIEF_OPTIONS
 
 # The action model, the distributions and the scene sampler (OpenCV, shapely, trimesh, torch) are imported where
 # used: the command-line parser imports this module for add_tool_rule_argument and POLICY_NAMES.
@@ -27,12 +30,30 @@ from slax_drake.policies.rules import PROFILES, RULES, ToolConfig, flat_field_na
 
 @dataclasses.dataclass(frozen=True)
 class PolicyEntry:
-    """One row of the policy table: ``cls`` as "module:Class" and the options its constructor gets; ``oracle``:
-    the policy reads the true scene and searches it (it takes ``oracle_options`` such as a time limit)."""
+    """One row of the policy table: ``cls`` as "module:Class" and the options its constructor gets (a dict of
+    keyword arguments, or an options dataclass passed as ``options``); ``oracle``: the policy reads the true scene
+    and searches it (it takes ``oracle_options`` such as a time limit)."""
 
     cls: str
-    options: dict = dataclasses.field(default_factory=dict)
+    options: typing.Any = dataclasses.field(default_factory=dict)
     oracle: bool = False
+
+    def recorded_options(self) -> dict:
+        """The options that make this row its policy, as a results folder's settings record them (of an options
+        dataclass, the fields that differ from its defaults)."""
+        if dataclasses.is_dataclass(self.options):
+            return self.options.changed()
+        return dict(self.options)
+
+    def constructor_options(self, overrides: dict | None = None) -> dict:
+        """Keyword arguments for the class: the row's options with ``overrides`` (the fields of an options
+        dataclass replaced in it, other keys passed beside it)."""
+        overrides = dict(overrides or {})
+        if not dataclasses.is_dataclass(self.options):
+            return dict(self.options, **overrides)
+        names = {f.name for f in dataclasses.fields(self.options)}
+        fields = {k: overrides.pop(k) for k in list(overrides) if k in names}
+        return dict(overrides, options=dataclasses.replace(self.options, **fields))
 
     def load(self) -> type:
         module, _, name = self.cls.partition(":")
@@ -40,6 +61,7 @@ class PolicyEntry:
 
 
 _POLICIES = "slax_drake.policies.policies"
+_BELIEF = "slax_drake.policies.belief:BeliefSearch"
 POLICY_TABLE: dict[str, PolicyEntry] = {
     "oracle-p": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": False}, oracle=True),
     "oracle-p+s": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": True}, oracle=True),
@@ -54,21 +76,15 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "bluction-dar-cost": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "cost", "corrected": True}),
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
-    "slax-belief": PolicyEntry("slax_drake.policies.belief:BeliefSearch"),
+    "slax-belief": PolicyEntry(_BELIEF, DEFAULT_BELIEF_OPTIONS),
     # camera mode (belief.py's docstring): hypotheses assumed 0.13 m deep, hidden ones remembered, outcome evidence
-    # within 1 cm; the privileged path reads none of these. Measured, not the default: 25 per density, camera,
-    # 69 % against slax-belief's 73 % (docs/results/slax_belief_camera_depth25; first 10 at 8/10 objects:
-    # docs/results/slax_belief_camera_first10)
-    "slax-belief-camera-depth": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
-                                            {"camera_depth": 0.13, "camera_memory": True,
-                                             "camera_outcome_tolerance": 0.01}),
+    # within 1 cm; the privileged path reads none of these. Measured, not the default (its results table: 69 %
+    # against slax-belief's 73 % in camera mode)
+    "slax-belief-camera-depth": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, camera_depth=0.13, camera_memory=True, camera_outcome_tolerance=0.01)),
     # a failed placement's box no longer refuses later placements; one overlapping it in hidden space fails with 0.5
-    # more (belief.py's blocked_rule="risk"). Measured, not the default: first 25 per density 90 % (default 89 %),
-    # 10 of the default's 47 failures of 100 per density revealed (docs/results/slax_belief_missed_reveals)
-    "slax-belief-v4": PolicyEntry("slax_drake.policies.belief:BeliefSearch", {"blocked_rule": "risk"}),
-    # slax-belief before v3 (remembered objects, actions' outcomes, wider beam): docs/results/slax_belief_v2_*
-    "slax-belief-v2": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
-                                  {"evidence": "none", "remember_objects": False, "widen_beam": 0}),
+    # more. Measured, not the default (its results table: 100 scenes per density, paper profile)
+    "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk")),
 }
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
@@ -168,10 +184,10 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
                         tool_config(scenario, profile, **(tool_overrides or {})))
     if cls.needs_true_scene:
         policy = cls(model, psi=psi, horizon=horizon, threshold=scenario.target.visibility_threshold,
-                     **entry.options, **(oracle_options or {}))
+                     **entry.constructor_options(oracle_options))
     else:
         size = target_size or tuple(scenario.target.sizes[0])
-        options = dict(entry.options, **(policy_options or {}))
+        options = entry.constructor_options(policy_options)
         if getattr(cls, "uses_visibility_threshold", False):  # a policy that plans for the success test itself
             options.setdefault("threshold", scenario.target.visibility_threshold)
         if getattr(cls, "uses_horizon", False):  # a policy that plans to the protocol's deadline H, as the oracles
