@@ -46,11 +46,18 @@ class ShelfConfig:
 
 
 @dataclasses.dataclass
-class CameraConfig:
-    """The depth camera (RealSense L515 on the bluction tool's mount), static relative to the shelf.
+class ShelfCameraConfig:
+    """The depth camera (RealSense L515 on the bluction tool's mount), static relative to the shelf: its pose in
+    the shelf frame S and its pinhole intrinsics (:class:`slax_drake.scene.camera.Camera`).
 
     ``position`` is the optical centre in the shelf frame; the optical axis points along +y of the shelf,
     pitched down by ``pitch_deg``. Pixels are square: fx = fy from the horizontal field of view.
+
+    Not Drake's ``pydrake.systems.sensors.CameraConfig``: that one mounts a sensor on a frame of a
+    MultibodyPlant for ``ApplyCameraConfig``, while this camera is fixed in the shelf frame of a scenario that the
+    first-order simulator and the occupancy code use without any plant; the station places the shelf so that the
+    robot's tool camera at its observation pose is this camera (:mod:`slax_drake.station.scenario`), and the
+    renderer builds Drake's render cameras from the same intrinsics.
     """
 
     width: int = 640
@@ -161,7 +168,7 @@ class Scenario:
 
     profile: str = "station"
     shelf: ShelfConfig = dataclasses.field(default_factory=ShelfConfig)
-    camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)
+    camera: ShelfCameraConfig = dataclasses.field(default_factory=ShelfCameraConfig)
     objects: ObjectsConfig = dataclasses.field(default_factory=ObjectsConfig)
     physics: PhysicsConfig = dataclasses.field(default_factory=PhysicsConfig)
     target: TargetConfig = dataclasses.field(default_factory=TargetConfig)

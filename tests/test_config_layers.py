@@ -9,7 +9,7 @@ import json
 import pytest
 
 from slax_drake.cli import main
-from slax_drake.config import REPO_ROOT, Scenario, CameraConfig, load_scenario
+from slax_drake.config import REPO_ROOT, Scenario, ShelfCameraConfig, load_scenario
 from slax_drake.errors import ConfigError
 
 # SHA-256 of json.dumps(dataclasses.asdict(scenario), sort_keys=True) of each shipped scenario, as it loaded when
@@ -41,7 +41,7 @@ def test_the_shipped_scenarios_are_covered():
 def test_an_overlay_changes_only_its_keys():
     table1, aligned = load_scenario("sim_configs/table1.yaml"), load_scenario("sim_configs/table1_aligned.yaml")
     assert aligned == dataclasses.replace(table1, objects=dataclasses.replace(table1.objects, box_yaw="aligned"))
-    assert isinstance(aligned.camera, CameraConfig)
+    assert isinstance(aligned.camera, ShelfCameraConfig)
 
 
 def write(folder, name, text):
