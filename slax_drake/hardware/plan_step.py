@@ -292,7 +292,7 @@ class StepPlanner:
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings)
                 why, early = "check: " + report.summary().splitlines()[-1], False
             else:
-                why, early = motion.reason, motion.failure.early  # before the tool reaches the object: the group
+                why, early = motion.reason, motion.failure.early  # failed before the tool reached the object
             rejected.append({"action": action.describe(), "reason": why})
             self.policy.exclude(action, why, whole_group=early)
             decision = self.policy.decide(observation)
