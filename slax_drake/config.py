@@ -7,7 +7,8 @@ the shelf, z up.
 Scenarios are layered as Drake's scenario loaders layer them: each layer is loaded with
 ``yaml_load_typed(..., defaults=<the layers below>)``, so a layer sets only the keys it changes (a nested mapping
 merges key by key; a list replaces the whole list). A file names the layer below it with a top-level ``base:``
-key, a path relative to the file itself; the bottom file's defaults are :class:`Scenario`'s. For example
+key, a path relative to the file itself or absolute (an overlay copied elsewhere names its base by an absolute
+path); the bottom file's defaults are :class:`Scenario`'s. For example
 ``sim_configs/table1_aligned.yaml`` is::
 
     base: table1.yaml
