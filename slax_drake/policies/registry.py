@@ -169,7 +169,9 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
     """A fresh policy object named ``name`` (a key of :data:`POLICY_TABLE`) for ``scenario``'s shelf and camera,
     planning with ``profile``'s rules (default: the scenario's) and ``tool_overrides``. ``oracle_options``: extra
     constructor options of the oracles (e.g. ``seconds``, the search time limit); ``policy_options``: extra
-    constructor options of a distribution policy (e.g. ``seconds``, the hindsight policy's time per decision)."""
+    constructor options of a distribution policy (e.g. ``seconds``, the hindsight policy's time per decision; for a
+    row with an options dataclass, its fields are replaced in the row's options: ``{"blocked_rule": "risk"}`` on
+    ``slax-belief`` is ``slax-belief-v4``)."""
     from slax_drake.policies.actions import ActionModel
     from slax_drake.policies.distribution import make_distribution_model
     from slax_drake.scene.camera import Camera
