@@ -3,6 +3,21 @@
 All lengths are metres, angles degrees where the key says ``_deg``, otherwise radians.
 The shelf frame S: origin at the centre of the support surface, x to the right as seen from the camera, y into
 the shelf, z up.
+
+Scenarios are layered as Drake's scenario loaders layer them: each layer is loaded with
+``yaml_load_typed(..., defaults=<the layers below>)``, so a layer sets only the keys it changes (a nested mapping
+merges key by key; a list replaces the whole list). A file names the layer below it with a top-level ``base:``
+key, a path relative to the file itself or absolute (an overlay copied elsewhere names its base by an absolute
+path); the bottom file's defaults are :class:`Scenario`'s. For example
+``sim_configs/table1_aligned.yaml`` is::
+
+    base: table1.yaml
+    objects:
+      box_yaw: aligned
+
+and :func:`load_scenario` ("sim_configs/table1_aligned.yaml") is Table I's scenario with square boxes. Every layer
+is checked for unknown keys and value types; the scenario they make together is validated once
+(:func:`validate_scenario`).
 """
 
 # No `from __future__ import annotations`: yaml_load_typed needs the real types of the fields.
@@ -15,6 +30,7 @@ import typing
 from slax_drake.errors import ConfigError
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
+BASE_KEY = "base"  # a scenario file's key naming the file it overlays (a path relative to the file)
 DEFAULT_CONFIG = "sim_configs/sim_shelf.yaml"
 PROFILES = ("paper", "station")  # the action model's rule profiles (slax_drake.shelf.rules.PROFILES)
 TARGET_PLACEMENTS = ("after-objects", "first")  # target.placement
@@ -31,11 +47,18 @@ class ShelfConfig:
 
 
 @dataclasses.dataclass
-class CameraConfig:
-    """The depth camera (RealSense L515 on the bluction tool's mount), static relative to the shelf.
+class ShelfCameraConfig:
+    """The depth camera (RealSense L515 on the bluction tool's mount), static relative to the shelf: its pose in
+    the shelf frame S and its pinhole intrinsics (:class:`slax_drake.scene.camera.Camera`).
 
     ``position`` is the optical centre in the shelf frame; the optical axis points along +y of the shelf,
     pitched down by ``pitch_deg``. Pixels are square: fx = fy from the horizontal field of view.
+
+    Not Drake's ``pydrake.systems.sensors.CameraConfig``: that one mounts a sensor on a frame of a
+    MultibodyPlant for ``ApplyCameraConfig``, while this camera is fixed in the shelf frame of a scenario that the
+    first-order simulator and the occupancy code use without any plant; the station places the shelf so that the
+    robot's tool camera at its observation pose is this camera (:mod:`slax_drake.station.scenario`), and the
+    renderer builds Drake's render cameras from the same intrinsics.
     """
 
     width: int = 640
@@ -146,7 +169,7 @@ class Scenario:
 
     profile: str = "station"
     shelf: ShelfConfig = dataclasses.field(default_factory=ShelfConfig)
-    camera: CameraConfig = dataclasses.field(default_factory=CameraConfig)
+    camera: ShelfCameraConfig = dataclasses.field(default_factory=ShelfCameraConfig)
     objects: ObjectsConfig = dataclasses.field(default_factory=ObjectsConfig)
     physics: PhysicsConfig = dataclasses.field(default_factory=PhysicsConfig)
     target: TargetConfig = dataclasses.field(default_factory=TargetConfig)
@@ -155,27 +178,50 @@ class Scenario:
 
 
 def load_scenario(path: str | Path) -> Scenario:
-    """Loads and validates a scenario YAML file; raises ConfigError naming the file, key and value."""
-    from pydrake.common.yaml import yaml_load, yaml_load_typed  # here, not at the top: the CLI parser imports us
-
+    """Loads and validates a scenario YAML file and the files under it (``base:``, see the module docstring);
+    raises ConfigError naming the file, key and value."""
     path = Path(path)
     if not path.is_file() and not path.is_absolute() and (REPO_ROOT / path).is_file():
         path = REPO_ROOT / path  # the shipped sim_configs/ when run from another folder
     if not path.is_file():
         raise ConfigError(f"{path}: no such config file")
+    scenario = _load_layers(path, ())
+    validate_scenario(scenario, source=str(path))
+    return scenario
+
+
+def _load_layers(path: Path, above: tuple) -> Scenario:
+    """The scenario of ``path`` on top of the layers its ``base:`` names (``above``: the files that named it)."""
+    import copy
+
+    from pydrake.common.yaml import yaml_load, yaml_load_typed  # here, not at the top: the CLI parser imports us
+
     try:
         raw = yaml_load(filename=str(path))
     except Exception as e:
         message = " ".join(str(e).split())
         raise ConfigError(f"{path}: not valid YAML ({message})") from None
-    _check_schema(raw if raw is not None else {}, Scenario, "", str(path))
+    raw = raw if raw is not None else {}
+    defaults = Scenario()
+    base = raw.pop(BASE_KEY, None) if isinstance(raw, dict) else None
+    if base is not None:
+        if not isinstance(base, str) or not base:
+            raise ConfigError(f"{path}: key '{BASE_KEY}' = {base!r}: must be the path of a scenario file, relative "
+                              "to this one")
+        below = (path.parent / base).resolve()
+        if not below.is_file():
+            raise ConfigError(f"{path}: key '{BASE_KEY}' = {base!r}: no such config file ({below})")
+        if below in above or below == path.resolve():
+            raise ConfigError(f"{path}: key '{BASE_KEY}' = {base!r}: the files' bases form a cycle")
+        defaults = _load_layers(below, above + (path.resolve(),))
+    _check_schema(raw, Scenario, "", str(path))
     try:
-        scenario = yaml_load_typed(schema=Scenario, filename=str(path), defaults=Scenario())
+        # The base key is checked above; the typed load reads the rest of the file over the layers below.
+        return yaml_load_typed(schema=Scenario, filename=str(path), defaults=copy.deepcopy(defaults),
+                               allow_yaml_with_no_schema=base is not None)
     except Exception as e:  # Drake raises RuntimeError/TypeError/ValueError with a descriptive text.
         message = " ".join(str(e).split())
         raise ConfigError(f"{path}: {message}") from None
-    validate_scenario(scenario, source=str(path))
-    return scenario
 
 
 def _check_schema(value, schema, key: str, source: str) -> None:

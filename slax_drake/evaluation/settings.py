@@ -54,7 +54,7 @@ def policy_settings(names) -> dict:
     """Per policy name: its registry class and constructor options (what makes it that policy)."""
     from slax_drake.policies.registry import POLICY_TABLE
 
-    return {n: {"class": POLICY_TABLE[n].cls, "options": dict(POLICY_TABLE[n].options)} for n in names}
+    return {n: {"class": POLICY_TABLE[n].cls, "options": POLICY_TABLE[n].recorded_options()} for n in names}
 
 
 def protocol_settings(scenario, config: str, seed: int, perception: str, tool_rules: dict, policies,

@@ -68,14 +68,14 @@ def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
 def run_benchmark_trial(job) -> dict:
     """Runs one trial (in whichever process the backend chose); returns the trial file's content."""
     scenario, policy_name, density, index, seed, perception, tool_rules, camera, profile, oracle_seconds = job
-    from slax_drake.policies.registry import make_policy
+    from slax_drake.policies.registry import is_oracle, make_policy
     from slax_drake.shelf.simulator import CameraObserver, run_trial
     from slax_drake.scene.sampling import sample_scene
 
     size = tuple(scenario.target.sizes[0])
     scene = sample_scene(scenario, scenario.protocol.occluders(density), seed, target_size=size)
     horizon = scenario.protocol.horizon_per_object * density
-    oracle_options = {"seconds": oracle_seconds} if policy_name.startswith("oracle") and oracle_seconds else None
+    oracle_options = {"seconds": oracle_seconds} if is_oracle(policy_name) and oracle_seconds else None
     policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules,
                          profile=profile, oracle_options=oracle_options)
     observer = None

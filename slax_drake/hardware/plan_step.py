@@ -346,13 +346,11 @@ class StepPlanner:
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
                                                               history, timings, visibility=visibility)
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings, visibility)
-                why = "check: " + report.summary().splitlines()[-1]
+                why, early = "check: " + report.summary().splitlines()[-1], False
             else:
-                why = motion.reason
+                why, early = motion.reason, motion.failure.early  # failed before the tool reached the object
             rejected.append({"action": action.describe(), "reason": why})
-            from slax_drake.systems.planner import EARLY_FAILURES
-
-            self.policy.exclude(action, why, whole_group=why.startswith(EARLY_FAILURES))
+            self.policy.exclude(action, why, whole_group=early)
             decision = self.policy.decide(observation)
             reason = "no feasible motion"
         timings["planning_s"] = time.perf_counter() - t0

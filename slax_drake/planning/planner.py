@@ -28,14 +28,15 @@
    waypoints ask for them; the suction command is on during the segments that carry the object.
 
 When the waypoints in front of the opening fail (out of reach, no free way) or a straight segment cannot be kept
-(``STRAIGHT_SEGMENT_FAILURES``), the action is planned again with the tool's tip 1 cm in front of the opening
+(:attr:`~slax_drake.planning.failures.PlanningFailure.straight_segment`), the action is planned again with the tool's tip 1 cm in front of the opening
 (``APPROACH_MARGINS``); when a carried segment fails, a suctioned object is carried across at shallower depths
 inside the shelf and then, pulled all the way out, with the tool turned ``CARRY_YAWS`` each way about the cup's
 vertical axis (:func:`slax_drake.planning.waypoints.carry_options`: straight ahead of the shoulder the arm cannot
 hold the tube along S y that close to the robot; turned it can). IK solves and free paths are memoised per planning
-world (one decision's candidates share their approach waypoints). Any failure returns a :class:`Rejection` with a
-reason naming the waypoint (and the colliding body, or what the carried object meets); the reason of the last
-variant tried leads, the others follow in brackets. Timings of each stage are kept (seconds of wall clock) for the
+world (one decision's candidates share their approach waypoints). Any failure returns a :class:`Rejection`: the
+typed failure of the last variant tried (:class:`slax_drake.planning.failures.PlanningFailure`: its kind, the
+waypoint, the colliding body or what the carried object meets) and the reason in words, made from the failures:
+the last variant's leads, the others follow in brackets. Timings of each stage are kept (seconds of wall clock) for the
 benchmark.
 """
 
@@ -46,6 +47,7 @@ import time
 
 import numpy as np
 
+from slax_drake.planning.failures import RETURN, FailureKind, PlanningFailure, distinct, joined_message
 from slax_drake.planning.free_path import free_path
 from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
@@ -67,16 +69,17 @@ MAX_FIRST_SOLUTIONS = 3
 MIN_DISTANCE = 0.004  # m, IK's robot-environment and self distance when the unconstrained solution collides
 MAX_DISTANCE_RETRIES = 2  # colliding IK solutions re-solved with the distance constraint, per waypoint
 CARRIED_PROBES = 21  # poses along a colliding carried segment examined to name what the object meets
-# Rejections that a smaller approach margin may avoid (the waypoints in front of the opening and the free ways)
-MARGIN_DEPENDENT = ("pre-approach", "retract", "segment to pre-approach", "segment to retract",
-                    "no collision-free way back")
-# Rejections that carrying a suctioned object across at another depth (hence, perhaps, lifted less) may avoid
-PULL_DEPENDENT = ("lift", "pull out", "translate", "push in", "lower", "segment to lift", "segment to pull out",
-                  "segment to translate", "segment to push in", "segment to lower")
+# Rejections that a smaller approach margin may avoid: at the waypoints in front of the opening (or the joint
+# segments arriving at them), and no free way back
+MARGIN_DEPENDENT = frozenset({"pre-approach", "retract"})
+MARGIN_DEPENDENT_KINDS = frozenset({FailureKind.NO_WAY_BACK})
+# Rejections that carrying a suctioned object across at another depth (hence, perhaps, lifted less) may avoid: at
+# the carrying waypoints or the joint segments arriving at them
+PULL_DEPENDENT = frozenset({"lift", "pull out", "translate", "push in", "lower"})
 # Rejections of a straight tool segment (the joint-space line between two IK solutions leaves it and the midpoints
-# cannot bring it back: the solutions lie on different branches) depend on the solutions the chain took, which
-# another carrying depth or approach margin changes: they let the next variant be tried, as the ones above do.
-STRAIGHT_SEGMENT_FAILURES = ("leaves its straight segment", "a point of the straight segment is out of reach")
+# cannot bring it back: the solutions lie on different branches; PlanningFailure.straight_segment) depend on the
+# solutions the chain took, which another carrying depth or approach margin changes: they let the next variant be
+# tried, as the ones above do.
 MAX_REANCHORS = 2  # waypoints re-solved from the seed library (and the path before them backward) per plan
 FREE_PATH_SEED = 0
 # IK tolerances while the cup holds the object (seal to release): the object turns and shifts with the tool, and
@@ -87,11 +90,13 @@ HOLD_ANGLE_TOLERANCE = 1e-3  # rad
 
 @dataclasses.dataclass
 class Rejection:
-    """An action whose motion is infeasible, and why."""
+    """An action whose motion is infeasible, and why: ``failure``, the leading failure of the last variant tried
+    (decisions rest on it), and ``reason``, every variant's failures in words (for logs and trial files)."""
 
     action: object
     reason: str
     timings: dict
+    failure: PlanningFailure | None = None
 
     feasible = False
 
@@ -118,7 +123,11 @@ class PlannedMotion:
 
 
 class _Reject(Exception):
-    pass
+    """A planning variant failed: ``failures`` (one per first IK solution tried, distinct messages)."""
+
+    def __init__(self, *failures: PlanningFailure):
+        self.failures = failures
+        super().__init__(joined_message(failures))
 
 
 class _PoseReject(_Reject):
@@ -181,18 +190,19 @@ class MotionPlanner:
                     where = f"approach margin {margin * 100:.0f} cm" + (f", carried across at y = {pull:+.3f}"
                                                                         if len(pulls) > 1 else "") + (
                         f" turned {np.degrees(carry_yaw):+.0f} deg" if carry_yaw else "")
-                    reasons.append((where, str(e)))
-                    if not _may_differ(str(e), PULL_DEPENDENT):
+                    reasons.append((where, e.failures))
+                    if not _may_differ(e.failures, PULL_DEPENDENT):
                         break
-            if motion is not None or not _may_differ(reasons[-1][1], MARGIN_DEPENDENT):
+            if motion is not None or not _may_differ(reasons[-1][1], MARGIN_DEPENDENT, MARGIN_DEPENDENT_KINDS):
                 break
         if motion is None:
             timings["total_s"] = time.perf_counter() - t_all
-            # The last variant's reason leads (it starts with the waypoint's label, which the PlannerSystem reads);
-            # the other variants follow in brackets.
-            reason = reasons[-1][1] if len(reasons) == 1 else (
-                f"{reasons[-1][1]} [{reasons[-1][0]}; before: " + " | ".join(f"{w}: {r}" for w, r in reasons[:-1]) + "]")
-            return Rejection(action, reason, _rounded(timings))
+            # The last variant's failures lead (their first is the Rejection's failure, which the PlannerSystem
+            # reads); the other variants follow in brackets.
+            said = [(w, joined_message(f)) for w, f in reasons]
+            reason = said[-1][1] if len(said) == 1 else (
+                f"{said[-1][1]} [{said[-1][0]}; before: " + " | ".join(f"{w}: {r}" for w, r in said[:-1]) + "]")
+            return Rejection(action, reason, _rounded(timings), reasons[-1][1][0])
         timings["total_s"] = time.perf_counter() - t_all
         motion.timings = _rounded(timings)
         return motion
@@ -263,8 +273,8 @@ class MotionPlanner:
                 world.ik_tool_contact(name, False)
             hits = (pairs_text(world.collision_pairs(colliding[0])) or ", ".join(world.colliding_bodies(colliding[0]))
                     or "the environment")
-            raise _Reject(f"{wp.label}: every IK solution collides: {hits}")
-        raise _Reject(f"{wp.label}: tool pose out of reach (no IK solution)")
+            raise _Reject(PlanningFailure(FailureKind.EVERY_SOLUTION_COLLIDES, wp.label, hits=hits))
+        raise _Reject(PlanningFailure(FailureKind.NO_IK_SOLUTION, wp.label))
 
     def _seeds(self, q_start):
         """Initial guesses for the first waypoint: the start, the observation pose with the torso low, mid and
@@ -316,20 +326,20 @@ class MotionPlanner:
             except _Reject:
                 pass
         if not found:
-            what = "every solution collides" if colliding else "no IK solution"
-            raise _Reject(f"{wp.label}: tool pose out of reach ({what}; {len(seeds)} seeds)")
+            raise _Reject(PlanningFailure(FailureKind.FIRST_OUT_OF_REACH, wp.label, seeds=len(seeds),
+                                          collides=bool(colliding)))
         return found
 
     def _plan(self, world, action, waypoints, q_start, timings) -> PlannedMotion:
-        reasons = []
+        failures = []
         for q_first in self._first_waypoints(world, waypoints[0], q_start, action.name, timings):
             try:
                 return self._plan_from(world, action, waypoints, q_start, q_first, timings)
             except _PoseReject:
                 raise
             except _Reject as e:
-                reasons.append(str(e))
-        raise _Reject(reasons[0] if len(set(reasons)) == 1 else "; ".join(dict.fromkeys(reasons)))
+                failures.extend(e.failures)
+        raise _Reject(*distinct(failures))
 
     def _plan_from(self, world, action, waypoints, q_start, q_first, timings) -> PlannedMotion:
         name = action.name
@@ -388,9 +398,9 @@ class MotionPlanner:
             back = self._free_path(world, qs[-1], self.q_observation)
         timings["check_s"] += time.perf_counter() - t0
         if to_first is None:
-            raise _Reject(f"{waypoints[0].label}: no collision-free way from the start")
+            raise _Reject(PlanningFailure(FailureKind.NO_WAY_FROM_START, waypoints[0].label))
         if back is None:
-            raise _Reject("no collision-free way back to the observation pose")
+            raise _Reject(PlanningFailure(FailureKind.NO_WAY_BACK))
         carried = [carried[i] for i in range(len(chain))]
         chain[1:1] = [(q, False, False, None) for q in to_first[1:-1]]
         carried[1:1] = [""] * len(to_first[1:-1])
@@ -413,13 +423,13 @@ class MotionPlanner:
                 if not world.edge_free(qa, qb):
                     timings["check_s"] += time.perf_counter() - t0
                     ahead = next((w for _, _, _, w in chain[i + 1:] if w is not None), None)
-                    where = ahead.label if ahead is not None else "the return to the observation pose"
+                    where = ahead.label if ahead is not None else RETURN
                     if carry:
                         hits = _carried_hits(world, qa, qb)
                         if hits is not None:
-                            raise _Reject(f"segment to {where}: the carried {name} collides with {hits}")
+                            raise _Reject(PlanningFailure(FailureKind.CARRIED_COLLIDES, where, hits=hits, carried=name))
                     pairs = world.first_collision_on(qa, qb)
-                    raise _Reject(f"segment to {where} collides" + (f": {pairs_text(pairs)}" if pairs else ""))
+                    raise _Reject(PlanningFailure(FailureKind.SEGMENT_COLLIDES, where, hits=pairs_text(pairs) if pairs else ""))
                 segments.append((np.asarray(qa).copy(), np.asarray(qb).copy(), contact, carry))
         finally:
             world.drop()
@@ -453,7 +463,7 @@ class MotionPlanner:
         upper = np.maximum(lim.position_upper - LIMIT_MARGIN, q_start)
         outside = np.flatnonzero(np.any((traj.q < lower - 1e-9) | (traj.q > upper + 1e-9), axis=0))
         if len(outside):
-            raise _Reject(f"{lim.names[outside[0]]} comes within {LIMIT_MARGIN} of its position limit")
+            raise _Reject(PlanningFailure(FailureKind.JOINT_LIMIT, hits=lim.names[outside[0]], margin=LIMIT_MARGIN))
         return PlannedMotion(action, traj, [(round(float(a), 6), round(float(b), 6)) for a, b in suction],
                              waypoint_times, float(max_dev), {}, segments, list(waypoints))
 
@@ -469,7 +479,7 @@ class MotionPlanner:
         if dev <= (min(self.deviation_tolerance, CARRIED_DEVIATION_TOLERANCE) if wp.carried else self.deviation_tolerance):
             return [], dev
         if depth >= MAX_REFINE_DEPTH:
-            raise _Reject(f"{wp.label}: the tool leaves its straight segment by {dev * 1000:.1f} mm")
+            raise _Reject(PlanningFailure(FailureKind.LEAVES_STRAIGHT_SEGMENT, wp.label, deviation=dev))
         X_mid = Xa.copy()
         X_mid[:3, :3] = _midway_rotation(Xa[:3, :3], Xb[:3, :3])
         X_mid[:3, 3] = (pa + pb) / 2.0
@@ -480,16 +490,18 @@ class MotionPlanner:
             if q_mid is not None:
                 break
         if q_mid is None:
-            raise _Reject(f"{wp.label}: a point of the straight segment is out of reach")
+            raise _Reject(PlanningFailure(FailureKind.STRAIGHT_SEGMENT_OUT_OF_REACH, wp.label))
         left, d1 = self._refine(world, qa, Xa, q_mid, X_mid, wp, timings, depth + 1)
         right, d2 = self._refine(world, q_mid, X_mid, qb, Xb, wp, timings, depth + 1)
         return left + [q_mid] + right, max(d1, d2)
 
 
-def _may_differ(reason: str, dependent: tuple) -> bool:
-    """Whether another planning variant may avoid the rejection ``reason``: it names a waypoint of ``dependent``
-    or is a straight-segment failure (``STRAIGHT_SEGMENT_FAILURES``)."""
-    return reason.startswith(dependent) or any(f in reason for f in STRAIGHT_SEGMENT_FAILURES)
+def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) -> bool:
+    """Whether another planning variant may avoid a variant's ``failures`` (one per first IK solution tried): the
+    first names a waypoint of ``dependent`` (or a joint segment arriving at one) or is of one of ``kinds``, or any
+    is a straight-segment failure."""
+    return (failures[0].names_any(dependent) or failures[0].kind in kinds
+            or any(f.straight_segment for f in failures))
 
 
 def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q) -> None:
@@ -498,8 +510,8 @@ def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q) -> None:
     tool_hits = world.tool_environment_hits(q)
     if tool_hits:
         pairs = [(a, b) for a, b in world.collision_pairs(q) if a in tool_hits]
-        raise _PoseReject(f"{wp.label}: the tool collides at its pose: "
-                          + (pairs_text(pairs) if pairs else f"{', '.join(tool_hits)} (environment)"))
+        raise _PoseReject(PlanningFailure(FailureKind.TOOL_COLLIDES, wp.label,
+                                          hits=pairs_text(pairs) if pairs else f"{', '.join(tool_hits)} (environment)"))
 
 
 def _carried_hits(world, qa, qb) -> str | None:

@@ -38,7 +38,8 @@ suction may place its object in hidden space, where an unseen object may stop it
 as ``hidden_risk`` times the share of hidden placements in its placement box (widened by half the target), and a
 placement that was put back or stopped short marks its box blocked for the rest of the trial.
 
-What the trial has shown (``slax-belief-v2`` in the registry turns all three off):
+What the trial has shown (three fields of :class:`BeliefOptions`; ``evidence="none"``,
+``remember_objects=False`` and ``widen_beam=0`` turn them off):
 
 - ``remember_objects``: an object seen earlier and hidden now, that the robot has not moved since, is kept among
   the seen objects where it stood (:meth:`with_remembered`; in the first-order world nothing moves unless the
@@ -109,17 +110,18 @@ import time
 import numpy as np
 
 from slax_drake.shelf.actions import Push, Suction, apply_action
+from slax_drake.policies.belief_options import DEFAULT_BELIEF_OPTIONS, BeliefOptions
 from slax_drake.policies.hindsight import Hindsight, Worlds
 from slax_drake.policies.oracle_search import maximal_pushes_only
 from slax_drake.policies.protocol import Decision
 from slax_drake.scene.model import state_key
 
 
-REMEMBERED = "remembered_"  # camera mode: the name prefix of a remembered hypothesis (hidden now; not acted on)
+REMEMBERED = "remembered_"  # camera mode: the name prefix of a remembered hypothesis (SceneObject.remembered)
 
 
 class _NoActionsOnRemembered:
-    """The policy's action model, enumerating no action on a remembered hypothesis (:data:`REMEMBERED`: the camera
+    """The policy's action model, enumerating no action on a remembered hypothesis (``remembered``: the camera
     shows no segment of it to act on); it stays an obstacle. Everything else is the wrapped model's. Privileged
     observations name no object so: there it is the wrapped model."""
 
@@ -133,8 +135,8 @@ class _NoActionsOnRemembered:
 
     def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None):
         objects = tuple(objects)
-        if only is None and any(o.name.startswith(REMEMBERED) for o in objects):
-            only = {o.name for o in objects if not o.name.startswith(REMEMBERED)}
+        if only is None and any(o.remembered for o in objects):
+            only = {o.name for o in objects if not o.remembered}
         return self._model.enumerate(objects, fixed, pushes, suctions, only)
 
 
@@ -152,85 +154,56 @@ class _Node:
 
 
 class BeliefSearch(Hindsight):
-    """See the module docstring. Options: ``samples`` (worlds), ``depth`` (plan length searched), ``max_depth``
-    (searched further while nothing is revealed), ``beam``, ``placements_per_object`` (suction placements kept per
-    object and state), ``failure_cost``, ``horizon`` (actions per trial, None: unknown), ``hidden_risk``,
-    ``select`` ("ratio": the most revealed mass per expected cost; "value": the least V), ``seconds`` (the
-    per-decision CPU cap), ``grid_step`` (m), ``threshold`` (v; the registry passes the scenario's),
-    ``remember_objects``, ``evidence`` ("outcome" or "none"), ``block_weight``, ``widen_beam`` and ``stuck_select``
-    ("progress" or "value"), ``blocked_rule`` ("box", "hidden" or "risk") and ``blocked_risk``; camera mode:
-    ``camera_depth``, ``maybe_occupied``, ``camera_memory`` and ``camera_outcome_tolerance`` (see the module
-    docstring)."""
+    """See the module docstring. ``options``: how it searches (:class:`BeliefOptions`, every field documented
+    there); ``horizon``: actions per trial (None: unknown; the registry passes the protocol's H). Other keyword
+    arguments are :class:`~slax_drake.policies.hindsight.Hindsight`'s (``grid_step`` (m), ``threshold`` (v; the
+    registry passes the scenario's), ...)."""
 
     name = "slax-belief"
     uses_horizon = True  # the registry passes the protocol's H (see the module docstring)
 
-    def __init__(self, *args, samples: int = 64, depth: int = 3, beam: int = 6, placements_per_object: int = 2,
-                 failure_cost: float = 10.0, horizon: int | None = None, seconds: float = 30.0,
-                 hidden_risk: float = 1.0, max_depth: int = 5, select: str = "ratio", evidence: str = "outcome",
-                 block_weight: float = 8.0, remember_objects: bool = True, widen_beam: int = 12,
-                 camera_depth: float | None = None, camera_memory: bool = False,
-                 camera_outcome_tolerance: float = 0.003, maybe_occupied: float | None = None,
-                 stuck_select: str = "value", blocked_rule: str = "box", blocked_risk: float = 0.5, **kwargs):
-        super().__init__(*args, samples=samples, seconds=seconds, failure_cost=failure_cost, safe_suctions=False,
+    def __init__(self, *args, options: BeliefOptions = DEFAULT_BELIEF_OPTIONS, horizon: int | None = None, **kwargs):
+        o = options
+        super().__init__(*args, samples=o.samples, seconds=o.seconds, failure_cost=o.failure_cost, safe_suctions=False,
                          **kwargs)
+        self.options = o
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
         self._risk_by_box: dict = {}  # placement box -> its placement_risk, for this decision's hidden centres
         self._risk_cache: dict = {}  # (id(object), action) -> (the object, its placement_risk), this decision
-        self.depth = depth
-        self.max_depth = max(depth, max_depth)  # deeper while no plan of ``depth`` reveals anything
-        self.beam = beam
-        self.placements_per_object = placements_per_object
+        self.depth = o.depth
+        self.max_depth = max(o.depth, o.max_depth)  # deeper while no plan of ``depth`` reveals anything
+        self.beam = o.beam
+        self.placements_per_object = o.placements_per_object
         self.horizon = horizon
         self._plan: list = []  # the rest of the last decision's plan
         self._expected = None  # the arrangement that plan expects next
         self._distance_cache: dict = {}
         self._worlds = None  # the worlds (PackedWorlds) of this trial, kept while enough stay consistent
         self._n_worlds = 0  # how many of them are consistent at this decision
-        self.hidden_risk = hidden_risk
-        if select not in ("ratio", "value"):
-            raise ValueError("select must be 'ratio' or 'value'")
-        self.select = select
+        self.hidden_risk = o.hidden_risk
+        self.select = o.select
         self._blocked: list = []  # boxes (x_lo, x_hi, y_lo, y_hi) where a placement failed: an unseen obstacle
         self._last = None  # (the suction taken last, the pose it predicts for its object)
-        if evidence not in ("outcome", "none"):
-            raise ValueError("evidence must be 'outcome' or 'none'")
-        self.evidence = evidence
-        if not block_weight > 0:
-            raise ValueError(f"block_weight must be positive (got {block_weight!r})")
-        if isinstance(widen_beam, bool) or not isinstance(widen_beam, int) or widen_beam < 0:
-            raise ValueError(f"widen_beam must be a whole number, 0 or more (got {widen_beam!r})")
-        self.block_weight = float(block_weight)
+        self.evidence = o.evidence
+        self.block_weight = float(o.block_weight)
         self._weights: dict = {}  # lattice key -> the placement's weight in the belief (1 when absent)
         self._executed = None  # (the action taken last, the seen objects it was planned on)
         self._template = None  # the observation's scene template (shelf, camera) at this decision
         self.evidence_log: list = []  # per executed action: how its outcome changed the belief
-        self.remember_objects = remember_objects
-        self.widen_beam = widen_beam  # the beam of a second search when the first reveals nothing (0: none)
+        self.remember_objects = o.remember_objects
+        self.widen_beam = o.widen_beam  # the beam of a second search when the first reveals nothing (0: none)
         self._remembered: dict = {}  # name -> the object as last believed (seen, or remembered), last decision
-        if camera_depth is not None and not 0 < camera_depth:
-            raise ValueError(f"camera_depth must be a positive depth in metres or None (got {camera_depth!r})")
-        self.camera_depth = camera_depth  # camera mode: the hypotheses' assumed unseen depth (None: as observed)
-        self.camera_memory = camera_memory  # camera mode: remember hidden hypotheses (matched across frames)
-        if not camera_outcome_tolerance > 0:
-            raise ValueError(f"camera_outcome_tolerance must be positive (got {camera_outcome_tolerance!r})")
-        self.camera_outcome_tolerance = float(camera_outcome_tolerance)  # m, outcome evidence on estimated poses
+        self.camera_depth = o.camera_depth  # camera mode: the hypotheses' assumed unseen depth (None: as observed)
+        self.camera_memory = o.camera_memory  # camera mode: remember hidden hypotheses (matched across frames)
+        self.camera_outcome_tolerance = float(o.camera_outcome_tolerance)  # m, outcome evidence on estimated poses
         self._action_model = _NoActionsOnRemembered(self._action_model)
         self._camera_mode = False  # the last observation was a camera frame's
-        if maybe_occupied is not None and not 0 < maybe_occupied <= 1:
-            raise ValueError(f"maybe_occupied must be in (0, 1] or None (got {maybe_occupied!r})")
-        self.maybe_occupied = maybe_occupied  # camera mode: the weight of a placement in a hypothesis' assumed depth
+        self.maybe_occupied = o.maybe_occupied  # camera mode: the weight of a placement in a hypothesis' assumed depth
         self._as_observed: dict = {}  # camera mode with camera_depth: name -> the observer's hypothesis (least depth)
         self._maybe: frozenset = frozenset()  # lattice keys of the placements weighed by maybe_occupied now
-        if stuck_select not in ("value", "progress"):
-            raise ValueError("stuck_select must be 'value' or 'progress'")
-        self.stuck_select = stuck_select  # the rule when no plan looked at reveals anything (module docstring)
-        if blocked_rule not in ("box", "hidden", "risk"):
-            raise ValueError("blocked_rule must be 'box', 'hidden' or 'risk'")
-        self.blocked_rule = blocked_rule  # which placements a failed placement's box refuses (placement_allowed)
-        if not 0 <= blocked_risk <= 1:
-            raise ValueError(f"blocked_risk must be in [0, 1] (got {blocked_risk!r})")
-        self.blocked_risk = float(blocked_risk)  # blocked_rule="risk": the failure chance a blocked box adds
+        self.stuck_select = o.stuck_select  # the rule when no plan looked at reveals anything (module docstring)
+        self.blocked_rule = o.blocked_rule  # which placements a failed placement's box refuses (placement_allowed)
+        self.blocked_risk = float(o.blocked_risk)  # blocked_rule="risk": the failure chance a blocked box adds
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -354,7 +327,7 @@ class BeliefSearch(Hindsight):
 
     def remembered_in_frame(self, obs, moved: str | None) -> tuple:
         """Camera mode: the hypotheses of the last decision (seen then, or remembered) that stand for an object
-        hidden now, named ``remembered_<k>`` (:data:`REMEMBERED`; the policy takes no action on them: it sees no
+        hidden now, flagged ``remembered`` and named ``remembered_<k>`` (:data:`REMEMBERED`; the policy takes no action on them: it sees no
         segment to act on). A segment's id says nothing across frames (a real segmentation renumbers them), so
         a hypothesis is matched by where it stands: it is the object of a hypothesis of this frame when their
         footprints overlap (more than ``overlap_share`` of the smaller one); the hypothesis the last action moved
@@ -384,11 +357,11 @@ class BeliefSearch(Hindsight):
         names = {o.name for o in obs.known}
         out = []
         for k, o in enumerate(kept):
-            label = o.name if o.name.startswith(REMEMBERED) else f"{REMEMBERED}{o.name}"
+            label = o.name if o.remembered else f"{REMEMBERED}{o.name}"
             while label in names:
                 label = f"{REMEMBERED}{k}_{label}"
             names.add(label)
-            out.append(o if label == o.name else dataclasses.replace(o, name=label))
+            out.append(o if label == o.name else dataclasses.replace(o, name=label, remembered=True))
         return tuple(out)
 
     def placements(self, obs) -> np.ndarray:

@@ -41,7 +41,7 @@ import numpy as np
 from slax_drake.shelf.actions import ActionModel, Push, Suction, apply_action
 from slax_drake.shelf.distribution import DistributionModel, entropy, history_min, support
 from slax_drake.policies.protocol import Decision, Exclusions, read_only
-from slax_drake.policies.trial_memory import TrialMemory
+from slax_drake.policies.trial_memory import Miss, TrialMemory
 
 
 class DistributionPolicy:
@@ -102,10 +102,10 @@ class DistributionPolicy:
         its object as predicted; ``obs``'s arrangement joins the observed ones (correction 2)."""
         failed = self.memory.outcome(obs.known)
         if failed is not None:
-            proposal, reason = failed
-            unchanged = reason.startswith("the observation did not change")
-            self._exclusions.add(proposal.action, f"executed: {reason}", unchanged and isinstance(proposal.action, Push),
-                                 proposal.before)
+            proposal, how = failed
+            unchanged = how.miss is Miss.UNCHANGED
+            self._exclusions.add(proposal.action, f"executed: {how.message}",
+                                 unchanged and isinstance(proposal.action, Push), proposal.before)
         self.memory.observe(obs.known)
 
     def exclude(self, action, reason: str, whole_group: bool = False) -> None:

@@ -1,8 +1,10 @@
 """Policies by name, built for a scenario: the one place that maps a command-line name to a policy object.
 
-:data:`POLICY_TABLE` is the table: name -> (class, options). A distribution policy's class is called as
-``cls(action_model, distribution_model, psi=psi, **options)`` (plus ``horizon=horizon`` for a class with
-``uses_horizon``), an oracle's (``needs_true_scene``) as
+:data:`POLICY_TABLE` is the table: name -> (class, options). Options are a dict of constructor arguments, or a
+frozen options dataclass (slax-belief's :class:`~slax_drake.policies.belief_options.BeliefOptions`), whose named
+variants are built with ``dataclasses.replace`` of the defaults. A distribution policy's class is called as
+``cls(action_model, distribution_model, psi=psi, **options)`` (``options=options`` for a dataclass; plus
+``horizon=horizon`` for a class with ``uses_horizon``), an oracle's (``needs_true_scene``) as
 ``cls(action_model, psi=psi, horizon=horizon, threshold=v, **options)``. Every class implements
 :class:`slax_drake.policies.protocol.Policy`. Classes are named by import path so that listing the names imports
 nothing heavy. A new policy is one class and one line here.
@@ -15,6 +17,7 @@ import importlib
 import typing
 
 from slax_drake.errors import UnknownPolicyError
+from slax_drake.policies.belief_options import DEFAULT_BELIEF_OPTIONS
 
 # The action model, the distributions and the scene sampler (OpenCV, shapely, trimesh, torch) are imported where
 # used: the command-line parser imports this module for POLICY_NAMES.
@@ -24,10 +27,30 @@ if typing.TYPE_CHECKING:
 
 @dataclasses.dataclass(frozen=True)
 class PolicyEntry:
-    """One row of the policy table: ``cls`` as "module:Class" and the options its constructor gets."""
+    """One row of the policy table: ``cls`` as "module:Class" and the options its constructor gets (a dict of
+    keyword arguments, or an options dataclass passed as ``options``); ``oracle``: the policy reads the true scene
+    and searches it (it takes ``oracle_options`` such as a time limit)."""
 
     cls: str
-    options: dict = dataclasses.field(default_factory=dict)
+    options: typing.Any = dataclasses.field(default_factory=dict)
+    oracle: bool = False
+
+    def recorded_options(self) -> dict:
+        """The options that make this row its policy, as a results folder's settings record them (of an options
+        dataclass, the fields that differ from its defaults)."""
+        if dataclasses.is_dataclass(self.options):
+            return self.options.changed()
+        return dict(self.options)
+
+    def constructor_options(self, overrides: dict | None = None) -> dict:
+        """Keyword arguments for the class: the row's options with ``overrides`` (the fields of an options
+        dataclass replaced in it, other keys passed beside it)."""
+        overrides = dict(overrides or {})
+        if not dataclasses.is_dataclass(self.options):
+            return dict(self.options, **overrides)
+        names = {f.name for f in dataclasses.fields(self.options)}
+        fields = {k: overrides.pop(k) for k in list(overrides) if k in names}
+        return dict(overrides, options=dataclasses.replace(self.options, **fields))
 
     def load(self) -> type:
         module, _, name = self.cls.partition(":")
@@ -35,9 +58,10 @@ class PolicyEntry:
 
 
 _POLICIES = "slax_drake.policies.policies"
+_BELIEF = "slax_drake.policies.belief:BeliefSearch"
 POLICY_TABLE: dict[str, PolicyEntry] = {
-    "oracle-p": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": False}),
-    "oracle-p+s": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": True}),
+    "oracle-p": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": False}, oracle=True),
+    "oracle-p+s": PolicyEntry("slax_drake.policies.oracle:Oracle", {"suctions": True}, oracle=True),
     # DAR and Bluction-DAR with the corrections any implementation needs (policies.py's docstring: a failed action
     # is excluded, no return to an observed arrangement, no zero-reduction action while another reveals unseen
     # space); the "-literal" rows are the paper's text alone, kept so that the corrections' effect is visible.
@@ -49,18 +73,15 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "bluction-dar-cost": PolicyEntry(f"{_POLICIES}:BluctionDAR", {"suction_weighting": "cost", "corrected": True}),
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead"),
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight"),
-    "slax-belief": PolicyEntry("slax_drake.policies.belief:BeliefSearch"),
+    "slax-belief": PolicyEntry(_BELIEF, DEFAULT_BELIEF_OPTIONS),
     # camera mode (belief.py's docstring): hypotheses assumed 0.13 m deep, hidden ones remembered, outcome evidence
-    # within 1 cm; the privileged path reads none of these. Measured, not the default (docs/research/slax_belief.md)
-    "slax-belief-camera-depth": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
-                                            {"camera_depth": 0.13, "camera_memory": True,
-                                             "camera_outcome_tolerance": 0.01}),
+    # within 1 cm; the privileged path reads none of these. Measured, not the default (its results table: 69 %
+    # against slax-belief's 73 % in camera mode)
+    "slax-belief-camera-depth": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, camera_depth=0.13, camera_memory=True, camera_outcome_tolerance=0.01)),
     # a failed placement's box no longer refuses later placements; one overlapping it in hidden space fails with 0.5
-    # more (belief.py's blocked_rule="risk"). Measured, not the default (docs/research/slax_belief.md)
-    "slax-belief-v4": PolicyEntry("slax_drake.policies.belief:BeliefSearch", {"blocked_rule": "risk"}),
-    # slax-belief without remembered objects, actions' outcomes and the wider beam (belief.py's docstring)
-    "slax-belief-v2": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
-                                  {"evidence": "none", "remember_objects": False, "widen_beam": 0}),
+    # more. Measured, not the default (its results table: 100 scenes per density, paper profile)
+    "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk")),
 }
 POLICY_NAMES = tuple(POLICY_TABLE)
 PAPER_POLICIES = ("oracle-p", "oracle-p+s", "dar", "der-3", "bluction-dar")  # the five of the paper's Table I
@@ -69,13 +90,21 @@ OUR_POLICIES = ("bluction-la2", "slax-hindsight", "slax-belief")  # the project'
 DEFAULT_BENCHMARK_POLICIES = PAPER_POLICIES + OUR_POLICIES
 
 
+def is_oracle(name: str) -> bool:
+    """Whether the policy named ``name`` is an oracle (reads the true scene; takes ``oracle_options``)."""
+    entry = POLICY_TABLE.get(name)
+    return entry is not None and entry.oracle
+
+
 def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth", horizon: int | None = None,
                 target_size=None, tool_overrides: dict | None = None, oracle_options: dict | None = None,
                 profile: str | None = None, policy_options: dict | None = None):
     """A fresh policy object named ``name`` (a key of :data:`POLICY_TABLE`) for ``scenario``'s shelf and camera,
     planning with ``profile``'s rules (default: the scenario's) and ``tool_overrides``. ``oracle_options``: extra
     constructor options of the oracles (e.g. ``seconds``, the search time limit); ``policy_options``: extra
-    constructor options of a distribution policy (e.g. ``seconds``, the hindsight policy's time per decision)."""
+    constructor options of a distribution policy (e.g. ``seconds``, the hindsight policy's time per decision; for a
+    row with an options dataclass, its fields are replaced in the row's options: ``{"blocked_rule": "risk"}`` on
+    ``slax-belief`` is ``slax-belief-v4``)."""
     from slax_drake.shelf.actions import ActionModel
     from slax_drake.shelf.distribution import make_distribution_model
     from slax_drake.shelf.tool import tool_config
@@ -91,10 +120,10 @@ def make_policy(name: str, scenario: Scenario, perception: str = "ground-truth",
                         tool_config(scenario, profile, **(tool_overrides or {})))
     if cls.needs_true_scene:
         policy = cls(model, psi=psi, horizon=horizon, threshold=scenario.target.visibility_threshold,
-                     **entry.options, **(oracle_options or {}))
+                     **entry.constructor_options(oracle_options))
     else:
         size = target_size or tuple(scenario.target.sizes[0])
-        options = dict(entry.options, **(policy_options or {}))
+        options = entry.constructor_options(policy_options)
         if getattr(cls, "uses_visibility_threshold", False):  # a policy that plans for the success test itself
             options.setdefault("threshold", scenario.target.visibility_threshold)
         if getattr(cls, "uses_horizon", False):  # a policy that plans to the protocol's deadline H, as the oracles

@@ -21,9 +21,39 @@ All positions are in the shelf frame S (x right, y into the shelf; metres).
 from __future__ import annotations
 
 import dataclasses
+import enum
 import math
 
 from slax_drake.shelf.actions import apply_action
+
+
+class Miss(enum.Enum):
+    """How an executed action failed to move its object as predicted."""
+
+    UNCHANGED = "unchanged"  # the observation did not change: the action moved nothing
+    SHORT = "short"  # the object moved less than predicted
+    ELSEWHERE = "elsewhere"  # the object moved, but stands away from the predicted pose
+
+
+@dataclasses.dataclass(frozen=True)
+class Failed:
+    """An executed action that did not move its object as predicted: ``miss``, and (for ``SHORT`` and
+    ``ELSEWHERE``) how far it moved (``moved``, m), how far it was predicted to move (``predicted``, m) and how far
+    it stands from the predicted pose (``off``, m)."""
+
+    miss: Miss
+    moved: float = 0.0
+    predicted: float = 0.0
+    off: float = 0.0
+
+    @property
+    def message(self) -> str:
+        """The failure in words, as trial logs record it."""
+        if self.miss is Miss.UNCHANGED:
+            return "the observation did not change: the action moved nothing"
+        if self.miss is Miss.SHORT:
+            return f"moved its object {self.moved:.3f} m where {self.predicted:.3f} m was predicted"
+        return f"its object stands {self.off:.3f} m from the predicted pose"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -159,8 +189,8 @@ class TrialMemory:
         if self.proposal is not None and self.proposal.action == action:
             self.proposal = None
 
-    def outcome(self, objects) -> tuple[Proposal, str] | None:
-        """(the proposal, why it failed) when the observation ``objects`` shows that the last proposed action did
+    def outcome(self, objects) -> tuple[Proposal, Failed] | None:
+        """(the proposal, how it failed) when the observation ``objects`` shows that the last proposed action did
         not move its object as predicted; None otherwise. Forgets the proposal either way."""
         p, self.proposal = self.proposal, None
         if p is None:
@@ -171,14 +201,13 @@ class TrialMemory:
             return None  # too small a move to tell from the observation
         now = next((o for o in objects if o.name == p.action.name), None)
         if now is None and self.same_arrangement(tuple(objects), p.before):
-            return p, "the observation did not change: the action moved nothing"
+            return p, Failed(Miss.UNCHANGED)
         if now is None:
             return None
         xy = (float(now.center[0]), float(now.center[1]))
         if math.dist(xy, p.predicted_xy) <= tol:
             return None
         if math.dist(xy, p.before_xy) <= tol:
-            return p, "the observation did not change: the action moved nothing"
-        return p, (f"moved its object {math.dist(xy, p.before_xy):.3f} m where {predicted:.3f} m was predicted"
-                   if math.dist(xy, p.before_xy) < predicted else
-                   f"its object stands {math.dist(xy, p.predicted_xy):.3f} m from the predicted pose")
+            return p, Failed(Miss.UNCHANGED)
+        moved, off = math.dist(xy, p.before_xy), math.dist(xy, p.predicted_xy)
+        return p, Failed(Miss.SHORT if moved < predicted else Miss.ELSEWHERE, moved, predicted, off)

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from slax_drake.config import CameraConfig
+from slax_drake.config import ShelfCameraConfig
 
 
 @dataclasses.dataclass(frozen=True)
@@ -31,7 +31,7 @@ class Camera:
     far: float = 5.0
 
     @staticmethod
-    def from_config(config: CameraConfig) -> "Camera":
+    def from_config(config: ShelfCameraConfig) -> "Camera":
         fx = (config.width / 2.0) / math.tan(math.radians(config.horizontal_fov_deg) / 2.0)
         return Camera(
             width=int(config.width),

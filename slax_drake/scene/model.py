@@ -32,7 +32,8 @@ class Shelf:
 @dataclasses.dataclass(frozen=True)
 class SceneObject:
     """An occluding object: ``shape`` "box" or "cylinder", ``size`` [x, y, z], its pose X_SO (4x4) and, when the
-    scenario draws masses, its ``mass`` (kg).
+    scenario draws masses, its ``mass`` (kg). ``remembered``: a policy's belief holds it where it was last seen,
+    hidden from the camera now (an obstacle no action is planned on); never set on a true scene's objects.
 
     X_SO is a read-only float array (a writable one given is copied first): the search caches of the action model
     key footprints by the object's identity, so an object whose pose changed in place would read another pose's
@@ -43,6 +44,7 @@ class SceneObject:
     size: tuple[float, float, float]
     X_SO: np.ndarray
     mass: float | None = None  # kg; None: from the scenario's density (slax_drake.scene.mass.object_mass)
+    remembered: bool = False
 
     def __post_init__(self):
         X = self.X_SO

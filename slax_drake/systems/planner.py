@@ -186,7 +186,7 @@ class PlannerSystem(LeafSystem):
                 break
             rejected.append({"action": action.describe(), "reason": result.reason,
                              "planning_s": result.timings.get("total_s")})
-            policy.exclude(action, result.reason, whole_group=result.reason.startswith(EARLY_FAILURES))
+            policy.exclude(action, result.reason, whole_group=result.failure.early)
             action = None
         history = policy.history
         entry["support"] = support(history)
@@ -196,7 +196,8 @@ class PlannerSystem(LeafSystem):
         entry["decision_s"] = round(decide_s, 4)
         entry["planning_s"] = round(time.perf_counter() - t0 - decide_s, 4)
         if motion is None:
-            return self._finish(s, "no feasible action" if not rejected else "no feasible motion", entry, frame)
+            return self._finish(s, "no feasible action" if not rejected else "no feasible motion", entry, frame,
+                                hold=True)
         entry["action"] = _describe(action)
         entry["motion"] = {"duration_s": round(motion.trajectory.duration, 3), "timings": motion.timings,
                            "max_deviation_m": round(motion.max_deviation, 5),
@@ -208,19 +209,15 @@ class PlannerSystem(LeafSystem):
             s, motion=motion, t_start=now, steps=s.steps + 1, log=s.log + (entry,), motions=s.motions + ((now, motion),),
             cost=s.cost + (1.0 if isinstance(action, Push) else self.suction_cost))
 
-    def _finish(self, s: TrialState, result: str, entry: dict, frame) -> TrialState:
+    def _finish(self, s: TrialState, result: str, entry: dict, frame, hold: bool = False) -> TrialState:
+        """The trial ends with ``result``; ``hold``: no motion runs now (the robot holds the last motion's end
+        pose), else the motion in progress, if any, plays out."""
         entry["final"] = True
         entry["result"] = result
         if self.on_step is not None:
             self.on_step(entry, frame.depth, frame.segmentation, frame.target_mask, self.policy.history, None)
-        motion = None if result.startswith("no feasible") else s.motion  # hold the last motion's end pose
+        motion = None if hold else s.motion
         return dataclasses.replace(s, done=True, motion=motion, result=result, log=s.log + (entry,))
-
-
-# A planning failure before the tool reaches the object (its waypoint label leads the reason): no action of that
-# group (pushes of the object in that direction, or its suctions) can run from here.
-EARLY_FAILURES = ("pre-approach", "insert", "approach", "segment to pre-approach", "segment to insert",
-                  "segment to approach", "seal")
 
 
 def _describe(action) -> dict:

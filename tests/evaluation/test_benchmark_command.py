@@ -47,18 +47,17 @@ def test_a_resume_with_another_setting_is_refused_naming_it(made, tmp_path, caps
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before  # nothing rewritten
 
 
-@pytest.mark.parametrize("edit, named", [
-    (lambda y: y.replace("horizon_per_object: 2", "horizon_per_object: 3"), "horizon"),
-    (lambda y: y.replace("visibility_threshold: 0.80", "visibility_threshold: 0.70"), "visibility threshold"),
-    (lambda y: y.replace("clearance: 0.002", "clearance: 0.004"), "scenario (the --config file's content)"),
+@pytest.mark.parametrize("overlay, named", [
+    ("protocol:\n  horizon_per_object: 3\n", "horizon"),
+    ("target:\n  visibility_threshold: 0.70\n", "visibility threshold"),
+    ("objects:\n  clearance: 0.004\n", "scenario (the --config file's content)"),
 ])
-def test_another_config_content_is_refused_but_the_same_content_elsewhere_is_not(made, tmp_path, capsys, edit,
+def test_another_config_content_is_refused_but_the_same_content_elsewhere_is_not(made, tmp_path, capsys, overlay,
                                                                                   named):
-    text = Path(CONFIG).read_text()
-    assert edit(text) != text, "the edit must change the config"
+    base = f"base: {(Path(slax_drake.__file__).parent.parent / CONFIG).resolve()}\n"
     same, other = tmp_path / "same.yaml", tmp_path / "other.yaml"
-    same.write_text("# a copy\n" + text)
-    other.write_text(edit(text))
+    same.write_text("# the same content in another file\n" + base)
+    other.write_text(base + overlay)
     out = copy_of(made, tmp_path)
     argv = ["benchmark", "--densities", "4", "--scenes-per-density", "1", "--no-progress", "--policies", "dar",
             "--seed", "0", "--out", str(out)]

@@ -1,6 +1,8 @@
 """``slax-drake trial --benchmark-scene N:INDEX``: the options of the very trial the physics benchmark runs for that
 scene (no simulation here), and one clear message with exit code 2 for a bad request."""
 
+from pathlib import Path
+
 import pytest
 
 from slax_drake.cli import main
@@ -24,7 +26,7 @@ def test_benchmark_scene_gives_the_protocols_seed_target_horizon_and_station():
 def test_benchmark_scene_counts_the_target_among_n_when_the_protocol_does(tmp_path):
     """With ``protocol.count_includes_target`` the Drake trial of scene N:INDEX holds N - 1 occluders, as the
     Table I benchmark's scene of that seed does (slax_drake.evaluation.table1), and H stays 2N."""
-    text = open("sim_configs/table1.yaml").read().replace("protocol:\n", "protocol:\n  count_includes_target: true\n")
+    text = f"base: {Path('sim_configs/table1.yaml').resolve()}\nprotocol:\n  count_includes_target: true\n"
     config = tmp_path / "table1.yaml"
     config.write_text(text)
     opts = benchmark_scene_options(TrialOptions(config=str(config)), "8:1")

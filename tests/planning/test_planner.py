@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from slax_drake.planning.failures import FailureKind
 from slax_drake.planning.planner import MotionPlanner, Rejection
 from slax_drake.planning.timing import time_waypoints
 from slax_drake.planning.world import PlanningWorld
@@ -150,6 +151,8 @@ def test_unreachable_action_is_rejected_with_a_reason(setup):
     result = planner.plan(far, scene)
     assert isinstance(result, Rejection) and not result.feasible
     assert "out of reach" in result.reason and result.reason.startswith("pre-approach")
+    assert result.failure.kind is FailureKind.FIRST_OUT_OF_REACH and result.failure.waypoint == "pre-approach"
+    assert result.failure.early and result.reason.startswith(result.failure.message)  # the whole group is excluded
     deep = Suction(obj.name, (float(obj.center[0]), 2.0, 0.05), 0.0, float(obj.center[1]))
     result = planner.plan(deep, scene)
     assert isinstance(result, Rejection) and result.reason

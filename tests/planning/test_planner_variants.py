@@ -5,15 +5,16 @@ the planning world's collision check."""
 
 import pytest
 
-from slax_drake.planning.planner import STRAIGHT_SEGMENT_FAILURES, _may_differ
+from slax_drake.planning.failures import FailureKind, PlanningFailure
+from slax_drake.planning.planner import _may_differ
 
 
 def test_straight_segment_failures_let_the_next_variant_be_tried():
-    assert _may_differ("approach: the tool leaves its straight segment by 42.3 mm", ("pull out",))
-    assert _may_differ("insert: a point of the straight segment is out of reach", ("pre-approach",))
-    assert _may_differ("pull out: tool pose out of reach (no IK solution)", ("pull out",))
-    assert not _may_differ("insert: the tool collides at its pose: wrist_roll_link (environment)", ("pre-approach",))
-    assert len(STRAIGHT_SEGMENT_FAILURES) == 2
+    K = FailureKind
+    assert _may_differ((PlanningFailure(K.LEAVES_STRAIGHT_SEGMENT, "approach", deviation=0.0423),), {"pull out"})
+    assert _may_differ((PlanningFailure(K.STRAIGHT_SEGMENT_OUT_OF_REACH, "insert"),), {"pre-approach"})
+    assert _may_differ((PlanningFailure(K.NO_IK_SOLUTION, "pull out"),), {"pull out"})
+    assert not _may_differ((PlanningFailure(K.TOOL_COLLIDES, "insert", hits="wrist_roll_link"),), {"pre-approach"})
 
 
 @pytest.mark.slow

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from slax_drake.config import load_scenario
-from slax_drake.policies.belief import BeliefSearch, PackedWorlds
+from slax_drake.policies.belief import PackedWorlds
+from slax_drake.policies.belief_options import BeliefOptions
 from slax_drake.policies.hindsight import Worlds
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.simulator import execute, observation_for, run_trial
@@ -101,17 +102,17 @@ def test_distances_match_a_brute_force_count(paper):
 
 
 def test_belief_rejects_an_unknown_selection(paper):
-    policy = make_policy("slax-belief", paper)
-    with pytest.raises(ValueError):
-        BeliefSearch(policy.action_model, policy.distribution, select="greedy")
+    with pytest.raises(ValueError, match="select"):
+        BeliefOptions(select="greedy")
 
 
 @pytest.mark.parametrize("option", [{"evidence": "all"}, {"block_weight": 0.0}, {"block_weight": -1.0},
                                     {"widen_beam": -1}, {"widen_beam": 2.5}])
 def test_belief_rejects_v3_options_out_of_range(paper, option):
-    policy = make_policy("slax-belief", paper)
-    with pytest.raises(ValueError):
-        BeliefSearch(policy.action_model, policy.distribution, **option)
+    with pytest.raises(ValueError, match=next(iter(option))):
+        BeliefOptions(**option)
+    with pytest.raises(ValueError, match=next(iter(option))):
+        make_policy("slax-belief", paper, policy_options=option)
 
 
 def test_registry_passes_the_protocol_horizon_to_slax_belief_only(paper):
@@ -190,7 +191,7 @@ def test_weighted_draw_is_seeded_and_follows_the_weights(paper):
 
 def test_belief_remembers_an_untouched_object_that_became_hidden(paper):
     """An object seen at one decision and hidden at the next stays in the policy's seen objects where it stood,
-    unless it is the object the last action moved (where that one stopped is not known); slax-belief-v2 forgets."""
+    unless it is the object the last action moved (where that one stopped is not known); with remember_objects off it forgets."""
     from slax_drake.shelf.actions import Push
 
     scene = stacked_scene(paper)
@@ -207,7 +208,7 @@ def test_belief_remembers_an_untouched_object_that_became_hidden(paper):
         ["front", "middle"]
     policy._executed = (Push("middle", (0.0, 0.02, 0.05), 0.05), remembered.known)
     assert [o.name for o in policy.with_remembered(front_only).known] == ["front"]  # it moved: not remembered
-    forgetful = make_policy("slax-belief-v2", paper, horizon=4)
+    forgetful = make_policy("slax-belief", paper, horizon=4, policy_options={"remember_objects": False})
     forgetful.reset(scene)
     forgetful.with_remembered(obs)
     assert forgetful.with_remembered(front_only).known == front_only.known

@@ -91,6 +91,7 @@ def test_camera_memory_keeps_an_untouched_hypothesis_that_a_move_hid(paper):
     kept = policy.with_remembered(second)
     remembered = [o for o in kept.known if o.name.startswith(REMEMBERED)]
     assert len(remembered) == 1 and len(kept.known) == 2
+    assert [o.name for o in kept.known if o.remembered] == [remembered[0].name]  # the typed flag decides
     small_then = next(o for o in seen.known if names[o.name] == "small")
     assert np.array_equal(remembered[0].center, small_then.center) and remembered[0].size == small_then.size
     assert remembered[0] in kept.scene_template.objects

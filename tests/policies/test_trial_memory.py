@@ -8,7 +8,7 @@ from slax_drake.config import load_scenario
 from slax_drake.shelf.actions import apply_action
 from slax_drake.policies.registry import POLICY_NAMES, make_policy
 from slax_drake.shelf.simulator import execute, observation_for, run_trial
-from slax_drake.policies.trial_memory import TrialMemory
+from slax_drake.policies.trial_memory import Miss, TrialMemory
 from slax_drake.scene import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
 from slax_drake.scene.sampling import sample_scene, target_visible_fraction
@@ -64,8 +64,9 @@ def test_a_push_that_moved_less_than_predicted_is_excluded():
     push = Push("a", (0.0, 0.0, 0.0), 0.10)
     memory.propose(push, (a, b))
     moved = box("a", 0.04, 0.0)
-    (proposal, reason) = memory.outcome((moved, b))
-    assert proposal.action == push and reason.startswith("moved its object 0.040 m where 0.100 m")
+    (proposal, how) = memory.outcome((moved, b))
+    assert proposal.action == push and how.miss is Miss.SHORT
+    assert how.message.startswith("moved its object 0.040 m where 0.100 m")
     memory.propose(push, (a, b))
     assert memory.outcome((box("a", 0.10, 0.0), b)) is None  # as predicted
 

@@ -149,8 +149,6 @@ def test_directives_without_the_robot_are_refused(tmp_path):
 
 def test_station_for_finds_by_name_then_by_shelf_and_refuses_an_unknown_shelf(tmp_path):
     """One lookup for every command: station_<stem>.yaml first, else a shipped station with the same shelf."""
-    import shutil
-
     from slax_drake.config import REPO_ROOT
     from slax_drake.errors import StationNotFoundError
     from slax_drake.scene.model import Shelf
@@ -159,9 +157,13 @@ def test_station_for_finds_by_name_then_by_shelf_and_refuses_an_unknown_shelf(tm
     assert Path(station_for("sim_configs/sim_shelf.yaml")).name == "station_sim_shelf.yaml"
     # table1.yaml has no station of its own: the shipped station with its shelf (the sim shelf)
     assert Path(station_for(REPO_ROOT / "sim_configs" / "table1.yaml")).name == "station_sim_shelf.yaml"
-    # a copy elsewhere under another name is found by its shelf
+    # a copy elsewhere under another name (written out flat: the shipped file is an overlay) is found by its shelf
+    from pydrake.common.yaml import yaml_dump_typed
+
+    from slax_drake.config import load_scenario
+
     copy = tmp_path / "my_table.yaml"
-    shutil.copy(REPO_ROOT / "sim_configs" / "physical_shelf.yaml", copy)
+    copy.write_text(yaml_dump_typed(load_scenario(REPO_ROOT / "sim_configs" / "physical_shelf.yaml")))
     assert Path(station_for(copy)).name == "station_physical_shelf.yaml"
     with pytest.raises(StationNotFoundError, match="pass --station"):
         station_for(shelf=Shelf(width=1.234, height=0.5, depth=0.5))

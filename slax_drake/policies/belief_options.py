@@ -1,0 +1,99 @@
+"""The options of slax-belief (:class:`slax_drake.policies.belief.BeliefSearch`) as one frozen dataclass.
+
+Plain data (no heavy imports): the policy registry builds its named variants from :data:`DEFAULT_BELIEF_OPTIONS`
+with ``dataclasses.replace``. Lengths are in metres, times in seconds of CPU time. The horizon (the protocol's
+actions per trial) and the visibility threshold v are not options of the policy: the registry passes the
+scenario's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+SELECT_RULES = ("ratio", "value")
+EVIDENCE_RULES = ("outcome", "none")
+STUCK_RULES = ("value", "progress")
+BLOCKED_RULES = ("box", "hidden", "risk")
+
+
+@dataclasses.dataclass(frozen=True)
+class BeliefOptions:
+    """How slax-belief searches; the defaults are the registry's ``slax-belief``. A ValueError names a field whose
+    value it cannot take."""
+
+    samples: int = 64
+    """Worlds (target placements drawn from the belief) that stand for the belief."""
+    depth: int = 3
+    """Actions per plan searched."""
+    max_depth: int = 5
+    """Actions per plan searched while no plan of ``depth`` actions reveals anything (at least ``depth``)."""
+    beam: int = 6
+    """Arrangements kept per depth of the beam search (duplicates merged)."""
+    placements_per_object: int = 2
+    """Suction placements kept per object and state, the best by their value."""
+    failure_cost: float = 10.0
+    """Cost (actions) of a world farther from being revealed than the actions left."""
+    seconds: float = 30.0
+    """CPU time per decision; past it the search stops and takes the best plan so far."""
+    hidden_risk: float = 1.0
+    """The chance a suction placed in hidden space fails, per share of hidden placements in its placement box."""
+    select: str = "ratio"
+    """The plan taken: "ratio", the most revealed mass per expected cost; "value", the least value V."""
+    evidence: str = "outcome"
+    """"outcome": each executed action's outcome updates the belief; "none": only what the camera shows."""
+    block_weight: float = 8.0
+    """How much likelier a placement that would have stopped a stopped action exactly there becomes (> 0)."""
+    remember_objects: bool = True
+    """An object seen earlier, hidden now and not moved since is kept among the seen objects where it stood."""
+    widen_beam: int = 12
+    """The beam of a second search when the first reveals nothing (0: no second search)."""
+    stuck_select: str = "value"
+    """The plan taken when no plan looked at reveals anything: "value" (least V) or "progress" (least V - G)."""
+    blocked_rule: str = "box"
+    """What the box of a placement that was put back or stopped short refuses: "box", every later placement
+    overlapping it; "hidden", only those overlapping it in hidden space; "risk", none, but those overlapping it in
+    hidden space fail with ``blocked_risk`` more."""
+    blocked_risk: float = 0.5
+    """``blocked_rule`` "risk": the failure chance a blocked box adds, in [0, 1]."""
+    camera_depth: float | None = None
+    """Camera mode: the hypotheses are estimated again assuming each at least this deep (m) behind its visible
+    surfaces (None: as the observer estimated them)."""
+    camera_memory: bool = False
+    """Camera mode: hypotheses hidden now are remembered where they stood (matched across frames by footprint)."""
+    camera_outcome_tolerance: float = 0.003
+    """Camera mode: the tolerance (m, > 0) of the outcome evidence and the placement check on estimated poses."""
+    maybe_occupied: float | None = None
+    """Camera mode with ``camera_depth``: the weight, in (0, 1], of a target placement inside a hypothesis' assumed
+    depth (None: such placements are excluded)."""
+
+    def __post_init__(self):
+        if self.select not in SELECT_RULES:
+            raise ValueError("select must be 'ratio' or 'value'")
+        if self.evidence not in EVIDENCE_RULES:
+            raise ValueError("evidence must be 'outcome' or 'none'")
+        if not self.block_weight > 0:
+            raise ValueError(f"block_weight must be positive (got {self.block_weight!r})")
+        w = self.widen_beam
+        if isinstance(w, bool) or not isinstance(w, int) or w < 0:
+            raise ValueError(f"widen_beam must be a whole number, 0 or more (got {w!r})")
+        if self.camera_depth is not None and not 0 < self.camera_depth:
+            raise ValueError(f"camera_depth must be a positive depth in metres or None (got {self.camera_depth!r})")
+        if not self.camera_outcome_tolerance > 0:
+            raise ValueError(f"camera_outcome_tolerance must be positive (got {self.camera_outcome_tolerance!r})")
+        if self.maybe_occupied is not None and not 0 < self.maybe_occupied <= 1:
+            raise ValueError(f"maybe_occupied must be in (0, 1] or None (got {self.maybe_occupied!r})")
+        if self.stuck_select not in STUCK_RULES:
+            raise ValueError("stuck_select must be 'value' or 'progress'")
+        if self.blocked_rule not in BLOCKED_RULES:
+            raise ValueError("blocked_rule must be 'box', 'hidden' or 'risk'")
+        if not 0 <= self.blocked_risk <= 1:
+            raise ValueError(f"blocked_risk must be in [0, 1] (got {self.blocked_risk!r})")
+
+    def changed(self) -> dict:
+        """The fields that differ from the defaults (what a results folder's settings record of this variant)."""
+        default = type(self)()
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                if getattr(self, f.name) != getattr(default, f.name)}
+
+
+DEFAULT_BELIEF_OPTIONS = BeliefOptions()
