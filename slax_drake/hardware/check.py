@@ -40,6 +40,7 @@ import numpy as np
 from slax_drake.errors import TrajectoryFileError
 from slax_drake.hardware.fetch_limits import FetchLimits
 from slax_drake.hardware.trajectory_file import ExportedTrajectory
+from slax_drake.io import plural
 
 POSITION_TOL = 1e-6  # rad or m
 LIMIT_REL_TOL = 1e-4  # relative: rounding, and quintic interpolation between records (export --rate)
@@ -90,7 +91,7 @@ class CheckReport:
         return out
 
     def summary(self, max_lines: int = 5) -> str:
-        lines = [f"checked {self.checked['motions']} motions, {self.checked['points']} points "
+        lines = [f"checked {plural(self.checked['motions'], 'motion')}, {plural(self.checked['points'], 'point')} "
                  f"({', '.join(self.checked['checks'])})"]
         reasons = self.checked.get("structural_reasons") or {}
         for a, b in self.checked.get("structural_pairs") or ():
@@ -112,17 +113,17 @@ class CheckReport:
         if self.ok:
             lines.append("OK: no violation")
             return "\n".join(lines)
-        lines.append(f"FAILED: {len(self.violations)} violations")
+        lines.append(f"FAILED: {plural(len(self.violations), 'violation')}")
         for kind, found in self.by_kind().items():
             if not found:
                 continue
             groups = {}
             for v in found:
                 groups.setdefault((v.motion, v.what), []).append(v)
-            lines.append(f"{kind}: {len(found)} in {len(groups)} (motion, joint/bodies) groups")
+            lines.append(f"{kind}: {len(found)} in {plural(len(groups), '(motion, joint/bodies) group')}")
             for (motion, what), vs in list(groups.items())[:max_lines]:
                 worst = max(vs, key=lambda v: abs(v.value) - abs(v.limit))
-                lines.append(f"  motion {motion} {what}: {len(vs)} points from t = {vs[0].time:.3f} s, worst: "
+                lines.append(f"  motion {motion} {what}: {plural(len(vs), 'point')} from t = {vs[0].time:.3f} s, worst: "
                              f"{worst.message}")
             if len(groups) > max_lines:
                 lines.append(f"  ... and {len(groups) - max_lines} more groups")
