@@ -34,7 +34,6 @@ KEYS = ("4", "6", "8", "10", "all")
 README_BEGIN, README_END = "<!-- results:begin -->", "<!-- results:end -->"
 NAMES = {"oracle-p": "Oracle-P", "oracle-p+s": "Oracle-P+S", "dar": "DAR", "der-3": "DER-3",
          "bluction-dar": "Bluction-DAR", "dar-literal": "DAR, literal", "bluction-dar-literal": "Bluction-DAR, literal"}
-OURS = ("bluction-la2", "slax-hindsight", "slax-belief")
 # Paper Table II (Sec. VI-B): successes of 3 physical shelves per density with the real Fetch.
 PAPER_TABLE2 = {"der-3": {"8": (0, 3), "10": (2, 3), "12": (1, 3)},
                 "bluction-dar": {"8": (3, 3), "10": (3, 3), "12": (3, 3)}}
@@ -101,7 +100,9 @@ def _policy_order(names) -> list[str]:
 
 
 def _display(policy: str) -> str:
-    return NAMES.get(policy, policy + (" (ours)" if policy.startswith(OURS) else ""))
+    from slax_drake.policies.registry import is_ours
+
+    return NAMES.get(policy, policy + (" (ours)" if is_ours(policy) else ""))
 
 
 def _pct(rate) -> str:
@@ -211,12 +212,14 @@ def observation_mode_rows(folders: list[ResultFolder]) -> list[tuple[ResultFolde
     """(privileged folder, camera folder, policy) for every non-oracle policy of every camera folder, paired with
     a privileged folder of the same protocol that holds the policy with the same recorded class and options: one
     with the camera folder's very policy set if given (its counterpart run), else the first given."""
+    from slax_drake.policies.registry import is_oracle
+
     table1 = [f for f in folders if f.kind == "table1"]
     privileged = [f for f in table1 if (f.meta.get("observation") or "privileged") == "privileged"]
     rows, seen = [], set()
     for cam in (f for f in table1 if f.meta.get("observation") == "camera"):
         for policy in _policy_order(cam.summary["policies"]):
-            if policy.startswith("oracle") or (policy, _protocol(cam)) in seen:
+            if is_oracle(policy) or (policy, _protocol(cam)) in seen:
                 continue
             # The privileged run of the same policy set (the camera run's counterpart) first, then the first
             # privileged folder given that holds the policy.
