@@ -55,7 +55,7 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "slax-belief-camera-depth": PolicyEntry("slax_drake.policies.belief:BeliefSearch",
                                             {"camera_depth": 0.13, "camera_memory": True,
                                              "camera_outcome_tolerance": 0.01}),
-    # a failed placement's box no longer refuses later placements; one overlapping it in hidden space fails with 0.5
+    # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more (belief.py's blocked_rule="risk"). Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry("slax_drake.policies.belief:BeliefSearch", {"blocked_rule": "risk"}),
     # slax-belief without remembered objects, actions' outcomes and the wider beam (belief.py's docstring)
