@@ -77,12 +77,11 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight", ours=True),
     "slax-belief": PolicyEntry(_BELIEF, DEFAULT_BELIEF_OPTIONS, ours=True),
     # camera mode (belief.py's docstring): hypotheses assumed 0.13 m deep, hidden ones remembered, outcome evidence
-    # within 1 cm; the privileged path reads none of these. Measured, not the default (its results table: 69 %
-    # against slax-belief's 73 % in camera mode)
+    # within 1 cm; the privileged path reads none of these. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-camera-depth": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, camera_depth=0.13, camera_memory=True, camera_outcome_tolerance=0.01), ours=True),
-    # a failed placement's box no longer refuses later placements; one overlapping it in hidden space fails with 0.5
-    # more. Measured, not the default (its results table: 100 scenes per density, paper profile)
+    # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
+    # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk"),
                                   ours=True),
 }
