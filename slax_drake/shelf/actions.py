@@ -450,12 +450,36 @@ class ActionModel:
                     lat, fp, ctx.all_fps[j]))
         if t.rules.suction_hidden_rule != "none" and ok.any():
             ok &= self._suction_hidden_ok(ctx, i, lat, path_rule)
+        if self.reach is not None and ok.any() and abs(lat.yaw) < 1e-9:
+            released = self._release_reachable(lat, obj)
+            if not (ok & released).any():
+                rejected.append(refused(what, f"the arm cannot back off and retract from any placement of "
+                                              f"{obj.name} (reach map)", kind=RefusalKind.REACH_MAP))
+                return
+            ok &= released
         a_index, b_index = np.nonzero(ok)
         if len(a_index) == 0:
             rejected.append(refused(what, f"no collision-free placement for {obj.name} in known free space",
                                     kind=RefusalKind.NO_PLACEMENT))
             return
         feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
+
+    def _release_reachable(self, lat: "SuctionLattice", obj: SceneObject) -> np.ndarray:
+        """(A, B) bool: whether the reach map's release layers let the arm back off and retract from each
+        placement of a yaw-0 suction (the cup's contact where it releases: moved by dx, and in by the placement's
+        depth change); all True when the map has no release layers."""
+        if "mask" in lat._release:
+            return lat._release["mask"]
+        ok = np.ones((len(lat.a_all), len(lat.b_all)), bool)
+        lat._release["mask"] = ok  # it depends on the object and the map alone: kept with the object's lattice
+        if not any(layer in self.reach.reach for layer in ("back off", "retract")):
+            return ok
+        cx, cy = float(lat.q[0]), float(lat.q[1])
+        oy = float(obj.center[1])
+        for a, dx in enumerate(np.asarray(lat.a_all, float) * lat.res):
+            for b, y_placed in enumerate(lat.y_placed):
+                ok[a, b] = not self.reach.refuses_release(cx + float(dx), cy + (float(y_placed) - oy), REACH_MARGIN)
+        return ok
 
     def suction_lattice(self, obj: SceneObject, fp: Footprint, mask: np.ndarray) -> "SuctionLattice":
         """Object ``obj``'s :class:`SuctionLattice` (``fp`` its footprint, ``mask`` its footprint mask on the
@@ -808,6 +832,7 @@ class SuctionLattice:
     name: str = ""
     res: float = 0.0
     _actions: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
+    _release: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)  # _release_reachable's mask
 
     @classmethod
     def refused(cls, reason: str, kind: "RefusalKind") -> "SuctionLattice":
