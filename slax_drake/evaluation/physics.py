@@ -165,6 +165,10 @@ def _run_scene(job) -> dict:
         "dropped": sorted(n for n, p in final.items() if not p["inside"]),
         "initial_objects": d["initial_objects"], "final_objects": final, "sleep": d.get("sleep", False),
     }
+    last = (d.get("steps_log") or [{}])[-1]
+    if last.get("reasons") is not None:  # ended with no action to execute: why, by stage and kind
+        drake["end_reasons"] = last["reasons"]
+        drake["end_rejected"] = [{"kind": r.get("kind"), "waypoint": r.get("waypoint")} for r in last.get("rejected", [])]
     shelf_keep = {k: shelf[k] for k in ("success", "steps", "cost", "reason", "actions", "notes", "visible_fraction")}
     return {"policy": policy_name, "density": density, "index": index, "seed": seed, "shelf": shelf_keep,
             "drake": drake, "profile": profile, "tool_rules": tool_rules}

@@ -79,6 +79,10 @@ class DecisionPrinter:
         visible = f" ({snap.visible_fraction * 100:.0f}% of it visible)" if snap is not None else ""
         rejected = len(entry.get("rejected", ()))
         tried = f"; {plural(rejected, 'candidate')} without a motion" if rejected else ""
+        reasons = entry.get("reasons")
+        if reasons:  # the most frequent reason no candidate was executed (see the summary for the rest)
+            top = reasons[0]
+            tried += f"; most often {top['stage']}: {top['kind']} ({plural(top['count'], 'candidate')})"
         return f"done after {plural(entry['step'], 'action')}: {text}{visible}{tried}\n"
 
     def _close(self, poses: dict | None, lost) -> None:

@@ -346,15 +346,22 @@ class StepPlanner:
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
                                                               history, timings, visibility=visibility)
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings, visibility)
-                why, early = "check: " + report.summary().splitlines()[-1], False
+                why, early, kind, waypoint = "check: " + report.summary().splitlines()[-1], False, "check", None
             else:
                 why, early = motion.reason, motion.failure.early  # failed before the tool reached the object
-            rejected.append({"action": action.describe(), "reason": why})
+                kind, waypoint = motion.failure.kind.value, motion.failure.waypoint
+            rejected.append({"action": action.describe(), "reason": why, "kind": kind, "waypoint": waypoint})
             self.policy.exclude(action, why, whole_group=early)
             decision = self.policy.decide(observation)
             reason = "no feasible motion"
         timings["planning_s"] = time.perf_counter() - t0
-        return self._nothing(q, source, belief, observation, rejected, history, timings, reason, visibility)
+        result = self._nothing(q, source, belief, observation, rejected, history, timings, reason, visibility)
+        from slax_drake.systems.planner import stop_record
+
+        # why no action was planned: the action model's refusals and the planner's rejections by kind
+        record = stop_record(self.policy, observation.known, rejected, decision.stop_reason)
+        result.trajectory.metadata["plan_step"].update({k: v for k, v in record.items() if k != "excluded"})
+        return result
 
     def _nothing(self, q, source, belief, observation, rejected, history, timings, reason, visibility):
         """The step file of a step that plans no motion, with ``reason``."""

@@ -33,7 +33,9 @@ When the waypoints in front of the opening fail (out of reach, no free way) or a
 inside the shelf and then, pulled all the way out, with the tool turned ``CARRY_YAWS`` each way about the cup's
 vertical axis (:func:`slax_drake.planning.waypoints.carry_options`: straight ahead of the shoulder the arm cannot
 hold the tube along S y that close to the robot; turned it can). IK solves and free paths are memoised per planning
-world (one decision's candidates share their approach waypoints). Any failure returns a :class:`Rejection`: the
+world (one decision's candidates share their approach waypoints); the IK solves without a distance constraint, which
+read the robot's kinematics alone, are also kept across worlds (``keep_kinematic_ik``: the next decision's
+candidates on objects that did not move ask for the same tool poses from the same seeds). Any failure returns a :class:`Rejection`: the
 typed failure of the last variant tried (:class:`slax_drake.planning.failures.PlanningFailure`: its kind, the
 waypoint, the colliding body or what the carried object meets) and the reason in words, made from the failures:
 the last variant's leads, the others follow in brackets. Timings of each stage are kept (seconds of wall clock) for the
@@ -82,6 +84,7 @@ PULL_DEPENDENT = frozenset({"lift", "pull out", "translate", "push in", "lower"}
 # tried, as the ones above do.
 MAX_REANCHORS = 2  # waypoints re-solved from the seed library (and the path before them backward) per plan
 FREE_PATH_SEED = 0
+KINEMATIC_IK_CACHE_SIZE = 50_000  # kinematic IK solutions kept across planning worlds (cleared when full)
 # IK tolerances while the cup holds the object (seal to release): the object turns and shifts with the tool, and
 # IK's default tolerances (0.5 mm, 0.01 rad) would let it wander ~2 mm between waypoints.
 HOLD_POSITION_TOLERANCE = 1e-4  # m
@@ -139,7 +142,7 @@ class MotionPlanner:
     """Plans actions for one station (robot, shelf placement, observation pose)."""
 
     def __init__(self, scenario: StationScenario, tool: ToolConfig = ToolConfig(),
-                 deviation_tolerance: float = DEVIATION_TOLERANCE):
+                 deviation_tolerance: float = DEVIATION_TOLERANCE, keep_kinematic_ik: bool = True):
         self.scenario = scenario
         self.tool = tool
         self.deviation_tolerance = deviation_tolerance
@@ -150,6 +153,10 @@ class MotionPlanner:
         # Results of IK solves and free paths in the current world (both deterministic), keyed by their inputs:
         # the candidates of one decision share waypoints (every suction of an object has the same approach).
         self._memo = {}
+        # IK solves without a distance constraint (the robot's kinematics alone: the same answer in every world of
+        # this station), kept across worlds when ``keep_kinematic_ik``
+        self.keep_kinematic_ik = keep_kinematic_ik
+        self._kinematic_ik = {}
 
     def world(self, scene: Scene) -> PlanningWorld:
         """The planning world of the scene's objects as they stand (built once per object state)."""
@@ -221,17 +228,21 @@ class MotionPlanner:
     def _ik(self, world, wp: ToolWaypoint, guess, timings, min_distance=None):
         from pydrake.math import RigidTransform
 
+        kinematic = min_distance is None and self.keep_kinematic_ik
+        memo = self._kinematic_ik if kinematic else self._memo
         key = ("ik", wp.frame, wp.X_SF.tobytes(), np.asarray(guess, float).tobytes(), wp.shaft, wp.suction,
-               min_distance, world._ik_filter is not None)
-        if key in self._memo:
-            q = self._memo[key]
+               min_distance, False if kinematic else world._ik_filter is not None)
+        if key in memo:
+            q = memo[key]
             return None if q is None else q.copy()
         t0 = time.perf_counter()
         tol = {} if not wp.suction else dict(position_tolerance=HOLD_POSITION_TOLERANCE, angle_tolerance=HOLD_ANGLE_TOLERANCE)
         q = solve_tool_pose(world, wp.frame, RigidTransform(wp.X_SF), guess, wp.shaft, min_distance=min_distance, **tol)
         timings["ik_s"] += time.perf_counter() - t0
         timings["ik_solves"] += 1
-        self._memo[key] = None if q is None else q.copy()
+        if kinematic and len(memo) >= KINEMATIC_IK_CACHE_SIZE:
+            memo.clear()
+        memo[key] = None if q is None else q.copy()
         return q
 
     def _free_path(self, world, qa, qb):

@@ -9,6 +9,11 @@ the tool at (the blade inserted for a push toward +x / -x: ``action_waypoints``'
 a yaw-0 suction at height ``CUP_HEIGHT``: "seal"), and whether :meth:`MotionPlanner.reaches` finds a
 collision-free IK solution from the observation pose with its seed library. One node takes about a second where
 the arm does not reach (every seed is tried), less where it does.
+
+The optional release layers (``--add-release``; :data:`slax_drake.shelf.reach.RELEASE_LAYERS`) are of a yaw-0
+suction whose cup releases the object with its contact at (x, y), ``CUP_HEIGHT`` high: "back off" (the cup backed
+off along the tube from there) and "retract" (the tool drawn back out in front of the opening, at either approach
+margin: reached when either is).
 """
 
 from __future__ import annotations
@@ -18,7 +23,7 @@ import time
 
 import numpy as np
 
-from slax_drake.shelf.reach import LAYERS, ReachMap, grid, turned_cup_layers, turned_cup_params
+from slax_drake.shelf.reach import LAYERS, RELEASE_LAYERS, ReachMap, grid, turned_cup_layers, turned_cup_params
 
 CUP_HEIGHT = 0.10  # m, the cup layer's contact height (contacts sit 1.5-18.5 cm high)
 STEP = 0.05  # m
@@ -41,8 +46,25 @@ def layer_waypoint(layer: str, x: float, y: float, scene, tool):
         return next(w for w in wps if w.label == "insert")
     if layer == "cup":
         return cup_waypoint(x, y, 0.0, scene, tool)
+    if layer in RELEASE_LAYERS:
+        return release_waypoint(layer, x, y, scene, tool)
     yaw, height = turned_cup_params(layer)  # "cup@+20/6cm": turned 20 deg, the contact 6 cm high
     return cup_waypoint(x, y, yaw, scene, tool, height)
+
+
+def release_waypoint(layer: str, x: float, y: float, scene, tool, approach_margin: float | None = None):
+    """The "back off" or "retract" waypoint (``layer``) of a yaw-0 suction that releases its object with the cup's
+    contact at (x, y, ``CUP_HEIGHT``) (S, m); ``approach_margin``: the retract's (default the planner's first)."""
+    from slax_drake.planning.waypoints import APPROACH_MARGIN, action_waypoints
+    from slax_drake.shelf.actions import Suction
+    from slax_drake.scene.model import SceneObject, planar_pose
+
+    dummy = SceneObject("reach_probe", "box", (0.06, 0.06, 0.06), planar_pose(x, y + 0.03, 0.03, 0.0))
+    # no move: released where it was sealed (the back-off and retract read only where the cup releases)
+    action = Suction(dummy.name, (x, y, CUP_HEIGHT), 0.0, y + 0.03, 0.0)
+    margin = APPROACH_MARGIN if approach_margin is None else approach_margin
+    wps = action_waypoints(action, (dummy,), scene.shelf, tool, approach_margin=margin)
+    return next(w for w in wps if w.label == layer)
 
 
 def cup_waypoint(x: float, y: float, yaw: float, scene, tool, height: float = CUP_HEIGHT):
@@ -86,8 +108,19 @@ def compute_reach_map(station_path: str, step: float = STEP, progress: bool = Tr
     xs, ys = map_grid(shelf, step) if base is None else (base.xs, base.ys)
     reach = {} if base is None else dict(base.reach)
     t0 = time.perf_counter()
+    from slax_drake.planning.waypoints import APPROACH_MARGINS
+
     for layer in layers:
         ok = np.zeros((len(ys), len(xs)), bool)
+        if layer == "retract":  # in front of the opening: the same for every y; reached at either margin
+            for i, x in enumerate(xs):
+                ok[:, i] = any(planner.reaches(scene, release_waypoint(layer, float(x), float(ys[0]), scene, tool, m))
+                               for m in APPROACH_MARGINS)
+            reach[layer] = ok
+            if progress:
+                print(f"{layer}: {int(ok.sum())} of {ok.size} nodes reached ({time.perf_counter() - t0:.0f} s)",
+                      flush=True)
+            continue
         for j, y in enumerate(ys):
             for i, x in enumerate(xs):
                 ok[j, i] = planner.reaches(scene, layer_waypoint(layer, float(x), float(y), scene, tool))
@@ -101,7 +134,8 @@ def compute_reach_map(station_path: str, step: float = STEP, progress: bool = Tr
 def layer_heights(tool) -> dict:
     """The tool's height (m above the support) per layer of a map."""
     cups = {layer: turned_cup_params(layer)[1] for layer in turned_cup_layers()}
-    return {"push+x": tool.geometry.blade_height / 2, "push-x": tool.geometry.blade_height / 2, "cup": CUP_HEIGHT, **cups}
+    return {"push+x": tool.geometry.blade_height / 2, "push-x": tool.geometry.blade_height / 2, "cup": CUP_HEIGHT, **cups,
+            **{layer: CUP_HEIGHT for layer in RELEASE_LAYERS}}
 
 
 def reach_png(rmap: ReachMap, shelf) -> bytes:
@@ -152,8 +186,16 @@ def main(argv=None) -> int:
     parser.add_argument("--step", type=float, default=STEP)
     parser.add_argument("--add-turned-cup", action="store_true",
                         help="read the map at --out and add the turned-cup layers it lacks, on its grid")
+    parser.add_argument("--add-release", action="store_true",
+                        help="read the map at --out and add the release layers (back off, retract) it lacks")
     args = parser.parse_args(argv)
-    if args.add_turned_cup:
+    if args.add_release:
+        from slax_drake.shelf.reach import load_reach_map
+
+        base = load_reach_map(args.out)
+        layers = tuple(layer for layer in RELEASE_LAYERS if layer not in base.reach)
+        rmap = compute_reach_map(args.station, layers=layers, base=base)
+    elif args.add_turned_cup:
         from slax_drake.shelf.reach import load_reach_map
 
         base = load_reach_map(args.out)

@@ -44,6 +44,7 @@ candidate with the reason.
 from __future__ import annotations
 
 import dataclasses
+import enum
 import functools
 import math
 
@@ -117,12 +118,32 @@ class Suction:
 Action = Push | Suction
 
 
+class RefusalKind(enum.Enum):
+    """Why the action model refuses a candidate (the typed kind; :attr:`Rejected.reason` is its wording)."""
+
+    NO_ROOM_FOR_BLADE = "no room for the blade"  # the blade does not fit between the object and the wall
+    BLOCKED = "blocked by an object"  # the blade's lane, the tube's way in or the path out meets another object
+    HIDDEN_SPACE = "hidden space"  # the motion would cross or end in space hidden from the camera
+    NO_ROOM = "no room to move"  # the object is stopped at once, or a longer push would hit something
+    NO_PLACEMENT = "no placement"  # no placement of a suctioned object fits or is collision-free
+    TOO_HEAVY = "too heavy for the cup"  # the object's mass exceeds the cup's lift
+    NO_FACE = "no face for the cup"  # the camera-facing side is too small or curved
+    SEAL_ANGLE = "seal angle"  # the camera-facing side is turned too far from the tube
+    SUCTION_MOMENT = "suction moment"  # the held weight's moment about the cup exceeds its limit
+    TUBE_DEPTH = "beyond the tube"  # the face lies deeper than the tube reaches
+    REACH_MAP = "out of the arm's reach (reach map)"  # the station's reach map says the arm cannot put the tool there
+
+
+# What stops a push at once (the ``stopper`` of ActionModel._pushes), as a refusal kind; an object's name: NO_ROOM
+_STOPPER_KIND = {"hidden space": RefusalKind.HIDDEN_SPACE, "the arm's reach": RefusalKind.REACH_MAP}
+
+
 @dataclasses.dataclass(frozen=True)
 class Rejected:
     """A candidate that was skipped: what it was and why. ``action_kind`` ("push" or "suction"), ``object_name``,
     ``direction`` (a push's side along the shelf's x: +1 or -1; 0 for a suction) and ``distance`` (the refused
     push distance in metres, signed along x, when one distance was refused; None when the whole direction or every
-    placement was) say the same as ``what`` as values."""
+    placement was) say the same as ``what`` as values; ``kind`` (:class:`RefusalKind`) says why as a value."""
 
     what: str
     reason: str
@@ -130,6 +151,7 @@ class Rejected:
     object_name: str = ""
     direction: int = 0
     distance: float | None = None
+    kind: RefusalKind | None = None
 
     def spec(self) -> str:
         """The refused candidate in the ``kind:object:value`` form of an action: ``push:OBJECT:+0.1000`` for one
@@ -254,7 +276,8 @@ class ActionModel:
         lane_x = self.push_tool_rects(fp, sign)[0][0]
         gap_x = rects[0][0]
         if abs(gap_x) + rects[0][2] > shelf.width / 2 + 1e-9:
-            rejected.append(refused(what, f"blade does not fit between {obj.name} and the {side} wall"))
+            rejected.append(refused(what, f"blade does not fit between {obj.name} and the {side} wall",
+                                    kind=RefusalKind.NO_ROOM_FOR_BLADE))
             return
         y_lo = min([y - ey] + [r[1] - r[3] for r in rects]) - t.physics.clearance - 1e-6
         y_hi = max([y + ey] + [r[1] + r[3] for r in rects]) + t.physics.clearance + 1e-6
@@ -270,12 +293,14 @@ class ActionModel:
             k_r = self._pair(("lane", ctx.ids[i], sign, ctx.ids[j]), lambda: lane_blocked(ctx.all_fps[j]))
             if k_r >= 0:
                 where = "gap" if k_r == 0 else "shaft's way in"
-                rejected.append(refused(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}"))
+                rejected.append(refused(what, f"blade {where} {side} of {obj.name} blocked by {ctx.all_names[j]}",
+                                        kind=RefusalKind.BLOCKED))
                 return
         if t.rules.push_tube_check:
             blocker = self.push_tube_blocker(ctx, i, sign)
             if blocker is not None:
-                rejected.append(refused(what, f"the tube's way in {side} of {obj.name} is blocked by {blocker}"))
+                rejected.append(refused(what, f"the tube's way in {side} of {obj.name} is blocked by {blocker}",
+                                        kind=RefusalKind.BLOCKED))
                 return
         n = int(math.ceil(shelf.width / t.grid.cell)) + 1
         k = np.arange(1, n + 1)
@@ -315,7 +340,8 @@ class ActionModel:
             layer = "push+x" if sign > 0 else "push-x"
             if self.reach.refuses(layer, q[0], q[1], REACH_MARGIN):
                 rejected.append(refused(what, f"the arm cannot reach the blade beside {obj.name} at "
-                                               f"({q[0]:+.2f}, {q[1]:+.2f}) m (reach map)"))
+                                               f"({q[0]:+.2f}, {q[1]:+.2f}) m (reach map)",
+                                        kind=RefusalKind.REACH_MAP))
                 return
             k_reach = _first_false(np.array([not self.reach.refuses(layer, q[0] + sign * kk * t.grid.cell, q[1],
                                                                     REACH_MARGIN) for kk in range(1, first_bad + 1)],
@@ -326,7 +352,8 @@ class ActionModel:
         if t.rules.push_stop == "exact" and first_bad < n and stopper not in ("hidden space", "the arm's reach"):
             d_max = self._exact_stop(fp, sign, rects, [ctx.all_fps[j] for j in band], d_max, t.grid.cell)
         if d_max < t.grid.min_push - 1e-12:
-            rejected.append(refused(what, f"no room: {obj.name} is stopped by {stopper} at once"))
+            rejected.append(refused(what, f"no room: {obj.name} is stopped by {stopper} at once",
+                                    kind=_STOPPER_KIND.get(stopper, RefusalKind.NO_ROOM)))
             return
         ds = list(np.arange(1, int(d_max / step + 1e-9) + 1) * step)
         if end_ok is not None:  # only the lattice distances at which the object may come to rest
@@ -338,7 +365,8 @@ class ActionModel:
         d = (int(d_max / step + 1e-9) + 1) * step
         if d < shelf.width:
             rejected.append(refused(f"{what} by {d:.3f}", f"{obj.name} would hit {stopper} after {d_max:.3f} m",
-                                     distance=round(float(sign * d), 6)))
+                                     distance=round(float(sign * d), 6),
+                                     kind=_STOPPER_KIND.get(stopper, RefusalKind.NO_ROOM)))
 
     def _exact_stop(self, fp: Footprint, sign: int, rects, others, d_ok: float, step: float) -> float:
         """The longest push distance (m, floored to 1 micrometre) in [d_ok, d_ok + step) at which ``fp`` keeps
@@ -380,7 +408,7 @@ class ActionModel:
         refused = functools.partial(Rejected, action_kind="suction", object_name=obj.name)
         lat = self.suction_lattice(obj, fp, ctx.masks[i])
         if lat.refusal is not None:
-            rejected.append(refused(what, lat.refusal))
+            rejected.append(refused(what, lat.refusal, kind=lat.refusal_kind))
             return
         cz = lat.q[2]
         tube_r = t.geometry.tube_diameter / 2
@@ -390,7 +418,8 @@ class ActionModel:
             if not self._pair(("approach", ctx.ids[i], tuple(obj.size), ctx.ids[j]), lambda: bool(
                     clear_of("box", lat.corridor, lat.yaw, lat.corridor_half, ctx.all_fps[j],
                              BLADE_CONTACT_CLEARANCE)[0])):
-                rejected.append(refused(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}"))
+                rejected.append(refused(what, f"tube approach to {obj.name} blocked by {ctx.all_names[j]}",
+                                        kind=RefusalKind.BLOCKED))
                 return
         ex = fp.extents()[0]
         blocking = [j for j in ctx.others(i) if not self.passes_over(obj, ctx.all_heights[j])]
@@ -399,16 +428,18 @@ class ActionModel:
                 continue
             if not self._pair(("out", ctx.ids[i], ctx.ids[j]), lambda: bool(clear_of(
                     fp.shape, lat.path_out, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all())):
-                rejected.append(refused(what, f"path out of the shelf blocked by {ctx.all_names[j]}"))
+                rejected.append(refused(what, f"path out of the shelf blocked by {ctx.all_names[j]}",
+                                        kind=RefusalKind.BLOCKED))
                 return
         path_rule = t.rules.suction_hidden_rule == "path"
         if path_rule:
             hidden_o = ctx.hidden_others(i)
             if any(hidden_o[:r, c].any() for c, r in zip(lat.cols, lat.first_rows)):
-                rejected.append(refused(what, "path out of the shelf crosses space hidden from the camera"))
+                rejected.append(refused(what, "path out of the shelf crosses space hidden from the camera",
+                                    kind=RefusalKind.HIDDEN_SPACE))
                 return
         if lat.lattice_empty:
-            rejected.append(refused(what, "no placement fits in the shelf"))
+            rejected.append(refused(what, "no placement fits in the shelf", kind=RefusalKind.NO_PLACEMENT))
             return
         ok = lat.base.copy()
         for j in blocking:  # reachable on the way in past each object it cannot pass over
@@ -419,11 +450,36 @@ class ActionModel:
                     lat, fp, ctx.all_fps[j]))
         if t.rules.suction_hidden_rule != "none" and ok.any():
             ok &= self._suction_hidden_ok(ctx, i, lat, path_rule)
+        if self.reach is not None and ok.any() and abs(lat.yaw) < 1e-9:
+            released = self._release_reachable(lat, obj)
+            if not (ok & released).any():
+                rejected.append(refused(what, f"the arm cannot back off and retract from any placement of "
+                                              f"{obj.name} (reach map)", kind=RefusalKind.REACH_MAP))
+                return
+            ok &= released
         a_index, b_index = np.nonzero(ok)
         if len(a_index) == 0:
-            rejected.append(refused(what, f"no collision-free placement for {obj.name} in known free space"))
+            rejected.append(refused(what, f"no collision-free placement for {obj.name} in known free space",
+                                    kind=RefusalKind.NO_PLACEMENT))
             return
         feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
+
+    def _release_reachable(self, lat: "SuctionLattice", obj: SceneObject) -> np.ndarray:
+        """(A, B) bool: whether the reach map's release layers let the arm back off and retract from each
+        placement of a yaw-0 suction (the cup's contact where it releases: moved by dx, and in by the placement's
+        depth change); all True when the map has no release layers."""
+        if "mask" in lat._release:
+            return lat._release["mask"]
+        ok = np.ones((len(lat.a_all), len(lat.b_all)), bool)
+        lat._release["mask"] = ok  # it depends on the object and the map alone: kept with the object's lattice
+        if not any(layer in self.reach.reach for layer in ("back off", "retract")):
+            return ok
+        cx, cy = float(lat.q[0]), float(lat.q[1])
+        oy = float(obj.center[1])
+        for a, dx in enumerate(np.asarray(lat.a_all, float) * lat.res):
+            for b, y_placed in enumerate(lat.y_placed):
+                ok[a, b] = not self.reach.refuses_release(cx + float(dx), cy + (float(y_placed) - oy), REACH_MARGIN)
+        return ok
 
     def suction_lattice(self, obj: SceneObject, fp: Footprint, mask: np.ndarray) -> "SuctionLattice":
         """Object ``obj``'s :class:`SuctionLattice` (``fp`` its footprint, ``mask`` its footprint mask on the
@@ -440,10 +496,12 @@ class ActionModel:
         t, shelf = self.tool, self.shelf
         mass = object_mass(obj, t.physics.object_density, t.physics)
         if RULES["max_suction_mass"].refuses(t.rules.max_suction_mass, mass):
-            return SuctionLattice.refused(f"{obj.name} weighs {mass:.2f} kg > {t.rules.max_suction_mass:.2f} kg")
+            return SuctionLattice.refused(f"{obj.name} weighs {mass:.2f} kg > {t.rules.max_suction_mass:.2f} kg",
+                                          RefusalKind.TOO_HEAVY)
         contact = self.suction_contact(obj)
         if contact is None:
-            return SuctionLattice.refused(f"{obj.name}'s camera-facing side is too small or curved for the cup")
+            return SuctionLattice.refused(f"{obj.name}'s camera-facing side is too small or curved for the cup",
+                                          RefusalKind.NO_FACE)
         cx, cy, cz = contact
         yaw = self.tool_yaw(obj, (cx, cy))
         face = math.degrees(self.face_yaw(obj))
@@ -453,17 +511,17 @@ class ActionModel:
         if RULES["max_seal_angle_deg"].refuses(t.rules.max_seal_angle_deg, angle):
             turned = f" (the tool turns {abs(math.degrees(yaw)):.0f} deg)" if yaw else ""
             return SuctionLattice.refused(f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
-                                          f"tube{turned} > {t.rules.max_seal_angle_deg:.0f} deg")
+                                          f"tube{turned} > {t.rules.max_seal_angle_deg:.0f} deg", RefusalKind.SEAL_ANGLE)
         moment = mass * GRAVITY * math.hypot(float(obj.center[0]) - cx, float(obj.center[1]) - cy)
         if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
             return SuctionLattice.refused(f"{obj.name}'s weight hangs {moment:.2f} N m off the cup "
-                                          f"> {t.rules.max_suction_moment:.2f} N m")
+                                          f"> {t.rules.max_suction_moment:.2f} N m", RefusalKind.SUCTION_MOMENT)
         if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, (cy - (-shelf.depth / 2)) / math.cos(yaw)):
-            return SuctionLattice.refused(f"{obj.name}'s face is beyond the tube's reach")
+            return SuctionLattice.refused(f"{obj.name}'s face is beyond the tube's reach", RefusalKind.TUBE_DEPTH)
         if self.reach is not None and self.reach.refuses_cup(cx, cy, cz, yaw, REACH_MARGIN):
             turned = f" turned {math.degrees(yaw):+.0f} deg" if yaw else ""
             return SuctionLattice.refused(f"the arm cannot reach the cup{turned} at {obj.name}'s face "
-                                          f"({cx:+.2f}, {cy:+.2f}) m (reach map)")
+                                          f"({cx:+.2f}, {cy:+.2f}) m (reach map)", RefusalKind.REACH_MAP)
         tube_r = t.geometry.tube_diameter / 2
         # the tube's straight way in along its (turned) axis, from in front of the opening to the contact
         length = (cy - self.y_front) / math.cos(yaw)
@@ -739,7 +797,8 @@ class SuctionLattice:
     :meth:`ActionModel.suction_lattice`). Shelf frame S, metres; A lattice columns x' = x + a res (``a_all``),
     B depths y' = y + b res (``b_all``), C raster columns of the object's footprint.
 
-    ``refusal``: why a rule on the object alone refuses every suction of it (None: none does). Else ``q`` the cup's
+    ``refusal``: why a rule on the object alone refuses every suction of it (None: none does; ``refusal_kind`` the
+    same as a :class:`RefusalKind`). Else ``q`` the cup's
     contact (x, y, z), ``yaw`` the tool's yaw (rad), ``corridor`` (1, 2) and ``corridor_half`` the tube's way in as a
     turned box, ``path_out`` (n_out, 2) the centres of the way straight out of the shelf, ``cols``, ``first_rows``,
     ``last_rows`` (C,) the footprint's raster columns and their first and last rows, ``cells_per`` raster cells per
@@ -751,6 +810,7 @@ class SuctionLattice:
     :meth:`action` the :class:`Suction` to a lattice point (made on first use and kept)."""
 
     refusal: str | None
+    refusal_kind: "RefusalKind | None" = None  # the refusal's kind (None when there is none)
     lattice_empty: bool = True
     q: tuple = ()
     yaw: float = 0.0
@@ -772,10 +832,11 @@ class SuctionLattice:
     name: str = ""
     res: float = 0.0
     _actions: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
+    _release: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)  # _release_reachable's mask
 
     @classmethod
-    def refused(cls, reason: str) -> "SuctionLattice":
-        return cls(refusal=reason)
+    def refused(cls, reason: str, kind: "RefusalKind") -> "SuctionLattice":
+        return cls(refusal=reason, refusal_kind=kind)
 
     def action(self, a_index: int, b_index: int) -> Suction:
         """The suction that places the object at lattice point (a_all[a_index], b_all[b_index])."""

@@ -12,7 +12,11 @@ collision-free IK solution from the observation pose, on the empty shelf, for ea
   :data:`TURNED_CUP_HEIGHTS`): the same with the tool turned that many degrees about S z (the action's yaw), the
   contact at that height. :meth:`ReachMap.refuses_cup` refuses a turned suction only when the layers of every
   yaw node and every height node around its yaw and contact height (the yaw-0 node is ``cup``, at its one height)
-  exist and refuse its contact.
+  exist and refuse its contact;
+- optional release layers ``back off`` and ``retract`` (:data:`RELEASE_LAYERS`): a yaw-0 suction whose cup releases
+  the object with its contact at (x, y), at the height ``heights["back off"]``: the cup backed off along the tube,
+  and the tool drawn back in front of the opening (at either approach margin). :meth:`ReachMap.refuses_release`
+  refuses a release where either layer refuses it.
 
 :meth:`ReachMap.refuses` is conservative: a point is refused only when every grid node of every cell within
 ``margin`` of it (the cells its neighbourhood touches) is unreachable, so a refused point lies inside a region
@@ -30,6 +34,9 @@ from pathlib import Path
 import numpy as np
 
 LAYERS = ("push+x", "push-x", "cup")
+# Optional layers of a yaw-0 suction's release, (x, y) the cup's contact where it releases the object: the cup
+# backed off along the tube, and the tool retracted in front of the opening (the same for every y)
+RELEASE_LAYERS = ("back off", "retract")
 TURNED_CUP_YAWS_DEG = (-30, -20, -10, 10, 20, 30)  # the tool's yaw of the optional turned-cup layers (deg)
 TURNED_CUP_HEIGHTS = (0.03, 0.06, 0.10)  # their contact heights (m above the support)
 
@@ -96,6 +103,11 @@ class ReachMap:
                 if layer not in self.reach or not self.refuses(layer, x, y, margin):
                     return False
         return True
+
+    def refuses_release(self, x: float, y: float, margin: float = 0.0) -> bool:
+        """A yaw-0 suction releasing its object with the cup's contact at (x, y) (S, m): True when the map holds
+        the release layers and the back-off or the retract layer refuses (x, y); False when it has none."""
+        return any(layer in self.reach and self.refuses(layer, x, y, margin) for layer in RELEASE_LAYERS)
 
     def to_dict(self) -> dict:
         return {"station": self.station, "xs": [round(float(v), 6) for v in self.xs],

@@ -173,10 +173,11 @@ class PlannerSystem(LeafSystem):
         policy = self.policy
         rejected = []
         t0 = time.perf_counter()
-        motion, action, decide_s = None, None, 0.0
+        motion, action, decide_s, decision = None, None, 0.0, None
         for _ in range(MAX_PLAN_ATTEMPTS):
             td = time.perf_counter()
-            action = policy.decide(obs).best
+            decision = policy.decide(obs)
+            action = decision.best
             decide_s += time.perf_counter() - td
             if action is None:
                 break
@@ -184,7 +185,10 @@ class PlannerSystem(LeafSystem):
             if result.feasible:
                 motion = result
                 break
+            failure = result.failure
             rejected.append({"action": action.describe(), "reason": result.reason,
+                             "kind": failure.kind.value if failure is not None else None,
+                             "waypoint": failure.waypoint if failure is not None else None,
                              "planning_s": result.timings.get("total_s")})
             policy.exclude(action, result.reason, whole_group=result.failure.early)
             action = None
@@ -196,6 +200,8 @@ class PlannerSystem(LeafSystem):
         entry["decision_s"] = round(decide_s, 4)
         entry["planning_s"] = round(time.perf_counter() - t0 - decide_s, 4)
         if motion is None:
+            entry.update(stop_record(policy, belief.known, rejected,
+                                     decision.stop_reason if decision is not None and action is None else None))
             return self._finish(s, "no feasible action" if not rejected else "no feasible motion", entry, frame,
                                 hold=True)
         entry["action"] = _describe(action)
@@ -218,6 +224,31 @@ class PlannerSystem(LeafSystem):
             self.on_step(entry, frame.depth, frame.segmentation, frame.target_mask, self.policy.history, None)
         motion = None if hold else s.motion
         return dataclasses.replace(s, done=True, motion=motion, result=result, log=s.log + (entry,))
+
+
+def stop_record(policy, known, rejected: list, stop_reason: str | None) -> dict:
+    """Why a decision found no action to execute, for the trial record: ``stop_reason`` (the policy's, None when it
+    gave none), ``refused`` (every candidate the action model refuses on the believed objects ``known``, as
+    ``{"candidate", "kind", "reason"}``: the :class:`~slax_drake.shelf.actions.RefusalKind` value and its wording),
+    ``feasible_left`` (the action model's feasible candidates there: those the policy did not take were excluded
+    by it, e.g. by its corrections, or rejected by the motion planner), ``excluded`` (the policy's exclusions this
+    trial, when it records them) and ``reasons``: per stage ("action model", "motion planner") and kind (the
+    refusal kind, or the :class:`~slax_drake.planning.failures.FailureKind` value of each entry of ``rejected``)
+    how many candidates, the most frequent first."""
+    import collections
+
+    cands = policy.action_model.enumerate(tuple(known))
+    refused = [{"candidate": r.spec(), "kind": r.kind.value if r.kind is not None else None, "reason": r.reason}
+               for r in cands.rejected]
+    counts = collections.Counter(("action model", r["kind"]) for r in refused)
+    counts.update(("motion planner", r.get("kind")) for r in rejected)
+    reasons = [{"stage": stage, "kind": kind, "count": n}
+               for (stage, kind), n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0][0], str(kv[0][1])))]
+    out = {"stop_reason": stop_reason, "refused": refused, "feasible_left": len(cands.feasible), "reasons": reasons}
+    exclusions = getattr(policy, "exclusions", None)
+    if exclusions is not None:
+        out["excluded"] = [{"action": a.describe(), "reason": why} for a, why in exclusions]
+    return out
 
 
 def _describe(action) -> dict:

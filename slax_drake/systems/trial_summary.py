@@ -47,6 +47,37 @@ def _cost(cost: float, pushes: int, suctions: int) -> str:
     return f"{cost:g} (1 per push, {psi:g} per suction)"
 
 
+def why_lines(data: dict, written) -> list[str]:
+    """For a trial that ended with no action to execute ("no feasible action" or "no feasible motion"): how many
+    candidates the action model refused and the motion planner rejected at the last decision, the most frequent
+    reason (stage and kind) and the command that lists every candidate of the scene with its verdict. Empty for
+    other endings or a record without the reasons."""
+    if data.get("result") not in ("no feasible action", "no feasible motion"):
+        return []
+    last = (data.get("steps_log") or [{}])[-1]
+    reasons = last.get("reasons")
+    if reasons is None:
+        return []
+    refused = len(last.get("refused", ()))
+    rejected = len(last.get("rejected", ()))
+    head = (f"why:     at the last decision the action model refused {_plural(refused, 'candidate')}, the motion "
+            f"planner rejected {rejected}")
+    if last.get("feasible_left") and not rejected:
+        head += f"; the policy excluded the {_plural(last['feasible_left'], 'feasible one')} left"
+    if last.get("stop_reason"):
+        head += f" (the policy: {last['stop_reason']})"
+    lines = [head]
+    if reasons:
+        top = reasons[0]
+        lines.append(f"  most frequent: {top['stage']}: {top['kind']} ({_plural(top['count'], 'candidate')})"
+                     + "".join(f"; then {r['stage']}: {r['kind']} ({r['count']})" for r in reasons[1:3]))
+    scene = next((Path(p) for p in written if Path(p).name == "scene.json"), None)
+    station = f" --station {data['station']}" if data.get("station") else ""
+    lines.append(f"  every candidate with its verdict (action model, then planner, on the true scene): slax-drake "
+                 f"check-action --scene {scene if scene is not None else 'OUT/scene.json'}{station} --all")
+    return lines
+
+
 def trial_summary(data: dict, written: list[Path], html: str | Path | None = None,
                   meshcat_url: str | None = None) -> str:
     """The trial's closing block (lines without a trailing newline).
@@ -68,6 +99,7 @@ def trial_summary(data: dict, written: list[Path], html: str | Path | None = Non
         lines.append(f"  {k}. {a['type']} {who} ({params}): motion {a['motion']['duration_s']:.1f} s, "
                      f"planned in {a['planning_s']:.2f} s"
                      + (f" after {_plural(rejected, 'rejected candidate')}" if rejected else ""))
+    lines.extend(why_lines(data, written))
     lines.append(f"cost:    {_cost(data['cost'], pushes, len(actions) - pushes)}")
     rtf = data.get("real_time_factor")
     lines.append(f"time:    simulated {data['sim_time_s']:.1f} s in {data['wall_s']:.1f} s of wall time"

@@ -59,6 +59,13 @@ def test_no_feasible_action_says_how_many_candidates_had_no_motion():
                      "rejected": [{}, {}]},), (_snap(0.5, 0.0),))
     assert out.getvalue() == ("done after 0 actions: target not revealed: no candidate action had a collision-free "
                               "motion (0% of it visible); 2 candidates without a motion\n")
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    printer.update(({"step": 0, "time": 0.5, "final": True, "result": "no feasible motion", "rejected": [{}, {}],
+                     "reasons": [{"stage": "motion planner", "kind": "no IK solution", "count": 2}]},),
+                   (_snap(0.5, 0.0),))
+    assert out.getvalue().endswith("2 candidates without a motion; most often motion planner: no IK solution "
+                                   "(2 candidates)\n")
 
 
 @pytest.mark.slow

@@ -112,3 +112,14 @@ def test_round_trip_from_a_noisy_drake_frame_to_a_checked_trajectory(tmp_path, c
     again = json.loads((tmp_path / "step2.json").read_text())["metadata"]["plan_step"]
     assert again["history"]["steps"] == 2
     assert all(b <= a + 1e-12 for a, b in zip(record["history"]["history"], again["history"]["history"]))
+
+
+def test_a_step_with_no_action_records_why(tmp_path):
+    """Six objects, seed 6 (a scene where the station's action model refuses every candidate): the step file has
+    no motion and records the refusals by kind."""
+    _frame(tmp_path, objects=6, seed=6)
+    main(_args(tmp_path))
+    record = json.loads((tmp_path / "step.json").read_text())["metadata"]["plan_step"]
+    assert record["action"] is None
+    assert record["reasons"] and record["refused"]
+    assert all(r["kind"] for r in record["refused"] + record["rejected"])

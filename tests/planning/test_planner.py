@@ -270,3 +270,34 @@ def test_a_segment_is_checked_once_per_checker_state(setup):
     world.drop()
     world.edge_free(q0, q1)
     assert len(calls) == 3
+
+
+def test_kinematic_ik_kept_across_worlds_gives_the_same_motions(sim_scenario):
+    """IK solutions kept from an earlier world (the robot's kinematics alone) plan the same motions, bit for bit,
+    as a planner that solves them afresh, and save the solves."""
+    from slax_drake.shelf.actions import apply_action
+
+    station = load_station_scenario()
+    tool = tool_config(sim_scenario)
+    scene = sample_scene(sim_scenario, 4, seed=3)
+    model = ActionModel(shelf_of(sim_scenario), scene.camera.position, tool)
+    first = model.enumerate(scene.objects).feasible
+    moved = scene.with_objects(apply_action(scene.objects, first[0]))
+    later = [a for a in model.enumerate(moved.objects).feasible if a.name != first[0].name][:2]
+    assert later
+    warm = MotionPlanner(station, tool)
+    for a in first[:4]:
+        warm.plan(a, scene)
+    cold = MotionPlanner(station, tool, keep_kinematic_ik=False)
+    solves = {"warm": 0, "cold": 0}
+    for a in later:
+        fresh, kept = cold.plan(a, moved), warm.plan(a, moved)
+        solves["cold"] += fresh.timings["ik_solves"]
+        solves["warm"] += kept.timings["ik_solves"]
+        assert fresh.feasible == kept.feasible
+        if fresh.feasible:
+            assert np.array_equal(fresh.trajectory.q, kept.trajectory.q)
+            assert np.array_equal(fresh.trajectory.times, kept.trajectory.times)
+        else:
+            assert fresh.reason == kept.reason
+    assert solves["warm"] < solves["cold"]

@@ -204,3 +204,83 @@ def test_a_map_whose_turned_layer_has_the_wrong_shape_is_one_config_error(tmp_pa
     path.write_text(json.dumps(data))
     with pytest.raises(ConfigError, match=f"layer '{turned}' is"):
         load_reach_map(str(path))
+
+
+def test_a_release_is_refused_where_the_back_off_or_the_retract_layer_refuses():
+    m = _toy_map()
+    assert not m.refuses_release(0.25, 0.05)  # no release layers: nothing refused
+    ok, bad = np.ones((3, 4), bool), np.array([[True, True, False, False]] * 3)
+    with_back = ReachMap("toy", m.xs, m.ys, {**m.reach, "back off": bad, "retract": ok}, m.heights)
+    assert with_back.refuses_release(0.25, 0.05) and not with_back.refuses_release(0.05, 0.05)
+    with_retract = ReachMap("toy", m.xs, m.ys, {**m.reach, "back off": ok, "retract": bad}, m.heights)
+    assert with_retract.refuses_release(0.25, 0.05) and not with_retract.refuses_release(0.15, 0.05)
+
+
+def test_the_sim_map_holds_the_release_layers():
+    from slax_drake.shelf.reach import RELEASE_LAYERS
+
+    rmap = load_reach_map(SIM_MAP)
+    for name in RELEASE_LAYERS:
+        layer = rmap.reach[name]
+        assert layer.shape == rmap.reach["cup"].shape and layer.any()
+    assert not rmap.reach["back off"].all()  # the back-left corner, deep in the bay
+    assert (rmap.reach["retract"] == rmap.reach["retract"][0]).all()  # in front of the opening: the same for every y
+
+
+def test_the_action_model_keeps_no_placement_the_release_layers_refuse(sim_scenario):
+    """With the station's map, no yaw-0 suction it offers releases where the back-off or retract layer refuses."""
+    from slax_drake.scene.sampling import sample_scene
+    from slax_drake.shelf.actions import REACH_MARGIN, Suction
+
+    rmap = load_reach_map(SIM_MAP)
+    tool = tool_config(sim_scenario, "station", reach_map=SIM_MAP, max_suction_moment=float("inf"))
+    offered = 0
+    for seed in range(3):
+        scene = sample_scene(sim_scenario, 4, seed)
+        model = ActionModel(shelf_of(sim_scenario), scene.camera.position, tool)
+        for a in model.enumerate(scene.objects).feasible:
+            if isinstance(a, Suction) and a.yaw == 0.0:
+                obj = next(o for o in scene.objects if o.name == a.name)
+                x, y = a.q[0] + a.dx, a.q[1] + (a.dz - float(obj.center[1]))
+                assert not rmap.refuses_release(x, y, REACH_MARGIN), a
+                offered += 1
+    assert offered
+
+
+@pytest.mark.slow
+def test_the_release_layers_agree_with_the_planner_on_a_sample_of_poses(sim_scenario):
+    """Seeded random release contacts: each one the back-off (or retract) layer refuses has no collision-free IK
+    solution of that waypoint from the observation pose (the retract at neither approach margin); each one in a
+    cell whose four nodes were reached has one."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.planning.reach import release_waypoint
+    from slax_drake.planning.waypoints import APPROACH_MARGINS
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    rmap = load_reach_map(station.reach_map)
+    tool = tool_config(sim_scenario, "station")
+    planner = MotionPlanner(station, tool)
+    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    rng = np.random.default_rng(29)
+    for layer in ("back off", "retract"):
+        refused, accepted = [], []
+        want = 0 if rmap.reach[layer].all() else 3  # the sim map's retract layer reaches everywhere
+        for _ in range(20000):
+            if len(refused) >= want and len(accepted) >= 3:
+                break
+            x, y = rng.uniform(rmap.xs[0], rmap.xs[-1]), rng.uniform(rmap.ys[0], rmap.ys[-1])
+            i = min(len(rmap.xs) - 2, int(np.searchsorted(rmap.xs, x)) - 1)
+            j = min(len(rmap.ys) - 2, int(np.searchsorted(rmap.ys, y)) - 1)
+            if rmap.refuses(layer, x, y, 0.015):
+                if len(refused) < want:
+                    refused.append((x, y))
+            elif rmap.reach[layer][j:j + 2, i:i + 2].all() and len(accepted) < 3:
+                accepted.append((x, y))
+        assert len(refused) == want and len(accepted) == 3, layer
+        margins = APPROACH_MARGINS if layer == "retract" else (None,)
+        for (x, y), expected in [(p, False) for p in refused] + [(p, True) for p in accepted]:
+            got = any(planner.reaches(scene, release_waypoint(layer, x, y, scene, tool, m)) for m in margins)
+            assert got == expected, (layer, x, y)
