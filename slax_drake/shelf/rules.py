@@ -281,6 +281,51 @@ class MaxSuctionMoment(Rule):
 
 
 @register
+class DragGrasp(Rule):
+    """An object the cup may not lift (its held moment over ``max_suction_moment``) is dragged instead: the cup
+    seals low on the same face, pulls the object toward the camera sliding on the shelf floor until its front is
+    ``DRAG_FRONT_MARGIN`` inside the opening, translates it by d_x and pushes it in to depth d_z, the object on the
+    floor all the way (it passes over nothing; :meth:`ActionModel.drag_limits`). A drag is admitted when the pull it
+    needs, ``drag_safety_factor`` x ``drag_friction`` x m g, is within the cup's pull ``max_drag_pull``, when it
+    does not tip the object (the cup seals at most ``half base / (safety factor x mu)`` high, the base's half depth
+    along the pull, and no lower than the tube allows), and when its swept footprint (out, across, in) keeps
+    ``clearance`` from every known object and, unless ``suction_hidden_rule`` is "none", covers no hidden cell.
+    ``station``: on (what a real cup on a heavy box does instead of lifting it); never chosen while
+    ``max_suction_moment`` is unlimited. ``paper``: off, the FOSS lifts every object."""
+
+    name, type, paper, station = "drag_grasp", bool, False, True
+
+
+@register
+class MaxDragPull(Rule):
+    """The cup's pull (N) a drag may use: vacuum pressure x cup area. Unlimited in both profiles' defaults; the
+    Drake station's cup sets it (``suction.vacuum_pressure`` and ``suction.cup_radius`` in the station YAML:
+    60 kPa over a 15 mm radius, 42.4 N)."""
+
+    name, paper, station = "max_drag_pull", math.inf, math.inf
+
+
+@register
+class DragFriction(Rule):
+    """The Coulomb friction coefficient between a dragged object and the shelf floor. Both profiles: 0.44, what
+    the Drake station combines from the objects' 0.5 (``physics.object_friction``) and the shelf's 0.4 (Drake's
+    2 mu1 mu2 / (mu1 + mu2))."""
+
+    name, paper, station = "drag_friction", 0.44, 0.44
+
+
+@register
+class DragSafetyFactor(Rule):
+    """The factor on ``drag_friction`` for a drag's limits (pull and tipping): static friction, the cup's seal
+    and the floor vary. Both profiles: 1.5."""
+
+    name, paper, station = "drag_safety_factor", 1.5, 1.5
+
+    def problem(self, value) -> str | None:
+        return None if value >= 1.0 else "must be at least 1"
+
+
+@register
 class MaxToolYawDeg(Rule):
     """How far (deg) the tool may turn about the shelf's z axis to meet a turned box face along its normal: the
     tube then comes in along the face's normal, turned by the face's angle clamped to this value and to what the

@@ -1,0 +1,130 @@
+"""The drag grasp (the ``drag_grasp`` rule): an object the cup may not lift is dragged on the shelf floor when
+the pull it needs is within the cup's, it does not tip, and its swept footprint is clear. Hand-built cases of
+the lift/drag choice; the shelf simulator and the planner's waypoints execute the same motion."""
+
+import math
+
+import numpy as np
+import pytest
+
+from slax_drake.planning.waypoints import action_waypoints, carry_options
+from slax_drake.shelf.actions import DRAG_MIN_SEAL_Z, GRAVITY, ActionModel, apply_action
+from slax_drake.shelf.simulator import execute
+from slax_drake.shelf.tool import tool_config
+from slax_drake.scene.camera import Camera
+from slax_drake.scene.model import Scene, SceneObject, planar_pose
+from slax_drake.scene.sampling import shelf_of
+
+CUP = dict(max_suction_moment=0.4, max_drag_pull=42.412)  # the station YAML's cup: 0.4 N m lift, 42.4 N pull
+
+
+def _box(name, x, y, size, mass=None):
+    return SceneObject(name, "box", size, planar_pose(x, y, size[2] / 2, 0.0), mass=mass)
+
+
+def _model(scenario, profile="station", **rules):
+    return ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position,
+                       tool_config(scenario, profile, **{**CUP, **rules}))
+
+
+def _grips(candidates, name):
+    return {s.grip for s in candidates.feasible if s.kind == "suction" and s.name == name}
+
+
+def test_a_light_box_is_lifted_and_a_heavy_one_dragged(sim_scenario):
+    model = _model(sim_scenario)
+    light = _box("light", 0.0, 0.05, (0.10, 0.10, 0.12), mass=0.2)  # 0.2 x 9.81 x 0.05 = 0.10 N m: lifted
+    heavy = _box("heavy", 0.0, 0.05, (0.16, 0.16, 0.16), mass=2.0)  # 2 x 9.81 x 0.08 = 1.6 N m: dragged
+    assert _grips(model.enumerate((light,), pushes=False), "light") == {"lift"}
+    assert _grips(model.enumerate((heavy,), pushes=False), "heavy") == {"drag"}
+    # with drag_grasp off (and in the paper profile) the heavy box is refused, as before
+    off = model.__class__(model.shelf, (*model.eye_xy, model.eye_z), tool_config(sim_scenario, "station",
+                                                                              drag_grasp=False, **CUP))
+    refused = off.enumerate((heavy,), pushes=False)
+    assert not refused.feasible and "N m off the cup" in refused.rejected[0].reason
+    assert not _model(sim_scenario, "paper").tool.rules.drag_grasp
+
+
+def test_a_drag_seals_low_enough_not_to_tip(sim_scenario):
+    model = _model(sim_scenario)
+    heavy = _box("heavy", 0.0, 0.05, (0.16, 0.16, 0.16), mass=2.0)
+    limits = model.drag_limits(heavy, 0.16)
+    mu = 1.5 * 0.44
+    assert limits.refusal is None
+    assert limits.tip_z == pytest.approx(0.08 / mu)
+    assert limits.pull == pytest.approx(mu * 2.0 * GRAVITY)
+    drag = model.enumerate((heavy,), pushes=False).feasible[0]
+    assert DRAG_MIN_SEAL_Z <= drag.q[2] <= 0.08 / mu + 1e-9
+
+
+def test_a_slender_heavy_box_would_tip_and_is_refused(sim_scenario):
+    # 3 kg, 3 cm deep: hangs 3 x 9.81 x 0.015 = 0.44 N m off the cup (not lifted); a pull above
+    # 1.5 cm / (1.5 x 0.44) = 2.3 cm tips it, and the tube seals no lower than 2.5 cm
+    slender = _box("slender", 0.0, 0.05, (0.20, 0.03, 0.25), mass=3.0)
+    result = _model(sim_scenario, max_seal_angle_deg=90.0).enumerate((slender,), pushes=False)
+    assert not result.feasible
+    assert "would tip" in result.rejected[0].reason
+
+
+def test_a_box_too_heavy_for_the_cups_pull_is_refused(sim_scenario):
+    # 8 kg: mu' m g = 0.66 x 8 x 9.81 = 51.8 N > 42.4 N
+    brick = _box("brick", 0.0, 0.05, (0.16, 0.16, 0.16), mass=8.0)
+    result = _model(sim_scenario).enumerate((brick,), pushes=False)
+    assert not result.feasible and "pull to slide" in result.rejected[0].reason
+    assert _grips(_model(sim_scenario, max_drag_pull=100.0).enumerate((brick,), pushes=False), "brick") == {"drag"}
+
+
+def test_a_drag_never_passes_over_a_low_object(sim_scenario):
+    """A lifted object passes over a low one in front of it; a dragged one cannot: it is refused."""
+    heavy = _box("heavy", 0.0, 0.10, (0.16, 0.16, 0.16), mass=2.0)
+    low = _box("low", 0.0, -0.17, (0.12, 0.08, 0.06), mass=0.1)
+    result = _model(sim_scenario).enumerate((heavy, low), pushes=False, only=("heavy",))
+    assert not result.feasible
+    assert "path out of the shelf blocked by low" in result.rejected[0].reason
+    lifted = _model(sim_scenario, max_suction_moment=math.inf).enumerate((heavy, low), pushes=False, only=("heavy",))
+    assert _grips(lifted, "heavy") == {"lift"}
+
+
+def test_a_drags_way_across_must_be_clear(sim_scenario):
+    """An object standing on the front row to the right blocks every drag to the right across it."""
+    heavy = _box("heavy", -0.15, 0.10, (0.16, 0.16, 0.16), mass=2.0)
+    front = _box("front", 0.10, -0.22, (0.08, 0.08, 0.12), mass=0.1)
+    result = _model(sim_scenario).enumerate((heavy, front), pushes=False, only=("heavy",))
+    dxs = {round(s.dx, 3) for s in result.feasible}
+    assert dxs and all(heavy.center[0] + dx < 0.10 - 0.04 - 0.08 for dx in dxs)
+
+
+def test_the_simulator_and_the_waypoints_drag_the_same_way(sim_scenario):
+    model = _model(sim_scenario)
+    heavy = _box("heavy", 0.0, 0.10, (0.16, 0.16, 0.16), mass=2.0)
+    shelf = shelf_of(sim_scenario)
+    scene = Scene(shelf, Camera.from_config(sim_scenario.camera), (heavy,), None)
+    drag = next(s for s in model.enumerate((heavy,), pushes=False).feasible if s.dx != 0)
+    after, note = execute(scene, drag, model)
+    assert note == ""
+    expected = apply_action((heavy,), drag)[0]
+    assert np.allclose(after.objects[0].center[:2], expected.center[:2])
+    wps = action_waypoints(drag, (heavy,), shelf, model.tool)
+    labels = [w.label for w in wps]
+    assert labels == ["pre-approach", "approach", "seal", "pull", "drag across", "push in", "release", "back off",
+                      "retract"]
+    z = {round(float(w.position[2]), 9) for w in wps}
+    assert z == {round(drag.q[2], 9)}  # never lifted
+    pull = wps[labels.index("pull")].position
+    # the object's front DRAG_FRONT_MARGIN inside the opening at the end of the pull
+    assert heavy.center[1] + (pull[1] - wps[labels.index("seal")].position[1]) - 0.08 == pytest.approx(
+        -shelf.depth / 2 + 0.01)
+    assert len(carry_options(drag, heavy, shelf)) == 1
+    assert all(w.carried == "resting" for w in wps[3:6])
+
+
+def test_the_simulator_stops_a_drag_at_an_unseen_object(sim_scenario):
+    model = _model(sim_scenario)
+    heavy = _box("heavy", 0.0, 0.10, (0.16, 0.16, 0.16), mass=2.0)
+    shelf = shelf_of(sim_scenario)
+    drag = next(s for s in model.enumerate((heavy,), pushes=False).feasible if s.dx == 0.15 and s.dz > 0.05)
+    unseen = _box("unseen", 0.15, 0.20, (0.10, 0.06, 0.10), mass=0.2)
+    after, note = execute(Scene(shelf, Camera.from_config(sim_scenario.camera), (heavy, unseen), None), drag, model)
+    assert "stopped early" in note
+    moved = after.objects[0]
+    assert moved.center[0] == pytest.approx(0.15) and moved.center[1] < drag.dz
