@@ -438,7 +438,10 @@ class ActionModel:
                 ok &= self._drag_hidden_ok(ctx, i, lat)
         a_index, b_index = np.nonzero(ok)
         if len(a_index) == 0:
-            rejected.append(refused(what, f"no collision-free placement for {obj.name} in known free space"))
+            only_back = lat.drag and not lat.base[lat.a_all != 0].any()
+            rejected.append(refused(what, f"no collision-free placement for {obj.name} in known free space" + (
+                " (dragged straight out and back in only: a sideways drag would twist it off the cup)"
+                if only_back else "")))
             return
         feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
 
@@ -472,7 +475,7 @@ class ActionModel:
             return SuctionLattice.refused(f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
                                           f"tube{turned} > {t.rules.max_seal_angle_deg:.0f} deg")
         moment = mass * GRAVITY * math.hypot(float(obj.center[0]) - cx, float(obj.center[1]) - cy)
-        drag = False
+        drag, drag_across = False, True
         if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
             lifted = f"{obj.name}'s weight hangs {moment:.2f} N m off the cup > {t.rules.max_suction_moment:.2f} N m"
             if not t.rules.drag_grasp:
@@ -481,6 +484,8 @@ class ActionModel:
             if limits.refusal is not None:
                 return SuctionLattice.refused(f"{lifted}, and no drag: {limits.refusal}")
             drag, cz = True, limits.seal_z
+            r = t.rules
+            drag_across = r.drag_safety_factor * r.drag_friction * moment <= r.max_drag_twist
         if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, (cy - (-shelf.depth / 2)) / math.cos(yaw)):
             return SuctionLattice.refused(f"{obj.name}'s face is beyond the tube's reach")
         if self.reach is not None and self.reach.refuses_cup(cx, cy, cz, yaw, REACH_MARGIN):
@@ -526,6 +531,8 @@ class ActionModel:
         base[(a_all == 0)[:, None] & (b_all == 0)[None, :]] = False  # not where it stands
         if drag:  # pushed in from the pull-out depth, never pulled farther out
             base &= (fp.y + b_all * res >= y_out - 1e-9)[None, :]
+            if not drag_across:  # the seal would not hold the twist of a sideways slide: straight out and in only
+                base &= (a_all == 0)[:, None]
         return SuctionLattice(refusal=None, lattice_empty=False, a_all=a_all, b_all=b_all, xs=xs,
                               y_placed=fp.y + b_all * res, steps=steps, shifted_cols=shifted_cols, inside=inside,
                               base=base, name=obj.name, res=res, **common)

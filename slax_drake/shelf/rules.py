@@ -306,6 +306,20 @@ class MaxDragPull(Rule):
 
 
 @register
+class MaxDragTwist(Rule):
+    """The moment (N m) about the vertical through the cup's contact that a drag's
+    translation along x may ask of the seal: sliding sideways, the floor's friction, ``drag_safety_factor`` x
+    ``drag_friction`` x m g, acts at the object's centre, so it twists the object about the cup by that times the
+    floor-plane distance from the contact to the centre (the held moment times mu'). Over this, only drags with
+    d_x = 0 (pulled out and pushed back in) are admitted. Unlimited in both profiles' defaults; the Drake
+    station's cup sets it: its lip moment, the pull times the cup's radius (42.4 N x 15 mm = 0.64 N m; in
+    research/drag_hold.py 2 kg boxes 8 cm behind the contact, 0.69 N m without the safety factor, turned 35 deg
+    while translated, 1.5 kg ones, 0.52 N m, did not)."""
+
+    name, paper, station = "max_drag_twist", math.inf, math.inf
+
+
+@register
 class DragFriction(Rule):
     """The Coulomb friction coefficient between a dragged object and the shelf floor. Both profiles: 0.44, what
     the Drake station combines from the objects' 0.5 (``physics.object_friction``) and the shelf's 0.4 (Drake's

@@ -79,7 +79,8 @@ class TrialDiagram:
 def station_tool_rules(station, overrides: dict | None = None, profile: str = "station") -> dict:
     """The rule overrides of ``profile`` a trial on ``station`` plans with: the station cup's limits
     (``suction.max_held_moment`` as ``max_suction_moment`` when finite, with the cup's pull,
-    ``suction.vacuum_pressure`` x cup area, as ``max_drag_pull``; ``suction.max_seal_angle_deg`` when under 90) and its reach map (``reach_map`` when given), then ``overrides`` on top; entries equal to the profile's values are left out."""
+    ``suction.vacuum_pressure`` x cup area, as ``max_drag_pull`` and its lip moment, that times ``cup_radius``, as
+    ``max_drag_twist``; ``suction.max_seal_angle_deg`` when under 90) and its reach map (``reach_map`` when given), then ``overrides`` on top; entries equal to the profile's values are left out."""
     from slax_drake.shelf.tool import without_defaults
 
     rules = {}
@@ -87,13 +88,16 @@ def station_tool_rules(station, overrides: dict | None = None, profile: str = "s
         rules["max_suction_moment"] = float(station.suction.max_held_moment)
         # what the cup may drag instead of lifting: its pull, vacuum pressure x cup area (drag_grasp rule)
         rules["max_drag_pull"] = round(float(station.suction.max_force), 3)
+        rules["max_drag_twist"] = round(float(station.suction.lip_moment), 4)
     if station.suction.max_seal_angle_deg < 90.0:
         rules["max_seal_angle_deg"] = float(station.suction.max_seal_angle_deg)
     if station.reach_map:
         rules["reach_map"] = station.reach_map
     rules.update(overrides or {})
-    if not math.isfinite(rules.get("max_suction_moment", math.inf)) and "max_drag_pull" not in (overrides or {}):
-        rules.pop("max_drag_pull", None)  # nothing is dragged when every object is lifted
+    if not math.isfinite(rules.get("max_suction_moment", math.inf)):
+        for name in ("max_drag_pull", "max_drag_twist"):  # nothing is dragged when every object is lifted
+            if name not in (overrides or {}):
+                rules.pop(name, None)
     return without_defaults(rules, profile)
 
 
