@@ -107,12 +107,15 @@ class Suction:
     dz: float
     yaw: float = 0.0
     drag: bool = False  # dragged on the shelf floor instead of lifted (the ``drag_grasp`` rule)
+    guarded: bool = False  # the placement reaches into hidden space: pushed in until contact (``suction_hidden_rule``
+    # "guarded"), so the object may rest short of d_z
 
     kind = "suction"
 
     def describe(self) -> str:
         turned = f" yaw={math.degrees(self.yaw):+.0f}deg" if self.yaw else ""
-        return f"suction {self.name} dx={self.dx:+.3f} dz={self.dz:+.3f}{turned}{' drag' if self.drag else ''}"
+        return (f"suction {self.name} dx={self.dx:+.3f} dz={self.dz:+.3f}{turned}{' drag' if self.drag else ''}"
+                f"{' guarded' if self.guarded else ''}")
 
     @property
     def grip(self) -> str:
@@ -432,7 +435,12 @@ class ActionModel:
             if j not in blocking:
                 ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: self._placements_clear_of(
                     lat, fp, ctx.all_fps[j]))
-        if t.rules.suction_hidden_rule != "none" and ok.any():
+        guarded = None  # (A, B) bool: placements reaching into hidden space, made as guarded moves
+        if t.rules.suction_hidden_rule == "guarded" and ok.any():
+            guarded = ~self._suction_hidden_ok(ctx, i, lat, False)
+            if drag:
+                ok &= self._drag_hidden_ok(ctx, i, lat, way_in=False)
+        elif t.rules.suction_hidden_rule != "none" and ok.any():
             ok &= self._suction_hidden_ok(ctx, i, lat, path_rule)
             if drag and ok.any():
                 ok &= self._drag_hidden_ok(ctx, i, lat)
@@ -443,7 +451,11 @@ class ActionModel:
                 " (dragged straight out and back in only: a sideways drag would twist it off the cup)"
                 if only_back else "")))
             return
-        feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
+        if guarded is None:
+            feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
+        else:
+            feasible.extend(dataclasses.replace(lat.action(a, b), guarded=True) if guarded[a, b] else lat.action(a, b)
+                            for a, b in zip(a_index.tolist(), b_index.tolist()))
 
     def suction_lattice(self, obj: SceneObject, fp: Footprint, mask: np.ndarray) -> "SuctionLattice":
         """Object ``obj``'s :class:`SuctionLattice` (``fp`` its footprint, ``mask`` its footprint mask on the
@@ -578,9 +590,10 @@ class ActionModel:
         ok = np.array([bool(clear[(xs >= min(fp.x, x) - 1e-9) & (xs <= max(fp.x, x) + 1e-9)].all()) for x in lat.xs])
         return np.repeat(ok[:, None], len(lat.y_placed), axis=1)
 
-    def _drag_hidden_ok(self, ctx, i: int, lat: "SuctionLattice") -> np.ndarray:
-        """(A, B) bool: the drags of object i whose swept footprint (pulled out, across, pushed in; on the floor
-        raster, the object's own mask shifted by whole cells, rounded outward) covers no cell hidden by others."""
+    def _drag_hidden_ok(self, ctx, i: int, lat: "SuctionLattice", way_in: bool = True) -> np.ndarray:
+        """(A, B) bool: the drags of object i whose swept footprint (pulled out, across, and with ``way_in``
+        pushed in; on the floor raster, the object's own mask shifted by whole cells, rounded outward) covers no
+        cell hidden by others."""
         hidden = ctx.hidden_all & ~ctx.masks[i]
         rows, cols = np.nonzero(ctx.masks[i])
         ny, nx = hidden.shape
@@ -599,6 +612,9 @@ class ActionModel:
             dc_end = a * lat.cells_per
             step = 1 if dc_end >= 0 else -1
             if any(hit(-out_rows, dc) for dc in range(0, dc_end + step, step)):
+                continue
+            if not way_in:
+                ok[a_index, :] = True
                 continue
             for b_index, b in enumerate(lat.b_all.tolist()):
                 dr_end = b * lat.cells_per

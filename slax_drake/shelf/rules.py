@@ -208,11 +208,16 @@ class MinHiddenWidth(Rule):
 @register
 class SuctionHiddenRule(Rule):
     """Which part of a suction must stay out of hidden space: "placement", the final placement; "path", the
-    whole way in and out as well; "none", nothing (only collisions with known objects are checked). ``paper``:
-    "none", the FOSS admits any collision-free placement. ``station``: "placement", the physical tool must not
-    put an object down onto something it cannot see."""
+    whole way in and out as well; "none", nothing (only collisions with known objects are checked); "guarded",
+    a placement reaching into hidden space is admitted as a guarded move (:attr:`Suction.guarded`): the push in
+    stops at the first contact and the object rests there (the shelf simulator stops it at the first unseen
+    object along the way in; a drag's way out and across still stay out of hidden space). ``paper``: "none",
+    the FOSS admits any collision-free placement. ``station``: "placement", the physical tool must not put an
+    object down onto something it cannot see. "guarded" is a named variant of no profile: the Drake planner does
+    not yet stop a push in on contact."""
 
-    name, type, paper, station, choices = "suction_hidden_rule", str, "none", "placement", ("path", "placement", "none")
+    name, type, paper, station, choices = ("suction_hidden_rule", str, "none", "placement",
+                                           ("path", "placement", "none", "guarded"))
 
 
 @register

@@ -231,7 +231,8 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
             # stopped before the whole object is back inside the bay: it is put back where it was
             return scene, "could not place the object: put back"
         moved = obj.moved_to(float(x_new), float(y_final))
-        note = "" if k == n_in else "placement stopped early by an unseen obstacle"
+        note = "" if k == n_in else ("guarded placement stopped on contact" if action.guarded
+                                     else "placement stopped early by an unseen obstacle")
         return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
     raise TypeError(f"not an action: {action!r}")
 
@@ -264,7 +265,8 @@ def _execute_drag(scene: Scene, i: int, action: Suction, model: ActionModel, cle
     k = int(np.flatnonzero(~ok)[0]) if not ok.all() else len(way_in)
     x_end, y_end = (way_in[k - 1] if k > 0 else (x_new, y_pull))
     moved = obj.moved_to(float(x_end), float(y_end))
-    note = "" if k == len(way_in) else "drag: placement stopped early by an unseen obstacle"
+    note = "" if k == len(way_in) else ("drag: guarded placement stopped on contact" if action.guarded
+                                        else "drag: placement stopped early by an unseen obstacle")
     return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
 
 

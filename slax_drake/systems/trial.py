@@ -127,6 +127,9 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
     station_path = opts.station or station_for(opts.config)
     station = load_station_scenario(station_path)
     tool_rules = station_tool_rules(station, opts.tool_rules, opts.profile)
+    if tool_rules.get("suction_hidden_rule") == "guarded":
+        raise TrialError("suction_hidden_rule=guarded is a shelf-simulator variant: the Drake planner does not stop "
+                         "a push in on contact yet")
     target_size = None if opts.target_size is None else tuple(float(v) for v in opts.target_size)
     scene = sample_scene(scenario, opts.objects, seed=opts.seed, target_size=target_size)
     horizon = opts.horizon if opts.horizon is not None else 2 * opts.objects

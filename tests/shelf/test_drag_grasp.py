@@ -116,3 +116,39 @@ def test_the_simulator_stops_a_drag_at_an_unseen_object(sim_scenario):
     assert "stopped early" in note
     moved = after.objects[0]
     assert moved.center[0] == pytest.approx(0.15) and moved.center[1] < drag.dz
+
+
+# ---- guarded placement (suction_hidden_rule "guarded", a named variant of no profile) ------------------------
+def _hidden_scene():
+    """A wide box at the front hides the back left of the bay; a light box to the right may be suctioned."""
+    wall = _box("wall", -0.12, -0.15, (0.30, 0.06, 0.30), mass=0.3)
+    light = _box("light", 0.20, -0.10, (0.08, 0.08, 0.10), mass=0.2)
+    return wall, light
+
+
+def test_a_guarded_placement_reaches_into_hidden_space(sim_scenario):
+    wall, light = _hidden_scene()
+    station = _model(sim_scenario).enumerate((wall, light), pushes=False, only=("light",)).feasible
+    guarded = _model(sim_scenario, suction_hidden_rule="guarded").enumerate(
+        (wall, light), pushes=False, only=("light",)).feasible
+    assert station and not any(s.guarded for s in station)
+    into_hidden = [s for s in guarded if s.guarded]
+    assert into_hidden and {(s.dx, s.dz) for s in into_hidden}.isdisjoint({(s.dx, s.dz) for s in station})
+    assert {(s.dx, s.dz) for s in guarded if not s.guarded} == {(s.dx, s.dz) for s in station}
+    assert into_hidden[0].describe().endswith(" guarded")
+
+
+def test_the_simulator_stops_a_guarded_placement_on_an_unseen_object_and_completes_it_otherwise(sim_scenario):
+    model = _model(sim_scenario, suction_hidden_rule="guarded")
+    wall, light = _hidden_scene()
+    shelf = shelf_of(sim_scenario)
+    camera = Camera.from_config(sim_scenario.camera)
+    action = next(s for s in model.enumerate((wall, light), pushes=False, only=("light",)).feasible
+                  if s.guarded and s.dz >= 0.15)
+    done, note = execute(Scene(shelf, camera, (wall, light), None), action, model)
+    assert note == "" and done.objects[1].center[1] == pytest.approx(action.dz)
+    x = light.center[0] + action.dx
+    unseen = _box("unseen", x, action.dz + 0.02, (0.08, 0.08, 0.40), mass=0.2)  # too tall to pass over
+    stopped, note = execute(Scene(shelf, camera, (wall, light, unseen), None), action, model)
+    assert note == "guarded placement stopped on contact"
+    assert stopped.objects[1].center[1] < action.dz and stopped.objects[2] == unseen
