@@ -9,7 +9,8 @@ its depth (or, where a sideways drag would twist it off the cup, straight out an
 opening) is
 planned by the motion planner and executed open loop in the Drake station (research/cup_hold.py measured the
 lift the same way). A case is "as predicted" when the box ends within 1 cm and 5 deg of the model's placement,
-upright (tilt under 5 deg); "toppled" when its tilt exceeds 20 deg. One line per case, a count per band of held
+upright (tilt under 5 deg); "toppled" when its tilt exceeds 20 deg. ``--yaw`` turns the box (the tool turns
+toward its face, up to 30 deg). One line per case, a count per band of held
 moment at the end.
 """
 
@@ -32,11 +33,12 @@ X = -0.05
 WIDTH = 0.12
 
 
-def drag_case(scenario, station, tool, mass: float, height: float, depth: float, y: float, dx: float) -> dict:
+def drag_case(scenario, station, tool, mass: float, height: float, depth: float, y: float, dx: float,
+              yaw_deg: float = 0.0) -> dict:
     """Plans and executes one drag; returns what happened (``grip``, ``outcome``: "as predicted", "off",
     "toppled", "no motion" or the action model's refusal; the end offset in m and yaw/tilt in deg)."""
     size = (WIDTH, depth, height)
-    box = SceneObject("object_0", "box", size, planar_pose(X, y, height / 2, 0.0), mass=mass)
+    box = SceneObject("object_0", "box", size, planar_pose(X, y, height / 2, math.radians(yaw_deg)), mass=mass)
     scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (box,), None, 0)
     model = ActionModel(scene.shelf, scene.camera.position, tool)
     found = model.enumerate((box,), pushes=False)
@@ -47,7 +49,7 @@ def drag_case(scenario, station, tool, mass: float, height: float, depth: float,
                dx=action.dx if action is not None else None)
     if action is None:
         return dict(row, grip="-", outcome=(found.rejected[0].reason if found.rejected else "no such placement"))
-    row.update(grip=action.grip, seal_z=action.q[2])
+    row.update(grip=action.grip, seal_z=action.q[2], tool_yaw_deg=math.degrees(action.yaw))
     motion = MotionPlanner(station, tool).plan(action, scene)
     if not motion.feasible:
         return dict(row, outcome=f"no motion: {motion.reason[:70]}")
@@ -74,6 +76,7 @@ def main():
     parser.add_argument("--dx", type=float, default=0.10, help="the drag's translation along x (m)")
     parser.add_argument("--seal-friction", type=float, default=None,
                         help="plan with this drag_friction (a variant: a low value seals high, to show tipping)")
+    parser.add_argument("--yaw", type=float, default=0.0, help="the box's yaw about the shelf's z (deg)")
     args = parser.parse_args()
     scenario = load_scenario("sim_configs/sim_shelf.yaml")
     station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
@@ -90,7 +93,7 @@ def main():
     counts = {}
     for h in (float(v) for v in args.heights.split(",")):
         for m in (float(v) for v in args.masses.split(",")):
-            r = drag_case(scenario, station, tool, m, h, args.depth, args.y, args.dx)
+            r = drag_case(scenario, station, tool, m, h, args.depth, args.y, args.dx, args.yaw)
             band = "<= 0.4 N m" if r["moment"] <= 0.4 else "> 0.4 N m"
             counts.setdefault((band, r["grip"], r["outcome"]), 0)
             counts[(band, r["grip"], r["outcome"])] += 1
