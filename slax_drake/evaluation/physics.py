@@ -148,7 +148,8 @@ def _run_scene(job) -> dict:
     for a in d["actions"]:
         params = {k: a[k] for k in ("d", "dx", "dz") if k in a}
         timings = (a.get("motion") or {}).get("timings", {})
-        record = {"type": a["type"], "object": a["object"], **params, "predicted": a["predicted"],
+        record = {"type": a["type"], "object": a["object"], **params,
+                  **({"grip": a["grip"]} if "grip" in a else {}), "predicted": a["predicted"],
                   "before": a.get("before"), "outcome": a["outcome"], "lost_after": a.get("lost_after"),
                   "matched": action_matches(a["predicted"], a["outcome"], a.get("before")),
                   "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
@@ -331,8 +332,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],
             "drake_wall_s": d["wall_s"],
             "planning_s": [a["planning_s"] for a in d["actions"] if a.get("planning_s") is not None],
-            "judged_by_kind": {kind: [sum(1 for a in d["actions"] if a["type"] == kind and a["matched"]),
-                                      sum(1 for a in d["actions"] if a["type"] == kind and a["matched"] is not None)]
+            "judged_by_kind": {kind: [sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"]),
+                                      sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"] is not None)]
                                for kind in ACTION_KINDS},
             # a file written before mismatches were classified counts its mismatches as "unclassified"
             "mismatches": dict(collections.Counter(a["mismatch"] or "unclassified" for a in d["actions"]
@@ -368,15 +369,21 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
     return summary
 
 
-ACTION_KINDS = ("push", "suction")
+ACTION_KINDS = ("push", "suction", "drag")  # "suction": lifted; "drag": slid on the floor (the drag grasp)
+
+
+def action_kind(action: dict) -> str:
+    """An action record's kind for the fidelity counts: "push", "suction" (lifted) or "drag" (a suction whose
+    ``grip`` is "drag"; a record without ``grip`` was lifted)."""
+    return "drag" if action["type"] == "suction" and action.get("grip") == "drag" else action["type"]
 
 
 def _match_by_action(trials: list[dict]) -> dict:
     """{action kind: {"matched", "judged", "match_rate"}} over ``trials`` (summary rows)."""
     out = {}
     for kind in ACTION_KINDS:
-        matched = sum(t["judged_by_kind"][kind][0] for t in trials)
-        judged = sum(t["judged_by_kind"][kind][1] for t in trials)
+        matched = sum(t["judged_by_kind"].get(kind, [0, 0])[0] for t in trials)
+        judged = sum(t["judged_by_kind"].get(kind, [0, 0])[1] for t in trials)
         out[kind] = {"matched": matched, "judged": judged, "match_rate": round(matched / judged, 4) if judged else None}
     return out
 
@@ -451,9 +458,9 @@ def markdown_table(summary: dict) -> str:
               "kind (dropped: lost out of the bay; toppled: lost inside it; seal never formed: a suction that left its "
               f"object within {100 * SEAL_MOVE:.0f} cm and {math.degrees(SEAL_TURN):.0f} deg of where it stood; slid: "
               f"more than {100 * MATCH_DISTANCE:.0f} cm from the prediction; turned: within it, yaw off):", "",
-              "| Policy | Objects | Pushes matching | Suctions matching | " + " | ".join(
+              "| Policy | Objects | Pushes matching | Suctions matching (lifted) | Drags matching | " + " | ".join(
                   k.capitalize() for k in MISMATCH_KINDS) + " | Other |",
-              "|---|---|---|---|" + "---|" * (len(MISMATCH_KINDS) + 1)]
+              "|---|---|---|---|---|" + "---|" * (len(MISMATCH_KINDS) + 1)]
     for p, per in summary["policies"].items():
         for key, e in per.items():
             by = e.get("match_by_action", {})

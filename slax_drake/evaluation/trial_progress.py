@@ -66,7 +66,8 @@ class DecisionPrinter:
         if a["type"] == "push":
             what = f"push {a['object']} {a['d']:+.3f} m"
         else:
-            what = f"suction {a['object']} by {a['dx']:+.3f} m to y = {a['dz']:+.3f} m"
+            grip = " (dragged)" if a.get("grip") == "drag" else ""
+            what = f"suction {a['object']} by {a['dx']:+.3f} m to y = {a['dz']:+.3f} m{grip}"
         rejected = len(entry.get("rejected", ()))
         return (f"step {entry['step'] + 1}/{self.horizon}: {what}, planned in {entry.get('planning_s', 0.0):.1f} s"
                 + (f" after {plural(rejected, 'rejected candidate')}" if rejected else "") + ", ")

@@ -27,6 +27,13 @@ translation rises or falls between the two (the arm reaches a low pull-out near 
 arriving at "pull out", "translate" and "push in" carry the object clear of the support (``carried``): the
 planner checks the object with the tool there ("clear"); on the lift and the lowering ("resting") it checks the
 object less its bottom ``LIFT``, which touches the support at one end of the segment.
+
+A drag (a Suction with ``drag`` set, the action model's ``drag_grasp`` rule) has the same approach, seal, release
+and retreat, with q sealed low on the face; between them the object stays on the floor: the cup pulls it along
+its axis until its front is ``DRAG_FRONT_MARGIN`` inside the opening (``pull``, :func:`drag_pull_cup_y`),
+translates it by d_x (``drag across``) and pushes it in until its centre is at y = d_z (``push in``), at the seal's
+height all the way. These segments carry the object ``"resting"`` (checked less its bottom ``LIFT``: it slides on
+the support). There is one way to drag an object (no shallower pull-outs, no turned carry).
 """
 
 from __future__ import annotations
@@ -35,7 +42,7 @@ import dataclasses
 
 import numpy as np
 
-from slax_drake.shelf.actions import BLADE_LIFT, TUBE_STANDOFF, Push, Suction
+from slax_drake.shelf.actions import BLADE_LIFT, DRAG_FRONT_MARGIN, TUBE_STANDOFF, Push, Suction
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf
@@ -157,6 +164,20 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         R_across = suction_rotation(action.yaw + carry_yaw)
         on = dict(contact=True, suction=True)
         x_off, y_off = x2 - (RELEASE_BACKOFF + SEAL_PRESS) * ax, y_in - (RELEASE_BACKOFF + SEAL_PRESS) * ay
+        if action.drag:  # on the floor all the way, at the seal's height
+            slide = dict(carried="resting", **on)
+            y_pull = drag_pull_cup_y(action, obj, shelf) + SEAL_PRESS * ay
+            return [
+                ToolWaypoint("pre-approach", f, _pose(R, (cx - back * ax, y_pre, cz)), s),
+                ToolWaypoint("approach", f, _pose(R, (cx - CUP_STANDOFF * ax, cy - CUP_STANDOFF * ay, cz)), s),
+                ToolWaypoint("seal", f, _pose(R, (px, py, cz)), s, contact=True, suction=True, dwell=DWELL),
+                ToolWaypoint("pull", f, _pose(R, (px, y_pull, cz)), s, **slide),
+                ToolWaypoint("drag across", f, _pose(R, (x2, y_pull, cz)), s, **slide),
+                ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz)), s, **slide),
+                ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),
+                ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
+                ToolWaypoint("retract", f, _pose(R, (x_off, y_pre, cz)), s, contact=True),
+            ]
         return [
             ToolWaypoint("pre-approach", f, _pose(R, (cx - back * ax, y_pre, cz)), s),
             ToolWaypoint("approach", f, _pose(R, (cx - CUP_STANDOFF * ax, cy - CUP_STANDOFF * ay, cz)), s),
@@ -171,6 +192,16 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
             ToolWaypoint("retract", f, _pose(R, (x_off, y_pre, cz)), s, contact=True),
         ]
     raise TypeError(f"not an action: {action!r}")
+
+
+def drag_pull_cup_y(action, obj: SceneObject, shelf: Shelf) -> float:
+    """The contact's y (S) when a dragged object's front is ``DRAG_FRONT_MARGIN`` inside the opening (where the
+    action model's drag pulls it: :meth:`slax_drake.shelf.actions.ActionModel.drag_pull_y`), or where it stands
+    when it is already that far out."""
+    _, ey = Footprint.of(obj).extents()
+    oy = float(obj.center[1])
+    y_centre = min(oy, -shelf.depth / 2.0 + ey + DRAG_FRONT_MARGIN)
+    return action.q[1] + (y_centre - oy)
 
 
 def full_pull_out(action, obj: SceneObject, shelf: Shelf, approach_margin: float = APPROACH_MARGIN) -> float:
@@ -220,6 +251,8 @@ def carry_options(action, obj: SceneObject, shelf: Shelf, target=None, approach_
     the robot the arm cannot hold the tube straight along S y (the wrist folds into the shoulder: the elbow and
     the torso are at their limits), turned it can. A turned way is left out when its footprints, turning about
     the cup, would come within ``TARGET_CLEARANCE`` of the target's (the planning world does not hold it)."""
+    if getattr(action, "drag", False):
+        return [(drag_pull_cup_y(action, obj, shelf), 0.0)]  # one way: action_waypoints drags it
     options = [(y, 0.0) for y in pull_out_options(action, obj, shelf, target, approach_margin)]
     y_full = options[0][0]
     y_place = action.q[1] + (action.dz - float(obj.center[1]))

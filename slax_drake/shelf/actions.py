@@ -73,6 +73,11 @@ REACH_MARGIN = 0.015  # m: the reach map refuses a tool position only when every
 # edge BLADE_LIFT above the support; the tube runs along the blade's upper edge, centred on its plane.
 TUBE_STANDOFF = 0.004  # m
 BLADE_LIFT = 0.008  # m
+# A drag (the ``drag_grasp`` rule): the object is pulled until its front is DRAG_FRONT_MARGIN inside the opening
+# (it stays on the floor); the cup seals no lower than DRAG_MIN_SEAL_Z above the floor (the horizontal tube, 3 cm
+# thick, clears the floor by 1 cm).
+DRAG_FRONT_MARGIN = 0.01  # m
+DRAG_MIN_SEAL_Z = 0.025  # m
 TUBE_CHECK_SLACK = 0.004  # m: how far the planned tool may stray from its straight segment (the planner's
 # DEVIATION_TOLERANCE); the push_tube_check corridor is narrowed and lowered by it, so it refuses only sure hits
 
@@ -102,12 +107,21 @@ class Suction:
     dx: float
     dz: float
     yaw: float = 0.0
+    drag: bool = False  # dragged on the shelf floor instead of lifted (the ``drag_grasp`` rule)
+    guarded: bool = False  # the placement reaches into hidden space: pushed in until contact (``suction_hidden_rule``
+    # "guarded"), so the object may rest short of d_z
 
     kind = "suction"
 
     def describe(self) -> str:
         turned = f" yaw={math.degrees(self.yaw):+.0f}deg" if self.yaw else ""
-        return f"suction {self.name} dx={self.dx:+.3f} dz={self.dz:+.3f}{turned}"
+        return (f"suction {self.name} dx={self.dx:+.3f} dz={self.dz:+.3f}{turned}{' drag' if self.drag else ''}"
+                f"{' guarded' if self.guarded else ''}")
+
+    @property
+    def grip(self) -> str:
+        """"drag" when the object slides on the shelf floor all the way, else "lift"."""
+        return "drag" if self.drag else "lift"
 
     @property
     def axis(self) -> np.ndarray:
@@ -422,11 +436,12 @@ class ActionModel:
                                         kind=RefusalKind.BLOCKED))
                 return
         ex = fp.extents()[0]
-        blocking = [j for j in ctx.others(i) if not self.passes_over(obj, ctx.all_heights[j])]
+        drag = lat.drag  # on the floor all the way: every other object blocks it
+        blocking = [j for j in ctx.others(i) if drag or not self.passes_over(obj, ctx.all_heights[j])]
         for j in ctx.others_in_band(i, 0, fp.x - ex - t.physics.clearance - 1e-6, fp.x + ex + t.physics.clearance + 1e-6):
             if j not in blocking:
                 continue
-            if not self._pair(("out", ctx.ids[i], ctx.ids[j]), lambda: bool(clear_of(
+            if not self._pair(("out", drag, ctx.ids[i], ctx.ids[j]), lambda: bool(clear_of(
                     fp.shape, lat.path_out, fp.yaw, (fp.half_x, fp.half_y), ctx.all_fps[j], t.physics.clearance).all())):
                 rejected.append(refused(what, f"path out of the shelf blocked by {ctx.all_names[j]}",
                                         kind=RefusalKind.BLOCKED))
@@ -443,14 +458,25 @@ class ActionModel:
             return
         ok = lat.base.copy()
         for j in blocking:  # reachable on the way in past each object it cannot pass over
-            ok &= self._pair(("in", ctx.ids[i], ctx.ids[j]), lambda: self._reachable_past(lat, fp, ctx.all_fps[j]))
+            ok &= self._pair(("in", drag, ctx.ids[i], ctx.ids[j]), lambda: self._reachable_past(lat, fp, ctx.all_fps[j]))
+            if drag:
+                ok &= self._pair(("across", ctx.ids[i], ctx.ids[j]), lambda: self._drag_across_clear(
+                    lat, fp, ctx.all_fps[j]))
         for j in ctx.others(i):  # clear of each object it passes over, where it is put down
             if j not in blocking:
                 ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: self._placements_clear_of(
                     lat, fp, ctx.all_fps[j]))
-        if t.rules.suction_hidden_rule != "none" and ok.any():
+        guarded = None  # (A, B) bool: placements reaching into hidden space, made as guarded moves
+        if t.rules.suction_hidden_rule == "guarded" and ok.any():
+            guarded = ~self._suction_hidden_ok(ctx, i, lat, False)
+            if drag:
+                ok &= self._drag_hidden_ok(ctx, i, lat, way_in=False)
+        elif t.rules.suction_hidden_rule != "none" and ok.any():
             ok &= self._suction_hidden_ok(ctx, i, lat, path_rule)
-        if self.reach is not None and ok.any() and abs(lat.yaw) < 1e-9:
+            if drag and ok.any():
+                ok &= self._drag_hidden_ok(ctx, i, lat)
+        if self.reach is not None and ok.any() and abs(lat.yaw) < 1e-9 and not lat.drag:
+            # the release layers were computed for a lifted carry's back-off and retract
             released = self._release_reachable(lat, obj)
             if not (ok & released).any():
                 rejected.append(refused(what, f"the arm cannot back off and retract from any placement of "
@@ -459,10 +485,16 @@ class ActionModel:
             ok &= released
         a_index, b_index = np.nonzero(ok)
         if len(a_index) == 0:
-            rejected.append(refused(what, f"no collision-free placement for {obj.name} in known free space",
-                                    kind=RefusalKind.NO_PLACEMENT))
+            only_back = lat.drag and not lat.base[lat.a_all != 0].any()
+            rejected.append(refused(what, f"no collision-free placement for {obj.name} in known free space" + (
+                " (dragged straight out and back in only: a sideways drag would twist it off the cup)"
+                if only_back else ""), kind=RefusalKind.NO_PLACEMENT))
             return
-        feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
+        if guarded is None:
+            feasible.extend(lat.action(a, b) for a, b in zip(a_index.tolist(), b_index.tolist()))
+        else:
+            feasible.extend(dataclasses.replace(lat.action(a, b), guarded=True) if guarded[a, b] else lat.action(a, b)
+                            for a, b in zip(a_index.tolist(), b_index.tolist()))
 
     def _release_reachable(self, lat: "SuctionLattice", obj: SceneObject) -> np.ndarray:
         """(A, B) bool: whether the reach map's release layers let the arm back off and retract from each
@@ -513,9 +545,17 @@ class ActionModel:
             return SuctionLattice.refused(f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
                                           f"tube{turned} > {t.rules.max_seal_angle_deg:.0f} deg", RefusalKind.SEAL_ANGLE)
         moment = mass * GRAVITY * math.hypot(float(obj.center[0]) - cx, float(obj.center[1]) - cy)
+        drag, drag_across = False, True
         if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
-            return SuctionLattice.refused(f"{obj.name}'s weight hangs {moment:.2f} N m off the cup "
-                                          f"> {t.rules.max_suction_moment:.2f} N m", RefusalKind.SUCTION_MOMENT)
+            lifted = f"{obj.name}'s weight hangs {moment:.2f} N m off the cup > {t.rules.max_suction_moment:.2f} N m"
+            if not t.rules.drag_grasp:
+                return SuctionLattice.refused(lifted, RefusalKind.SUCTION_MOMENT)
+            limits = self.drag_limits(obj, cz)
+            if limits.refusal is not None:
+                return SuctionLattice.refused(f"{lifted}, and no drag: {limits.refusal}", RefusalKind.SUCTION_MOMENT)
+            drag, cz = True, limits.seal_z
+            r = t.rules
+            drag_across = r.drag_safety_factor * r.drag_friction * moment <= r.max_drag_twist
         if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, (cy - (-shelf.depth / 2)) / math.cos(yaw)):
             return SuctionLattice.refused(f"{obj.name}'s face is beyond the tube's reach", RefusalKind.TUBE_DEPTH)
         if self.reach is not None and self.reach.refuses_cup(cx, cy, cz, yaw, REACH_MARGIN):
@@ -528,8 +568,12 @@ class ActionModel:
         corridor = np.array([[cx + math.sin(yaw) * length / 2, cy - math.cos(yaw) * length / 2]])
         ex, ey = fp.extents()
         y_out = -shelf.depth / 2 - ey - t.grid.cell
+        if drag:  # pulled along the floor until its front is DRAG_FRONT_MARGIN inside the opening
+            y_out = min(fp.y, self.drag_pull_y(fp))
         n_out = int(math.ceil((fp.y - y_out) / t.grid.cell))
         path_out = np.column_stack([np.full(n_out, fp.x), fp.y - np.arange(1, n_out + 1) * t.grid.cell])
+        if drag and n_out:
+            path_out[-1, 1] = y_out
         cols, first_rows, last_rows = column_extents(mask)
         q = (float(cx), float(cy), float(cz))
         # Placements on a lattice around the object: x' = x + a res, y' = y + b res.
@@ -541,22 +585,99 @@ class ActionModel:
         a_all = a_all[np.abs(fp.x + a_all * res) <= x_lim + 1e-12]
         b_all = np.arange(int(math.ceil((-y_lim - fp.y) / res - 1e-9)), int(math.floor((y_lim - fp.y) / res + 1e-9)) + 1)
         common = dict(q=q, yaw=yaw, corridor=corridor, corridor_half=(tube_r, length / 2), path_out=path_out,
-                      cols=cols, first_rows=first_rows, last_rows=last_rows, cells_per=cells_per)
+                      cols=cols, first_rows=first_rows, last_rows=last_rows, cells_per=cells_per, drag=drag,
+                      y_pull=y_out)
         if len(a_all) == 0 or len(b_all) == 0:
             return SuctionLattice(refusal=None, lattice_empty=True, **common)
         # the way in: per column x', steps in from y_out to the deepest placement
         y_deep = fp.y + b_all[-1] * res
         n_in = int(math.ceil((y_deep - y_out) / t.grid.cell)) + 1
         steps = y_out + np.arange(n_in) * t.grid.cell
-        steps[-1] = min(steps[-1], y_deep)
+        steps[-1] = max(min(steps[-1], y_deep), y_out)
         xs = fp.x + a_all * res
         shifted_cols = cols[None, :] + a_all[:, None] * cells_per  # (A, C) raster columns of each placement column
         inside = (shifted_cols >= 0) & (shifted_cols < self.grid.nx)
         base = np.repeat(inside.any(axis=1)[:, None], len(b_all), axis=1)  # a column wholly off the raster: none
         base[(a_all == 0)[:, None] & (b_all == 0)[None, :]] = False  # not where it stands
+        if drag:  # pushed in from the pull-out depth, never pulled farther out
+            base &= (fp.y + b_all * res >= y_out - 1e-9)[None, :]
+            if not drag_across:  # the seal would not hold the twist of a sideways slide: straight out and in only
+                base &= (a_all == 0)[:, None]
         return SuctionLattice(refusal=None, lattice_empty=False, a_all=a_all, b_all=b_all, xs=xs,
                               y_placed=fp.y + b_all * res, steps=steps, shifted_cols=shifted_cols, inside=inside,
                               base=base, name=obj.name, res=res, **common)
+
+    def drag_limits(self, obj: SceneObject, seal_z: float) -> "DragLimits":
+        """The limits of dragging ``obj`` on the shelf floor (the ``drag_grasp`` rule), the cup sealing on its
+        camera-facing side at most ``seal_z`` (m) high. With mu' = ``drag_safety_factor`` x ``drag_friction``:
+        the pull, mu' m g (N), must be within ``max_drag_pull``; the object must not tip about its leading base
+        edge: a horizontal pull F at height h tips it when F h > m g b, b the base's half depth along the pull, so
+        the cup seals at most b / mu' high, b the least of the footprint's half extents along S x and y (the
+        pull out and the push in run along y, the translation along x; a cylinder's radius); and the tube
+        needs ``DRAG_MIN_SEAL_Z``. The seal height is the lower of ``seal_z`` and b / mu'."""
+        r = self.tool.rules
+        mu = r.drag_safety_factor * r.drag_friction
+        mass = object_mass(obj, self.tool.physics.object_density, self.tool.physics)
+        pull = mu * mass * GRAVITY
+        ex, ey = Footprint.of(obj).extents()
+        b = min(ex, ey)
+        z_tip = b / mu if mu > 0 else math.inf
+        z = min(seal_z, z_tip)
+        if pull > r.max_drag_pull:
+            return DragLimits(f"{obj.name} needs a {pull:.1f} N pull to slide > the cup's {r.max_drag_pull:.1f} N",
+                              pull, z_tip, z)
+        if z < DRAG_MIN_SEAL_Z:
+            return DragLimits(f"{obj.name} would tip (a pull above {z_tip * 100:.1f} cm tips it, the tube seals no "
+                              f"lower than {DRAG_MIN_SEAL_Z * 100:.1f} cm)", pull, z_tip, z)
+        return DragLimits(None, pull, z_tip, z)
+
+    def drag_pull_y(self, fp: Footprint) -> float:
+        """The y (S) of a dragged object's centre at the end of its pull toward the camera: its front
+        ``DRAG_FRONT_MARGIN`` inside the opening."""
+        return -self.shelf.depth / 2 + fp.extents()[1] + DRAG_FRONT_MARGIN
+
+    def _drag_across_clear(self, lat: "SuctionLattice", fp: Footprint, other: Footprint) -> np.ndarray:
+        """(A, B) bool: whether the dragged object, sliding along x at the pull-out depth from where it stands to
+        each lattice column, keeps ``clearance`` from ``other``."""
+        cell = self.tool.grid.cell
+        lo, hi = min(float(lat.xs.min()), fp.x), max(float(lat.xs.max()), fp.x)
+        n = int(math.ceil((hi - lo) / cell)) + 1
+        xs = np.linspace(lo, hi, max(n, 2))
+        clear = clear_of(fp.shape, np.column_stack([xs, np.full(len(xs), lat.y_pull)]), fp.yaw,
+                         (fp.half_x, fp.half_y), other, self.tool.physics.clearance)
+        ok = np.array([bool(clear[(xs >= min(fp.x, x) - 1e-9) & (xs <= max(fp.x, x) + 1e-9)].all()) for x in lat.xs])
+        return np.repeat(ok[:, None], len(lat.y_placed), axis=1)
+
+    def _drag_hidden_ok(self, ctx, i: int, lat: "SuctionLattice", way_in: bool = True) -> np.ndarray:
+        """(A, B) bool: the drags of object i whose swept footprint (pulled out, across, and with ``way_in``
+        pushed in; on the floor raster, the object's own mask shifted by whole cells, rounded outward) covers no
+        cell hidden by others."""
+        hidden = ctx.hidden_all & ~ctx.masks[i]
+        rows, cols = np.nonzero(ctx.masks[i])
+        ny, nx = hidden.shape
+        cell = self.tool.grid.cell
+
+        def hit(dr: int, dc: int) -> bool:
+            r, c = rows + dr, cols + dc
+            keep = (r >= 0) & (r < ny) & (c >= 0) & (c < nx)
+            return bool(hidden[r[keep], c[keep]].any())
+
+        out_rows = int(math.ceil((ctx.fps[i].y - lat.y_pull) / cell - 1e-9))
+        ok = np.zeros((len(lat.xs), len(lat.y_placed)), dtype=bool)
+        if any(hit(-k, 0) for k in range(out_rows + 1)):
+            return ok
+        for a_index, a in enumerate(lat.a_all.tolist()):
+            dc_end = a * lat.cells_per
+            step = 1 if dc_end >= 0 else -1
+            if any(hit(-out_rows, dc) for dc in range(0, dc_end + step, step)):
+                continue
+            if not way_in:
+                ok[a_index, :] = True
+                continue
+            for b_index, b in enumerate(lat.b_all.tolist()):
+                dr_end = b * lat.cells_per
+                ok[a_index, b_index] = not any(hit(dr, dc_end) for dr in range(-out_rows, dr_end + 1))
+        return ok
 
     def _reachable_past(self, lat: "SuctionLattice", fp: Footprint, other: Footprint) -> np.ndarray:
         """(A, B) bool: whether the object (footprint ``fp``), going straight in at each lattice column, reaches the
@@ -779,6 +900,18 @@ def _front_face(obj: SceneObject):
 
 
 @dataclasses.dataclass(frozen=True)
+class DragLimits:
+    """What :meth:`ActionModel.drag_limits` finds: ``refusal`` (why the object cannot be dragged, or None), the
+    pull the drag needs with the safety factor (N), the highest seal that does not tip it (m above the floor),
+    and the seal height a drag uses (m)."""
+
+    refusal: str | None
+    pull: float
+    tip_z: float
+    seal_z: float
+
+
+@dataclasses.dataclass(frozen=True)
 class ObjectGeometry:
     """What the action model derives from one object's pose (:meth:`ActionModel.object_geometry`): its
     footprint, the footprint's id (keys of ``ActionModel._pair``), footprint and shadow masks on the floor
@@ -831,6 +964,8 @@ class SuctionLattice:
     base: np.ndarray | None = None
     name: str = ""
     res: float = 0.0
+    drag: bool = False
+    y_pull: float = 0.0
     _actions: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
     _release: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)  # _release_reachable's mask
 
@@ -845,7 +980,7 @@ class SuctionLattice:
             a = self.a_all[a_index]
             hit = self._actions[(a_index, b_index)] = Suction(
                 self.name, self.q, round(float(a * self.res), 6), round(float(self.y_placed[b_index]), 6),
-                round(float(self.yaw), 6))
+                round(float(self.yaw), 6), self.drag)
         return hit
 
 

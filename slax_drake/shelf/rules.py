@@ -208,11 +208,16 @@ class MinHiddenWidth(Rule):
 @register
 class SuctionHiddenRule(Rule):
     """Which part of a suction must stay out of hidden space: "placement", the final placement; "path", the
-    whole way in and out as well; "none", nothing (only collisions with known objects are checked). ``paper``:
-    "none", the FOSS admits any collision-free placement. ``station``: "placement", the physical tool must not
-    put an object down onto something it cannot see."""
+    whole way in and out as well; "none", nothing (only collisions with known objects are checked); "guarded",
+    a placement reaching into hidden space is admitted as a guarded move (:attr:`Suction.guarded`): the push in
+    stops at the first contact and the object rests there (the shelf simulator stops it at the first unseen
+    object along the way in; a drag's way out and across still stay out of hidden space). ``paper``: "none",
+    the FOSS admits any collision-free placement. ``station``: "placement", the physical tool must not put an
+    object down onto something it cannot see. "guarded" is a named variant of no profile: the Drake planner does
+    not yet stop a push in on contact."""
 
-    name, type, paper, station, choices = "suction_hidden_rule", str, "none", "placement", ("path", "placement", "none")
+    name, type, paper, station, choices = ("suction_hidden_rule", str, "none", "placement",
+                                           ("path", "placement", "none", "guarded"))
 
 
 @register
@@ -278,6 +283,65 @@ class MaxSuctionMoment(Rule):
 
     def refuses(self, value: float, moment: float) -> bool:
         return moment > value
+
+
+@register
+class DragGrasp(Rule):
+    """An object the cup may not lift (its held moment over ``max_suction_moment``) is dragged instead: the cup
+    seals low on the same face, pulls the object toward the camera sliding on the shelf floor until its front is
+    ``DRAG_FRONT_MARGIN`` inside the opening, translates it by d_x and pushes it in to depth d_z, the object on the
+    floor all the way (it passes over nothing; :meth:`ActionModel.drag_limits`). A drag is admitted when the pull it
+    needs, ``drag_safety_factor`` x ``drag_friction`` x m g, is within the cup's pull ``max_drag_pull``, when it
+    does not tip the object (the cup seals at most ``half base / (safety factor x mu)`` high, the base's half depth
+    along the pull, and no lower than the tube allows), and when its swept footprint (out, across, in) keeps
+    ``clearance`` from every known object and, unless ``suction_hidden_rule`` is "none", covers no hidden cell.
+    ``station``: on (what a real cup on a heavy box does instead of lifting it); never chosen while
+    ``max_suction_moment`` is unlimited. ``paper``: off, the FOSS lifts every object."""
+
+    name, type, paper, station = "drag_grasp", bool, False, True
+
+
+@register
+class MaxDragPull(Rule):
+    """The cup's pull (N) a drag may use: vacuum pressure x cup area. Unlimited in both profiles' defaults; the
+    Drake station's cup sets it (``suction.vacuum_pressure`` and ``suction.cup_radius`` in the station YAML:
+    60 kPa over a 15 mm radius, 42.4 N)."""
+
+    name, paper, station = "max_drag_pull", math.inf, math.inf
+
+
+@register
+class MaxDragTwist(Rule):
+    """The moment (N m) about the vertical through the cup's contact that a drag's
+    translation along x may ask of the seal: sliding sideways, the floor's friction, ``drag_safety_factor`` x
+    ``drag_friction`` x m g, acts at the object's centre, so it twists the object about the cup by that times the
+    floor-plane distance from the contact to the centre (the held moment times mu'). Over this, only drags with
+    d_x = 0 (pulled out and pushed back in) are admitted. Unlimited in both profiles' defaults; the Drake
+    station's cup sets it: its lip moment, the pull times the cup's radius (42.4 N x 15 mm = 0.64 N m; in
+    research/drag_hold.py 2 kg boxes 8 cm behind the contact, 0.69 N m without the safety factor, turned 35 deg
+    while translated, 1.5 kg ones, 0.52 N m, did not)."""
+
+    name, paper, station = "max_drag_twist", math.inf, math.inf
+
+
+@register
+class DragFriction(Rule):
+    """The Coulomb friction coefficient between a dragged object and the shelf floor. Both profiles: 0.44, what
+    the Drake station combines from the objects' 0.5 (``physics.object_friction``) and the shelf's 0.4 (Drake's
+    2 mu1 mu2 / (mu1 + mu2))."""
+
+    name, paper, station = "drag_friction", 0.44, 0.44
+
+
+@register
+class DragSafetyFactor(Rule):
+    """The factor on ``drag_friction`` for a drag's limits (pull and tipping): static friction, the cup's seal
+    and the floor vary. Both profiles: 1.5."""
+
+    name, paper, station = "drag_safety_factor", 1.5, 1.5
+
+    def problem(self, value) -> str | None:
+        return None if value >= 1.0 else "must be at least 1"
 
 
 @register

@@ -207,6 +207,9 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         note = "" if k == n else f"push stopped after {s[k - 1]:+.3f} m by an unseen obstacle"
         return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
 
+    if isinstance(action, Suction) and action.drag:
+        return _execute_drag(scene, i, action, model, clear_at)
+
     if isinstance(action, Suction):
         y_out = -shelf.depth / 2 - ey - t.grid.cell
         n_out = max(1, int(math.ceil((fp.y - y_out) / t.grid.cell)))
@@ -228,9 +231,43 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
             # stopped before the whole object is back inside the bay: it is put back where it was
             return scene, "could not place the object: put back"
         moved = obj.moved_to(float(x_new), float(y_final))
-        note = "" if k == n_in else "placement stopped early by an unseen obstacle"
+        note = "" if k == n_in else ("guarded placement stopped on contact" if action.guarded
+                                     else "placement stopped early by an unseen obstacle")
         return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
     raise TypeError(f"not an action: {action!r}")
+
+
+def _execute_drag(scene: Scene, i: int, action: Suction, model: ActionModel, clear_at) -> tuple[Scene, str]:
+    """A drag (:attr:`Suction.drag`) on the true scene: the object slides on the floor, pulled toward the camera to
+    :meth:`ActionModel.drag_pull_y`, across by d_x, pushed in to d_z, in ``cell`` steps. Blocked on the way out or
+    across, it is pushed back where it was (nothing moves); blocked on the way in, it rests where it stopped."""
+    t, shelf = model.tool, scene.shelf
+    obj = scene.objects[i]
+    fp = Footprint.of(obj)
+    ex, _ = fp.extents()
+    y_pull = min(fp.y, model.drag_pull_y(fp))
+    x_new = fp.x + action.dx
+    if abs(x_new) + ex > shelf.width / 2 - t.physics.clearance + 1e-9:
+        return scene, "placement outside the walls"
+
+    def line(a, b) -> np.ndarray:
+        n = max(1, int(math.ceil(float(np.hypot(b[0] - a[0], b[1] - a[1])) / t.grid.cell)))
+        return np.linspace(a, b, n + 1)[1:]
+
+    out = line((fp.x, fp.y), (fp.x, y_pull))
+    if not clear_at(out).all():
+        return scene, "drag: path out blocked by an unseen obstacle"
+    across = line((fp.x, y_pull), (x_new, y_pull))
+    if not clear_at(across).all():
+        return scene, "drag: path across blocked by an unseen obstacle"
+    way_in = line((x_new, y_pull), (x_new, action.dz))
+    ok = clear_at(way_in)
+    k = int(np.flatnonzero(~ok)[0]) if not ok.all() else len(way_in)
+    x_end, y_end = (way_in[k - 1] if k > 0 else (x_new, y_pull))
+    moved = obj.moved_to(float(x_end), float(y_end))
+    note = "" if k == len(way_in) else ("drag: guarded placement stopped on contact" if action.guarded
+                                        else "drag: placement stopped early by an unseen obstacle")
+    return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
 
 
 @dataclasses.dataclass

@@ -255,7 +255,7 @@ def _describe(action) -> dict:
     if isinstance(action, Push):
         return {"type": "push", "object": action.name, "q": list(action.q), "d": action.d}
     return {"type": "suction", "object": action.name, "q": list(action.q), "dx": action.dx, "dz": action.dz,
-            "yaw": action.yaw}
+            "yaw": action.yaw, "grip": action.grip}
 
 
 def _predicted(objects, action) -> dict:

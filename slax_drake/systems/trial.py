@@ -78,18 +78,26 @@ class TrialDiagram:
 
 def station_tool_rules(station, overrides: dict | None = None, profile: str = "station") -> dict:
     """The rule overrides of ``profile`` a trial on ``station`` plans with: the station cup's limits
-    (``suction.max_held_moment`` as ``max_suction_moment`` when finite, ``suction.max_seal_angle_deg`` when under
-    90) and its reach map (``reach_map`` when given), then ``overrides`` on top; entries equal to the profile's values are left out."""
+    (``suction.max_held_moment`` as ``max_suction_moment`` when finite, with the cup's pull,
+    ``suction.vacuum_pressure`` x cup area, as ``max_drag_pull`` and its lip moment, that times ``cup_radius``, as
+    ``max_drag_twist``; ``suction.max_seal_angle_deg`` when under 90) and its reach map (``reach_map`` when given), then ``overrides`` on top; entries equal to the profile's values are left out."""
     from slax_drake.shelf.tool import without_defaults
 
     rules = {}
     if math.isfinite(station.suction.max_held_moment):
         rules["max_suction_moment"] = float(station.suction.max_held_moment)
+        # what the cup may drag instead of lifting: its pull, vacuum pressure x cup area (drag_grasp rule)
+        rules["max_drag_pull"] = round(float(station.suction.max_force), 3)
+        rules["max_drag_twist"] = round(float(station.suction.lip_moment), 4)
     if station.suction.max_seal_angle_deg < 90.0:
         rules["max_seal_angle_deg"] = float(station.suction.max_seal_angle_deg)
     if station.reach_map:
         rules["reach_map"] = station.reach_map
     rules.update(overrides or {})
+    if not math.isfinite(rules.get("max_suction_moment", math.inf)):
+        for name in ("max_drag_pull", "max_drag_twist"):  # nothing is dragged when every object is lifted
+            if name not in (overrides or {}):
+                rules.pop(name, None)
     return without_defaults(rules, profile)
 
 
@@ -119,6 +127,9 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
     station_path = opts.station or station_for(opts.config)
     station = load_station_scenario(station_path)
     tool_rules = station_tool_rules(station, opts.tool_rules, opts.profile)
+    if tool_rules.get("suction_hidden_rule") == "guarded":
+        raise TrialError("suction_hidden_rule=guarded is a shelf-simulator variant: the Drake planner does not stop "
+                         "a push in on contact yet")
     target_size = None if opts.target_size is None else tuple(float(v) for v in opts.target_size)
     scene = sample_scene(scenario, opts.objects, seed=opts.seed, target_size=target_size)
     horizon = opts.horizon if opts.horizon is not None else 2 * opts.objects

@@ -71,7 +71,7 @@ def test_shelf_side_is_the_shelf_benchmarks_scene(tiny):
     scene = sample_scene(scenario, 2, scene_seed(3, 2, 0), target_size=tuple(scenario.target.sizes[0]))
     saved = json.loads(trial_path(out, "bluction-dar", 2, 0).read_text())
     # Both simulators plan under the station cup's holding limit (sim_configs/station_sim_shelf.yaml).
-    assert saved["tool_rules"] == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0, "reach_map": "models/reach/station_sim_shelf.json"}
+    assert saved["tool_rules"] == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0, "reach_map": "models/reach/station_sim_shelf.json"}
     expected = run_trial(scene, make_policy("bluction-dar", scenario, perception="ground-truth", horizon=4,
                                             tool_overrides=saved["tool_rules"]), 4)
     shelf = saved["shelf"]
@@ -235,7 +235,9 @@ def test_summary_counts_match_per_action_kind_and_mismatch_kinds():
     drake = {"success": False, "result": "horizon", "steps": 4, "toppled": [], "dropped": [],
              "real_time_factor": 1.0, "wall_s": 1.0,
              "actions": [action("push", True), action("push", False, "slid"), action("suction", True),
-                         action("suction", False, "seal never formed"), action("suction", None)]}
+                         action("suction", False, "seal never formed"), action("suction", None),
+                         dict(action("suction", True), grip="drag"), dict(action("suction", False, "turned"),
+                                                                           grip="drag")]}
     old = dict(drake, actions=[action("push", False)])  # a file from before the classification
     # a push whose hypothesis named its box 90 deg turned: recorded as turned, judged again as matched
     rejudged = {"type": "push", "matched": False, "mismatch": "turned", "planning_s": 0.1, "lost_after": False,
@@ -246,8 +248,9 @@ def test_summary_counts_match_per_action_kind_and_mismatch_kinds():
                 "drake": d} for i, d in enumerate((drake, old))]
     e = summarise(results, ["p"], [4])["policies"]["p"]["all"]
     assert e["match_by_action"] == {"push": {"matched": 2, "judged": 4, "match_rate": 0.5},
-                                    "suction": {"matched": 1, "judged": 2, "match_rate": 0.5}}
-    assert e["mismatch_kinds"] == {"dropped": 0, "toppled": 0, "seal never formed": 1, "slid": 1, "turned": 0,
+                                    "suction": {"matched": 1, "judged": 2, "match_rate": 0.5},
+                                    "drag": {"matched": 1, "judged": 2, "match_rate": 0.5}}
+    assert e["mismatch_kinds"] == {"dropped": 0, "toppled": 0, "seal never formed": 1, "slid": 1, "turned": 1,
                                    "unclassified": 1}
     md = markdown_table({"policies": {"p": {"all": {**e, "trials": 2}}}, "meta": {}})
-    assert "| p | All | 50 % (2/4) | 50 % (1/2) | 0 | 0 | 1 | 1 | 0 | 1 |" in md
+    assert "| p | All | 50 % (2/4) | 50 % (1/2) | 50 % (1/2) | 0 | 0 | 1 | 1 | 1 | 1 |" in md

@@ -79,3 +79,13 @@ def test_the_default_trial_prints_its_decisions_on_stderr(tmp_path, capfd):
     assert lines[-1].startswith("done after")
     assert "== trial summary ==" in out and "step 1/" not in out
     assert (tmp_path / "t" / "object_poses.npz").is_file()  # what view-trial replays the objects from
+
+
+def test_a_drag_says_so_in_its_line():
+    out = io.StringIO()
+    printer = DecisionPrinter(8, out)
+    entry = {"step": 0, "time": 0.5, "planning_s": 0.2, "rejected": [],
+             "action": {"type": "suction", "object": "segment_2", "dx": 0.3, "dz": -0.181, "grip": "drag"},
+             "predicted_objects": {"object": "segment_2", "x": 0.2, "y": -0.181, "yaw": 0.0}}
+    printer.update((entry,), (_snap(0.5, 0.05),))
+    assert out.getvalue() == "step 1/8: suction segment_2 by +0.300 m to y = -0.181 m (dragged), planned in 0.2 s, "

@@ -121,14 +121,14 @@ def test_the_station_cup_limits_are_planning_rules_that_overrides_replace():
 
     shipped = load_station_scenario(DEFAULT_STATION_PATH)
     # the station's reach map is one of its planning rules too
-    assert station_tool_rules(shipped) == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0,
+    assert station_tool_rules(shipped) == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0,
                                            "reach_map": "models/reach/station_sim_shelf.json"}
     station = dataclasses.replace(shipped, reach_map="")
     assert station.suction.max_held_moment == pytest.approx(0.4)
     assert station.suction.max_seal_angle_deg == pytest.approx(10.0)
-    assert station_tool_rules(station) == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0}
+    assert station_tool_rules(station) == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0}
     assert station_tool_rules(station, {"max_suction_moment": 0.3, "blade_gap": 0.05}) == {
-        "max_suction_moment": 0.3, "max_seal_angle_deg": 10.0, "blade_gap": 0.05}
+        "max_suction_moment": 0.3, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0, "blade_gap": 0.05}
     # The first-order defaults are no variant: a run under them is recorded as one under no rules.
     assert station_tool_rules(station, {"max_suction_moment": math.inf, "max_seal_angle_deg": 90.0}) == {}
     unlimited = dataclasses.replace(station, suction=dataclasses.replace(

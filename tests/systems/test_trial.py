@@ -45,7 +45,7 @@ def test_short_trial_reveals_the_target(short_trial):
     for a in d["actions"]:  # chosen on a hypothesis, executed on the object its segment shows
         assert a["object"].startswith("segment_") and a["true_object"] in d["final_objects"]
     # the station cup's limits and its reach map
-    assert d["tool_rules"] == {"max_suction_moment": 0.4, "max_seal_angle_deg": 10.0, "reach_map": "models/reach/station_sim_shelf.json"}
+    assert d["tool_rules"] == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0, "reach_map": "models/reach/station_sim_shelf.json"}
 
 
 @pytest.mark.slow
@@ -71,6 +71,9 @@ def test_trial_cli_rejects_bad_input(capsys):
     assert main(["trial", "--policy", "oracle-p"]) == 2
     assert main(["trial", "--tool-rule", "max_suction_moment=heavy"]) == 2
     assert "needs a float" in capsys.readouterr().err
+    # the guarded placement is a shelf-simulator variant: the Drake planner does not stop on contact yet
+    assert main(["trial", "--tool-rule", "suction_hidden_rule=guarded"]) == 2
+    assert "shelf-simulator variant" in capsys.readouterr().err
 
 
 @pytest.mark.slow
