@@ -34,7 +34,9 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
      its segment;
    - ``"fixed"``: a stated depth (``DepthPrior.fixed``, clipped to [smallest, largest]), e.g. the mean object
      dimension (0.13 m): a policy that must not run objects into the unseen part of an object assumes more than
-     the least material there.
+     the least material there;
+   - ``"range"``: each unseen edge a stated share (``DepthPrior.fraction``) of the way from the observed part to
+     the farthest the frame allows (the extent range, step 7), at least the smallest object deep.
 
    The prior never pushes a box through the back or side wall nor into another hypothesis: the extension is
    shortened until the overlap is at most ``overlap_tolerance`` (m^2).
@@ -42,6 +44,10 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
    borders a nearer segment, an unknown pixel or the image border is *occluded*: the object may extend behind
    it until its x-extent is the diagonal of the largest object, so the visible edge is then only a bound), and
    its depth (the observed part .. the largest possible; whether the prior extended it).
+7. Extent range (:class:`ExtentRange`, ``Uncertainty.extent``): the measured faces and visible width are what was
+   seen; every edge of the footprint is stepped outward to the nearest bound: a wall, another hypothesis's observed
+   footprint, space the camera sees as empty (a point of the stepped edge that the frame shows in front of the
+   surface behind it), or the largest object dimension. The true footprint lies inside the farthest rectangle.
 
 The hypotheses are :class:`~slax_drake.scene.model.SceneObject` boxes and cylinders named ``segment_<id>``, so
 the action model consumes them as it consumes true objects. Everything is deterministic (no random draws).
@@ -65,7 +71,7 @@ from slax_drake.perception.range_offset import shelf_range_calibration, without_
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
-DEPTH_RULES = ("smallest-object", "visible-extent", "fixed")
+DEPTH_RULES = ("smallest-object", "visible-extent", "fixed", "range")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,22 +80,28 @@ class DepthPrior:
 
     ``rule`` "smallest-object" (default) or "visible-extent" (see the module docstring); ``smallest`` and
     ``largest`` bound every object dimension (metres; the paper's scenes: 0.06 and 0.20); ``fixed``: the depth of
-    the "fixed" rule (metres)."""
+    the "fixed" rule (metres); ``fraction``: the "range" rule's share, in [0, 1], of the way from the observed part
+    to the farthest the frame allows (:class:`ExtentRange`) at which each unseen edge is placed (an edge whose range
+    is within ``EstimatorConfig.range_margin`` plus two steps of the observed one counts as seen and stays), never
+    less deep than the smallest object."""
 
     rule: str = "smallest-object"
     smallest: float = 0.06
     largest: float = 0.20
     fixed: float = 0.13
+    fraction: float = 0.5
 
     def __post_init__(self) -> None:
         if self.rule not in DEPTH_RULES:
             raise ValueError(f"unknown depth prior {self.rule!r}; choose one of {', '.join(DEPTH_RULES)}")
         if not 0 < self.smallest <= self.largest:
             raise ValueError(f"depth prior needs 0 < smallest <= largest, got {self.smallest}, {self.largest}")
+        if not 0 <= self.fraction <= 1:
+            raise ValueError(f"depth prior fraction must be in [0, 1], got {self.fraction}")
 
     def depth(self, visible_width: float) -> float:
         """The assumed full extent (m) along an axis the camera looks along, given the extent across it."""
-        if self.rule == "smallest-object":
+        if self.rule in ("smallest-object", "range"):  # "range": widened later from the extent range
             return self.smallest
         if self.rule == "fixed":
             return float(np.clip(self.fixed, self.smallest, self.largest))
@@ -244,6 +256,11 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
         left, right = _occluded_sides(observation, mask, sid, config.occluded_row_fraction)
         fits.append((sid, int(mask.sum()), left, right, _fit(p, columns, eye, camera, left, right, config, noise)))
     boxes = [f[4] for f in fits]
+    if config.prior.rule == "range":
+        for i, fit in enumerate(boxes):
+            if fit.shape == "box":
+                _widen_to_range(fit, _extent_range(fit, [f for j, f in enumerate(boxes) if j != i], observation,
+                                                   shelf, noise, config), config)
     _limit_priors(boxes, shelf, config)
     _separate(boxes, eye, config)
     out = []
@@ -669,6 +686,22 @@ def _extent_range(fit: _Fit, others: list[_Fit], observation: Observation, shelf
                 most_lo[k] = value
     return ExtentRange(fit.shape, float(yaw), tuple(map(float, lo)), tuple(map(float, hi)),
                        tuple(map(float, np.minimum(most_lo, lo))), tuple(map(float, np.maximum(most_hi, hi))))
+
+
+def _widen_to_range(fit: _Fit, extent: ExtentRange, config: EstimatorConfig) -> None:
+    """The "range" depth prior: each unseen edge of the box (its range reaches more than ``range_margin`` plus two
+    steps beyond the observed part) moves ``config.prior.fraction`` of the way to its farthest, if that is beyond
+    where it stands (in place; the observed part is kept for :func:`_limit_priors`)."""
+    box = fit.box
+    seen = config.range_margin + 2 * config.range_step
+    f = config.prior.fraction
+    for k in range(2):
+        grow_lo = extent.least_lo[k] - extent.most_lo[k]
+        grow_hi = extent.most_hi[k] - extent.least_hi[k]
+        if grow_lo > seen:
+            box.lo[k] = min(box.lo[k], extent.least_lo[k] - f * grow_lo)
+        if grow_hi > seen:
+            box.hi[k] = max(box.hi[k], extent.least_hi[k] + f * grow_hi)
 
 
 # ------------------------------------------------------------------------------------------- hypotheses
