@@ -97,7 +97,7 @@ walls. The options below address these; all are off in the registry's ``slax-bel
 - ``seen_target``: when the frame shows part of the target, its placement is known up to its size: the belief
   keeps only the placements whose target holds every seen target point (:meth:`placements`), so every world is
   the partly seen target and the search clears what still hides it (``slax-belief-extents`` sets it with
-  ``camera_extents`` and ``maybe_occupied``).
+  ``camera_extents`` 0.5).
 
 The privileged path does not read any of them. The measurements behind each option's default are in the
 research note docs/research/slax_belief.md.

@@ -80,10 +80,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "slax-belief-camera-depth": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, camera_depth=0.13, camera_memory=True, camera_outcome_tolerance=0.01)),
     # camera mode: hypotheses' unseen edges halfway along their extent range (walls, neighbours, space seen empty),
-    # placements in the assumed part kept at half weight, a partly seen target collapses the belief onto it; the
-    # privileged path reads none of these
+    # a partly seen target collapses the belief onto it; the privileged path reads none of these
     "slax-belief-extents": PolicyEntry(_BELIEF, dataclasses.replace(
-        DEFAULT_BELIEF_OPTIONS, camera_extents=0.5, maybe_occupied=0.5, seen_target=True)),
+        DEFAULT_BELIEF_OPTIONS, camera_extents=0.5, seen_target=True)),
     # a failed placement's box no longer refuses later placements; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (its results table: 100 scenes per density, paper profile)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk")),
