@@ -83,6 +83,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # a partly seen target collapses the belief onto it; the privileged path reads none of these
     "slax-belief-extents": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, camera_extents=0.5, seen_target=True)),
+    # the same with every unseen edge at the farthest the frame allows (a move must clear the whole possible extent)
+    "slax-belief-extents-full": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, camera_extents=1.0, seen_target=True)),
     # a failed placement's box no longer refuses later placements; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (its results table: 100 scenes per density, paper profile)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk")),
