@@ -69,7 +69,8 @@ def main(argv=None) -> int:
                 else:
                     reach.append(extent.least_lo[k] - extent.most_lo[k])
                     true_depth.append(max(extent.least_lo[k] - along.min(), 0.0))
-        print(f"{n:>7} {seen:>5} {held:>5} {held / max(seen, 1):>6.3f} {np.mean(reach):>8.3f} {np.mean(true_depth):>7.3f}")
+        share = held / max(seen, 1)
+        print(f"{n:>7} {seen:>5} {held:>5} {share:>6.3f} {np.mean(reach):>8.3f} {np.mean(true_depth):>7.3f}")
     return 0
 
 
