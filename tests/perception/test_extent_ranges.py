@@ -19,7 +19,17 @@ TOLERANCE = 0.005  # m: the most rectangle is grown by this before the true foot
 AREA_OUT = 1e-4  # m^2 of the true footprint allowed outside it (1 cm^2: polygon round-off)
 
 
-def frames(width: int):
+_FRAMES: dict = {}
+
+
+def frames(width: int) -> list:
+    """(scene, observation) per density and seed at ``width`` px, rendered once per test session."""
+    if width not in _FRAMES:
+        _FRAMES[width] = list(_frames(width))
+    return _FRAMES[width]
+
+
+def _frames(width: int):
     scenario = load_scenario(REPO / "sim_configs" / "sim_shelf.yaml")
     for n in DENSITIES:
         for seed in SEEDS:
@@ -67,6 +77,6 @@ def test_unseen_depth_reaches_past_the_smallest_object_prior():
 
 
 def test_extent_ranges_can_be_switched_off():
-    scene, obs = next(frames(160))
+    scene, obs = frames(160)[0]
     assert all(h.uncertainty.extent is None
                for h in estimate_objects(obs, scene.shelf, EstimatorConfig(extent_ranges=False)))
