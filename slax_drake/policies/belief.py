@@ -95,8 +95,8 @@ walls. The options below address these; all are off in the registry's ``slax-bel
   neighbours' observed footprints, space seen empty, the largest object; ``DepthPrior(rule="range")``), so an
   object with little room behind it is assumed shallow and one with room deep;
 - ``seen_target``: when the frame shows part of the target, its placement is known up to its size: the belief
-  keeps only the placements whose target holds every seen target point (:meth:`placements`), so every world is
-  the partly seen target and the search clears what still hides it (``slax-belief-extents`` sets it with
+  keeps only the placements whose target holds every seen target point (:meth:`placements`; ``decision_log``
+  records ``target_seen``), so every world is the partly seen target and the search clears what still hides it (``slax-belief-extents`` sets it with
   ``camera_extents`` 0.5).
 
 The privileged path does not read any of them. The measurements behind each option's default are in the
@@ -204,6 +204,7 @@ class BeliefSearch(Hindsight):
         self.camera_depth = o.camera_depth  # camera mode: the hypotheses' assumed unseen depth (None: as observed)
         self.camera_extents = o.camera_extents  # camera mode: unseen edges' share of their extent range (None: off)
         self.seen_target = o.seen_target  # camera mode: a partly seen target collapses the belief onto it
+        self._target_seen_now = False  # this decision's placements were collapsed onto a partly seen target
         self.camera_memory = o.camera_memory  # camera mode: remember hidden hypotheses (matched across frames)
         self.camera_outcome_tolerance = float(o.camera_outcome_tolerance)  # m, outcome evidence on estimated poses
         self._action_model = _NoActionsOnRemembered(self._action_model)
@@ -406,6 +407,7 @@ class BeliefSearch(Hindsight):
         belief keeps only these from now on. Unchanged when nothing of the target shows, in privileged mode, or
         when no placement holds the points (the estimate is off: the belief is not emptied on it)."""
         belief = getattr(obs, "belief", None)
+        self._target_seen_now = False
         if not self.seen_target or belief is None or not len(placements):
             return placements
         frame = belief.observation
@@ -423,6 +425,7 @@ class BeliefSearch(Hindsight):
             return placements
         kept = placements[held]
         self._consistent = set(self.lattice_keys(kept))
+        self._target_seen_now = True
         return kept
 
     # ---- what an executed action's outcome says about the target ---------------------------------------------
@@ -796,6 +799,8 @@ class BeliefSearch(Hindsight):
         if not cands:
             return Decision.stop("no feasible action")
         log = {"placements": int(len(placements)), "samples": 0, "expanded": 0, "capped": False}
+        if self._target_seen_now:
+            log["target_seen"] = True  # the placements were collapsed onto a partly seen target (seen_target)
         self.decision_log.append(log)
         if not len(placements):
             return Decision(tuple(cands))

@@ -67,4 +67,5 @@ def test_a_partly_seen_target_collapses_the_belief_onto_it(paper):
     assert np.min(np.hypot(*(kept["on"] - truth).T)) <= on.grid_step
     assert np.max(np.hypot(*(kept["on"] - truth).T)) <= 0.10  # within the target's size of the seen part
     assert on.consistent_placements == frozenset(on.lattice_keys(kept["on"]))
+    assert on._target_seen_now and not off._target_seen_now
     assert np.max(np.hypot(*(kept["off"] - truth).T)) > 0.2
