@@ -34,7 +34,9 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
      its segment;
    - ``"fixed"``: a stated depth (``DepthPrior.fixed``, clipped to [smallest, largest]), e.g. the mean object
      dimension (0.13 m): a policy that must not run objects into the unseen part of an object assumes more than
-     the least material there.
+     the least material there;
+   - ``"range"``: each unseen edge a stated share (``DepthPrior.fraction``) of the way from the observed part to
+     the farthest the frame allows (the extent range, step 7), at least the smallest object deep.
 
    The prior never pushes a box through the back or side wall nor into another hypothesis: the extension is
    shortened until the overlap is at most ``overlap_tolerance`` (m^2).
@@ -42,6 +44,10 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
    borders a nearer segment, an unknown pixel or the image border is *occluded*: the object may extend behind
    it until its x-extent is the diagonal of the largest object, so the visible edge is then only a bound), and
    its depth (the observed part .. the largest possible; whether the prior extended it).
+7. Extent range (:class:`ExtentRange`, ``Uncertainty.extent``): the measured faces and visible width are what was
+   seen; every edge of the footprint is stepped outward to the nearest bound: a wall, another hypothesis's observed
+   footprint, space the camera sees as empty (a point of the stepped edge that the frame shows in front of the
+   surface behind it), or the largest object dimension. The true footprint lies inside the farthest rectangle.
 
 The hypotheses are :class:`~slax_drake.scene.model.SceneObject` boxes and cylinders named ``segment_<id>``, so
 the action model consumes them as it consumes true objects. Everything is deterministic (no random draws).
@@ -65,7 +71,7 @@ from slax_drake.perception.range_offset import shelf_range_calibration, without_
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
-DEPTH_RULES = ("smallest-object", "visible-extent", "fixed")
+DEPTH_RULES = ("smallest-object", "visible-extent", "fixed", "range")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,22 +80,28 @@ class DepthPrior:
 
     ``rule`` "smallest-object" (default) or "visible-extent" (see the module docstring); ``smallest`` and
     ``largest`` bound every object dimension (metres; the paper's scenes: 0.06 and 0.20); ``fixed``: the depth of
-    the "fixed" rule (metres)."""
+    the "fixed" rule (metres); ``fraction``: the "range" rule's share, in [0, 1], of the way from the observed part
+    to the farthest the frame allows (:class:`ExtentRange`) at which each unseen edge is placed (an edge whose range
+    is within ``EstimatorConfig.range_margin`` plus two steps of the observed one counts as seen and stays), never
+    less deep than the smallest object."""
 
     rule: str = "smallest-object"
     smallest: float = 0.06
     largest: float = 0.20
     fixed: float = 0.13
+    fraction: float = 0.5
 
     def __post_init__(self) -> None:
         if self.rule not in DEPTH_RULES:
             raise ValueError(f"unknown depth prior {self.rule!r}; choose one of {', '.join(DEPTH_RULES)}")
         if not 0 < self.smallest <= self.largest:
             raise ValueError(f"depth prior needs 0 < smallest <= largest, got {self.smallest}, {self.largest}")
+        if not 0 <= self.fraction <= 1:
+            raise ValueError(f"depth prior fraction must be in [0, 1], got {self.fraction}")
 
     def depth(self, visible_width: float) -> float:
         """The assumed full extent (m) along an axis the camera looks along, given the extent across it."""
-        if self.rule == "smallest-object":
+        if self.rule in ("smallest-object", "range"):  # "range": widened later from the extent range
             return self.smallest
         if self.rule == "fixed":
             return float(np.clip(self.fixed, self.smallest, self.largest))
@@ -124,6 +136,14 @@ class EstimatorConfig:
     face_from_points: bool = True
     face_band_sigmas: float = 2.576  # standard deviations of the range noise
     min_face_noise: float = 0.0005  # m: range noise below this counts as a clean frame
+    # The extent range (:class:`ExtentRange`): each edge of the footprint is stepped outward by ``range_step``
+    # until the line it reaches is seen empty (at least ``range_empty_points`` of its sample points lie in front
+    # of the observed surface by ``range_margin`` plus three range-noise deviations), meets a wall or another
+    # hypothesis's observed footprint, or the object would be wider than the largest object.
+    extent_ranges: bool = True
+    range_step: float = 0.005
+    range_margin: float = 0.01
+    range_empty_points: int = 2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -138,6 +158,49 @@ class Uncertainty:
     occluded_left: bool
     occluded_right: bool
     residual: float  # robust rms distance (m) of the outline points to the fitted outline
+    extent: "ExtentRange | None" = None  # the range of the object's footprint (None: not computed)
+
+
+@dataclasses.dataclass(frozen=True)
+class ExtentRange:
+    """The range of what one seen object's footprint may be, in S (metres): a rectangle of yaw ``yaw`` (radians)
+    whose edges along its two axes e1 = (cos yaw, sin yaw), e2 = (-sin yaw, cos yaw) lie between the observed
+    part (``least_lo``, ``least_hi``: the coordinates along e1 and e2 of what the camera measured) and the largest
+    the frame allows (``most_lo``, ``most_hi``). The measured faces are known to within the frame's resolution;
+    the unseen depth and the hidden part of the width reach from what was seen to the nearest bound: a wall, a
+    neighbour's observed footprint, space the camera sees as empty, or the largest object dimension. The true
+    footprint contains the least rectangle (up to the fit's error) and lies inside the most one. A cylinder's
+    range is its fitted circle's bounding square (yaw 0) and its growth."""
+
+    shape: str  # the hypothesis's shape, "box" or "cylinder"
+    yaw: float
+    least_lo: tuple[float, float]
+    least_hi: tuple[float, float]
+    most_lo: tuple[float, float]
+    most_hi: tuple[float, float]
+
+    def _footprint(self, lo, hi) -> Footprint:
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        m = (np.asarray(lo) + np.asarray(hi)) / 2
+        return Footprint("box", float(c * m[0] - s * m[1]), float(s * m[0] + c * m[1]), self.yaw,
+                         float(hi[0] - lo[0]) / 2, float(hi[1] - lo[1]) / 2)
+
+    def least(self) -> Footprint:
+        """The observed part's rectangle."""
+        return self._footprint(self.least_lo, self.least_hi)
+
+    def most(self) -> Footprint:
+        """The largest footprint the frame allows (every edge at its farthest)."""
+        return self._footprint(self.most_lo, self.most_hi)
+
+    def growth(self) -> tuple[float, float, float, float]:
+        """How far (m) each edge may lie beyond the observed part: (lo e1, hi e1, lo e2, hi e2)."""
+        return (self.least_lo[0] - self.most_lo[0], self.most_hi[0] - self.least_hi[0],
+                self.least_lo[1] - self.most_lo[1], self.most_hi[1] - self.least_hi[1])
+
+    def contains(self, footprint: Footprint, tolerance: float = 0.0) -> bool:
+        """Whether ``footprint`` lies inside the most rectangle grown by ``tolerance`` (m)."""
+        return bool(self.most().polygon().buffer(tolerance).contains(footprint.polygon()))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -193,11 +256,20 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
         left, right = _occluded_sides(observation, mask, sid, config.occluded_row_fraction)
         fits.append((sid, int(mask.sum()), left, right, _fit(p, columns, eye, camera, left, right, config, noise)))
     boxes = [f[4] for f in fits]
+    if config.prior.rule == "range":
+        for i, fit in enumerate(boxes):
+            if fit.shape == "box":
+                _widen_to_range(fit, _extent_range(fit, [f for j, f in enumerate(boxes) if j != i], observation,
+                                                   shelf, noise, config), config)
     _limit_priors(boxes, shelf, config)
     _separate(boxes, eye, config)
     out = []
-    for sid, pixels, left, right, fit in fits:
-        out.append(_hypothesis(sid, pixels, left, right, fit, eye, config))
+    for i, (sid, pixels, left, right, fit) in enumerate(fits):
+        h = _hypothesis(sid, pixels, left, right, fit, eye, config)
+        if config.extent_ranges:
+            extent = _extent_range(fit, [f for j, f in enumerate(boxes) if j != i], observation, shelf, noise, config)
+            h = dataclasses.replace(h, uncertainty=dataclasses.replace(h.uncertainty, extent=extent))
+        out.append(h)
     return out
 
 
@@ -525,6 +597,111 @@ def _give_way(fit: _Fit, other, eye: np.ndarray, tolerance: float) -> None:
     else:
         box.lo[k] = value
         box.observed_lo[k] = max(box.observed_lo[k], value)
+
+
+# ------------------------------------------------------------------------------------------ extent range
+
+
+def _least_box(fit: _Fit) -> tuple[float, np.ndarray, np.ndarray]:
+    """(yaw, lo, hi) of a fit's observed part along its axes (a cylinder: its circle's bounding square)."""
+    if fit.shape == "cylinder":
+        x, y, r = fit.circle
+        return 0.0, np.array([x - r, y - r]), np.array([x + r, y + r])
+    return fit.box.yaw, fit.box.observed_lo.astype(float).copy(), fit.box.observed_hi.astype(float).copy()
+
+
+def _inside_least(points: np.ndarray, fit: _Fit, shrink: float) -> np.ndarray:
+    """Which points (N, 2) lie inside ``fit``'s observed footprint shrunk by ``shrink`` (m)."""
+    if fit.shape == "cylinder":
+        x, y, r = fit.circle
+        return np.hypot(points[:, 0] - x, points[:, 1] - y) < r - shrink
+    yaw, lo, hi = _least_box(fit)
+    c, s = math.cos(yaw), math.sin(yaw)
+    q = points @ np.array([[c, s], [-s, c]]).T
+    return np.all((q > lo + shrink) & (q < hi - shrink), axis=1)
+
+
+def _extent_range(fit: _Fit, others: list[_Fit], observation: Observation, shelf: Shelf, noise: float,
+                  config: EstimatorConfig) -> ExtentRange:
+    """The range of ``fit``'s footprint (:class:`ExtentRange`): each edge of the observed part is stepped outward
+    (``config.range_step``) until the line it reaches (sampled across the observed width, at a quarter, half and
+    three quarters of the height) is seen empty, leaves the shelf or enters another hypothesis's observed
+    footprint; the edge may reach that line, no farther. Along an axis the object is at most the largest object
+    dimension (``config.prior.largest``) wide, counted from the opposite observed edge; when the observed part is
+    narrower than the smallest object along both axes, its outline does not fix the yaw: the object may be as
+    wide as the largest object's diagonal along either axis, and a line seen empty no longer bounds it (a turned
+    object need not span the observed width beyond its visible corner), so only walls and neighbours do."""
+    yaw, lo, hi = _least_box(fit)
+    c, s = math.cos(yaw), math.sin(yaw)
+    axes = np.array([[c, s], [-s, c]])
+    camera = observation.camera
+    depth = observation.depth
+    h_img, w_img = depth.shape
+    largest = config.prior.largest
+    yaw_known = float(np.max(hi - lo)) >= config.prior.smallest
+    if not yaw_known:  # any turned object must fit the range
+        largest *= math.sqrt(2.0)
+    margin = config.range_margin + 3.0 * noise
+    heights = np.array([0.25, 0.5, 0.75]) * fit.height
+    step = config.range_step
+    most_lo, most_hi = lo.copy(), hi.copy()
+    for k in range(2):
+        across = 1 - k
+        inset = min(0.01, (hi[across] - lo[across]) / 4)
+        cross = np.linspace(lo[across] + inset, hi[across] - inset, 5)
+        for sign in (-1.0, 1.0):
+            edge = hi[k] if sign > 0 else lo[k]
+            reach = max(largest - (hi[k] - lo[k]), 0.0)  # the object is at most ``largest`` along the axis
+            n = int(math.ceil(reach / step))
+            if n == 0:
+                continue
+            t = np.minimum(np.arange(1, n + 1) * step, reach)  # (n,) offsets beyond the edge
+            coords = np.zeros((n, len(cross), 2))
+            coords[:, :, k] = edge + sign * t[:, None]
+            coords[:, :, across] = cross[None, :]
+            xy = coords @ axes  # (n, m, 2) in S
+            flat = xy.reshape(-1, 2)
+            bad = ((np.abs(flat[:, 0]) > shelf.width / 2) | (flat[:, 1] > shelf.depth / 2)
+                   | (flat[:, 1] < -shelf.depth / 2))
+            for other in others:
+                bad |= _inside_least(flat, other, 0.005)
+            bad = bad.reshape(n, -1).any(axis=1)
+            p = np.concatenate([np.broadcast_to(flat[:, None, :], (len(flat), len(heights), 2)),
+                                np.broadcast_to(heights[None, :, None], (len(flat), len(heights), 1))], axis=-1)
+            p = p.reshape(-1, 3)
+            z = camera.to_camera(p)[:, 2]
+            uv = np.rint(camera.project(p)).astype(np.int64)
+            ok = (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < w_img) & (uv[:, 1] >= 0) & (uv[:, 1] < h_img)
+            seen = np.zeros(len(p), dtype=np.float64)
+            seen[ok] = depth[uv[ok, 1], uv[ok, 0]]
+            empty = (seen > 0) & (z < seen - margin)
+            empty_count = empty.reshape(n, -1).sum(axis=1)
+            if yaw_known:
+                bad |= empty_count >= min(config.range_empty_points, empty.reshape(n, -1).shape[1])
+            first = int(np.argmax(bad)) if bad.any() else n - 1
+            value = edge + sign * float(t[first])
+            if sign > 0:
+                most_hi[k] = value
+            else:
+                most_lo[k] = value
+    return ExtentRange(fit.shape, float(yaw), tuple(map(float, lo)), tuple(map(float, hi)),
+                       tuple(map(float, np.minimum(most_lo, lo))), tuple(map(float, np.maximum(most_hi, hi))))
+
+
+def _widen_to_range(fit: _Fit, extent: ExtentRange, config: EstimatorConfig) -> None:
+    """The "range" depth prior: each unseen edge of the box (its range reaches more than ``range_margin`` plus two
+    steps beyond the observed part) moves ``config.prior.fraction`` of the way to its farthest, if that is beyond
+    where it stands (in place; the observed part is kept for :func:`_limit_priors`)."""
+    box = fit.box
+    seen = config.range_margin + 2 * config.range_step
+    f = config.prior.fraction
+    for k in range(2):
+        grow_lo = extent.least_lo[k] - extent.most_lo[k]
+        grow_hi = extent.most_hi[k] - extent.least_hi[k]
+        if grow_lo > seen:
+            box.lo[k] = min(box.lo[k], extent.least_lo[k] - f * grow_lo)
+        if grow_hi > seen:
+            box.hi[k] = max(box.hi[k], extent.least_hi[k] + f * grow_hi)
 
 
 # ------------------------------------------------------------------------------------------- hypotheses

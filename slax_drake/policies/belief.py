@@ -89,7 +89,15 @@ walls. The options below address these; all are off in the registry's ``slax-bel
   stands (segment ids are not kept by a real segmentation), remembered as ``remembered_<name>``, an obstacle the
   policy takes no action on (:meth:`remembered_in_frame`);
 - ``camera_outcome_tolerance`` (m): the outcome evidence and the placement check compare estimated poses, within
-  this tolerance rather than the 3 mm (5 mm) that exact poses allow.
+  this tolerance rather than the 3 mm (5 mm) that exact poses allow;
+- ``camera_extents`` (a share in [0, 1]): as ``camera_depth``, but each hypothesis's unseen edges lie that share
+  of the way from what the frame shows to the farthest it allows (the estimator's extent range: the walls, the
+  neighbours' observed footprints, space seen empty, the largest object; ``DepthPrior(rule="range")``), so an
+  object with little room behind it is assumed shallow and one with room deep;
+- ``seen_target``: when the frame shows part of the target, its placement is known up to its size: the belief
+  keeps only the placements whose target holds every seen target point (:meth:`placements`; ``decision_log``
+  records ``target_seen``), so every world is the partly seen target and the search clears what still hides it (``slax-belief-extents`` sets it with
+  ``camera_extents`` 0.5).
 
 The privileged path does not read any of them. The measurements behind each option's default are in the
 research note docs/research/slax_belief.md.
@@ -194,6 +202,9 @@ class BeliefSearch(Hindsight):
         self.widen_beam = o.widen_beam  # the beam of a second search when the first reveals nothing (0: none)
         self._remembered: dict = {}  # name -> the object as last believed (seen, or remembered), last decision
         self.camera_depth = o.camera_depth  # camera mode: the hypotheses' assumed unseen depth (None: as observed)
+        self.camera_extents = o.camera_extents  # camera mode: unseen edges' share of their extent range (None: off)
+        self.seen_target = o.seen_target  # camera mode: a partly seen target collapses the belief onto it
+        self._target_seen_now = False  # this decision's placements were collapsed onto a partly seen target
         self.camera_memory = o.camera_memory  # camera mode: remember hidden hypotheses (matched across frames)
         self.camera_outcome_tolerance = float(o.camera_outcome_tolerance)  # m, outcome evidence on estimated poses
         self._action_model = _NoActionsOnRemembered(self._action_model)
@@ -284,13 +295,16 @@ class BeliefSearch(Hindsight):
         ``camera_depth`` None: ``obs`` unchanged."""
         belief = getattr(obs, "belief", None)
         self._as_observed = {}
-        if belief is None or self.camera_depth is None:
+        if belief is None or (self.camera_depth is None and self.camera_extents is None):
             return obs
         self._as_observed = {o.name: o for o in obs.known}
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.estimator import DepthPrior, EstimatorConfig, estimate_objects
 
-        config = EstimatorConfig(prior=DepthPrior(rule="fixed", fixed=float(self.camera_depth)))
+        if self.camera_extents is not None:
+            config = EstimatorConfig(prior=DepthPrior(rule="range", fraction=float(self.camera_extents)))
+        else:
+            config = EstimatorConfig(prior=DepthPrior(rule="fixed", fixed=float(self.camera_depth)))
         hypotheses = estimate_objects(belief.observation, belief.shelf, config)
         deeper = ObservedBelief(belief.observation, belief.shelf, belief.source, background=belief.background,
                                 hypotheses=hypotheses, p1d=belief.p1d)
@@ -372,7 +386,7 @@ class BeliefSearch(Hindsight):
         shallow = self._as_observed
         if self.maybe_occupied is None or not shallow:
             self._maybe = frozenset()
-            return super().placements(obs)
+            return self.on_seen_target(obs, super().placements(obs))
         from slax_drake.scene.footprint import Footprint, clear_of
 
         objects = tuple(shallow.get(o.name, o) for o in obs.known)
@@ -384,7 +398,35 @@ class BeliefSearch(Hindsight):
             if o.name in shallow and len(out):
                 inside |= ~clear_of("box", out, 0.0, half, Footprint.of(o), 0.0)
         self._maybe = frozenset(self.lattice_keys(out[inside]))
-        return out
+        return self.on_seen_target(obs, out)
+
+    def on_seen_target(self, obs, placements: np.ndarray) -> np.ndarray:
+        """Camera mode with ``seen_target``: when the frame's target mask shows part of the target, the placements
+        (K, 2; m) whose target (its known size, any yaw: within its half diagonal plus half a lattice step and
+        5 mm of its centre, in x-y) holds at least 95 % of the seen target points, back-projected into S; the
+        belief keeps only these from now on. Unchanged when nothing of the target shows, in privileged mode, or
+        when no placement holds the points (the estimate is off: the belief is not emptied on it)."""
+        belief = getattr(obs, "belief", None)
+        self._target_seen_now = False
+        if not self.seen_target or belief is None or not len(placements):
+            return placements
+        frame = belief.observation
+        mask = frame.target_mask & (frame.depth > 0)
+        if not mask.any():
+            return placements
+        from slax_drake.perception.segmentation import back_project
+
+        points = back_project(np.where(mask, frame.depth, 0.0).astype(np.float32), frame.camera)[mask][:, :2]
+        size = self.target_size()
+        reach = float(np.hypot(size[0] / 2, size[1] / 2)) + self.grid_step / 2 + 0.005
+        d = np.hypot(placements[:, None, 0] - points[None, :, 0], placements[:, None, 1] - points[None, :, 1])
+        held = (d <= reach).mean(axis=1) >= 0.95
+        if not held.any():
+            return placements
+        kept = placements[held]
+        self._consistent = set(self.lattice_keys(kept))
+        self._target_seen_now = True
+        return kept
 
     # ---- what an executed action's outcome says about the target ---------------------------------------------
     def condition_on_outcome(self, known) -> None:
@@ -757,6 +799,8 @@ class BeliefSearch(Hindsight):
         if not cands:
             return Decision.stop("no feasible action")
         log = {"placements": int(len(placements)), "samples": 0, "expanded": 0, "capped": False}
+        if self._target_seen_now:
+            log["target_seen"] = True  # the placements were collapsed onto a partly seen target (seen_target)
         self.decision_log.append(log)
         if not len(placements):
             return Decision(tuple(cands))

@@ -65,6 +65,13 @@ class BeliefOptions:
     maybe_occupied: float | None = None
     """Camera mode with ``camera_depth``: the weight, in (0, 1], of a target placement inside a hypothesis' assumed
     depth (None: such placements are excluded)."""
+    camera_extents: float | None = None
+    """Camera mode: the hypotheses are estimated again with each unseen edge this share, in [0, 1], of the way from
+    what the frame shows to the farthest it allows (the estimator's extent range; ``DepthPrior(rule="range")``);
+    None: as the observer estimated them. Takes precedence over ``camera_depth``."""
+    seen_target: bool = False
+    """Camera mode: when the frame shows part of the target, the belief keeps only the placements whose target
+    would hold every seen target point (the target's known size), however few pixels show."""
 
     def __post_init__(self):
         if self.select not in SELECT_RULES:
@@ -82,6 +89,8 @@ class BeliefOptions:
             raise ValueError(f"camera_outcome_tolerance must be positive (got {self.camera_outcome_tolerance!r})")
         if self.maybe_occupied is not None and not 0 < self.maybe_occupied <= 1:
             raise ValueError(f"maybe_occupied must be in (0, 1] or None (got {self.maybe_occupied!r})")
+        if self.camera_extents is not None and not 0 <= self.camera_extents <= 1:
+            raise ValueError(f"camera_extents must be in [0, 1] or None (got {self.camera_extents!r})")
         if self.stuck_select not in STUCK_RULES:
             raise ValueError("stuck_select must be 'value' or 'progress'")
         if self.blocked_rule not in BLOCKED_RULES:

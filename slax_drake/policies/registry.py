@@ -80,6 +80,15 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # within 1 cm; the privileged path reads none of these. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-camera-depth": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, camera_depth=0.13, camera_memory=True, camera_outcome_tolerance=0.01), ours=True),
+    # camera mode: hypotheses' unseen edges halfway along their extent range (walls, neighbours, space seen empty),
+    # a partly seen target collapses the belief onto it; the privileged path reads none of these. Measured, not the
+    # default (docs/research/uncertain-extents.md: 73 % in camera mode on 25 scenes per density, as slax-belief)
+    "slax-belief-extents": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, camera_extents=0.5, seen_target=True), ours=True),
+    # the same with every unseen edge at the farthest the frame allows (a move must clear the whole possible extent);
+    # measured, worse (26 of 40 camera trials against 30; docs/research/uncertain-extents.md)
+    "slax-belief-extents-full": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, camera_extents=1.0, seen_target=True), ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk"),

@@ -150,7 +150,7 @@ def test_partially_occluded_objects_give_a_lower_bound_on_the_extent(scenes, ren
     assert checked >= 10
 
 
-@pytest.mark.parametrize("rule", ["smallest-object", "visible-extent"])
+@pytest.mark.parametrize("rule", ["smallest-object", "visible-extent", "range"])
 def test_hypotheses_do_not_overlap_and_stay_in_the_shelf(scenes, renderers, rule):
     config = EstimatorConfig(prior=DepthPrior(rule=rule))
     renderer = renderers[(128, 96)]
