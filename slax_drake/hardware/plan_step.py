@@ -207,6 +207,7 @@ class StepPlanner:
         self.source = DepthDistribution(self.shelf, self.target_size)
         self.background = background_depth(self.shelf, self.working)
         self._motion_planner = None
+        self.tracker = None  # the object tracker of the last perceive (its state goes into the step file)
 
     def frame_camera(self, depth: np.ndarray):
         """The camera at the frame's resolution (same aspect as the station camera's, else refused)."""
@@ -216,9 +217,12 @@ class StepPlanner:
                                 f"({self.camera.width}x{self.camera.height})")
         return self.camera.with_resolution(w, h)
 
-    def perceive(self, depth: np.ndarray, mask: np.ndarray, joint_state=None):
+    def perceive(self, depth: np.ndarray, mask: np.ndarray, joint_state=None, history: dict | None = None):
         """Frame -> (the policy's PolicyObservation, the ObservedBelief). Raises ObservationError for an unusable
-        frame."""
+        frame. The hypotheses are named by the objects tracked so far (:class:`~slax_drake.perception.tracking.
+        ObjectTracker`): its state and the action last planned come from ``history`` (``tracks`` and ``action``,
+        as the previous step wrote them), a new tracker without; the updated state is written by this step."""
+        from slax_drake.perception.tracking import ObjectTracker
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.estimator import EstimatorConfig
         from slax_drake.perception.observation import Observation, occluder_segmentation
@@ -237,8 +241,16 @@ class StepPlanner:
         segments = occluder_segmentation(segment_depth(small_depth, self.working, self.shelf, margin=PANEL_MARGIN),
                                          small_mask)
         frame = Observation(small_depth, segments, small_mask, self.working, joint_state, min_valid_fraction=0.0)
-        belief = ObservedBelief(frame, self.shelf, self.source, background=self.background,
-                                config=EstimatorConfig(overlap_tolerance=HYPOTHESIS_OVERLAP))
+        from slax_drake.perception.estimator import estimate_objects
+
+        tracks = (history or {}).get("tracks")
+        self.tracker = ObjectTracker.from_dict(tracks) if isinstance(tracks, dict) else ObjectTracker()
+        last = _action_of((history or {}).get("action"))
+        config = EstimatorConfig(overlap_tolerance=HYPOTHESIS_OVERLAP)
+        hypotheses = self.tracker.update(estimate_objects(frame, self.shelf, config), last, frame,
+                                         Scene(self.shelf, self.working, (), None))
+        belief = ObservedBelief(frame, self.shelf, self.source, background=self.background, hypotheses=hypotheses,
+                                config=config, remembered=self.tracker.hidden())
         believed = Scene(self.shelf, self.camera, belief.known, None)
         return PolicyObservation(small_depth, segments, belief.known, belief.p1d, believed, belief), belief
 
@@ -317,7 +329,7 @@ class StepPlanner:
         self.check_joint_state(q)
         timings = {}
         t0 = time.perf_counter()
-        observation, belief = self.perceive(depth, mask, q)
+        observation, belief = self.perceive(depth, mask, q, history)
         visibility = self.target_visibility(depth, mask)
         timings["perception_s"] = time.perf_counter() - t0
         if visibility["revealed"]:
@@ -417,8 +429,27 @@ class StepPlanner:
             "check": None if report is None else {"ok": report.ok, "checked": report.checked},
             "timings_s": {k: round(v, 4) for k, v in timings.items()},
             "history": {"policy": self.policy_name, "steps": steps + (1 if action is not None else 0),
-                        "history": [] if h is None else [float(v) for v in h]},
+                        "history": [] if h is None else [float(v) for v in h],
+                        "tracks": self.tracker.to_dict() if getattr(self, "tracker", None) is not None else None,
+                        "action": None if action is None else _describe(action)},
         }
+
+
+def _action_of(doc):
+    """The action a step.json's ``action`` describes (None for none or an unreadable one)."""
+    from slax_drake.shelf.actions import Push, Suction
+
+    if not isinstance(doc, dict):
+        return None
+    try:
+        if doc.get("type") == "push":
+            return Push(str(doc["object"]), tuple(float(v) for v in doc["q"]), float(doc["d"]))
+        if doc.get("type") == "suction":
+            return Suction(str(doc["object"]), tuple(float(v) for v in doc["q"]), float(doc["dx"]),
+                           float(doc["dz"]), float(doc.get("yaw", 0.0)))
+    except (KeyError, TypeError, ValueError):
+        return None
+    return None
 
 
 def plan_step_files(station: str, depth: str, mask: str, joint_state: str, out: str, history: str | None = None,

@@ -13,7 +13,12 @@ redoes it, until the horizon. :class:`TrialMemory` holds the two facts the corre
 - the last proposed action, the objects it was chosen on and the pose the action model predicts for its object.
   :meth:`outcome` compares that prediction with the next observation: "moved nothing" (the object stands where
   it stood), "moved less than predicted" (it moved, but stands more than ``position_tolerance`` short of or away
-  from the predicted pose), or None (as predicted, or the object is no longer seen and nothing can be said).
+  from the predicted pose), or None (as predicted, or the object is no longer seen and nothing can be said);
+- per object, the planar displacement (m) of the last executed action on it (as observed; as commanded when the
+  object is hidden after it), so that :meth:`undoes` can tell a candidate that moves the object back (a shuttle).
+
+Names are the observation's: true names in privileged mode, the tracker's stable names in camera mode
+(:mod:`slax_drake.perception.tracking`), so an object keeps its name across frames.
 
 All positions are in the shelf frame S (x right, y into the shelf; metres).
 """
@@ -79,6 +84,24 @@ class TrialMemory:
     def reset(self) -> None:
         self.observed: list[tuple] = []
         self.proposal: Proposal | None = None
+        self.moves: dict[str, tuple[float, float]] = {}  # object name -> its last executed displacement (m)
+
+    def undoes(self, objects, action) -> bool:
+        """Whether ``action`` on ``objects`` moves its object back against the last executed action on it: its
+        commanded displacement has a component of more than ``position_tolerance`` (m) opposite to that move."""
+        last = self.moves.get(action.name)
+        if last is None:
+            return False
+        obj = next((o for o in objects if o.name == action.name), None)
+        if obj is None:
+            return False
+        moved = apply_action((obj,), action)[0]
+        dx, dy = float(moved.center[0] - obj.center[0]), float(moved.center[1] - obj.center[1])
+        norm = math.hypot(*last)
+        if norm <= self.position_tolerance:
+            return False
+        back = -(dx * last[0] + dy * last[1]) / norm
+        return back > self.position_tolerance
 
     # ---- arrangements -------------------------------------------------------------------------------------------
     def observe(self, objects) -> None:
@@ -197,9 +220,15 @@ class TrialMemory:
             return None
         tol = self.position_tolerance
         predicted = math.dist(p.predicted_xy, p.before_xy)
+        now = next((o for o in objects if o.name == p.action.name), None)
+        if now is None:
+            self.moves[p.action.name] = (p.predicted_xy[0] - p.before_xy[0], p.predicted_xy[1] - p.before_xy[1])
+        else:
+            d = (float(now.center[0]) - p.before_xy[0], float(now.center[1]) - p.before_xy[1])
+            if math.hypot(*d) > tol:
+                self.moves[p.action.name] = d
         if predicted <= tol:
             return None  # too small a move to tell from the observation
-        now = next((o for o in objects if o.name == p.action.name), None)
         if now is None and self.same_arrangement(tuple(objects), p.before):
             return p, Failed(Miss.UNCHANGED)
         if now is None:
