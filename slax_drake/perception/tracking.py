@@ -2,8 +2,9 @@
 
 A segmentation numbers its segments anew in every frame, so ``segment_<id>`` says nothing about which object a
 hypothesis is from one frame to the next. :class:`ObjectTracker` keeps one track per object seen in this trial and
-gives each a stable name (``object_<k>``, numbered by first sighting), so that logs, step figures, trial records
-and the policies' memory of arrangements name the same object the same way across frames.
+gives each a stable name (``track_<k>``, numbered by first sighting; distinct from the true objects'
+``object_<k>``), so that logs, step figures, trial records and the policies' memory of arrangements name the same
+object the same way across frames.
 
 Per frame (:meth:`ObjectTracker.update`), with the action executed since the last frame (if any):
 
@@ -36,7 +37,7 @@ import numpy as np
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject
 
-PREFIX = "object_"  # the stable names: object_1, object_2, ... in order of first sighting
+PREFIX = "track_"  # the stable names: track_1, track_2, ... in order of first sighting (true objects are object_<k>)
 
 
 @dataclasses.dataclass

@@ -75,7 +75,7 @@ class CameraObserver:
 
     ``tracking`` (default): the hypotheses are associated with the objects seen in earlier frames of the trial
     (:class:`~slax_drake.perception.tracking.ObjectTracker`, told the action executed since the last frame through
-    :meth:`executed`) and named by their tracks (``object_<k>``, stable across frames) instead of by segment;
+    :meth:`executed`) and named by their tracks (``track_<k>``, stable across frames) instead of by segment;
     :meth:`start` begins a new trial. False: ``segment_<id>`` names, nothing carried between frames."""
 
     def __init__(self, shelf, camera, target_size, source: str = "depth", width: int = 160,

@@ -113,7 +113,7 @@ def test_camera_observation_holds_hypotheses_not_true_objects(scenario):
     scene = sample_scene(scenario, 6, 3, target_size=SIZE)
     obs, names = CameraObserver(scene.shelf, scene.camera, SIZE).observe(scene)
     assert obs.belief is not None and obs.known == obs.belief.known
-    assert all(o.name.startswith("object_") for o in obs.known)  # named by the tracker
+    assert all(o.name.startswith("track_") for o in obs.known)  # named by the tracker
     untracked, _ = CameraObserver(scene.shelf, scene.camera, SIZE, tracking=False).observe(scene)
     assert all(o.name.startswith("segment_") for o in untracked.known)
     assert set(names.values()) <= {o.name for o in scene.objects}
