@@ -330,14 +330,18 @@ class BeliefSearch(Hindsight):
 
     def remembered_in_frame(self, obs, moved: str | None) -> tuple:
         """Camera mode: the hypotheses of the last decision (seen then, or remembered) that stand for an object
-        hidden now, flagged ``remembered`` and named ``remembered_<k>`` (:data:`REMEMBERED`; the policy takes no action on them: it sees no
-        segment to act on). When the observation comes with a tracker's hidden objects (``obs.belief.remembered``),
-        those are the remembered ones (but the one the last action moved). Otherwise: a segment's id says nothing across frames (a real segmentation renumbers them), so
-        a hypothesis is matched by where it stands: it is the object of a hypothesis of this frame when their
-        footprints overlap (more than ``overlap_share`` of the smaller one); the hypothesis the last action moved
-        (``moved``) is not remembered (where it ended is what this frame shows, or unknown). An unmatched one is
-        kept unless this frame contradicts it: the frame sees past it (deeper than its surface by
-        ``see_through`` m) on more than half of the pixels where it would show, were it alone on the shelf."""
+        hidden now, flagged ``remembered`` and named ``remembered_<k>`` (:data:`REMEMBERED`; the policy takes no
+        action on them: it sees no segment to act on).
+
+        When the observation comes with a tracker's hidden objects (``obs.belief.remembered``,
+        :class:`~slax_drake.perception.tracking.ObjectTracker`), those are the remembered ones, but the one the
+        last action moved (``moved``). Otherwise (no tracker): a segment's id says nothing across frames (a real
+        segmentation renumbers them), so a hypothesis is matched by where it stands: it is the object of a
+        hypothesis of this frame when their footprints overlap (more than ``overlap_share`` of the smaller one);
+        the hypothesis the last action moved is not remembered (where it ended is what this frame shows, or
+        unknown). An unmatched one is kept unless this frame contradicts it: the frame sees past it (deeper than
+        its surface by ``see_through`` m) on more than half of the pixels where it would show, were it alone on
+        the shelf."""
         from slax_drake.scene.footprint import Footprint
         from slax_drake.scene.raycast import SceneRaycaster
 
