@@ -257,7 +257,7 @@ class StepPlanner:
     def decide(self, observation, history: dict | None = None):
         """The policy's Decision on ``observation``, after restoring ``history`` (P'_{t-1})."""
         self.policy.reset(observation.scene_template)
-        if history is not None:
+        if history is not None and history["history"]:  # an empty one: P'_(t-1) not carried (a new history)
             previous = np.asarray(history["history"], dtype=float)
             if previous.shape != np.shape(observation.p1d):
                 raise PlanStepError(f"history has {previous.size} columns, this step's distribution "
@@ -478,6 +478,7 @@ class TrialStepInputs:
     target_mask: Path
     joint_state: Path
     time_s: float  # the decision's simulated time
+    history: Path | None = None  # the objects tracked up to the previous decision and its action (None: step 1)
 
 
 def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> TrialStepInputs:
@@ -489,7 +490,12 @@ def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> 
       the trial recorded it at that decision (its planar pose; an object that had toppled is drawn upright);
     - ``joint_state.json``: the commanded joint positions at that moment (``executed_trajectory``).
 
-    The station is the trial's. The policy's history is not carried over (plan-step starts it afresh)."""
+    - ``history.json`` (from decision 2 on): the objects the trial's tracker held at the previous decision (seen
+      and remembered, by their tracked names) and the action taken there, so that plan-step names the objects as
+      the trial did (``--history``). P'_(t-1) is not carried over (plan-step starts the policy's history afresh:
+      its working resolution may differ from the trial's).
+
+    The station is the trial's."""
     from slax_drake.io import write_bytes_atomic, write_text_atomic
     from slax_drake.scene.io import load_scene
     from slax_drake.scene.raycast import SceneRaycaster
@@ -548,5 +554,23 @@ def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> 
     write_bytes_atomic(out_dir / "target_mask.png", png.tobytes())
     write_text_atomic(out_dir / "joint_state.json", json.dumps(
         {"joint_names": list(PLANNED_JOINTS), "positions": [q_now[n] for n in PLANNED_JOINTS]}, indent=1))
+    history = None
+    if step > 1:
+        previous = decisions[step - 2]
+        tracks = []
+        for hidden, table in ((False, previous.get("hypotheses") or {}), (True, previous.get("remembered") or {})):
+            for name, h in table.items():
+                if not str(name).startswith("track_") or "shape" not in h or "size" not in h:
+                    continue  # a trial recorded without the tracker
+                tracks.append({"name": name, "shape": h["shape"], "size": h["size"], "x": h["x"], "y": h["y"],
+                               "z": float(h["size"][2]) / 2, "yaw": h.get("yaw", 0.0),
+                               "uncertainty": h.get("uncertainty_m", 0.0), "hidden": hidden, "frames": 1})
+        if tracks:
+            numbers = [int(t["name"].split("_")[-1]) for t in tracks if t["name"].split("_")[-1].isdigit()]
+            doc = {"policy": data.get("policy"), "steps": step - 1, "history": [],
+                   "tracks": {"next_id": max(numbers, default=0) + 1, "frames": step - 1, "tracks": tracks},
+                   "action": previous.get("action")}
+            history = out_dir / "history.json"
+            write_text_atomic(history, json.dumps(doc, indent=1))
     return TrialStepInputs(str(data.get("station") or ""), out_dir / "depth.npy", out_dir / "target_mask.png",
-                           out_dir / "joint_state.json", float(entry["time"]))
+                           out_dir / "joint_state.json", float(entry["time"]), history)

@@ -177,9 +177,11 @@ class PlannerSystem(LeafSystem):
         entry["hypotheses"] = {o.name: {"shape": o.shape, "size": [round(float(v), 4) for v in o.size],
                                         "x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                         "yaw": round(float(o.yaw), 5)} for o in belief.known}
-        entry["remembered"] = {o.name: {"x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
+        entry["remembered"] = {o.name: {"shape": o.shape, "size": [round(float(v), 4) for v in o.size],
+                                        "x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
+                                        "yaw": round(float(o.yaw), 5),
                                         "uncertainty_m": round(self.tracker.uncertainty(o.name), 4)}
-                               for o in belief.remembered}
+                               for o in belief.remembered}  # seen earlier, hidden now (the tracker's memory)
         policy = self.policy
         rejected = []
         t0 = time.perf_counter()
