@@ -87,8 +87,9 @@ class TrialMemory:
         self.moves: dict[str, tuple[float, float]] = {}  # object name -> its last executed displacement (m)
 
     def undoes(self, objects, action) -> bool:
-        """Whether ``action`` on ``objects`` moves its object back against the last executed action on it: its
-        commanded displacement has a component of more than ``position_tolerance`` (m) opposite to that move."""
+        """Whether ``action`` on ``objects`` moves its object back against the last executed action on it: along x
+        or along y, both that move and this one's commanded displacement exceed ``position_tolerance`` (m) and
+        point opposite ways (e.g. dx -0.05 then +0.10, whatever either did along y)."""
         last = self.moves.get(action.name)
         if last is None:
             return False
@@ -96,12 +97,9 @@ class TrialMemory:
         if obj is None:
             return False
         moved = apply_action((obj,), action)[0]
-        dx, dy = float(moved.center[0] - obj.center[0]), float(moved.center[1] - obj.center[1])
-        norm = math.hypot(*last)
-        if norm <= self.position_tolerance:
-            return False
-        back = -(dx * last[0] + dy * last[1]) / norm
-        return back > self.position_tolerance
+        now = (float(moved.center[0] - obj.center[0]), float(moved.center[1] - obj.center[1]))
+        tol = self.position_tolerance
+        return any(abs(a) > tol and abs(b) > tol and a * b < 0 for a, b in zip(last, now))
 
     # ---- arrangements -------------------------------------------------------------------------------------------
     def observe(self, objects) -> None:

@@ -177,6 +177,7 @@ class PlannerSystem(LeafSystem):
         entry["hypotheses"] = {o.name: {"shape": o.shape, "size": [round(float(v), 4) for v in o.size],
                                         "x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                         "yaw": round(float(o.yaw), 5)} for o in belief.known}
+        entry["segment_of"] = {o.name: f"segment_{belief.segment_id(o.name)}" for o in belief.known}  # this frame's
         entry["remembered"] = {o.name: {"shape": o.shape, "size": [round(float(v), 4) for v in o.size],
                                         "x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                         "yaw": round(float(o.yaw), 5),
