@@ -21,8 +21,10 @@ the first-order model is wrong about the true shelf (:mod:`slax_drake.policies.t
 2. no candidate that would return the seen objects to an arrangement already observed in this trial;
 3. no shuttle: a candidate that moves its object back against the last executed action on it
    (:meth:`~slax_drake.policies.trial_memory.TrialMemory.undoes`) is not taken unless it reveals space no earlier
-   arrangement revealed: the support of P'_t drops by at least ``shuttle_reveal`` columns under its predicted
-   distribution (P'_t is the minimum over every observation so far, so only space never seen drops it);
+   arrangement revealed: it uncovers at least ``shuttle_reveal`` (m) of width along x that the object covered in
+   every arrangement observed so far (:meth:`~slax_drake.policies.trial_memory.TrialMemory.vacates_unseen`). The
+   predicted distribution is no judge here: it assumes the empty shelf behind a moved object, so on a shelf where
+   another object stands behind it every move back and forth "reveals" the same columns again;
 4. an action whose predicted support reduction is zero and that reveals no unseen space (the number of hidden
    target placements the distribution model counts does not drop) is not taken while another candidate reduces
    the support or reveals unseen space; among equal reductions, the one that reveals more unseen space first.
@@ -60,10 +62,9 @@ class DistributionPolicy:
 
     def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
                  observation_width: int = 160, max_placements: int = 4, corrected: bool = False,
-                 shuttle_reveal: int | None = 3):
+                 shuttle_reveal: float | None = 0.02):
         self.corrected = corrected  # the implementation's corrections (module docstring); False: the paper's text
-        self.shuttle_reveal = shuttle_reveal  # columns a shuttle must reveal (correction 3); None: shuttles allowed
-        self._obs = None  # the observation of the decision under way
+        self.shuttle_reveal = shuttle_reveal  # m a shuttle must uncover never seen (correction 3); None: allowed
         self.memory = TrialMemory()
         self._action_model = action_model
         self.distribution = distribution
@@ -97,7 +98,6 @@ class DistributionPolicy:
     def decide(self, obs) -> Decision:
         self._history = history_min(obs.p1d, self._history)
         self._objects = obs.known
-        self._obs = obs
         if self.corrected:
             self.learn(obs)
         decision = self.rank(obs)
@@ -152,13 +152,9 @@ class DistributionPolicy:
         return allowed
 
     def reveals_new(self, objects, action) -> bool:
-        """Whether ``action`` on ``objects`` reveals space no observation of this trial revealed: the support of
-        P'_t drops by at least ``shuttle_reveal`` columns under the action's predicted distribution."""
-        h = self._history
-        if h is None or self._obs is None:
-            return True
-        p = self.predict(self._obs, apply_action(tuple(objects), action))
-        return support(h) - support(np.minimum(p, h)) >= self.shuttle_reveal
+        """Whether ``action`` on ``objects`` uncovers at least ``shuttle_reveal`` m of width (along x) that its
+        object covered in every arrangement observed in this trial (correction 3)."""
+        return self.memory.vacates_unseen(objects, action) >= self.shuttle_reveal
 
     def unseen_space(self, obs, objects) -> int | None:
         """The number of hidden target placements with the seen objects at ``objects`` (the distribution model's

@@ -101,6 +101,29 @@ class TrialMemory:
         tol = self.position_tolerance
         return any(abs(a) > tol and abs(b) > tol and a * b < 0 for a, b in zip(last, now))
 
+    def vacates_unseen(self, objects, action) -> float:
+        """The width (m) of the space ``action`` on ``objects`` uncovers along x that its object covered in every
+        arrangement observed so far (where it was seen): space behind it no earlier arrangement showed. Judged on
+        the footprints' x extents (the camera looks along y)."""
+        obj = next((o for o in objects if o.name == action.name), None)
+        if obj is None:
+            return 0.0
+        moved = apply_action((obj,), action)[0]
+        now, new = _x_extent(obj), _x_extent(moved)
+        always = now
+        for seen in self.observed:
+            other = next((o for o in seen if o.name == action.name), None)
+            if other is None:
+                continue
+            lo, hi = _x_extent(other)
+            always = (max(always[0], lo), min(always[1], hi))
+        if always[1] <= always[0]:
+            return 0.0
+        # the part of ``always`` that the object leaves: ``always`` minus the new extent
+        left = max(0.0, min(always[1], new[0]) - always[0])
+        right = max(0.0, always[1] - max(always[0], new[1]))
+        return left + right
+
     # ---- arrangements -------------------------------------------------------------------------------------------
     def observe(self, objects) -> None:
         objects = tuple(objects)
@@ -238,3 +261,12 @@ class TrialMemory:
             return p, Failed(Miss.UNCHANGED)
         moved, off = math.dist(xy, p.before_xy), math.dist(xy, p.predicted_xy)
         return p, Failed(Miss.SHORT if moved < predicted else Miss.ELSEWHERE, moved, predicted, off)
+
+
+def _x_extent(o) -> tuple[float, float]:
+    """(x_min, x_max) of ``o``'s footprint in S (m)."""
+    from slax_drake.scene.footprint import Footprint
+
+    fp = Footprint.of(o)
+    ex, _ = fp.extents()
+    return fp.x - ex, fp.x + ex
