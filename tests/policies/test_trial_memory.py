@@ -165,3 +165,23 @@ def test_no_shuttle_on_a_replayed_noisy_sequence(paper, name):
             assert all(policy.reveals_new(obs1.known, a) for a in back)
             policy.reveals_new = lambda objects, action: False  # then no move back is offered at all
             assert not [a for a in policy.candidates(obs1.known) if memory.undoes(obs1.known, a)]
+
+
+def test_the_issues_shuttle_is_stopped_once_it_uncovers_nothing_new():
+    """dx -0.05, +0.10, -0.15, +0.10 on one 0.20 m wide box: each reversal is a shuttle (undoes); the first two
+    uncover space the box covered in every arrangement so far, the third moves it back over all of that."""
+    from slax_drake.shelf.actions import Push
+
+    memory = TrialMemory()
+    x, other = 0.0, box("other", 0.25, 0.2)
+    for d, uncovers in ((-0.05, None), (0.10, True), (-0.15, True), (0.10, False)):
+        objects = (box("a", x, 0.0, sx=0.20), other)
+        memory.observe(objects)
+        push = Push("a", (x + (0.1 if d < 0 else -0.1), -0.04, 0.05), d)
+        if uncovers is not None:
+            assert memory.undoes(objects, push)
+            assert (memory.vacates_unseen(objects, push) >= 0.02) == uncovers
+        memory.propose(push, objects)
+        x += d
+        memory.outcome((box("a", x, 0.0, sx=0.20), other))
+    assert not memory.undoes((box("a", x, 0.0, sx=0.20), other), Push("a", (x - 0.1, -0.04, 0.05), 0.05))
