@@ -15,7 +15,9 @@ Per frame (:meth:`ObjectTracker.update`), with the action executed since the las
    x centre and its front face's y (the depth the camera measures; the unseen depth behind it is a prior and
    may differ between frames). The cost is the distance (m) between the two fronts, for the moved track the
    distance to its commanded path; pairs further apart than ``gate`` (m) do not match. The pairs are chosen by
-   least total cost (one-to-one).
+   least total cost (one-to-one). Then a hypothesis left unmatched whose footprint overlaps an unmatched,
+   unmoved track's (same shape) by more than ``overlap_share`` of the smaller one is that object (its estimate changed between
+   frames: another yaw fitted, a face seen anew).
 3. Update. A matched track takes the hypothesis's estimate and name; its uncertainty (m) is the frame's. An
    unmatched hypothesis starts a new track. An unmatched track is hidden: it keeps its last estimate, flagged
    ``remembered``, and its uncertainty grows to cover the commanded path when the action moved it. A hidden
@@ -79,11 +81,13 @@ def commanded_displacement(action, obj: SceneObject) -> tuple[float, float]:
 
 class ObjectTracker:
     """See the module docstring. ``gate`` (m): the farthest a hypothesis's front may stand from a track's
-    predicted front and still be that object; ``see_through`` (m): how far past a hidden track's surface the frame
-    must see to contradict it."""
+    predicted front and still be that object; ``overlap_share``: the footprint overlap (a share of the smaller
+    footprint) that makes an otherwise unmatched hypothesis the object of an unmatched, unmoved track;
+    ``see_through`` (m): how far past a hidden track's surface the frame must see to contradict it."""
 
-    def __init__(self, gate: float = 0.04, see_through: float = 0.01):
+    def __init__(self, gate: float = 0.04, see_through: float = 0.01, overlap_share: float = 0.2):
         self.gate = float(gate)
+        self.overlap_share = float(overlap_share)
         self.see_through = float(see_through)
         self.reset()
 
@@ -125,6 +129,25 @@ class ObjectTracker:
         out_names = [None] * len(objs)
         for i, j in pairs:
             out_names[i] = names[j]
+        # a second pass: an estimate that changed much between frames (another yaw, a face seen anew) still stands
+        # where an unmatched track stood; the footprints overlapping by more than ``overlap_share`` of the
+        # smaller one make them the same object (the unmoved tracks only: the moved one was judged on its path)
+        free = [j for j in range(len(names)) if names[j] not in out_names and names[j] not in path]
+        for i, o in enumerate(objs):
+            if out_names[i] is not None or not free:
+                continue
+            poly = Footprint.of(o).polygon()
+            best, share = None, self.overlap_share
+            for j in free:
+                if self.tracks[names[j]].object.shape != o.shape:
+                    continue
+                q = Footprint.of(self.tracks[names[j]].object).polygon()
+                common = poly.intersection(q).area / max(1e-12, min(poly.area, q.area))
+                if common > share:
+                    best, share = j, common
+            if best is not None:
+                out_names[i] = names[best]
+                free.remove(best)
         seen = set()
         for i, o in enumerate(objs):
             name = out_names[i]
@@ -191,13 +214,14 @@ class ObjectTracker:
                            "yaw": float(o.yaw),
                            "uncertainty": t.uncertainty, "hidden": t.hidden, "frames": t.frames})
         return {"next_id": self.next_id, "frames": self.frames, "tracks": tracks,
-                "gate": self.gate, "see_through": self.see_through}
+                "gate": self.gate, "see_through": self.see_through, "overlap_share": self.overlap_share}
 
     @classmethod
     def from_dict(cls, doc: dict) -> "ObjectTracker":
         from slax_drake.scene.model import planar_pose
 
-        tracker = cls(gate=float(doc.get("gate", 0.04)), see_through=float(doc.get("see_through", 0.01)))
+        tracker = cls(gate=float(doc.get("gate", 0.04)), see_through=float(doc.get("see_through", 0.01)),
+                      overlap_share=float(doc.get("overlap_share", 0.2)))
         tracker.next_id = int(doc.get("next_id", 1))
         tracker.frames = int(doc.get("frames", 0))
         for t in doc.get("tracks", []):

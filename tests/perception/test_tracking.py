@@ -82,3 +82,11 @@ def test_the_state_round_trips_through_plain_data():
     a = t.update(frame(box("b", 0.0, -0.1), box("a", -0.10, -0.1)), push)
     b = restored.update(frame(box("b", 0.0, -0.1), box("a", -0.10, -0.1)), push)
     assert [o.name for o in a] == [o.name for o in b] == ["track_2", "track_1"]
+
+
+def test_an_estimate_that_changed_its_yaw_keeps_the_name():
+    """Seen from another angle the estimator may fit another yaw and front: the footprints still overlap."""
+    t = ObjectTracker()
+    t.update(frame(box("a", 0.0, 0.08, sx=0.16, sy=0.14, yaw=1.36), box("b", -0.2, -0.1)))
+    (o, b) = t.update(frame(box("a", 0.02, 0.175, sx=0.12, sy=0.06), box("b", -0.2, -0.1)))
+    assert (o.name, b.name) == ("track_1", "track_2") and not t.hidden()
