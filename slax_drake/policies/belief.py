@@ -73,8 +73,8 @@ space fails with ``blocked_risk`` more (:meth:`placement_risk`), so the reveals 
 refusal, a risk lets a move that reveals much outrank the cheap moves left; an identical failed action is still
 excluded by the corrections.
 
-Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses ``segment_<id>``, never true
-objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
+Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses, named ``track_<k>`` by the
+object tracker, never true objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
 object the frame showed, reaching beyond its hypothesis, into an object seen before and hidden now, or beyond the
 walls. The options below address these; all are off in the registry's ``slax-belief``;
 ``slax-belief-camera-depth`` sets all but ``maybe_occupied``:

@@ -71,7 +71,7 @@ class CameraObserver:
 
     :meth:`observe` also returns what only the simulator knows: which true object each hypothesis is (label
     segmentation: segment id = object index + 1; depth segmentation: the object most of the segment's pixels
-    show), so that an action on ``segment_<id>`` is executed on that object.
+    show), so that an action on a hypothesis is executed on that object.
 
     ``tracking`` (default): the hypotheses are associated with the objects seen in earlier frames of the trial
     (:class:`~slax_drake.perception.tracking.ObjectTracker`, told the action executed since the last frame through

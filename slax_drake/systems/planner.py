@@ -9,7 +9,8 @@ ended ``settle_time`` ago). When it is, the system decides:
 
 1. it stops with "revealed" when ``stop`` says so, with "horizon" after H actions (its own budget);
 2. the belief (:class:`~slax_drake.perception.belief.ObservedBelief`) from ``observation`` (depth, occluder
-   segmentation, target mask, camera), ``hypotheses`` (the estimator's objects ``segment_<id>``) and
+   segmentation, target mask, camera), ``hypotheses`` (the estimator's objects ``segment_<id>``, renamed by the
+   object tracker to ``track_<k>``, stable across frames; :mod:`slax_drake.perception.tracking`) and
    ``occupancy_1d`` (P_t); a hypothetical action's distribution comes from the predicted frame (segments shifted
    in the image) through the same distribution source as P_t;
 3. the policy (any :class:`~slax_drake.policies.protocol.Policy` that reads a
