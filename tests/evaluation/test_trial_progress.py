@@ -72,3 +72,18 @@ def test_the_default_trial_prints_its_decisions_on_stderr(tmp_path, capfd):
     assert lines[-1].startswith("done after")
     assert "== trial summary ==" in out and "step 1/" not in out
     assert (tmp_path / "t" / "object_poses.npz").is_file()  # what view-trial replays the objects from
+
+
+def test_a_tracked_object_is_judged_through_its_segment_in_that_frame():
+    """The policy names a tracked object (``track_<k>``); the entry's ``segment_of`` gives its segment in the
+    frame, which the referee maps to the true object."""
+    out = io.StringIO()
+    printer = DecisionPrinter(12, out)
+    first = _decision(0, 0.5)
+    first["action"]["object"] = "track_3"
+    first["segment_of"] = {"track_3": "segment_2"}
+    printer.update((first,), (_snap(0.5, 0.05),))
+    printer.update((first, {"step": 1, "time": 20.0, "final": True, "result": "horizon"}), (_snap(0.5, 0.05),
+                                                                                           _snap(20.0, -0.045)))
+    assert out.getvalue().splitlines()[0] == ("step 1/12: push track_3 -0.100 m, planned in 0.4 s, executed, "
+                                              "object_4 moved as predicted")

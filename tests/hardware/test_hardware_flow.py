@@ -55,7 +55,7 @@ def test_the_default_trial_is_refused_when_the_world_or_the_file_changes(trials,
     assert main(["export", str(folder / "trial.json"), "--out", str(path)]) == 0
     traj = load_trajectory(path)
     action = traj.motions[0].action
-    assert action["type"] == "push" and action["object"].startswith("segment_")  # the camera's name
+    assert action["type"] == "push" and action["object"].startswith("track_")  # the tracked camera object's name
     scene = load_scene(folder / "scene.json")
     pushed = action["scene_object"]
     # object_k (not the pushed one) moved to where the blade passes at the middle of the push
