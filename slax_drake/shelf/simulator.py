@@ -101,10 +101,11 @@ class CameraObserver:
         self._executed = None
 
     def start(self) -> None:
-        """A new trial: the tracker forgets every object."""
+        """A new trial: the tracker forgets every object and the noise's step index starts again at 0."""
         if self.tracker is not None:
             self.tracker.reset()
         self._executed = None
+        self.steps = 0
 
     def executed(self, action) -> None:
         """The action (named by a hypothesis of the last frame) executed since the last frame."""

@@ -109,6 +109,18 @@ def test_camera_trial_acts_on_true_objects(scenario, segmentation, noise):
     assert run().actions == result.actions  # deterministic (seeded noise)
 
 
+@pytest.mark.parametrize("policy", ["slax-belief", "bluction-dar"])
+def test_camera_mode_policies_with_the_tracker_are_deterministic(scenario, policy):
+    """Two rollouts of one camera trial (noisy frames, depth segmentation, the tracker on) take the same actions;
+    one observer reused for a second trial starts its tracker afresh."""
+    scene = sample_scene(scenario, 6, 4, target_size=SIZE)
+    observer = CameraObserver(scene.shelf, scene.camera, SIZE, segmentation="depth", noise_seed=5)
+    runs = [run_trial(scene, make_policy(policy, scenario, horizon=4), 4, observer=observer) for _ in range(2)]
+    fresh = CameraObserver(scene.shelf, scene.camera, SIZE, segmentation="depth", noise_seed=5)
+    runs.append(run_trial(scene, make_policy(policy, scenario, horizon=4), 4, observer=fresh))
+    assert runs[0].actions == runs[1].actions == runs[2].actions and runs[0].steps >= 1
+
+
 def test_camera_observation_holds_hypotheses_not_true_objects(scenario):
     scene = sample_scene(scenario, 6, 3, target_size=SIZE)
     obs, names = CameraObserver(scene.shelf, scene.camera, SIZE).observe(scene)
