@@ -99,7 +99,7 @@ def test_plan_step_output_passes_against_the_true_scene(objects, seed, tmp_path,
     _frame(tmp_path, renderer="drake", objects=objects, seed=seed)
     assert main(_args(tmp_path)) == 0
     step = json.loads((tmp_path / "step.json").read_text())
-    assert len(step["motions"]) == 1 and step["motions"][0]["action"]["object"].startswith("segment_")
+    assert len(step["motions"]) == 1 and step["motions"][0]["action"]["object"].startswith("track_")
     true = sample_scene(load_scenario("sim_configs/sim_shelf.yaml"), objects, seed)
     save_scene(true, tmp_path / "true.json")
     capsys.readouterr()
