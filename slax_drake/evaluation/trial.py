@@ -155,7 +155,8 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
         a["motion"] = entry["motion"]
         a["rejected_before"] = entry["rejected"]
         a["predicted"] = pred
-        a["true_object"] = entry.get("segments", {}).get(a["object"])  # the object the hypothesis was
+        segment = entry.get("segment_of", {}).get(a["object"], a["object"])  # the tracked object's segment
+        a["true_object"] = entry.get("segments", {}).get(segment)  # the object the hypothesis was
         a["before"] = entry.get("poses_before", {}).get(a["true_object"]) if a["true_object"] else None
         actions.append(a)
     # actual outcome of each action: the true object's pose at the next decision, and whether it was lost then

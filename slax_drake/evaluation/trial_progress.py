@@ -3,8 +3,8 @@
 A line starts when the planner has chosen and planned an action and ends when the next decision (or the end of the
 trial) shows where the object went::
 
-    step 3/12: push segment_2 -0.100 m, planned in 0.4 s after 1 rejected candidate, executed, object_4 moved as predicted
-    step 4/12: suction segment_1 by +0.050 m to y = -0.190 m, planned in 1.2 s, executed, object_1 ended 3.4 cm from the prediction
+    step 3/12: push track_2 -0.100 m, planned in 0.4 s after 1 rejected candidate, executed, object_4 moved as predicted
+    step 4/12: suction track_1 by +0.050 m to y = -0.190 m, planned in 1.2 s, executed, object_1 ended 3.4 cm from the prediction
     done after 4 actions: target revealed (96% of it visible)
 
 What a line says is what the trial knows at that moment: the policy's action on a camera segment, the planner's
@@ -91,7 +91,8 @@ class DecisionPrinter:
 
         entry, snap = self.open
         self.open = None
-        true_object = snap.segments.get(entry["action"]["object"]) if snap is not None else None
+        segment = entry.get("segment_of", {}).get(entry["action"]["object"], entry["action"]["object"])
+        true_object = snap.segments.get(segment) if snap is not None else None
         if true_object is None or poses is None or true_object not in poses or true_object not in snap.poses:
             self._write("executed\n")
             return

@@ -325,6 +325,8 @@ def run_plan_step(args: argparse.Namespace) -> int:
         inputs = inputs_from_trial(args.from_trial, args.step, out.parent / f"{out.stem}_inputs")
         scenario = scenario or inputs.station
         frame_inputs = (str(inputs.depth), str(inputs.target_mask), str(inputs.joint_state))
+        if args.history is None and inputs.history is not None:
+            args.history = str(inputs.history)  # the objects the trial tracked, so they keep the trial's names
         print(f"inputs of decision {args.step} (t = {inputs.time_s:.2f} s) of {args.from_trial}: "
               f"{', '.join(frame_inputs)}; station {scenario}")
     else:

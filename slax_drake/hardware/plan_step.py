@@ -207,6 +207,7 @@ class StepPlanner:
         self.source = DepthDistribution(self.shelf, self.target_size)
         self.background = background_depth(self.shelf, self.working)
         self._motion_planner = None
+        self.tracker = None  # the object tracker of the last perceive (its state goes into the step file)
 
     def frame_camera(self, depth: np.ndarray):
         """The camera at the frame's resolution (same aspect as the station camera's, else refused)."""
@@ -216,9 +217,12 @@ class StepPlanner:
                                 f"({self.camera.width}x{self.camera.height})")
         return self.camera.with_resolution(w, h)
 
-    def perceive(self, depth: np.ndarray, mask: np.ndarray, joint_state=None):
+    def perceive(self, depth: np.ndarray, mask: np.ndarray, joint_state=None, history: dict | None = None):
         """Frame -> (the policy's PolicyObservation, the ObservedBelief). Raises ObservationError for an unusable
-        frame."""
+        frame. The hypotheses are named by the objects tracked so far (:class:`~slax_drake.perception.tracking.
+        ObjectTracker`): its state and the action last planned come from ``history`` (``tracks`` and ``action``,
+        as the previous step wrote them), a new tracker without; the updated state is written by this step."""
+        from slax_drake.perception.tracking import ObjectTracker
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.estimator import EstimatorConfig
         from slax_drake.perception.observation import Observation, occluder_segmentation
@@ -237,15 +241,23 @@ class StepPlanner:
         segments = occluder_segmentation(segment_depth(small_depth, self.working, self.shelf, margin=PANEL_MARGIN),
                                          small_mask)
         frame = Observation(small_depth, segments, small_mask, self.working, joint_state, min_valid_fraction=0.0)
-        belief = ObservedBelief(frame, self.shelf, self.source, background=self.background,
-                                config=EstimatorConfig(overlap_tolerance=HYPOTHESIS_OVERLAP))
+        from slax_drake.perception.estimator import estimate_objects
+
+        tracks = (history or {}).get("tracks")
+        self.tracker = ObjectTracker.from_dict(tracks) if isinstance(tracks, dict) else ObjectTracker()
+        last = _action_of((history or {}).get("action"))
+        config = EstimatorConfig(overlap_tolerance=HYPOTHESIS_OVERLAP)
+        hypotheses = self.tracker.update(estimate_objects(frame, self.shelf, config), last, frame,
+                                         Scene(self.shelf, self.working, (), None))
+        belief = ObservedBelief(frame, self.shelf, self.source, background=self.background, hypotheses=hypotheses,
+                                config=config, remembered=self.tracker.hidden())
         believed = Scene(self.shelf, self.camera, belief.known, None)
         return PolicyObservation(small_depth, segments, belief.known, belief.p1d, believed, belief), belief
 
     def decide(self, observation, history: dict | None = None):
         """The policy's Decision on ``observation``, after restoring ``history`` (P'_{t-1})."""
         self.policy.reset(observation.scene_template)
-        if history is not None:
+        if history is not None and history["history"]:  # an empty one: P'_(t-1) not carried (a new history)
             previous = np.asarray(history["history"], dtype=float)
             if previous.shape != np.shape(observation.p1d):
                 raise PlanStepError(f"history has {previous.size} columns, this step's distribution "
@@ -317,7 +329,7 @@ class StepPlanner:
         self.check_joint_state(q)
         timings = {}
         t0 = time.perf_counter()
-        observation, belief = self.perceive(depth, mask, q)
+        observation, belief = self.perceive(depth, mask, q, history)
         visibility = self.target_visibility(depth, mask)
         timings["perception_s"] = time.perf_counter() - t0
         if visibility["revealed"]:
@@ -424,8 +436,27 @@ class StepPlanner:
             "check": None if report is None else {"ok": report.ok, "checked": report.checked},
             "timings_s": {k: round(v, 4) for k, v in timings.items()},
             "history": {"policy": self.policy_name, "steps": steps + (1 if action is not None else 0),
-                        "history": [] if h is None else [float(v) for v in h]},
+                        "history": [] if h is None else [float(v) for v in h],
+                        "tracks": self.tracker.to_dict() if getattr(self, "tracker", None) is not None else None,
+                        "action": None if action is None else _describe(action)},
         }
+
+
+def _action_of(doc):
+    """The action a step.json's ``action`` describes (None for none or an unreadable one)."""
+    from slax_drake.shelf.actions import Push, Suction
+
+    if not isinstance(doc, dict):
+        return None
+    try:
+        if doc.get("type") == "push":
+            return Push(str(doc["object"]), tuple(float(v) for v in doc["q"]), float(doc["d"]))
+        if doc.get("type") == "suction":
+            return Suction(str(doc["object"]), tuple(float(v) for v in doc["q"]), float(doc["dx"]),
+                           float(doc["dz"]), float(doc.get("yaw", 0.0)))
+    except (KeyError, TypeError, ValueError):
+        return None
+    return None
 
 
 def plan_step_files(station: str, depth: str, mask: str, joint_state: str, out: str, history: str | None = None,
@@ -454,6 +485,7 @@ class TrialStepInputs:
     target_mask: Path
     joint_state: Path
     time_s: float  # the decision's simulated time
+    history: Path | None = None  # the objects tracked up to the previous decision and its action (None: step 1)
 
 
 def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> TrialStepInputs:
@@ -465,7 +497,12 @@ def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> 
       the trial recorded it at that decision (its planar pose; an object that had toppled is drawn upright);
     - ``joint_state.json``: the commanded joint positions at that moment (``executed_trajectory``).
 
-    The station is the trial's. The policy's history is not carried over (plan-step starts it afresh)."""
+    - ``history.json`` (from decision 2 on): the objects the trial's tracker held at the previous decision (seen
+      and remembered, by their tracked names) and the action taken there, so that plan-step names the objects as
+      the trial did (``--history``). P'_(t-1) is not carried over (plan-step starts the policy's history afresh:
+      its working resolution may differ from the trial's).
+
+    The station is the trial's."""
     from slax_drake.io import write_bytes_atomic, write_text_atomic
     from slax_drake.scene.io import load_scene
     from slax_drake.scene.raycast import SceneRaycaster
@@ -524,5 +561,23 @@ def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> 
     write_bytes_atomic(out_dir / "target_mask.png", png.tobytes())
     write_text_atomic(out_dir / "joint_state.json", json.dumps(
         {"joint_names": list(PLANNED_JOINTS), "positions": [q_now[n] for n in PLANNED_JOINTS]}, indent=1))
+    history = None
+    if step > 1:
+        previous = decisions[step - 2]
+        tracks = []
+        for hidden, table in ((False, previous.get("hypotheses") or {}), (True, previous.get("remembered") or {})):
+            for name, h in table.items():
+                if not str(name).startswith("track_") or "shape" not in h or "size" not in h:
+                    continue  # a trial recorded without the tracker
+                tracks.append({"name": name, "shape": h["shape"], "size": h["size"], "x": h["x"], "y": h["y"],
+                               "z": float(h["size"][2]) / 2, "yaw": h.get("yaw", 0.0),
+                               "uncertainty": h.get("uncertainty_m", 0.0), "hidden": hidden, "frames": 1})
+        if tracks:
+            numbers = [int(t["name"].split("_")[-1]) for t in tracks if t["name"].split("_")[-1].isdigit()]
+            doc = {"policy": data.get("policy"), "steps": step - 1, "history": [],
+                   "tracks": {"next_id": max(numbers, default=0) + 1, "frames": step - 1, "tracks": tracks},
+                   "action": previous.get("action")}
+            history = out_dir / "history.json"
+            write_text_atomic(history, json.dumps(doc, indent=1))
     return TrialStepInputs(str(data.get("station") or ""), out_dir / "depth.npy", out_dir / "target_mask.png",
-                           out_dir / "joint_state.json", float(entry["time"]))
+                           out_dir / "joint_state.json", float(entry["time"]), history)

@@ -101,12 +101,15 @@ def background_depth(shelf: Shelf, camera: Camera) -> np.ndarray:
 class ObservedBelief:
     """See the module docstring. ``observation``'s segment ids name the hypotheses (``segment_<id>``);
     ``hypotheses`` (default: the estimator's on ``observation``) and ``p1d`` (default: the source on the frame) may
-    come from the PerceptionSystem."""
+    come from the PerceptionSystem. ``remembered``: the objects seen earlier in the trial and hidden in this frame,
+    where they were last estimated (an :class:`~slax_drake.perception.tracking.ObjectTracker`'s hidden tracks,
+    flagged ``remembered``); None when no tracker runs."""
 
     def __init__(self, observation: Observation, shelf: Shelf, source, background: np.ndarray | None = None,
                  hypotheses: list[Hypothesis] | None = None, config: EstimatorConfig = EstimatorConfig(),
-                 cache_size: int = 4096, p1d: np.ndarray | None = None):
+                 cache_size: int = 4096, p1d: np.ndarray | None = None, remembered: tuple | None = None):
         self.observation = observation
+        self.remembered = remembered
         self.shelf = shelf
         self.source = source
         self.hypotheses = estimate_objects(observation, shelf, config) if hypotheses is None else list(hypotheses)

@@ -73,8 +73,8 @@ space fails with ``blocked_risk`` more (:meth:`placement_risk`), so the reveals 
 refusal, a risk lets a move that reveals much outrank the cheap moves left; an identical failed action is still
 excluded by the corrections.
 
-Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses ``segment_<id>``, never true
-objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
+Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses, named ``track_<k>`` by the
+object tracker, never true objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
 object the frame showed, reaching beyond its hypothesis, into an object seen before and hidden now, or beyond the
 walls. The options below address these; all are off in the registry's ``slax-belief``;
 ``slax-belief-camera-depth`` sets all but ``maybe_occupied``:
@@ -305,9 +305,12 @@ class BeliefSearch(Hindsight):
             config = EstimatorConfig(prior=DepthPrior(rule="range", fraction=float(self.camera_extents)))
         else:
             config = EstimatorConfig(prior=DepthPrior(rule="fixed", fixed=float(self.camera_depth)))
-        hypotheses = estimate_objects(belief.observation, belief.shelf, config)
+        names = {h.segment_id: h.object.name for h in belief.hypotheses}  # the tracker's names, when it runs
+        hypotheses = [dataclasses.replace(h, object=dataclasses.replace(h.object, name=names[h.segment_id]))
+                      if h.segment_id in names else h
+                      for h in estimate_objects(belief.observation, belief.shelf, config)]
         deeper = ObservedBelief(belief.observation, belief.shelf, belief.source, background=belief.background,
-                                hypotheses=hypotheses, p1d=belief.p1d)
+                                hypotheses=hypotheses, p1d=belief.p1d, remembered=belief.remembered)
         known = deeper.known
         return dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known),
                                    belief=deeper)
@@ -341,16 +344,26 @@ class BeliefSearch(Hindsight):
 
     def remembered_in_frame(self, obs, moved: str | None) -> tuple:
         """Camera mode: the hypotheses of the last decision (seen then, or remembered) that stand for an object
-        hidden now, flagged ``remembered`` and named ``remembered_<k>`` (:data:`REMEMBERED`; the policy takes no action on them: it sees no
-        segment to act on). A segment's id says nothing across frames (a real segmentation renumbers them), so
-        a hypothesis is matched by where it stands: it is the object of a hypothesis of this frame when their
-        footprints overlap (more than ``overlap_share`` of the smaller one); the hypothesis the last action moved
-        (``moved``) is not remembered (where it ended is what this frame shows, or unknown). An unmatched one is
-        kept unless this frame contradicts it: the frame sees past it (deeper than its surface by
-        ``see_through`` m) on more than half of the pixels where it would show, were it alone on the shelf."""
+        hidden now, flagged ``remembered`` and named ``remembered_<k>`` (:data:`REMEMBERED`; the policy takes no
+        action on them: it sees no segment to act on).
+
+        When the observation comes with a tracker's hidden objects (``obs.belief.remembered``,
+        :class:`~slax_drake.perception.tracking.ObjectTracker`), those are the remembered ones, but the one the
+        last action moved (``moved``). Otherwise (no tracker): a segment's id says nothing across frames (a real
+        segmentation renumbers them), so a hypothesis is matched by where it stands: it is the object of a
+        hypothesis of this frame when their footprints overlap (more than ``overlap_share`` of the smaller one);
+        the hypothesis the last action moved is not remembered (where it ended is what this frame shows, or
+        unknown). An unmatched one is kept unless this frame contradicts it: the frame sees past it (deeper than
+        its surface by ``see_through`` m) on more than half of the pixels where it would show, were it alone on
+        the shelf."""
         from slax_drake.scene.footprint import Footprint
         from slax_drake.scene.raycast import SceneRaycaster
 
+        tracked = getattr(obs.belief, "remembered", None)
+        if tracked is not None:  # the tracker's hidden objects: matched across frames, contradicted ones dropped
+            names = {o.name for o in obs.known}
+            return tuple(dataclasses.replace(o, name=f"{REMEMBERED}{o.name}", remembered=True) for o in tracked
+                         if o.name != moved and f"{REMEMBERED}{o.name}" not in names)
         overlap_share, see_through = 0.2, 0.01
         frame = obs.belief.observation
         now = [Footprint.of(o).polygon() for o in obs.known]

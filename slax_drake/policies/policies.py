@@ -19,7 +19,13 @@ the first-order model is wrong about the true shelf (:mod:`slax_drake.policies.t
    for the rest of the trial through the protocol's exclusion record, with its reason (a push that moved nothing
    excludes that object's pushes in that direction while it stands there: they all start with the same contact);
 2. no candidate that would return the seen objects to an arrangement already observed in this trial;
-3. an action whose predicted support reduction is zero and that reveals no unseen space (the number of hidden
+3. no shuttle: a candidate that moves its object back against the last executed action on it
+   (:meth:`~slax_drake.policies.trial_memory.TrialMemory.undoes`) is not taken unless it reveals space no earlier
+   arrangement revealed: it uncovers at least ``shuttle_reveal`` (m) of width along x that the object covered in
+   every arrangement observed so far (:meth:`~slax_drake.policies.trial_memory.TrialMemory.vacates_unseen`). The
+   predicted distribution is no judge here: it assumes the empty shelf behind a moved object, so on a shelf where
+   another object stands behind it every move back and forth "reveals" the same columns again;
+4. an action whose predicted support reduction is zero and that reveals no unseen space (the number of hidden
    target placements the distribution model counts does not drop) is not taken while another candidate reduces
    the support or reveals unseen space; among equal reductions, the one that reveals more unseen space first.
 
@@ -55,8 +61,10 @@ class DistributionPolicy:
     use_suctions = False
 
     def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
-                 observation_width: int = 160, max_placements: int = 4, corrected: bool = False):
+                 observation_width: int = 160, max_placements: int = 4, corrected: bool = False,
+                 shuttle_reveal: float | None = 0.02):
         self.corrected = corrected  # the implementation's corrections (module docstring); False: the paper's text
+        self.shuttle_reveal = shuttle_reveal  # m a shuttle must uncover never seen (correction 3); None: allowed
         self.memory = TrialMemory()
         self._action_model = action_model
         self.distribution = distribution
@@ -139,7 +147,14 @@ class DistributionPolicy:
         if self.corrected and self.memory.observed:
             back = self.memory.leads_back(objects, allowed)
             allowed = [a for a, seen in zip(allowed, back) if not seen]
+        if self.corrected and self.shuttle_reveal is not None and self.memory.moves:
+            allowed = [a for a in allowed if not self.memory.undoes(objects, a) or self.reveals_new(objects, a)]
         return allowed
+
+    def reveals_new(self, objects, action) -> bool:
+        """Whether ``action`` on ``objects`` uncovers at least ``shuttle_reveal`` m of width (along x) that its
+        object covered in every arrangement observed in this trial (correction 3)."""
+        return self.memory.vacates_unseen(objects, action) >= self.shuttle_reveal
 
     def unseen_space(self, obs, objects) -> int | None:
         """The number of hidden target placements with the seen objects at ``objects`` (the distribution model's
@@ -210,7 +225,7 @@ class DAR(DistributionPolicy):
             weighted = dr * (self.suction_weight() if isinstance(a, Suction) else 1.0)
             disp = abs(a.d) if isinstance(a, Push) else abs(a.dx) + abs(a.dz)
             revealed = 0
-            if hidden_now is not None:  # correction 3: the unseen space it reveals (lattice placements)
+            if hidden_now is not None:  # correction 4: the unseen space it reveals (lattice placements)
                 revealed = hidden_now - self.unseen_space(obs, apply_action(obs.known, a))
             key = (-weighted, -revealed, support(p), self.action_cost(a), disp, order)
             order += 1
@@ -235,7 +250,7 @@ class DAR(DistributionPolicy):
                         break
         ranked.sort(key=lambda r: r[0])
         if hidden_now is not None and ranked and (ranked[0][0][0] < 0 or ranked[0][0][1] < 0):
-            # correction 3: something reduces the support or reveals unseen space; drop what does neither
+            # correction 4: something reduces the support or reveals unseen space; drop what does neither
             ranked = [r for r in ranked if r[0][0] < 0 or r[0][1] < 0]
         return Decision(tuple(a for _, a in ranked))
 

@@ -13,7 +13,12 @@ redoes it, until the horizon. :class:`TrialMemory` holds the two facts the corre
 - the last proposed action, the objects it was chosen on and the pose the action model predicts for its object.
   :meth:`outcome` compares that prediction with the next observation: "moved nothing" (the object stands where
   it stood), "moved less than predicted" (it moved, but stands more than ``position_tolerance`` short of or away
-  from the predicted pose), or None (as predicted, or the object is no longer seen and nothing can be said).
+  from the predicted pose), or None (as predicted, or the object is no longer seen and nothing can be said);
+- per object, the planar displacement (m) of the last executed action on it (as observed; as commanded when the
+  object is hidden after it), so that :meth:`undoes` can tell a candidate that moves the object back (a shuttle).
+
+Names are the observation's: true names in privileged mode, the tracker's stable names in camera mode
+(:mod:`slax_drake.perception.tracking`), so an object keeps its name across frames.
 
 All positions are in the shelf frame S (x right, y into the shelf; metres).
 """
@@ -79,6 +84,45 @@ class TrialMemory:
     def reset(self) -> None:
         self.observed: list[tuple] = []
         self.proposal: Proposal | None = None
+        self.moves: dict[str, tuple[float, float]] = {}  # object name -> its last executed displacement (m)
+
+    def undoes(self, objects, action) -> bool:
+        """Whether ``action`` on ``objects`` moves its object back against the last executed action on it: along x
+        or along y, both that move and this one's commanded displacement exceed ``position_tolerance`` (m) and
+        point opposite ways (e.g. dx -0.05 then +0.10, whatever either did along y)."""
+        last = self.moves.get(action.name)
+        if last is None:
+            return False
+        obj = next((o for o in objects if o.name == action.name), None)
+        if obj is None:
+            return False
+        moved = apply_action((obj,), action)[0]
+        now = (float(moved.center[0] - obj.center[0]), float(moved.center[1] - obj.center[1]))
+        tol = self.position_tolerance
+        return any(abs(a) > tol and abs(b) > tol and a * b < 0 for a, b in zip(last, now))
+
+    def vacates_unseen(self, objects, action) -> float:
+        """The width (m) of the space ``action`` on ``objects`` uncovers along x that its object covered in every
+        arrangement observed so far (where it was seen): space behind it no earlier arrangement showed. Judged on
+        the footprints' x extents (the camera looks along y)."""
+        obj = next((o for o in objects if o.name == action.name), None)
+        if obj is None:
+            return 0.0
+        moved = apply_action((obj,), action)[0]
+        now, new = _x_extent(obj), _x_extent(moved)
+        always = now
+        for seen in self.observed:
+            other = next((o for o in seen if o.name == action.name), None)
+            if other is None:
+                continue
+            lo, hi = _x_extent(other)
+            always = (max(always[0], lo), min(always[1], hi))
+        if always[1] <= always[0]:
+            return 0.0
+        # the part of ``always`` that the object leaves: ``always`` minus the new extent
+        left = max(0.0, min(always[1], new[0]) - always[0])
+        right = max(0.0, always[1] - max(always[0], new[1]))
+        return left + right
 
     # ---- arrangements -------------------------------------------------------------------------------------------
     def observe(self, objects) -> None:
@@ -197,9 +241,15 @@ class TrialMemory:
             return None
         tol = self.position_tolerance
         predicted = math.dist(p.predicted_xy, p.before_xy)
+        now = next((o for o in objects if o.name == p.action.name), None)
+        if now is None:
+            self.moves[p.action.name] = (p.predicted_xy[0] - p.before_xy[0], p.predicted_xy[1] - p.before_xy[1])
+        else:
+            d = (float(now.center[0]) - p.before_xy[0], float(now.center[1]) - p.before_xy[1])
+            if math.hypot(*d) > tol:
+                self.moves[p.action.name] = d
         if predicted <= tol:
             return None  # too small a move to tell from the observation
-        now = next((o for o in objects if o.name == p.action.name), None)
         if now is None and self.same_arrangement(tuple(objects), p.before):
             return p, Failed(Miss.UNCHANGED)
         if now is None:
@@ -211,3 +261,12 @@ class TrialMemory:
             return p, Failed(Miss.UNCHANGED)
         moved, off = math.dist(xy, p.before_xy), math.dist(xy, p.predicted_xy)
         return p, Failed(Miss.SHORT if moved < predicted else Miss.ELSEWHERE, moved, predicted, off)
+
+
+def _x_extent(o) -> tuple[float, float]:
+    """(x_min, x_max) of ``o``'s footprint in S (m)."""
+    from slax_drake.scene.footprint import Footprint
+
+    fp = Footprint.of(o)
+    ex, _ = fp.extents()
+    return fp.x - ex, fp.x + ex

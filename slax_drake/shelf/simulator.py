@@ -71,10 +71,15 @@ class CameraObserver:
 
     :meth:`observe` also returns what only the simulator knows: which true object each hypothesis is (label
     segmentation: segment id = object index + 1; depth segmentation: the object most of the segment's pixels
-    show), so that an action on ``segment_<id>`` is executed on that object."""
+    show), so that an action on a hypothesis is executed on that object.
+
+    ``tracking`` (default): the hypotheses are associated with the objects seen in earlier frames of the trial
+    (:class:`~slax_drake.perception.tracking.ObjectTracker`, told the action executed since the last frame through
+    :meth:`executed`) and named by their tracks (``track_<k>``, stable across frames) instead of by segment;
+    :meth:`start` begins a new trial. False: ``segment_<id>`` names, nothing carried between frames."""
 
     def __init__(self, shelf, camera, target_size, source: str = "depth", width: int = 160,
-                 segmentation: str = "labels", noise_seed: int | None = None):
+                 segmentation: str = "labels", noise_seed: int | None = None, tracking: bool = True):
         from slax_drake.perception.belief import background_depth, make_source
 
         if segmentation not in SEGMENTATIONS:
@@ -90,6 +95,21 @@ class CameraObserver:
         self.noise_seed = noise_seed
         self.background = background_depth(shelf, self.camera)
         self.steps = 0
+        from slax_drake.perception.tracking import ObjectTracker
+
+        self.tracker = ObjectTracker() if tracking else None
+        self._executed = None
+
+    def start(self) -> None:
+        """A new trial: the tracker forgets every object and the noise's step index starts again at 0."""
+        if self.tracker is not None:
+            self.tracker.reset()
+        self._executed = None
+        self.steps = 0
+
+    def executed(self, action) -> None:
+        """The action (named by a hypothesis of the last frame) executed since the last frame."""
+        self._executed = action
 
     def observe(self, scene: Scene) -> tuple[PolicyObservation, dict]:
         from slax_drake.perception.belief import ObservedBelief
@@ -112,7 +132,15 @@ class CameraObserver:
             segments = segment_depth(depth, self.camera, self.shelf)
         segments = occluder_segmentation(segments, target)
         frame = Frame(depth, segments, target, self.camera, min_valid_fraction=0.0)
-        belief = ObservedBelief(frame, self.shelf, self.source, background=self.background)
+        hypotheses = None
+        if self.tracker is not None:
+            from slax_drake.perception.estimator import estimate_objects
+
+            executed, self._executed = self._executed, None
+            hypotheses = self.tracker.update(estimate_objects(frame, self.shelf), executed, frame,
+                                             dataclasses.replace(scene, objects=(), target=None))
+        belief = ObservedBelief(frame, self.shelf, self.source, background=self.background, hypotheses=hypotheses,
+                                remembered=None if self.tracker is None else self.tracker.hidden())
         names = {}
         for h in belief.hypotheses:
             owners = labels[segments == h.segment_id]
@@ -300,6 +328,8 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
     action model. ``observer``: the camera mode for a non-oracle policy (its actions name hypotheses, executed on the
     true object each hypothesis is); None: privileged."""
     policy.reset(scene)
+    if observer is not None:
+        observer.start()
     seconds, actions, notes = [], [], []
     pushes = suctions = 0
     reason = "horizon"
@@ -321,6 +351,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
             reason = decision.stop_reason or "no action"
             break
         if names is not None:  # camera mode: the hypothesis's true object (the executor's knowledge only)
+            observer.executed(action)
             true_name = names.get(action.name)
             if true_name is None:
                 actions.append(action.describe())

@@ -9,7 +9,8 @@ ended ``settle_time`` ago). When it is, the system decides:
 
 1. it stops with "revealed" when ``stop`` says so, with "horizon" after H actions (its own budget);
 2. the belief (:class:`~slax_drake.perception.belief.ObservedBelief`) from ``observation`` (depth, occluder
-   segmentation, target mask, camera), ``hypotheses`` (the estimator's objects ``segment_<id>``) and
+   segmentation, target mask, camera), ``hypotheses`` (the estimator's objects ``segment_<id>``, renamed by the
+   object tracker to ``track_<k>``, stable across frames; :mod:`slax_drake.perception.tracking`) and
    ``occupancy_1d`` (P_t); a hypothetical action's distribution comes from the predicted frame (segments shifted
    in the image) through the same distribution source as P_t;
 3. the policy (any :class:`~slax_drake.policies.protocol.Policy` that reads a
@@ -84,6 +85,10 @@ class PlannerSystem(LeafSystem):
         from slax_drake.perception.belief import background_depth
 
         self.policy = policy
+        from slax_drake.perception.tracking import ObjectTracker
+
+        self.tracker = ObjectTracker()  # the objects seen so far, named stably across frames
+        self._last_action = None  # the action executed since the last decision (named by a track)
         self.planner = planner
         self.template = Scene(template.shelf, template.camera, (), None)
         self.source = source
@@ -115,6 +120,8 @@ class PlannerSystem(LeafSystem):
 
     def _initialize(self, context, state):
         self.policy.reset(self.template)
+        self.tracker.reset()
+        self._last_action = None
         state.get_mutable_abstract_state(0).set_value(TrialState())
 
     # outputs ---------------------------------------------------------------------------------------------
@@ -161,15 +168,22 @@ class PlannerSystem(LeafSystem):
         if s.steps >= self.horizon:
             return self._finish(s, "horizon", entry, frame)
         measured = self._measured.Eval(context)[: len(self._q_obs)]
-        hypotheses = self._hypotheses.Eval(context)
+        hypotheses = self.tracker.update(self._hypotheses.Eval(context), self._last_action, frame, self.template)
+        self._last_action = None
         p1d = np.array(self._occupancy.Eval(context), dtype=np.float64)
         belief = ObservedBelief(frame, self.template.shelf, self.source, background=self._background,
-                                hypotheses=hypotheses, p1d=p1d)
+                                hypotheses=hypotheses, p1d=p1d, remembered=self.tracker.hidden())
         believed = self.template.with_objects(belief.known)
         obs = PolicyObservation(depth, labels, belief.known, belief.p1d, believed, belief)
         entry["hypotheses"] = {o.name: {"shape": o.shape, "size": [round(float(v), 4) for v in o.size],
                                         "x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                         "yaw": round(float(o.yaw), 5)} for o in belief.known}
+        entry["segment_of"] = {o.name: f"segment_{belief.segment_id(o.name)}" for o in belief.known}  # this frame's
+        entry["remembered"] = {o.name: {"shape": o.shape, "size": [round(float(v), 4) for v in o.size],
+                                        "x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
+                                        "yaw": round(float(o.yaw), 5),
+                                        "uncertainty_m": round(self.tracker.uncertainty(o.name), 4)}
+                               for o in belief.remembered}  # seen earlier, hidden now (the tracker's memory)
         policy = self.policy
         rejected = []
         t0 = time.perf_counter()
@@ -205,6 +219,7 @@ class PlannerSystem(LeafSystem):
             return self._finish(s, "no feasible action" if not rejected else "no feasible motion", entry, frame,
                                 hold=True)
         entry["action"] = _describe(action)
+        self._last_action = action
         entry["motion"] = {"duration_s": round(motion.trajectory.duration, 3), "timings": motion.timings,
                            "max_deviation_m": round(motion.max_deviation, 5),
                            "waypoint_times": motion.waypoint_times, "suction_intervals": motion.suction_intervals}

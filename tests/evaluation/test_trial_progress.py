@@ -89,3 +89,18 @@ def test_a_drag_says_so_in_its_line():
              "predicted_objects": {"object": "segment_2", "x": 0.2, "y": -0.181, "yaw": 0.0}}
     printer.update((entry,), (_snap(0.5, 0.05),))
     assert out.getvalue() == "step 1/8: suction segment_2 by +0.300 m to y = -0.181 m (dragged), planned in 0.2 s, "
+
+
+def test_a_tracked_object_is_judged_through_its_segment_in_that_frame():
+    """The policy names a tracked object (``track_<k>``); the entry's ``segment_of`` gives its segment in the
+    frame, which the referee maps to the true object."""
+    out = io.StringIO()
+    printer = DecisionPrinter(12, out)
+    first = _decision(0, 0.5)
+    first["action"]["object"] = "track_3"
+    first["segment_of"] = {"track_3": "segment_2"}
+    printer.update((first,), (_snap(0.5, 0.05),))
+    printer.update((first, {"step": 1, "time": 20.0, "final": True, "result": "horizon"}), (_snap(0.5, 0.05),
+                                                                                           _snap(20.0, -0.045)))
+    assert out.getvalue().splitlines()[0] == ("step 1/12: push track_3 -0.100 m, planned in 0.4 s, executed, "
+                                              "object_4 moved as predicted")

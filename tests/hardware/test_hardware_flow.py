@@ -55,7 +55,7 @@ def test_the_default_trial_is_refused_when_the_world_or_the_file_changes(trials,
     assert main(["export", str(folder / "trial.json"), "--out", str(path)]) == 0
     traj = load_trajectory(path)
     action = traj.motions[0].action
-    assert action["type"] == "push" and action["object"].startswith("segment_")  # the camera's name
+    assert action["type"] == "push" and action["object"].startswith("track_")  # the tracked camera object's name
     scene = load_scene(folder / "scene.json")
     pushed = action["scene_object"]
     # object_k (not the pushed one) moved to where the blade passes at the middle of the push
@@ -99,7 +99,7 @@ def test_plan_step_output_passes_against_the_true_scene(objects, seed, tmp_path,
     _frame(tmp_path, renderer="drake", objects=objects, seed=seed)
     assert main(_args(tmp_path)) == 0
     step = json.loads((tmp_path / "step.json").read_text())
-    assert len(step["motions"]) == 1 and step["motions"][0]["action"]["object"].startswith("segment_")
+    assert len(step["motions"]) == 1 and step["motions"][0]["action"]["object"].startswith("track_")
     true = sample_scene(load_scenario("sim_configs/sim_shelf.yaml"), objects, seed)
     save_scene(true, tmp_path / "true.json")
     capsys.readouterr()

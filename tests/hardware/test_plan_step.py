@@ -90,6 +90,24 @@ def test_history_is_read_from_a_previous_step(tmp_path):
         read_history(tmp_path / "bad.json")
 
 
+def test_the_tracked_objects_carry_over_between_steps(tmp_path):
+    """plan-step names the hypotheses by the objects tracked in earlier steps (their state in the step file):
+    the same frame perceived again with the first step's tracks gives every hypothesis the same name."""
+    from slax_drake.hardware.plan_step import StepPlanner, _action_of
+
+    depth = _frame(tmp_path)
+    mask = cv2.imread(str(tmp_path / "mask.png"), cv2.IMREAD_GRAYSCALE) > 0
+    planner = StepPlanner(STATION)
+    _, first = planner.perceive(depth, mask)
+    names = [h.object.name for h in first.hypotheses]
+    assert names and all(n.startswith("track_") for n in names)
+    state = json.loads(json.dumps(planner.tracker.to_dict()))
+    _, again = StepPlanner(STATION).perceive(depth, mask, history={"history": [], "tracks": state, "action": None})
+    assert [h.object.name for h in again.hypotheses] == names
+    push = {"type": "push", "object": names[0], "q": [0.0, -0.2, 0.05], "d": 0.05}
+    assert _action_of(push).d == 0.05 and _action_of({"type": "wave"}) is None
+
+
 def test_resample_nearest_keeps_pixel_values():
     image = np.arange(480 * 640, dtype=np.float32).reshape(480, 640)
     small = resample_nearest(image, 160, 120)
@@ -103,7 +121,7 @@ def test_round_trip_from_a_noisy_drake_frame_to_a_checked_trajectory(tmp_path, c
     assert main(_args(tmp_path)) == 0
     doc = json.loads((tmp_path / "step.json").read_text())
     record = doc["metadata"]["plan_step"]
-    assert record["action"]["object"].startswith("segment_")  # chosen on a hypothesis, not a true object
+    assert record["action"]["object"].startswith("track_")  # chosen on a tracked hypothesis, not a true object
     assert record["check"]["ok"] and len(doc["motions"]) == 1
     assert record["history"]["steps"] == 1 and len(record["history"]["history"]) == 160
     assert main(["check-trajectory", str(tmp_path / "step.json")]) == 0
@@ -111,6 +129,7 @@ def test_round_trip_from_a_noisy_drake_frame_to_a_checked_trajectory(tmp_path, c
     assert main(_args(tmp_path, "frame.npy", "step2.json", "--history", str(tmp_path / "step.json"))) == 0
     again = json.loads((tmp_path / "step2.json").read_text())["metadata"]["plan_step"]
     assert again["history"]["steps"] == 2
+    assert again["history"]["tracks"]["tracks"] and again["history"]["action"] == record["action"]
     assert all(b <= a + 1e-12 for a, b in zip(record["history"]["history"], again["history"]["history"]))
 
 

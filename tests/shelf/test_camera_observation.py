@@ -109,11 +109,25 @@ def test_camera_trial_acts_on_true_objects(scenario, segmentation, noise):
     assert run().actions == result.actions  # deterministic (seeded noise)
 
 
+@pytest.mark.parametrize("policy", ["slax-belief", "bluction-dar"])
+def test_camera_mode_policies_with_the_tracker_are_deterministic(scenario, policy):
+    """Two rollouts of one camera trial (noisy frames, depth segmentation, the tracker on) take the same actions;
+    one observer reused for a second trial starts its tracker afresh."""
+    scene = sample_scene(scenario, 6, 4, target_size=SIZE)
+    observer = CameraObserver(scene.shelf, scene.camera, SIZE, segmentation="depth", noise_seed=5)
+    runs = [run_trial(scene, make_policy(policy, scenario, horizon=4), 4, observer=observer) for _ in range(2)]
+    fresh = CameraObserver(scene.shelf, scene.camera, SIZE, segmentation="depth", noise_seed=5)
+    runs.append(run_trial(scene, make_policy(policy, scenario, horizon=4), 4, observer=fresh))
+    assert runs[0].actions == runs[1].actions == runs[2].actions and runs[0].steps >= 1
+
+
 def test_camera_observation_holds_hypotheses_not_true_objects(scenario):
     scene = sample_scene(scenario, 6, 3, target_size=SIZE)
     obs, names = CameraObserver(scene.shelf, scene.camera, SIZE).observe(scene)
     assert obs.belief is not None and obs.known == obs.belief.known
-    assert all(o.name.startswith("segment_") for o in obs.known)
+    assert all(o.name.startswith("track_") for o in obs.known)  # named by the tracker
+    untracked, _ = CameraObserver(scene.shelf, scene.camera, SIZE, tracking=False).observe(scene)
+    assert all(o.name.startswith("segment_") for o in untracked.known)
     assert set(names.values()) <= {o.name for o in scene.objects}
     assert obs.scene_template.target is None
     assert obs.p1d.shape == (160,)
