@@ -9,6 +9,12 @@ from slax_drake.config import load_scenario
 REPO = Path(__file__).resolve().parents[1]
 
 
+@pytest.fixture(scope="module")
+def paper():
+    """The Table I scenario (the paper profile), loaded once per test module."""
+    return load_scenario(REPO / "sim_configs" / "table1.yaml")
+
+
 @pytest.fixture(scope="session")
 def sim_scenario():
     return load_scenario(REPO / "sim_configs" / "sim_shelf.yaml")

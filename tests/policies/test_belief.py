@@ -8,26 +8,16 @@ import itertools
 import numpy as np
 import pytest
 
-from slax_drake.config import load_scenario
 from slax_drake.policies.belief import PackedWorlds
 from slax_drake.policies.belief_options import BeliefOptions
 from slax_drake.policies.hindsight import Worlds
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.simulator import execute, observation_for, run_trial
 from slax_drake.scene import Camera
-from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
+from slax_drake.scene.model import Scene, Shelf, Target, planar_pose
 from slax_drake.scene.sampling import sample_scene, target_visible_fraction
 
-TARGET = (0.06, 0.06, 0.06)
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
-
-
-def box(name, x, y, sx, sy, sz):
-    return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, 0.0))
+from shelf_scenes import TARGET, box
 
 
 def stacked_scene(paper):

@@ -8,16 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slax_drake.config import load_scenario
 from slax_drake.shelf.actions import Suction
 from slax_drake.policies.registry import make_policy
 from slax_drake.scene import Camera
 from slax_drake.scene.model import Scene, SceneObject, Shelf, planar_pose
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
 
 
 def lone_block_policy(paper, rule):

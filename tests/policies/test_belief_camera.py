@@ -5,25 +5,15 @@ stand, never acted on) and the outcome evidence's tolerance on estimated poses; 
 import numpy as np
 import pytest
 
-from slax_drake.config import load_scenario
 from slax_drake.shelf.actions import Push, Suction
 from slax_drake.policies.belief import REMEMBERED
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.simulator import CameraObserver, observation_for
 from slax_drake.scene import Camera
 from slax_drake.scene.footprint import Footprint
-from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
+from slax_drake.scene.model import Scene, Shelf, Target, planar_pose
 
-TARGET = (0.06, 0.06, 0.06)
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
-
-
-def box(name, x, y, sx, sy, sz):
-    return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, 0.0))
+from shelf_scenes import TARGET, box
 
 
 def scene_of(paper, objects):

@@ -4,23 +4,13 @@ collapsing the belief onto the placements that hold it."""
 import numpy as np
 import pytest
 
-from slax_drake.config import load_scenario
 from slax_drake.policies.registry import make_policy
 from slax_drake.scene import Camera
 from slax_drake.scene.footprint import Footprint
-from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pose
+from slax_drake.scene.model import Scene, Shelf, Target, planar_pose
 from slax_drake.shelf.simulator import CameraObserver
 
-TARGET = (0.06, 0.06, 0.06)
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
-
-
-def box(name, x, y, sx, sy, sz):
-    return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, 0.0))
+from shelf_scenes import TARGET, box
 
 
 def scene_of(paper, objects, target_xy=(-0.2, 0.22)):

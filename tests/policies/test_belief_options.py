@@ -5,15 +5,9 @@ import dataclasses
 
 import pytest
 
-from slax_drake.config import load_scenario
 from slax_drake.evaluation.settings import policy_settings
 from slax_drake.policies.belief_options import DEFAULT_BELIEF_OPTIONS, BeliefOptions
 from slax_drake.policies.registry import POLICY_TABLE, make_policy
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
 
 
 def test_every_field_is_documented_and_the_options_are_frozen():

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from action_walks import walk
-from slax_drake.config import load_scenario
 from slax_drake.shelf.actions import ActionModel, _StateContext, apply_action
 from slax_drake.policies.oracle_search import StateKeys
 from slax_drake.policies.registry import make_policy
@@ -28,11 +27,6 @@ def two_blockers(scenario):
     target = Target((0.06, 0.06, 0.06), planar_pose(0.0, 0.22, 0.03, 0.0))
     objects = (box("a", 0.0, -0.15, sx=0.12), box("b", 0.0, 0.05, sx=0.12), box("c", -0.24, 0.20))
     return Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(scenario.camera), objects, target, 0)
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
 
 
 class UncachedModel(ActionModel):

@@ -3,7 +3,6 @@
 
 import pytest
 
-from slax_drake.config import load_scenario
 from slax_drake.shelf.actions import ActionModel, Push
 from slax_drake.policies.oracle_search import action_regions, commutation_margin, interacts, search_plan
 from slax_drake.policies.registry import make_policy
@@ -16,11 +15,6 @@ from slax_drake.scene.sampling import shelf_of
 
 def box(name, x, y, sx=0.10, sy=0.08, sz=0.15):
     return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, 0.0))
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
 
 
 def scene_with(objects, target_xy, scenario):

@@ -4,7 +4,6 @@ executed action that moved nothing (with its reason) and never return to an arra
 
 import pytest
 
-from slax_drake.config import load_scenario
 from slax_drake.shelf.actions import apply_action
 from slax_drake.policies.registry import POLICY_NAMES, make_policy
 from slax_drake.shelf.simulator import execute, observation_for, run_trial
@@ -14,11 +13,6 @@ from slax_drake.scene.model import Scene, SceneObject, Shelf, Target, planar_pos
 from slax_drake.scene.sampling import sample_scene, target_visible_fraction
 
 TARGET = (0.06, 0.06, 0.06)
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
 
 
 @pytest.mark.parametrize("name", POLICY_NAMES)

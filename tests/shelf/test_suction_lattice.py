@@ -12,17 +12,11 @@ import numpy as np
 import pytest
 
 from action_walks import walk
-from slax_drake.config import load_scenario
 from slax_drake.shelf.actions import ActionModel, Suction, _StateContext
 from slax_drake.shelf.floor import column_extents
 from slax_drake.shelf.tool import tool_config
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.sampling import shelf_of
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_scenario("sim_configs/table1.yaml")
 
 
 def model_for(scenario, profile: str, **rules) -> ActionModel:
