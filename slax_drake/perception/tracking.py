@@ -32,7 +32,6 @@ Positions in the shelf frame S (x right, y into the shelf; metres). Deterministi
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
