@@ -39,7 +39,9 @@ def register(subparsers) -> None:
                    help="what the non-oracle policies see: camera (default: rendered frames -> segmentation -> "
                    "estimator hypotheses, P_t from the frame, predictions by shifting segments in the image) or "
                    "privileged (the objects seen with their true shapes and poses, P_t of the true scene; the "
-                   "behaviour before camera mode); the oracles read the true scene in both; the shelf simulator only")
+                   "behaviour before camera mode); the oracles read the true scene in both. With --physics it sets the shelf "
+                   "simulator beside the Drake trials (default there: privileged); the Drake trials always see their "
+                   "camera")
     p.add_argument("--segmentation", choices=("labels", "depth"), default=None,
                    help="with --observation camera: the render's object labels (default, idealised) or depth-only "
                    "segmentation")
@@ -140,14 +142,19 @@ def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: in
         raise UserError("--physics runs ground-truth distributions only: leave out --perception")
     if args.oracle_seconds is not None:
         raise UserError("--oracle-seconds applies to the shelf simulator's oracles only")
-    if args.observation is not None or args.segmentation is not None:
-        raise UserError("--observation and --segmentation apply to the shelf simulator only (the physics benchmark's "
-                        "observation is its trial diagram's camera; --sensor-noise adds the L515 model to it)")
+    if args.segmentation is not None:
+        raise UserError("--segmentation applies to the shelf simulator only (the physics benchmark's Drake trials "
+                        "segment by the render's labels; --sensor-noise adds the L515 model to their camera)")
+    shelf_camera = None
+    if args.observation == "camera":  # the shelf simulator beside sees the same kind of frames as the Drake trials
+        from slax_drake.evaluation.table1 import CameraMode
+
+        shelf_camera = CameraMode(segmentation="labels", sensor_noise=bool(args.sensor_noise))
     summary = run_physics_benchmark(args.config, policies, n, seed=seed, out=args.out, workers=args.workers,
                                     densities=densities, station=args.station, sleep=args.sleep,
                                     progress=not args.no_progress, tool_rules=tool_rules, backend=args.backend,
                                     ray_address=args.ray_address, profile=profile,
-                                    sensor_noise=args.sensor_noise)
+                                    sensor_noise=args.sensor_noise, shelf_camera=shelf_camera)
     meta = summary["meta"]
     print(f"kept {plural(meta['scenes_kept'], 'scene')} already in {args.out}, ran {meta['scenes_run']}")
     for p, per in summary["policies"].items():

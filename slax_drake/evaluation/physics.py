@@ -53,6 +53,13 @@ def drake_observation(sensor_noise: bool) -> str:
             + ("" if sensor_noise else ", no sensor noise"))
 
 
+def mass_model_words(mass_model: str | None) -> str:
+    """The report's words for a scenario's ``physics.mass_model`` (None: a run from before it was recorded)."""
+    return {"household": "household goods' masses by shape and volume (physics.mass_model: household)",
+            "density": "objects.density x volume (physics.mass_model: density)"}.get(
+        mass_model, "not recorded (a run from before the mass model was; see its scenario)")
+
+
 def trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return Path(out) / "physics_trials" / policy / f"{density:02d}_{index:04d}.json"
 
@@ -120,10 +127,10 @@ def _diverged_trial(message: str, wall_s: float) -> dict:
 def _run_scene(job) -> dict:
     """Runs one scene in both simulators (in whichever process the backend chose); returns its result file's
     content."""
-    config, station, policy_name, density, index, seed, sleep, tool_rules, profile, sensor_noise = job
+    config, station, policy_name, density, index, seed, sleep, tool_rules, profile, sensor_noise, shelf_camera = job
     from slax_drake.config import load_scenario
     from slax_drake.policies.registry import make_policy
-    from slax_drake.shelf.simulator import run_trial as run_shelf_trial
+    from slax_drake.shelf.simulator import CameraObserver, run_trial as run_shelf_trial
     from slax_drake.scene.sampling import sample_scene
     from slax_drake.evaluation.trial import TrialOptions, drake_info_silenced, run_trial
 
@@ -134,8 +141,13 @@ def _run_scene(job) -> dict:
     scene = sample_scene(scenario, opts.objects, seed, target_size=opts.target_size)
     policy = make_policy(policy_name, scenario, perception="ground-truth", horizon=opts.horizon,
                          tool_overrides=tool_rules, profile=profile)
+    observer = None
+    if shelf_camera is not None:
+        observer = CameraObserver(scene.shelf, scene.camera, opts.target_size, source="depth",
+                                  width=policy.observation_width, segmentation=shelf_camera.segmentation,
+                                  noise_seed=seed if shelf_camera.sensor_noise else None)
     shelf = run_shelf_trial(scene, policy, opts.horizon, threshold=scenario.target.visibility_threshold,
-                            suction_cost=scenario.protocol.suction_cost, density=density).to_dict()
+                            suction_cost=scenario.protocol.suction_cost, density=density, observer=observer).to_dict()
     t0 = time.perf_counter()
     try:
         with drake_info_silenced():
@@ -194,7 +206,7 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
                           station: str | None = None, sleep: bool = False, progress: bool = True,
                           tool_rules: dict | None = None, backend: str = "local",
                           ray_address: str | None = None, profile: str = "station",
-                          sensor_noise: bool = False) -> dict:
+                          sensor_noise: bool = False, shelf_camera=None) -> dict:
     """Runs the missing scenes (both simulators) and writes physics.json and physics.md; returns the summary, whose
     ``meta`` says how many scenes were kept from the folder and how many ran.
 
@@ -205,7 +217,9 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     simulators, on top of the station's cup limit
     (``trial.station_tool_rules``); ``backend``, ``workers``, ``ray_address``: where the scenes run
     (:func:`slax_drake.backends.run_tasks`); ``sensor_noise``: the L515 depth-noise model between the Drake
-    trials' camera and their perception (seeded per scene). The settings are recorded in the folder; a resumed run
+    trials' camera and their perception (seeded per scene); ``shelf_camera``: the shelf simulator's camera mode
+    (slax_drake.evaluation.table1.CameraMode, the same frames' labels and noise as the Drake trials') or None
+    (privileged: the objects as they are). The settings are recorded in the folder; a resumed run
     with other settings is refused before anything runs.
     """
     from tqdm import tqdm
@@ -251,12 +265,14 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
         raise PhysicsBenchmarkError(f"station file not found: {station}")
     out = Path(out)
     tool_rules = station_tool_rules(load_station_scenario(station), tool_rules, profile)
-    settings = {**protocol_settings(scenario, config, seed, "ground-truth", tool_rules, policies, profile=profile),
+    settings = {**protocol_settings(scenario, config, seed, "ground-truth", tool_rules, policies, camera=shelf_camera,
+                                    profile=profile),
                 "drake_observation": drake_observation(sensor_noise),
                 "station": str(station), "station_sha256": file_digest(station), "sleep": bool(sleep)}
     record_or_refuse(out, settings, has_results=any((out / "physics_trials").glob("*/*.json")),
                      name=PHYSICS_SETTINGS_FILE)
-    all_jobs = [(config, station, p, n, i, scene_seed(seed, n, i), sleep, tool_rules, profile, sensor_noise)
+    all_jobs = [(config, station, p, n, i, scene_seed(seed, n, i), sleep, tool_rules, profile, sensor_noise,
+                 shelf_camera)
                 for p in policies for n in densities for i in range(scenes_per_density)]
     jobs = [j for j in all_jobs if not trial_path(out, j[2], j[3], j[4]).is_file()]
     # Scene index by scene index, densest first within each: a run stopped early holds the same number of scenes
@@ -277,7 +293,8 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
     summary = summarise(trials, policies, densities, (scenario.shelf.width, scenario.shelf.depth))
     summary["meta"] = {"config": config, "station": station, "scenes_per_density": scenes_per_density,
                        "seed": seed, "densities": densities, "sleep": sleep, "sensor_noise": sensor_noise,
-                       "workers": workers, "backend": backend,
+                       "workers": workers, "backend": backend, "mass_model": scenario.physics.mass_model,
+                       "shelf_observation": "privileged" if shelf_camera is None else "camera",
                        "profile": profile, "tool_rules": tool_rules, "scenes_kept": len(all_jobs) - len(jobs), "scenes_run": len(jobs),
                        "wall_seconds_this_run": round(elapsed, 1), "match_distance_m": MATCH_DISTANCE,
                        "match_yaw_deg": math.degrees(MATCH_YAW)}
@@ -436,8 +453,11 @@ def markdown_table(summary: dict) -> str:
                          f"{secs(e.get('planning_median_s'))} / {secs(e.get('planning_p90_s'))} |")
     meta = summary.get("meta", {})
     lines += ["", f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
-              f"the same scenes in both simulators: the shelf simulator with the objects seen as they are and ground-truth "
-              f"distributions (privileged), the Drake trials with what their camera sees "
+              f"the same scenes in both simulators: the shelf simulator "
+              + ("with the objects seen as they are and ground-truth distributions (privileged)"
+                 if meta.get("shelf_observation", "privileged") == "privileged" else
+                 "with what its rendered camera sees (camera mode, the render's labels, the same noise model)")
+              + f", the Drake trials with what their camera sees "
               f"({drake_observation(bool(meta.get('sensor_noise')))}). "
               f"Steps over successful trials. "
               f"An action matches when the object's physical pose at the next decision is within "
@@ -446,7 +466,8 @@ def markdown_table(summary: dict) -> str:
               f"nothing lost: a Drake success with no object toppled or dropped. "
               f"Planning per executed action: every candidate motion planned for that decision (rejected ones "
               f"included), one worker process each. "
-              f"Object sleep {'on' if meta.get('sleep') else 'off'}."
+              f"Object sleep {'on' if meta.get('sleep') else 'off'}. "
+              f"Object masses: {mass_model_words(meta.get('mass_model'))}."
               + f" Action-model rules: the '{meta.get('profile', 'station')}' profile"
               + (f", with {', '.join(f'{k} = {v}' for k, v in meta['tool_rules'].items())}."
                  if meta.get("tool_rules") else ".")]

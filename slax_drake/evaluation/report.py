@@ -137,6 +137,8 @@ def benchmark_command(folder: ResultFolder) -> str:
         parts.append("--densities " + ",".join(str(d) for d in densities))
     parts.append(f"--workers {meta.get('workers', 2)}")
     if folder.kind == "physics":
+        if meta.get("shelf_observation") == "camera":
+            parts.append("--observation camera")
         if meta.get("sensor_noise"):
             parts.append("--sensor-noise")
         if meta.get("sleep"):
@@ -281,11 +283,14 @@ def _drake_mode(folder: ResultFolder) -> tuple[str, str]:
 def physics_section(folder: ResultFolder) -> str:
     """Markdown of one physics-benchmark folder: profile, the two simulators' observation modes, the command and
     per policy and density the success in both simulators, the matched actions and Drake's endings."""
+    from slax_drake.evaluation.physics import mass_model_words
+
     meta = folder.meta
     rules = ", ".join(f"{k} = {v}" for k, v in (meta.get("tool_rules") or {}).items())
     mode, seen = _drake_mode(folder)
     lines = [f"### `{folder.path.name}`: profile `{folder.profile}`, {mode}", "",
-             f"{seen}; the shelf simulator beside them privileged. "
+             f"{seen}; the shelf simulator beside them {meta.get('shelf_observation', 'privileged')}. "
+             f"Object masses: {mass_model_words(meta.get('mass_model'))}. "
              + (f"Rules beyond the profile: {rules}. " if rules else "") + "Made with:", "",
              "```bash", benchmark_command(folder), "```", "",
              "| policy | objects | scenes | shelf simulator | Drake | Drake, nothing lost | actions matching the "
