@@ -133,3 +133,14 @@ def distinct(failures) -> tuple:
 def joined_message(failures) -> str:
     """The message of one variant's failures (one per first IK solution tried): the distinct ones, "; "-joined."""
     return "; ".join(f.message for f in distinct(failures))
+
+
+def lead_last(variants: list) -> list:
+    """The failed variants of one action, ``[(where, [PlanningFailure, ...]), ...]`` in the order tried, reordered so
+    that the one to report leads at the end: the last variant, unless one got past the approach (its first failure
+    not :attr:`PlanningFailure.early`), then the last such one. A group-wide (early) failure must hold for every
+    variant: when one variant reached the object, the approach is not what rules the action out, and the other
+    actions of its group (the object's other placements, say) may still run."""
+    late = [i for i, (_, failures) in enumerate(variants) if not failures[0].early]
+    lead = late[-1] if late else len(variants) - 1
+    return variants[:lead] + variants[lead + 1:] + [variants[lead]]

@@ -49,7 +49,7 @@ import time
 
 import numpy as np
 
-from slax_drake.planning.failures import RETURN, FailureKind, PlanningFailure, distinct, joined_message
+from slax_drake.planning.failures import RETURN, FailureKind, PlanningFailure, distinct, joined_message, lead_last
 from slax_drake.planning.free_path import free_path
 from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
@@ -204,12 +204,13 @@ class MotionPlanner:
                 break
         if motion is None:
             timings["total_s"] = time.perf_counter() - t_all
-            # The last variant's failures lead (their first is the Rejection's failure, which the PlannerSystem
-            # reads); the other variants follow in brackets.
-            said = [(w, joined_message(f)) for w, f in reasons]
+            # The leading variant's failures come first (their first is the Rejection's failure, which the
+            # PlannerSystem reads); the other variants follow in brackets (failures.lead_last).
+            ordered = lead_last(reasons)
+            said = [(w, joined_message(f)) for w, f in ordered]
             reason = said[-1][1] if len(said) == 1 else (
                 f"{said[-1][1]} [{said[-1][0]}; before: " + " | ".join(f"{w}: {r}" for w, r in said[:-1]) + "]")
-            return Rejection(action, reason, _rounded(timings), reasons[-1][1][0])
+            return Rejection(action, reason, _rounded(timings), ordered[-1][1][0])
         timings["total_s"] = time.perf_counter() - t_all
         motion.timings = _rounded(timings)
         return motion

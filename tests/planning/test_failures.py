@@ -106,3 +106,20 @@ def test_only_the_first_solutions_failure_names_the_waypoint():
 ])
 def test_an_executed_actions_miss_is_typed_and_its_message_made_from_it(failed, message):
     assert failed.message == message
+
+
+def test_a_variant_that_reached_the_object_leads_so_the_group_is_not_ruled_out():
+    """A suction whose first carry variants failed at the translate and whose last failed at the approach (a
+    replayed 6-object scene, seed 0 of Table I): the approach is not what rules it out, so the reported failure is
+    the last late one and the policy excludes this action only, not the object's other placements."""
+    from slax_drake.planning.failures import lead_last
+
+    translate = [PlanningFailure(FailureKind.NO_IK_SOLUTION, "translate")]
+    lower = [PlanningFailure(FailureKind.NO_IK_SOLUTION, "lower")]
+    approach = [PlanningFailure(FailureKind.SEGMENT_COLLIDES, "approach", hits="a with b")]
+    ordered = lead_last([("y = -0.48", translate), ("y = -0.36", lower), ("turned", approach)])
+    assert ordered[-1] == ("y = -0.36", lower) and not ordered[-1][1][0].early
+    assert [w for w, _ in ordered] == ["y = -0.48", "turned", "y = -0.36"]
+    # every variant failed before the tool reached the object: the last one leads and the whole group goes
+    only_early = lead_last([("m 5 cm", approach), ("m 2 cm", [PlanningFailure(FailureKind.NO_IK_SOLUTION, "insert")])])
+    assert only_early[-1][0] == "m 2 cm" and only_early[-1][1][0].early
