@@ -349,6 +349,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],
             "drake_wall_s": d["wall_s"],
             "planning_s": [a["planning_s"] for a in d["actions"] if a.get("planning_s") is not None],
+            "reversals": reversals(d["actions"]),
             "judged_by_kind": {kind: [sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"]),
                                       sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"] is not None)]
                                for kind in ACTION_KINDS},
@@ -379,11 +380,39 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "median_real_time_factor": _median([t["real_time_factor"] for t in sel
                                                     if t["real_time_factor"] is not None]),
                 **_planning_stats([s for t in sel for s in t["planning_s"]]),
+                "reversals": sum(t["reversals"] for t in sel),
+                "trials_with_reversal": sum(1 for t in sel if t["reversals"]),
                 "match_by_action": _match_by_action(sel),
                 "mismatch_kinds": _mismatch_counts(sel),
             }
         summary["policies"][p] = per
     return summary
+
+
+REVERSAL_MIN = 0.01  # m: both moves' components along the reversed axis exceed this (the no-shuttle rule's 1 cm)
+SAME_PLACE = 0.02  # m: an action's object stood within this of where an earlier action left it (the same object)
+
+
+def reversals(actions: list[dict]) -> int:
+    """How many of a Drake trial's executed actions moved an object back along x or y against the previous move of
+    the same physical object (both components over :data:`REVERSAL_MIN`): the shuttles the no-shuttle rule forbids,
+    plus the ones it lets through because they uncover space no earlier arrangement did. Judged from the true poses
+    of the record (``before``, ``outcome``, m in S): an action's object is the one an earlier action left within
+    :data:`SAME_PLACE` of where this one found it (the track names of the record are the planner's and may change)."""
+    last_moves = []  # (where the object was left (x, y), its displacement (dx, dy)), latest first
+    count = 0
+    for a in actions:
+        before, after = a.get("before"), a.get("outcome")
+        if before is None or after is None:
+            continue
+        move = (after["x"] - before["x"], after["y"] - before["y"])
+        previous = next((m for (x, y), m in last_moves
+                         if math.hypot(before["x"] - x, before["y"] - y) <= SAME_PLACE), None)
+        if previous is not None and any(p * c < 0 and abs(p) > REVERSAL_MIN and abs(c) > REVERSAL_MIN
+                                        for p, c in zip(previous, move)):
+            count += 1
+        last_moves.insert(0, ((after["x"], after["y"]), move))
+    return count
 
 
 ACTION_KINDS = ("push", "suction", "drag")  # "suction": lifted; "drag": slid on the floor (the drag grasp)

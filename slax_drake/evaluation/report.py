@@ -109,6 +109,14 @@ def _pct(rate) -> str:
     return "-" if rate is None else f"{100 * rate:.0f} %"
 
 
+def _count(n) -> str:
+    return "-" if n is None else str(n)
+
+
+def _seconds(v) -> str:
+    return "-" if v is None else f"{v:.2f}"
+
+
 def _tool_rule_args(rules: dict) -> str:
     return "".join(f" --tool-rule {k}={v}" for k, v in sorted((rules or {}).items()))
 
@@ -294,7 +302,8 @@ def physics_section(folder: ResultFolder) -> str:
              + (f"Rules beyond the profile: {rules}. " if rules else "") + "Made with:", "",
              "```bash", benchmark_command(folder), "```", "",
              "| policy | objects | scenes | shelf simulator | Drake | Drake, nothing lost | actions matching the "
-             "prediction | Drake endings |", "|---|---|---|---|---|---|---|---|"]
+             "prediction | Drake endings | trials with a reversal | planning per action, median / p90 (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for policy, per in folder.summary["policies"].items():
         for key in _density_keys(per):
             e = per[key]
@@ -302,7 +311,14 @@ def physics_section(folder: ResultFolder) -> str:
             lines.append(f"| {policy} | {'All' if key == 'all' else key} | {e['trials']} | "
                          f"{_pct(e['shelf_success_rate'])} | {_pct(e['drake_success_rate'])} | "
                          f"{_pct(e.get('drake_clean_success_rate'))} | {_pct(e['match_rate'])} "
-                         f"({e['actions_matched']}/{e['actions_judged']}) | {endings} |")
+                         f"({e['actions_matched']}/{e['actions_judged']}) | {endings} | "
+                         f"{_count(e.get('trials_with_reversal'))} | {_seconds(e.get('planning_median_s'))} / "
+                         f"{_seconds(e.get('planning_p90_s'))} |")
+    lines += ["", "Reversal: an executed move of an object back along x or y against its previous move (both over "
+              "1 cm, judged from the true poses): the shuttles the no-shuttle rule forbids and the reversals it lets "
+              "through because they uncover space no earlier arrangement uncovered (\"-\": a run from before it was "
+              "counted). Planning per executed action: every candidate motion planned for that decision, the "
+              "rejected ones included."]
     return "\n".join(lines) + "\n"
 
 

@@ -254,3 +254,38 @@ def test_summary_counts_match_per_action_kind_and_mismatch_kinds():
                                    "unclassified": 1}
     md = markdown_table({"policies": {"p": {"all": {**e, "trials": 2}}}, "meta": {}})
     assert "| p | All | 50 % (2/4) | 50 % (1/2) | 50 % (1/2) | 0 | 0 | 1 | 1 | 1 | 1 |" in md
+
+
+@pytest.mark.slow
+def test_the_shelf_simulator_beside_can_see_through_its_camera_and_the_report_names_the_masses(tmp_path):
+    from slax_drake.evaluation.table1 import CameraMode
+
+    summary = run_physics_benchmark(CONFIG, out=tmp_path, **{**TINY, "shelf_camera": CameraMode()})
+    assert summary["meta"]["shelf_observation"] == "camera"
+    assert summary["meta"]["mass_model"] == "density"
+    settings = json.loads((tmp_path / "physics_settings.json").read_text())
+    assert settings["observation"] == "camera" and settings["camera"] == {"segmentation": "labels",
+                                                                          "sensor_noise": False}
+    text = (tmp_path / "physics.md").read_text()
+    assert "with what its rendered camera sees" in text and "Object masses: objects.density x volume" in text
+
+
+def _moved(x0, y0, x1, y1):
+    return {"before": {"x": x0, "y": y0, "yaw": 0.0}, "outcome": {"x": x1, "y": y1, "yaw": 0.0}}
+
+
+def test_reversals_count_moves_back_against_the_same_objects_previous_move():
+    from slax_drake.evaluation.physics import reversals
+
+    # object A pushed +10 cm, object B moved, A pulled back 8 cm: one reversal (A found where it was left)
+    assert reversals([_moved(0.0, -0.1, 0.1, -0.1), _moved(-0.2, -0.1, -0.25, -0.1),
+                      _moved(0.1, -0.1, 0.02, -0.1)]) == 1
+    # the same displacements, but the third object stood elsewhere (another object): no reversal
+    assert reversals([_moved(0.0, -0.1, 0.1, -0.1), _moved(0.3, -0.2, 0.22, -0.2)]) == 0
+    # a move on along the same direction, and one back by less than 1 cm: no reversal
+    assert reversals([_moved(0.0, -0.1, 0.1, -0.1), _moved(0.1, -0.1, 0.2, -0.1),
+                      _moved(0.2, -0.1, 0.195, -0.1)]) == 0
+    # reversed along y only (a suction pulled it to the front, a push-in... here a second suction sets it back)
+    assert reversals([_moved(0.0, -0.05, 0.0, -0.2), _moved(0.0, -0.2, 0.0, -0.06)]) == 1
+    # an action with no outcome (the trial ended) is skipped
+    assert reversals([_moved(0.0, -0.1, 0.1, -0.1), {"before": None, "outcome": None}]) == 0
