@@ -790,6 +790,16 @@ class BeliefSearch(Hindsight):
             kids.extend(group[: self.placements_per_object])
         return kids
 
+    def screened_counts(self, objects) -> dict:
+        """The base policy's screening counts, plus "placement not allowed" for the suctions it lets through whose
+        placement overlaps a blocked region (:meth:`placement_allowed`)."""
+        counts = super().screened_counts(objects)
+        blocked = sum(1 for a in super(Hindsight, self).candidates(objects, True, True)
+                      if isinstance(a, Suction) and not self.placement_allowed(objects, a))
+        if blocked:
+            counts["placement not allowed"] = blocked
+        return counts
+
     def action_model_candidates(self, objects) -> list:
         """The first moves: the policy's candidates (every suction of the profile; exclusions and no return
         applied), less the placements overlapping a blocked region."""

@@ -143,13 +143,33 @@ class DistributionPolicy:
             objects, pushes=self.use_pushes if pushes is None else pushes,
             suctions=self.use_suctions if suctions is None else suctions,
         )
-        allowed = self._exclusions.allowed(c.feasible, objects)
+        return [a for a, why in self.screen(objects, c.feasible) if why is None]
+
+    def screen(self, objects, feasible) -> list:
+        """``(action, why)`` for each of the action model's ``feasible`` candidates on ``objects``: ``why`` None for
+        a candidate the policy may take, else the first correction that screens it out: "excluded" (an exclusion
+        of this trial: the motion planner rejected it or its group, or it failed when executed), "back to an
+        observed arrangement" (correction 2) or "shuttle" (correction 3: it reverses its object's last move and
+        uncovers no new width)."""
+        allowed = set(id(a) for a in self._exclusions.allowed(feasible, objects))
+        out = [(a, None if id(a) in allowed else "excluded") for a in feasible]
         if self.corrected and self.memory.observed:
-            back = self.memory.leads_back(objects, allowed)
-            allowed = [a for a, seen in zip(allowed, back) if not seen]
+            open_ = [a for a, why in out if why is None]
+            back = {id(a) for a, seen in zip(open_, self.memory.leads_back(objects, open_)) if seen}
+            out = [(a, "back to an observed arrangement" if id(a) in back else why) for a, why in out]
         if self.corrected and self.shuttle_reveal is not None and self.memory.moves:
-            allowed = [a for a in allowed if not self.memory.undoes(objects, a) or self.reveals_new(objects, a)]
-        return allowed
+            out = [(a, "shuttle" if why is None and self.memory.undoes(objects, a)
+                    and not self.reveals_new(objects, a) else why) for a, why in out]
+        return out
+
+    def screened_counts(self, objects) -> dict:
+        """{why: count} over the action model's feasible candidates on ``objects`` that this policy screens out
+        (:meth:`screen`), for the record of a decision that found no action; the policies that screen more (safe
+        suctions, placement rules) add their own kinds."""
+        import collections
+
+        c = self._action_model.enumerate(objects, pushes=True, suctions=True)
+        return dict(collections.Counter(why for _, why in self.screen(objects, c.feasible) if why is not None))
 
     def reveals_new(self, objects, action) -> bool:
         """Whether ``action`` on ``objects`` uncovers at least ``shuttle_reveal`` m of width (along x) that its

@@ -263,6 +263,9 @@ def stop_record(policy, known, rejected: list, stop_reason: str | None) -> dict:
     exclusions = getattr(policy, "exclusions", None)
     if exclusions is not None:
         out["excluded"] = [{"action": a.describe(), "reason": why} for a, why in exclusions]
+    screened = getattr(policy, "screened_counts", None)
+    if screened is not None:  # why the policy took none of the feasible candidates, by correction
+        out["screened"] = screened(tuple(known))
     return out
 
 

@@ -63,7 +63,10 @@ def why_lines(data: dict, written) -> list[str]:
     head = (f"why:     at the last decision the action model refused {_plural(refused, 'candidate')}, the motion "
             f"planner rejected {rejected}")
     if last.get("feasible_left") and not rejected:
-        head += f"; the policy excluded the {_plural(last['feasible_left'], 'feasible one')} left"
+        head += f"; the policy screened out the {_plural(last['feasible_left'], 'feasible one')} left"
+        if last.get("screened"):
+            head += " (" + ", ".join(f"{why}: {n}" for why, n in sorted(last["screened"].items(),
+                                                                       key=lambda kv: (-kv[1], kv[0]))) + ")"
     if last.get("stop_reason"):
         head += f" (the policy: {last['stop_reason']})"
     lines = [head]
