@@ -19,6 +19,7 @@ FLAT_DIGESTS = {
     "sim_configs/sim_shelf.yaml": "0ae367567db4a43e47b1e6d38fa2ed8b35b54f0b4cb0fe37bdf1c612f9468daf",
     "sim_configs/table1.yaml": "c66db8a0a01852b49fd245de1bec68c8d8d8db8367b3768e0beaa69dea1c0402",
     "sim_configs/table1_aligned.yaml": "19fdef14a94e5067fd7f91a59268893cdd43e5f88c2e910d6b18c4f266fe5774",
+    "sim_configs/table1_household.yaml": "0979e36b316968b36aa92413dc87e6e9cd7bdfd4a5ec2a192ae1c7d99c151e75",
     "sim_configs/table2.yaml": "928f496014b137dbccadacb93f13b7234d9ecf67200d1f69da0520af967c6e16",
 }
 
@@ -91,3 +92,9 @@ def test_the_command_line_reports_a_bad_overlay_in_one_line(tmp_path, capsys):
     assert main(["scene", "--config", str(path), "--out", str(tmp_path / "scene.json")]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "nowhere.yaml" in err
+
+
+def test_the_household_overlay_changes_only_the_mass_model():
+    table1, household = load_scenario("sim_configs/table1.yaml"), load_scenario("sim_configs/table1_household.yaml")
+    assert household == dataclasses.replace(table1, physics=dataclasses.replace(table1.physics,
+                                                                                mass_model="household"))

@@ -173,7 +173,7 @@ class BeliefSearch(Hindsight):
     def __init__(self, *args, options: BeliefOptions = DEFAULT_BELIEF_OPTIONS, horizon: int | None = None, **kwargs):
         o = options
         super().__init__(*args, samples=o.samples, seconds=o.seconds, failure_cost=o.failure_cost, safe_suctions=False,
-                         **kwargs)
+                         shuttle_last_resort=o.shuttle_last_resort, **kwargs)
         self.options = o
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
         self._risk_by_box: dict = {}  # placement box -> its placement_risk, for this decision's hidden centres
@@ -790,10 +790,11 @@ class BeliefSearch(Hindsight):
             kids.extend(group[: self.placements_per_object])
         return kids
 
-    def screened_counts(self, objects) -> dict:
+    def screened_counts(self, objects=None) -> dict:
         """The base policy's screening counts, plus "placement not allowed" for the suctions it lets through whose
         placement overlaps a blocked region (:meth:`placement_allowed`)."""
         counts = super().screened_counts(objects)
+        objects = self._objects if objects is None else tuple(objects)
         blocked = sum(1 for a in super(Hindsight, self).candidates(objects, True, True)
                       if isinstance(a, Suction) and not self.placement_allowed(objects, a))
         if blocked:

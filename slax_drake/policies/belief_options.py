@@ -72,6 +72,10 @@ class BeliefOptions:
     seen_target: bool = False
     """Camera mode: when the frame shows part of the target, the belief keeps only the placements whose target
     would hold every seen target point (the target's known size), however few pixels show."""
+    shuttle_last_resort: bool = False
+    """When the corrections screen out every feasible candidate and some only as shuttles (a move back against the
+    object's last move that uncovers no new width), those shuttles are offered rather than stopping with no action
+    (the correction is kept whenever anything else is left)."""
 
     def __post_init__(self):
         if self.select not in SELECT_RULES:

@@ -62,9 +62,11 @@ class DistributionPolicy:
 
     def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
                  observation_width: int = 160, max_placements: int = 4, corrected: bool = False,
-                 shuttle_reveal: float | None = 0.02):
+                 shuttle_reveal: float | None = 0.02, shuttle_last_resort: bool = False):
         self.corrected = corrected  # the implementation's corrections (module docstring); False: the paper's text
         self.shuttle_reveal = shuttle_reveal  # m a shuttle must uncover never seen (correction 3); None: allowed
+        # when the corrections leave no candidate, offer the ones screened out only as shuttles rather than stop
+        self.shuttle_last_resort = shuttle_last_resort
         self.memory = TrialMemory()
         self._action_model = action_model
         self.distribution = distribution
@@ -143,7 +145,11 @@ class DistributionPolicy:
             objects, pushes=self.use_pushes if pushes is None else pushes,
             suctions=self.use_suctions if suctions is None else suctions,
         )
-        return [a for a, why in self.screen(objects, c.feasible) if why is None]
+        screened = self.screen(objects, c.feasible)
+        allowed = [a for a, why in screened if why is None]
+        if not allowed and self.shuttle_last_resort:
+            allowed = [a for a, why in screened if why == "shuttle"]
+        return allowed
 
     def screen(self, objects, feasible) -> list:
         """``(action, why)`` for each of the action model's ``feasible`` candidates on ``objects``: ``why`` None for
@@ -162,12 +168,14 @@ class DistributionPolicy:
                     and not self.reveals_new(objects, a) else why) for a, why in out]
         return out
 
-    def screened_counts(self, objects) -> dict:
-        """{why: count} over the action model's feasible candidates on ``objects`` that this policy screens out
+    def screened_counts(self, objects=None) -> dict:
+        """{why: count} over the action model's feasible candidates on ``objects`` (default: the objects of the last
+        decision, as the policy saw them) that this policy screens out
         (:meth:`screen`), for the record of a decision that found no action; the policies that screen more (safe
         suctions, placement rules) add their own kinds."""
         import collections
 
+        objects = self._objects if objects is None else tuple(objects)
         c = self._action_model.enumerate(objects, pushes=True, suctions=True)
         return dict(collections.Counter(why for _, why in self.screen(objects, c.feasible) if why is not None))
 

@@ -313,9 +313,15 @@ class TrialResult:
     actions: list  # descriptions of the actions taken
     notes: list  # execution notes (unseen obstacles)
     visible_fraction: float
+    # when the policy found no action: how many of the action model's feasible candidates each of its corrections
+    # screened out ({why: count}, the policy's ``screened_counts``; None otherwise)
+    screened: dict | None = None
 
     def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
+        out = dataclasses.asdict(self)
+        if out["screened"] is None:  # the record of every other trial keeps its fields
+            del out["screened"]
+        return out
 
 
 def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, suction_cost: float = 1.3,
@@ -333,6 +339,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
     seconds, actions, notes = [], [], []
     pushes = suctions = 0
     reason = "horizon"
+    screened = None
     fraction = target_visible_fraction(scene)
     start = time.perf_counter()
     for _ in range(horizon):
@@ -349,6 +356,8 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
         seconds.append(time.perf_counter() - t0)
         if action is None:
             reason = decision.stop_reason or "no action"
+            counts = getattr(policy, "screened_counts", None)
+            screened = counts() if counts is not None else None
             break
         if names is not None:  # camera mode: the hypothesis's true object (the executor's knowledge only)
             observer.executed(action)
@@ -379,7 +388,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
         policy=policy.name, success=bool(success), steps=pushes + suctions,
         cost=round(pushes + suction_cost * suctions, 6), pushes=pushes, suctions=suctions, reason=reason,
         decision_seconds=[round(s, 6) for s in seconds], actions=actions, notes=notes,
-        visible_fraction=round(float(fraction), 6),
+        visible_fraction=round(float(fraction), 6), screened=screened,
     )
 
 

@@ -179,3 +179,41 @@ def test_the_issues_shuttle_is_stopped_once_it_uncovers_nothing_new():
         x += d
         memory.outcome((box("a", x, 0.0, sx=0.20), other))
     assert not memory.undoes((box("a", x, 0.0, sx=0.20), other), Push("a", (x - 0.1, -0.04, 0.05), 0.05))
+
+
+def test_screening_names_the_correction_and_the_last_resort_offers_only_shuttles(paper, monkeypatch):
+    """One box pushed -x by 5 cm (it went 3.5 cm): its short push back (+x) is screened out as a shuttle (it
+    uncovers nothing never seen), the pushes on along -x are not. The policy says so (``screen``, ``screened_counts``). With
+    ``shuttle_last_resort`` the shuttles are offered only when every candidate is screened out and some only as
+    shuttles."""
+    from slax_drake.shelf.actions import Push
+
+    policy = make_policy("dar", paper, horizon=4)
+    start = (box("a", 0.0, 0.0),)
+    policy.reset(hand_scene(paper, start, (-0.2, 0.2)))
+    policy.memory.observe(start)
+    push = Push("a", (0.05, -0.04, 0.05), -0.05)
+    policy.memory.propose(push, start)
+    after = (box("a", -0.035, 0.0),)  # it stopped 1.5 cm short: a push back by 5 cm returns to no observed pose
+    policy.memory.outcome(after)
+    policy.memory.observe(after)
+    feasible = policy.action_model.enumerate(after, pushes=True, suctions=False).feasible
+    screened = dict(policy.screen(after, feasible))
+    # a push back far enough to leave space the box covered in both arrangements uncovers something new
+    backs = [a for a in feasible if a.d > 0 and not policy.reveals_new(after, a)]
+    on = [a for a in feasible if a not in backs]
+    assert backs and on and any(a.d < 0 for a in on)
+    assert all(screened[a] == "shuttle" for a in backs) and all(screened[a] is None for a in on)
+    assert set(policy.candidates(after)) == set(on)
+    policy._objects = after
+    every = policy.action_model.enumerate(after, pushes=True, suctions=True).feasible  # suctions too
+    shuttles = [a for a, why in policy.screen(after, every) if why == "shuttle"]
+    assert set(backs) <= set(shuttles) and policy.screened_counts() == {"shuttle": len(shuttles)}
+    policy.shuttle_last_resort = True  # something else is left: the correction holds
+    assert set(policy.candidates(after)) == set(on)
+    # nothing left but a shuttle and a move back to an observed arrangement: the shuttle alone is offered
+    monkeypatch.setattr(policy, "screen", lambda objects, cands: [(backs[0], "shuttle"),
+                                                                  (on[0], "back to an observed arrangement")])
+    assert policy.candidates(after) == [backs[0]]
+    policy.shuttle_last_resort = False
+    assert policy.candidates(after) == []
