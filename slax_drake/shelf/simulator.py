@@ -313,6 +313,8 @@ class TrialResult:
     actions: list  # descriptions of the actions taken
     notes: list  # execution notes (unseen obstacles)
     visible_fraction: float
+    visible_fractions: list = dataclasses.field(default_factory=list)
+    """The target's visible fraction before each decision (the true scene's, the simulator's knowledge only)."""
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -330,7 +332,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
     policy.reset(scene)
     if observer is not None:
         observer.start()
-    seconds, actions, notes = [], [], []
+    seconds, actions, notes, fractions = [], [], [], []
     pushes = suctions = 0
     reason = "horizon"
     fraction = target_visible_fraction(scene)
@@ -338,6 +340,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
     for _ in range(horizon):
         if fraction >= threshold:
             break
+        fractions.append(round(float(fraction), 6))
         t0 = time.perf_counter()
         names = None
         if observer is not None and not policy.needs_true_scene:
@@ -379,7 +382,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
         policy=policy.name, success=bool(success), steps=pushes + suctions,
         cost=round(pushes + suction_cost * suctions, 6), pushes=pushes, suctions=suctions, reason=reason,
         decision_seconds=[round(s, 6) for s in seconds], actions=actions, notes=notes,
-        visible_fraction=round(float(fraction), 6),
+        visible_fraction=round(float(fraction), 6), visible_fractions=fractions,
     )
 
 
