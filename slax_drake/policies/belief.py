@@ -204,6 +204,7 @@ class BeliefSearch(Hindsight):
         self.camera_depth = o.camera_depth  # camera mode: the hypotheses' assumed unseen depth (None: as observed)
         self.camera_extents = o.camera_extents  # camera mode: unseen edges' share of their extent range (None: off)
         self.seen_target = o.seen_target  # camera mode: a partly seen target collapses the belief onto it
+        self.uncover_seen = o.uncover_seen  # ... and a move uncovering it passes the no-return/no-shuttle corrections
         self._target_seen_now = False  # this decision's placements were collapsed onto a partly seen target
         self.camera_memory = o.camera_memory  # camera mode: remember hidden hypotheses (matched across frames)
         self.camera_outcome_tolerance = float(o.camera_outcome_tolerance)  # m, outcome evidence on estimated poses
@@ -796,6 +797,39 @@ class BeliefSearch(Hindsight):
         base = super(Hindsight, self).candidates(objects, True, True)
         return [a for a in base if not isinstance(a, Suction) or self.placement_allowed(objects, a)]
 
+    def uncovering_moves(self, worlds, known, alive: np.ndarray, cands: list) -> list:
+        """With the belief collapsed onto a partly seen target (``seen_target`` and ``uncover_seen``): the feasible
+        moves not among ``cands`` (refused by the no-return or no-shuttle correction; a failed action's exclusion
+        and a blocked placement box still apply) whose object hides fewer points of the ``alive`` worlds' targets
+        after the move than before it: the moves that clear part of what still hides the rest of the target. The
+        corrections keep a distribution policy from shuttling an object between arrangements that reveal nothing
+        new; here every world is the seen target, so uncovering it is progress whatever was observed before."""
+        found = maximal_pushes_only(self._action_model.enumerate(known, pushes=True, suctions=True).feasible)
+        allowed = self._exclusions.allowed(found, known)
+        taken = set(cands)
+        alive_rows = np.flatnonzero(alive)
+        if not len(alive_rows):
+            return []
+        by_name = {o.name: o for o in known}
+
+        def hidden(obj) -> int:
+            m = worlds.mask(obj)
+            return 0 if m is None else int(_popcount(m[alive_rows]).sum())
+
+        before: dict = {}
+        out = []
+        for a in allowed:
+            if a in taken or (isinstance(a, Suction) and not self.placement_allowed(known, a)):
+                continue
+            if a.name not in before:
+                before[a.name] = hidden(by_name[a.name])
+            if not before[a.name]:
+                continue  # its object hides nothing of the seen target
+            moved = next(o for o in apply_action(known, a) if o.name == a.name)
+            if hidden(moved) < before[a.name]:
+                out.append(a)
+        return out
+
     def rank(self, obs) -> Decision:
         import itertools
 
@@ -827,6 +861,11 @@ class BeliefSearch(Hindsight):
         root = _Node(known, (), 0.0, np.ones(worlds.count, bool), 0.0, 0.0, -1)
         d0 = self.distances(worlds, known)
         root.alive = consistent & (d0 > 0)
+        if self._target_seen_now and self.uncover_seen:
+            extra = self.uncovering_moves(worlds, known, root.alive, cands)
+            if extra:
+                log["uncovering"] = len(extra)  # first moves the corrections refused, let through (seen_target)
+                cands = cands + extra
         level = self.expansions(worlds, root, [(a, apply_action(known, a), self.move_cost(known, a)) for a in cands],
                                 remaining, counter)
         # the rest of the last plan, when this is the arrangement it expected: kept in the beam at every depth

@@ -72,6 +72,10 @@ class BeliefOptions:
     seen_target: bool = False
     """Camera mode: when the frame shows part of the target, the belief keeps only the placements whose target
     would hold every seen target point (the target's known size), however few pixels show."""
+    uncover_seen: bool = True
+    """Camera mode with ``seen_target``, while the belief is collapsed onto a partly seen target: a move that
+    uncovers part of it (its object hides fewer of the worlds' target points after it than before) is a first move
+    even where the no-return and no-shuttle corrections refuse it (an excluded failed action stays excluded)."""
 
     def __post_init__(self):
         if self.select not in SELECT_RULES:

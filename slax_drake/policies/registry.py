@@ -89,6 +89,10 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # measured, worse (26 of 40 camera trials against 30; docs/research/uncertain-extents.md)
     "slax-belief-extents-full": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, camera_extents=1.0, seen_target=True), ours=True),
+    # camera mode: a partly seen target collapses the belief onto it, and a move uncovering it passes the no-return
+    # and no-shuttle corrections; the privileged path reads neither (docs/research/slax_belief.md)
+    "slax-belief-seen-target": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, seen_target=True),
+                                           ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk"),
