@@ -418,8 +418,13 @@ class BeliefSearch(Hindsight):
         """Camera mode with ``seen_target``: when the frame's target mask shows part of the target, the placements
         (K, 2; m) whose target (its known size, any yaw: within its half diagonal plus half a lattice step and
         5 mm of its centre, in x-y) holds at least 95 % of the seen target points, back-projected into S; the
-        belief keeps only these from now on. Unchanged when nothing of the target shows, in privileged mode, or
-        when no placement holds the points (the estimate is off: the belief is not emptied on it)."""
+        belief keeps only these from now on. When none of ``placements`` (those consistent with every observation
+        so far) holds them, the placements possible now (clear of the seen objects, seen less than v past them:
+        :func:`~slax_drake.policies.hindsight.possible_placements`) are collapsed instead: the seen points are
+        direct evidence, the earlier observations' consistency is the model's (a hypothesis narrower than its
+        object makes the true placement look partly seen at the first observation, where a wholly hidden target
+        is required). Unchanged when nothing of the target shows, in privileged mode, or when no placement holds
+        the points (the estimate is off: the belief is not emptied on it)."""
         belief = getattr(obs, "belief", None)
         self._target_seen_now = False
         if not self.seen_target or belief is None or not len(placements):
@@ -433,11 +438,20 @@ class BeliefSearch(Hindsight):
         points = back_project(np.where(mask, frame.depth, 0.0).astype(np.float32), frame.camera)[mask][:, :2]
         size = self.target_size()
         reach = float(np.hypot(size[0] / 2, size[1] / 2)) + self.grid_step / 2 + 0.005
-        d = np.hypot(placements[:, None, 0] - points[None, :, 0], placements[:, None, 1] - points[None, :, 1])
-        held = (d <= reach).mean(axis=1) >= 0.95
-        if not held.any():
+
+        def holding(centers: np.ndarray) -> np.ndarray:
+            d = np.hypot(centers[:, None, 0] - points[None, :, 0], centers[:, None, 1] - points[None, :, 1])
+            return centers[(d <= reach).mean(axis=1) >= 0.95]
+
+        kept = holding(placements)
+        if not len(kept):
+            from slax_drake.policies.hindsight import possible_placements
+
+            now = possible_placements(obs.scene_template.with_objects(obs.known), size, self.grid_step,
+                                      self.threshold)
+            kept = holding(now) if len(now) else now
+        if not len(kept):
             return placements
-        kept = placements[held]
         self._consistent = set(self.lattice_keys(kept))
         self._target_seen_now = True
         return kept
