@@ -96,8 +96,13 @@ walls. The options below address these; all are off in the registry's ``slax-bel
   object with little room behind it is assumed shallow and one with room deep;
 - ``seen_target``: when the frame shows part of the target, its placement is known up to its size: the belief
   keeps only the placements whose target holds every seen target point (:meth:`placements`; ``decision_log``
-  records ``target_seen``), so every world is the partly seen target and the search clears what still hides it (``slax-belief-extents`` sets it with
-  ``camera_extents`` 0.5).
+  records ``target_seen``), so every world is the partly seen target and the search clears what still hides it
+  (``slax-belief-extents`` sets it with ``camera_extents`` 0.5, ``slax-belief-seen-target`` alone); when none of
+  the placements consistent with the earlier observations holds the seen points, those possible now are collapsed;
+- ``uncover_seen`` (read only while the belief is collapsed onto a partly seen target): a move that uncovers part
+  of it (its object hides fewer of the worlds' target points after it) is a first move even where the no-return
+  and no-shuttle corrections refuse it (:meth:`uncovering_moves`; ``decision_log`` records ``uncovering``): an
+  object carried in front of the target by an earlier action must be allowed back.
 
 The privileged path does not read any of them. The measurements behind each option's default are in the
 research note docs/research/slax_belief.md.
