@@ -76,7 +76,8 @@ excluded by the corrections.
 Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses, named ``track_<k>`` by the
 object tracker, never true objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
 object the frame showed, reaching beyond its hypothesis, into an object seen before and hidden now, or beyond the
-walls. The options below address these; all are off in the registry's ``slax-belief``;
+walls. The options below address these; all but ``seen_target`` and ``uncover_seen`` are off in the registry's
+``slax-belief``;
 ``slax-belief-camera-depth`` sets all but ``maybe_occupied``:
 
 - ``camera_depth`` (m): the hypotheses are estimated again from the frame assuming each at least this deep behind
@@ -97,7 +98,7 @@ walls. The options below address these; all are off in the registry's ``slax-bel
 - ``seen_target``: when the frame shows part of the target, its placement is known up to its size: the belief
   keeps only the placements whose target holds every seen target point (:meth:`placements`; ``decision_log``
   records ``target_seen``), so every world is the partly seen target and the search clears what still hides it
-  (``slax-belief-extents`` sets it with ``camera_extents`` 0.5, ``slax-belief-seen-target`` alone); when none of
+  (on by default; ``slax-belief-no-seen-target`` turns it off); when none of
   the placements consistent with the earlier observations holds the seen points, those possible now are collapsed;
 - ``uncover_seen`` (read only while the belief is collapsed onto a partly seen target): a move that uncovers part
   of it (its object hides fewer of the worlds' target points after it) is a first move even where the no-return

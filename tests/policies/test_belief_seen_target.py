@@ -27,20 +27,20 @@ def camera_trial(scene, policy, horizon):
 
 
 def test_the_first_action_uncovers_a_partly_seen_target_and_reveals_it(paper):
-    """The target is partly seen at the first frame: slax-belief-seen-target moves the box in front of it first
-    and the trial ends revealed after that one action; slax-belief, whose belief spreads over the hidden space
-    behind the wide box, moves the wide box first."""
+    """The target is partly seen at the first frame: slax-belief moves the box in front of it first and the trial
+    ends revealed after that one action; slax-belief-no-seen-target (the frame's target mask not read), whose
+    belief spreads over the hidden space behind the wide box, moves the wide box first."""
     scene = partly_seen_scene(paper)
     assert 0.5 < target_visible_fraction(scene) < 0.8
-    policy = make_policy("slax-belief-seen-target", paper, horizon=6)
+    policy = make_policy("slax-belief", paper, horizon=6)
     result = camera_trial(scene, policy, 6)
     assert result.actions[0].split()[1] == "front"
     assert result.success and result.steps == 1
     assert policy.decision_log[0]["target_seen"]
-    default = make_policy("slax-belief", paper, horizon=6)
-    plain = camera_trial(scene, default, 6)
+    blind = make_policy("slax-belief-no-seen-target", paper, horizon=6)
+    plain = camera_trial(scene, blind, 6)
     assert plain.actions[0].split()[1] == "wide"
-    assert "target_seen" not in default.decision_log[0]
+    assert "target_seen" not in blind.decision_log[0]
 
 
 @pytest.mark.parametrize("uncover", [True, False])
@@ -50,7 +50,7 @@ def test_a_move_the_no_shuttle_correction_refuses_is_taken_when_it_uncovers_the_
     moving it back. With ``uncover_seen`` the policy still takes that move first (its decision log counts the moves let
     through); without it, the policy's first action is another one."""
     scene = partly_seen_scene(paper)
-    first = make_policy("slax-belief-seen-target", paper, horizon=6)
+    first = make_policy("slax-belief", paper, horizon=6)
     first.reset(scene)
     observer = CameraObserver(scene.shelf, scene.camera, TARGET, width=160)
     obs, names = observer.observe(scene)
@@ -58,7 +58,7 @@ def test_a_move_the_no_shuttle_correction_refuses_is_taken_when_it_uncovers_the_
     move = first.decide(obs).best
     assert move.name == front
 
-    policy = make_policy("slax-belief-seen-target", paper, horizon=6, policy_options={"uncover_seen": uncover})
+    policy = make_policy("slax-belief", paper, horizon=6, policy_options={"uncover_seen": uncover})
     policy.reset(scene)
     earlier = apply_action(obs.known, move)  # where the box stood before a move brought it here
     before = next(o for o in obs.known if o.name == front)
