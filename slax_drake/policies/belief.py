@@ -212,6 +212,7 @@ class BeliefSearch(Hindsight):
         self.seen_target = o.seen_target  # camera mode: a partly seen target collapses the belief onto it
         self.uncover_seen = o.uncover_seen  # ... and a move uncovering it passes the no-return/no-shuttle corrections
         self._target_seen_now = False  # this decision's placements were collapsed onto a partly seen target
+        self._unseen_keys = None  # after a collapse: lattice keys of the space never seen (placement risk reads it)
         self.camera_memory = o.camera_memory  # camera mode: remember hidden hypotheses (matched across frames)
         self.camera_outcome_tolerance = float(o.camera_outcome_tolerance)  # m, outcome evidence on estimated poses
         self._action_model = _NoActionsOnRemembered(self._action_model)
@@ -231,6 +232,7 @@ class BeliefSearch(Hindsight):
         self._weights, self._executed, self.evidence_log = {}, None, []
         self._remembered = {}
         self._as_observed, self._maybe = {}, frozenset()
+        self._unseen_keys = None
 
     @property
     def worlds(self) -> "PackedWorlds | None":
@@ -458,9 +460,27 @@ class BeliefSearch(Hindsight):
             kept = holding(now) if len(now) else now
         if not len(kept):
             return placements
+        if self._unseen_keys is None:  # the hidden space so far, before the belief leaves it for the target
+            self._unseen_keys = set(self.lattice_keys(placements))
         self._consistent = set(self.lattice_keys(kept))
         self._target_seen_now = True
         return kept
+
+    def hidden_space(self, obs, placements: np.ndarray) -> np.ndarray:
+        """(K, 2; m) the lattice placements standing for the space never seen since the trial began, where an
+        unseen object may stand (what :meth:`placement_risk` and :meth:`holds_hidden_space` read): the target's
+        possible ``placements`` until a partly seen target collapses the belief (:meth:`on_seen_target`); from then
+        on, the belief before the collapse, less every placement a later frame shows (a target there seen at v
+        past the seen objects: :func:`~slax_drake.policies.hindsight.possible_placements`). Without it, the
+        collapse would make every placement away from the target look safe, into space other unseen objects hold."""
+        if self._unseen_keys is None:
+            return placements
+        from slax_drake.policies.hindsight import possible_placements
+
+        now = possible_placements(obs.scene_template.with_objects(obs.known), self.target_size(), self.grid_step,
+                                  self.threshold)
+        self._unseen_keys &= set(self.lattice_keys(now))
+        return np.array(sorted(self._unseen_keys), dtype=float).reshape(-1, 2) * self.grid_step
 
     # ---- what an executed action's outcome says about the target ---------------------------------------------
     def condition_on_outcome(self, known) -> None:
@@ -860,7 +880,8 @@ class BeliefSearch(Hindsight):
         self.note_outcome(known)
         self.condition_on_outcome(known)
         # this decision's placements first: placement_allowed may read them (blocked_rule="hidden")
-        placements = self._hidden_centers = self.placements(obs)
+        placements = self.placements(obs)
+        self._hidden_centers = self.hidden_space(obs, placements)
         self._risk_by_box, self._risk_cache = {}, {}
         cands = maximal_pushes_only(self.action_model_candidates(known))
         if not cands:

@@ -2,6 +2,7 @@
 that hold the seen part, and the search clears what still hides the rest first, even where the no-return and
 no-shuttle corrections would refuse the move (``uncover_seen``)."""
 
+import numpy as np
 import pytest
 
 from slax_drake.policies.registry import make_policy
@@ -73,3 +74,22 @@ def test_a_move_the_no_shuttle_correction_refuses_is_taken_when_it_uncovers_the_
         assert decision.best == move and policy.decision_log[0]["uncovering"] >= 1
     else:
         assert decision.best != move and "uncovering" not in policy.decision_log[0]
+
+
+def test_the_collapse_leaves_the_hidden_space_of_the_placement_risk_alone(paper):
+    """Once the belief holds only the partly seen target, the space behind the wide box still counts as hidden for
+    the suctions' risk (an unseen object may stand there): the hidden space the risk reads keeps the placements
+    behind it, far from the target, while the belief keeps none of them."""
+    scene = partly_seen_scene(paper)
+    policy = make_policy("slax-belief", paper, horizon=6)
+    policy.reset(scene)
+    obs, _ = CameraObserver(scene.shelf, scene.camera, TARGET, width=160).observe(scene)
+    policy.decide(obs)
+    assert policy.decision_log[0]["target_seen"]
+    step = policy.grid_step
+    belief = np.array(sorted(policy.consistent_placements), dtype=float) * step
+    hidden = policy._hidden_centers
+    assert np.max(np.hypot(belief[:, 0] + 0.17, belief[:, 1] - 0.2)) <= 0.1
+    behind_wide = (hidden[:, 0] > 0.05) & (hidden[:, 1] > 0.0)
+    assert behind_wide.sum() >= 10
+    assert policy.box_risk((0.1, 0.2, 0.1, 0.2), hidden) > 0 == policy.box_risk((0.1, 0.2, 0.1, 0.2), belief)
