@@ -100,6 +100,8 @@ walls. The options below address these; all but ``seen_target`` and ``uncover_se
   records ``target_seen``), so every world is the partly seen target and the search clears what still hides it
   (on by default; ``slax-belief-no-seen-target`` turns it off); when none of
   the placements consistent with the earlier observations holds the seen points, those possible now are collapsed;
+  the suctions' risk of meeting something unseen still reads the space never seen (:meth:`hidden_space`), not the
+  target's few placements;
 - ``uncover_seen`` (read only while the belief is collapsed onto a partly seen target): a move that uncovers part
   of it (its object hides fewer of the worlds' target points after it) is a first move even where the no-return
   and no-shuttle corrections refuse it (:meth:`uncovering_moves`; ``decision_log`` records ``uncovering``): an
