@@ -100,8 +100,8 @@ walls. The options below address these; all but ``seen_target`` and ``uncover_se
   records ``target_seen``), so every world is the partly seen target and the search clears what still hides it
   (on by default; ``slax-belief-no-seen-target`` turns it off); when none of
   the placements consistent with the earlier observations holds the seen points, those possible now are collapsed;
-  the suctions' risk of meeting something unseen still reads the space never seen (:meth:`hidden_space`), not the
-  target's few placements;
+  ``unseen_risk`` (measured, off): after the collapse the suctions' risk of meeting something unseen reads the
+  space never seen (:meth:`hidden_space`), not the target's few placements;
 - ``uncover_seen`` (read only while the belief is collapsed onto a partly seen target): a move that uncovers part
   of it (its object hides fewer of the worlds' target points after it) is a first move even where the no-return
   and no-shuttle corrections refuse it (:meth:`uncovering_moves`; ``decision_log`` records ``uncovering``): an
@@ -214,6 +214,7 @@ class BeliefSearch(Hindsight):
         self.seen_target = o.seen_target  # camera mode: a partly seen target collapses the belief onto it
         self.uncover_seen = o.uncover_seen  # ... and a move uncovering it passes the no-return/no-shuttle corrections
         self._target_seen_now = False  # this decision's placements were collapsed onto a partly seen target
+        self.unseen_risk = o.unseen_risk  # ... and the placement risk then reads the space never seen
         self._unseen_keys = None  # after a collapse: lattice keys of the space never seen (placement risk reads it)
         self.camera_memory = o.camera_memory  # camera mode: remember hidden hypotheses (matched across frames)
         self.camera_outcome_tolerance = float(o.camera_outcome_tolerance)  # m, outcome evidence on estimated poses
@@ -462,7 +463,7 @@ class BeliefSearch(Hindsight):
             kept = holding(now) if len(now) else now
         if not len(kept):
             return placements
-        if self._unseen_keys is None:  # the hidden space so far, before the belief leaves it for the target
+        if self.unseen_risk and self._unseen_keys is None:  # the hidden space so far, before the collapse
             self._unseen_keys = set(self.lattice_keys(placements))
         self._consistent = set(self.lattice_keys(kept))
         self._target_seen_now = True
@@ -471,10 +472,11 @@ class BeliefSearch(Hindsight):
     def hidden_space(self, obs, placements: np.ndarray) -> np.ndarray:
         """(K, 2; m) the lattice placements standing for the space never seen since the trial began, where an
         unseen object may stand (what :meth:`placement_risk` and :meth:`holds_hidden_space` read): the target's
-        possible ``placements`` until a partly seen target collapses the belief (:meth:`on_seen_target`); from then
-        on, the belief before the collapse, less every placement a later frame shows (a target there seen at v
-        past the seen objects: :func:`~slax_drake.policies.hindsight.possible_placements`). Without it, the
-        collapse would make every placement away from the target look safe, into space other unseen objects hold."""
+        possible ``placements``; with ``unseen_risk``, once a partly seen target collapsed the belief
+        (:meth:`on_seen_target`), the belief before the collapse, less every placement a later frame shows (a target
+        there seen at v past the seen objects: :func:`~slax_drake.policies.hindsight.possible_placements`): the
+        collapsed belief makes every placement away from the target look safe, into space other unseen objects may
+        hold."""
         if self._unseen_keys is None:
             return placements
         from slax_drake.policies.hindsight import possible_placements

@@ -77,6 +77,11 @@ class BeliefOptions:
     """Camera mode with ``seen_target``, while the belief is collapsed onto a partly seen target: a move that
     uncovers part of it (its object hides fewer of the worlds' target points after it than before) is a first move
     even where the no-return and no-shuttle corrections refuse it (an excluded failed action stays excluded)."""
+    unseen_risk: bool = False
+    """Camera mode with ``seen_target``, once the belief collapsed onto a partly seen target: the suctions' risk of
+    meeting something unseen reads the space never seen (the belief before the collapse, less what later frames
+    show) rather than the collapsed belief, whose few placements make every placement away from the target look
+    safe. Measured, not the default (docs/research/slax_belief.md, "A partly seen target")."""
 
     def __post_init__(self):
         if self.select not in SELECT_RULES:

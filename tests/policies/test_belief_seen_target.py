@@ -76,12 +76,17 @@ def test_a_move_the_no_shuttle_correction_refuses_is_taken_when_it_uncovers_the_
         assert decision.best != move and "uncovering" not in policy.decision_log[0]
 
 
-def test_the_collapse_leaves_the_hidden_space_of_the_placement_risk_alone(paper):
-    """Once the belief holds only the partly seen target, the space behind the wide box still counts as hidden for
-    the suctions' risk (an unseen object may stand there): the hidden space the risk reads keeps the placements
-    behind it, far from the target, while the belief keeps none of them."""
+def test_unseen_risk_keeps_the_hidden_space_of_the_placement_risk_after_the_collapse(paper):
+    """With ``unseen_risk``, once the belief holds only the partly seen target, the space behind the wide box still
+    counts as hidden for the suctions' risk (an unseen object may stand there): the hidden space the risk reads
+    keeps the placements behind it, far from the target, while the belief keeps none of them. Without it (the
+    default) the risk reads the belief."""
     scene = partly_seen_scene(paper)
-    policy = make_policy("slax-belief", paper, horizon=6)
+    default = make_policy("slax-belief", paper, horizon=6)
+    default.reset(scene)
+    default.decide(CameraObserver(scene.shelf, scene.camera, TARGET, width=160).observe(scene)[0])
+    assert len(default._hidden_centers) == len(default.consistent_placements)
+    policy = make_policy("slax-belief", paper, horizon=6, policy_options={"unseen_risk": True})
     policy.reset(scene)
     obs, _ = CameraObserver(scene.shelf, scene.camera, TARGET, width=160).observe(scene)
     policy.decide(obs)
