@@ -77,8 +77,8 @@ Camera mode (the observation is a frame: ``known`` holds the estimator's hypothe
 object tracker, never true objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
 object the frame showed, reaching beyond its hypothesis, into an object seen before and hidden now, or beyond the
 walls. The options below address these; all but ``seen_target`` and ``uncover_seen`` are off in the registry's
-``slax-belief``;
-``slax-belief-camera-depth`` sets all but ``maybe_occupied``:
+``slax-belief``; ``slax-belief-camera-depth`` sets ``camera_depth``, ``camera_memory`` and
+``camera_outcome_tolerance`` and turns ``seen_target`` off:
 
 - ``camera_depth`` (m): the hypotheses are estimated again from the frame assuming each at least this deep behind
   its visible surfaces (:meth:`with_camera_hypotheses`; the estimator's ``DepthPrior(rule="fixed")``, shortened at
@@ -98,10 +98,10 @@ walls. The options below address these; all but ``seen_target`` and ``uncover_se
 - ``seen_target``: when the frame shows part of the target, its placement is known up to its size: the belief
   keeps only the placements whose target holds every seen target point (:meth:`placements`; ``decision_log``
   records ``target_seen``), so every world is the partly seen target and the search clears what still hides it
-  (on by default; ``slax-belief-no-seen-target`` turns it off); when none of
-  the placements consistent with the earlier observations holds the seen points, those possible now are collapsed;
-  ``unseen_risk`` (measured, off): after the collapse the suctions' risk of meeting something unseen reads the
-  space never seen (:meth:`hidden_space`), not the target's few placements;
+  (on by default; ``slax-belief-no-seen-target`` turns it off). When none of the placements consistent with the
+  earlier observations holds the seen points, those possible now are collapsed. ``unseen_risk`` (measured, off):
+  after the collapse the suctions' risk of meeting something unseen reads the space never seen
+  (:meth:`hidden_space`), not the target's few placements;
 - ``uncover_seen`` (read only while the belief is collapsed onto a partly seen target): a move that uncovers part
   of it (its object hides fewer of the worlds' target points after it) is a first move even where the no-return
   and no-shuttle corrections refuse it (:meth:`uncovering_moves`; ``decision_log`` records ``uncovering``): an
