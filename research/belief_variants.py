@@ -1,12 +1,14 @@
 """Runs slax-belief with extra constructor options on chosen Table I trials and prints, per trial, whether the
 target was revealed, the steps, the cost and the longest decision (CPU s), then the count revealed. The trials are
 the benchmark's (`slax-drake benchmark`): the same scene seed per (protocol seed, density, index), the registry's
-policy with the protocol's horizon, privileged observation, ground-truth distributions, the first-order shelf
-simulator; only the options differ. It is how the variants of issue 19 item 5 were measured one by one without a
+policy with the protocol's horizon, privileged observation (``--observation camera``: the benchmark's camera mode,
+rendered frames with label segmentation), ground-truth distributions, the first-order shelf simulator; only the
+options differ. It is how the variants of issue 19 item 5 were measured one by one without a
 registry row each.
 
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
+        [--observation camera] [--tool-rule FIELD=VALUE ...]
 
 ``--compare``: a `slax-drake benchmark` results folder run with the same protocol seed; each trial also prints
 the folder's outcome of ``--compare-policy`` for the same trial, and the flips (won: revealed here, not there;
@@ -22,7 +24,9 @@ from pathlib import Path
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.policies.registry import make_policy
-from slax_drake.shelf.simulator import run_trial
+from slax_drake.errors import UserError
+from slax_drake.shelf.simulator import CameraObserver, run_trial
+from slax_drake.shelf.tool import parse_tool_rules
 from slax_drake.scene.sampling import sample_scene
 
 
@@ -47,7 +51,15 @@ def main():
     ap.add_argument("--log", action="store_true", help="also print each action with its decision log")
     ap.add_argument("--compare", default=None, help="a results folder: print its outcome per trial and the flips")
     ap.add_argument("--compare-policy", default="slax-belief", help="the policy of --compare's trials")
+    ap.add_argument("--observation", choices=("privileged", "camera"), default="privileged")
+    ap.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
+                    help="override one rule of the profile, as the benchmark's --tool-rule; repeatable")
     args = ap.parse_args()
+    try:
+        tool_rules = parse_tool_rules(args.tool_rule, args.profile)
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     compare = None
     if args.compare is not None:
         compare = Path(args.compare) / "trials" / args.compare_policy
@@ -64,10 +76,14 @@ def main():
         scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
                              target_size=size)
         horizon = scenario.protocol.horizon_per_object * density
-        policy = make_policy(args.policy, scenario, horizon=horizon, profile=args.profile, policy_options=options)
+        policy = make_policy(args.policy, scenario, horizon=horizon, profile=args.profile, policy_options=options,
+                             tool_overrides=tool_rules)
+        observer = None
+        if args.observation == "camera":
+            observer = CameraObserver(scene.shelf, scene.camera, size, width=policy.observation_width)
         t0 = time.process_time()
         result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
-                           suction_cost=scenario.protocol.suction_cost, density=density)
+                           suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
         longest = max((d.get("seconds", 0.0) for d in policy.decision_log), default=0.0)
         revealed += bool(result.success)
         print(f"{density:02d}_{index:04d} revealed={result.success} steps={result.steps} cost={result.cost:.1f} "

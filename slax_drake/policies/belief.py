@@ -76,8 +76,9 @@ excluded by the corrections.
 Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses, named ``track_<k>`` by the
 object tracker, never true objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
 object the frame showed, reaching beyond its hypothesis, into an object seen before and hidden now, or beyond the
-walls. The options below address these; all are off in the registry's ``slax-belief``;
-``slax-belief-camera-depth`` sets all but ``maybe_occupied``:
+walls. The options below address these; all but ``seen_target`` and ``uncover_seen`` are off in the registry's
+``slax-belief``; ``slax-belief-camera-depth`` sets ``camera_depth``, ``camera_memory`` and
+``camera_outcome_tolerance`` and turns ``seen_target`` off:
 
 - ``camera_depth`` (m): the hypotheses are estimated again from the frame assuming each at least this deep behind
   its visible surfaces (:meth:`with_camera_hypotheses`; the estimator's ``DepthPrior(rule="fixed")``, shortened at
@@ -96,8 +97,15 @@ walls. The options below address these; all are off in the registry's ``slax-bel
   object with little room behind it is assumed shallow and one with room deep;
 - ``seen_target``: when the frame shows part of the target, its placement is known up to its size: the belief
   keeps only the placements whose target holds every seen target point (:meth:`placements`; ``decision_log``
-  records ``target_seen``), so every world is the partly seen target and the search clears what still hides it (``slax-belief-extents`` sets it with
-  ``camera_extents`` 0.5).
+  records ``target_seen``), so every world is the partly seen target and the search clears what still hides it
+  (on by default; ``slax-belief-no-seen-target`` turns it off). When none of the placements consistent with the
+  earlier observations holds the seen points, those possible now are collapsed. ``unseen_risk`` (measured, off):
+  after the collapse the suctions' risk of meeting something unseen reads the space never seen
+  (:meth:`hidden_space`), not the target's few placements;
+- ``uncover_seen`` (read only while the belief is collapsed onto a partly seen target): a move that uncovers part
+  of it (its object hides fewer of the worlds' target points after it) is a first move even where the no-return
+  and no-shuttle corrections refuse it (:meth:`uncovering_moves`; ``decision_log`` records ``uncovering``): an
+  object carried in front of the target by an earlier action must be allowed back.
 
 The privileged path does not read any of them. The measurements behind each option's default are in the
 research note docs/research/slax_belief.md.
@@ -204,7 +212,10 @@ class BeliefSearch(Hindsight):
         self.camera_depth = o.camera_depth  # camera mode: the hypotheses' assumed unseen depth (None: as observed)
         self.camera_extents = o.camera_extents  # camera mode: unseen edges' share of their extent range (None: off)
         self.seen_target = o.seen_target  # camera mode: a partly seen target collapses the belief onto it
+        self.uncover_seen = o.uncover_seen  # ... and a move uncovering it passes the no-return/no-shuttle corrections
         self._target_seen_now = False  # this decision's placements were collapsed onto a partly seen target
+        self.unseen_risk = o.unseen_risk  # ... and the placement risk then reads the space never seen
+        self._unseen_keys = None  # after a collapse: lattice keys of the space never seen (placement risk reads it)
         self.camera_memory = o.camera_memory  # camera mode: remember hidden hypotheses (matched across frames)
         self.camera_outcome_tolerance = float(o.camera_outcome_tolerance)  # m, outcome evidence on estimated poses
         self._action_model = _NoActionsOnRemembered(self._action_model)
@@ -224,6 +235,7 @@ class BeliefSearch(Hindsight):
         self._weights, self._executed, self.evidence_log = {}, None, []
         self._remembered = {}
         self._as_observed, self._maybe = {}, frozenset()
+        self._unseen_keys = None
 
     @property
     def worlds(self) -> "PackedWorlds | None":
@@ -417,8 +429,13 @@ class BeliefSearch(Hindsight):
         """Camera mode with ``seen_target``: when the frame's target mask shows part of the target, the placements
         (K, 2; m) whose target (its known size, any yaw: within its half diagonal plus half a lattice step and
         5 mm of its centre, in x-y) holds at least 95 % of the seen target points, back-projected into S; the
-        belief keeps only these from now on. Unchanged when nothing of the target shows, in privileged mode, or
-        when no placement holds the points (the estimate is off: the belief is not emptied on it)."""
+        belief keeps only these from now on. When none of ``placements`` (those consistent with every observation
+        so far) holds them, the placements possible now (clear of the seen objects, seen less than v past them:
+        :func:`~slax_drake.policies.hindsight.possible_placements`) are collapsed instead: the seen points are
+        direct evidence, the earlier observations' consistency is the model's (a hypothesis narrower than its
+        object makes the true placement look partly seen at the first observation, where a wholly hidden target
+        is required). Unchanged when nothing of the target shows, in privileged mode, or when no placement holds
+        the points (the estimate is off: the belief is not emptied on it)."""
         belief = getattr(obs, "belief", None)
         self._target_seen_now = False
         if not self.seen_target or belief is None or not len(placements):
@@ -432,14 +449,42 @@ class BeliefSearch(Hindsight):
         points = back_project(np.where(mask, frame.depth, 0.0).astype(np.float32), frame.camera)[mask][:, :2]
         size = self.target_size()
         reach = float(np.hypot(size[0] / 2, size[1] / 2)) + self.grid_step / 2 + 0.005
-        d = np.hypot(placements[:, None, 0] - points[None, :, 0], placements[:, None, 1] - points[None, :, 1])
-        held = (d <= reach).mean(axis=1) >= 0.95
-        if not held.any():
+
+        def holding(centers: np.ndarray) -> np.ndarray:
+            d = np.hypot(centers[:, None, 0] - points[None, :, 0], centers[:, None, 1] - points[None, :, 1])
+            return centers[(d <= reach).mean(axis=1) >= 0.95]
+
+        kept = holding(placements)
+        if not len(kept):
+            from slax_drake.policies.hindsight import possible_placements
+
+            now = possible_placements(obs.scene_template.with_objects(obs.known), size, self.grid_step,
+                                      self.threshold)
+            kept = holding(now) if len(now) else now
+        if not len(kept):
             return placements
-        kept = placements[held]
+        if self.unseen_risk and self._unseen_keys is None:  # the hidden space so far, before the collapse
+            self._unseen_keys = set(self.lattice_keys(placements))
         self._consistent = set(self.lattice_keys(kept))
         self._target_seen_now = True
         return kept
+
+    def hidden_space(self, obs, placements: np.ndarray) -> np.ndarray:
+        """(K, 2; m) the lattice placements standing for the space never seen since the trial began, where an
+        unseen object may stand (what :meth:`placement_risk` and :meth:`holds_hidden_space` read): the target's
+        possible ``placements``; with ``unseen_risk``, once a partly seen target collapsed the belief
+        (:meth:`on_seen_target`), the belief before the collapse, less every placement a later frame shows (a target
+        there seen at v past the seen objects: :func:`~slax_drake.policies.hindsight.possible_placements`): the
+        collapsed belief makes every placement away from the target look safe, into space other unseen objects may
+        hold."""
+        if self._unseen_keys is None:
+            return placements
+        from slax_drake.policies.hindsight import possible_placements
+
+        now = possible_placements(obs.scene_template.with_objects(obs.known), self.target_size(), self.grid_step,
+                                  self.threshold)
+        self._unseen_keys &= set(self.lattice_keys(now))
+        return np.array(sorted(self._unseen_keys), dtype=float).reshape(-1, 2) * self.grid_step
 
     # ---- what an executed action's outcome says about the target ---------------------------------------------
     def condition_on_outcome(self, known) -> None:
@@ -807,6 +852,39 @@ class BeliefSearch(Hindsight):
         base = super(Hindsight, self).candidates(objects, True, True)
         return [a for a in base if not isinstance(a, Suction) or self.placement_allowed(objects, a)]
 
+    def uncovering_moves(self, worlds, known, alive: np.ndarray, cands: list) -> list:
+        """With the belief collapsed onto a partly seen target (``seen_target`` and ``uncover_seen``): the feasible
+        moves not among ``cands`` (refused by the no-return or no-shuttle correction; a failed action's exclusion
+        and a blocked placement box still apply) whose object hides fewer points of the ``alive`` worlds' targets
+        after the move than before it: the moves that clear part of what still hides the rest of the target. The
+        corrections keep a distribution policy from shuttling an object between arrangements that reveal nothing
+        new; here every world is the seen target, so uncovering it is progress whatever was observed before."""
+        found = maximal_pushes_only(self._action_model.enumerate(known, pushes=True, suctions=True).feasible)
+        allowed = self._exclusions.allowed(found, known)
+        taken = set(cands)
+        alive_rows = np.flatnonzero(alive)
+        if not len(alive_rows):
+            return []
+        by_name = {o.name: o for o in known}
+
+        def hidden(obj) -> int:
+            m = worlds.mask(obj)
+            return 0 if m is None else int(_popcount(m[alive_rows]).sum())
+
+        before: dict = {}
+        out = []
+        for a in allowed:
+            if a in taken or (isinstance(a, Suction) and not self.placement_allowed(known, a)):
+                continue
+            if a.name not in before:
+                before[a.name] = hidden(by_name[a.name])
+            if not before[a.name]:
+                continue  # its object hides nothing of the seen target
+            moved = next(o for o in apply_action(known, a) if o.name == a.name)
+            if hidden(moved) < before[a.name]:
+                out.append(a)
+        return out
+
     def rank(self, obs) -> Decision:
         import itertools
 
@@ -817,7 +895,8 @@ class BeliefSearch(Hindsight):
         self.note_outcome(known)
         self.condition_on_outcome(known)
         # this decision's placements first: placement_allowed may read them (blocked_rule="hidden")
-        placements = self._hidden_centers = self.placements(obs)
+        placements = self.placements(obs)
+        self._hidden_centers = self.hidden_space(obs, placements)
         self._risk_by_box, self._risk_cache = {}, {}
         cands = maximal_pushes_only(self.action_model_candidates(known))
         if not cands:
@@ -838,6 +917,11 @@ class BeliefSearch(Hindsight):
         root = _Node(known, (), 0.0, np.ones(worlds.count, bool), 0.0, 0.0, -1)
         d0 = self.distances(worlds, known)
         root.alive = consistent & (d0 > 0)
+        if self._target_seen_now and self.uncover_seen:
+            extra = self.uncovering_moves(worlds, known, root.alive, cands)
+            if extra:
+                log["uncovering"] = len(extra)  # first moves the corrections refused, let through (seen_target)
+                cands = cands + extra
         level = self.expansions(worlds, root, [(a, apply_action(known, a), self.move_cost(known, a)) for a in cands],
                                 remaining, counter)
         # the rest of the last plan, when this is the arrangement it expected: kept in the beam at every depth

@@ -69,9 +69,19 @@ class BeliefOptions:
     """Camera mode: the hypotheses are estimated again with each unseen edge this share, in [0, 1], of the way from
     what the frame shows to the farthest it allows (the estimator's extent range; ``DepthPrior(rule="range")``);
     None: as the observer estimated them. Takes precedence over ``camera_depth``."""
-    seen_target: bool = False
+    seen_target: bool = True
     """Camera mode: when the frame shows part of the target, the belief keeps only the placements whose target
-    would hold every seen target point (the target's known size), however few pixels show."""
+    would hold every seen target point (the target's known size), however few pixels show (False: the frame's
+    target mask is not read; the default before a partly seen target was finished)."""
+    uncover_seen: bool = True
+    """Camera mode with ``seen_target``, while the belief is collapsed onto a partly seen target: a move that
+    uncovers part of it (its object hides fewer of the worlds' target points after it than before) is a first move
+    even where the no-return and no-shuttle corrections refuse it (an excluded failed action stays excluded)."""
+    unseen_risk: bool = False
+    """Camera mode with ``seen_target``, once the belief collapsed onto a partly seen target: the suctions' risk of
+    meeting something unseen reads the space never seen (the belief before the collapse, less what later frames
+    show) rather than the collapsed belief, whose few placements make every placement away from the target look
+    safe. Measured, not the default (docs/research/slax_belief.md, "A partly seen target")."""
     shuttle_last_resort: bool = False
     """When the corrections screen out every feasible candidate and some only as shuttles (a move back against the
     object's last move that uncovers no new width), those shuttles are offered rather than stopping with no action

@@ -313,6 +313,8 @@ class TrialResult:
     actions: list  # descriptions of the actions taken
     notes: list  # execution notes (unseen obstacles)
     visible_fraction: float
+    visible_fractions: list = dataclasses.field(default_factory=list)
+    """The target's visible fraction before each decision (the true scene's, the simulator's knowledge only)."""
     # when the policy found no action: how many of the action model's feasible candidates each of its corrections
     # screened out ({why: count}, the policy's ``screened_counts``; None otherwise)
     screened: dict | None = None
@@ -336,7 +338,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
     policy.reset(scene)
     if observer is not None:
         observer.start()
-    seconds, actions, notes = [], [], []
+    seconds, actions, notes, fractions = [], [], [], []
     pushes = suctions = 0
     reason = "horizon"
     screened = None
@@ -345,6 +347,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
     for _ in range(horizon):
         if fraction >= threshold:
             break
+        fractions.append(round(float(fraction), 6))
         t0 = time.perf_counter()
         names = None
         if observer is not None and not policy.needs_true_scene:
@@ -388,7 +391,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
         policy=policy.name, success=bool(success), steps=pushes + suctions,
         cost=round(pushes + suction_cost * suctions, 6), pushes=pushes, suctions=suctions, reason=reason,
         decision_seconds=[round(s, 6) for s in seconds], actions=actions, notes=notes,
-        visible_fraction=round(float(fraction), 6), screened=screened,
+        visible_fraction=round(float(fraction), 6), visible_fractions=fractions, screened=screened,
     )
 
 

@@ -46,7 +46,7 @@ def test_a_partly_seen_target_collapses_the_belief_onto_it(paper):
     obs = observe(scene_of(paper, [box("front", -0.08, -0.05, 0.2, 0.08, 0.16)], target_xy=(0.02, 0.12)))
     assert obs.belief.observation.target_mask.any()
     on = make_policy("slax-belief", paper, horizon=4, policy_options={"seen_target": True})
-    off = make_policy("slax-belief", paper, horizon=4)
+    off = make_policy("slax-belief", paper, horizon=4, policy_options={"seen_target": False})
     kept = {}
     for name, policy in (("on", on), ("off", off)):
         policy.reset(hidden)

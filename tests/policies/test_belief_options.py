@@ -32,7 +32,7 @@ def test_the_registry_variants_are_named_replacements_recorded_as_before():
     assert settings["slax-belief"]["options"] == {}
     assert settings["slax-belief-v4"]["options"] == {"blocked_rule": "risk"}
     assert settings["slax-belief-camera-depth"]["options"] == {"camera_depth": 0.13, "camera_memory": True,
-                                                               "camera_outcome_tolerance": 0.01}
+                                                               "camera_outcome_tolerance": 0.01, "seen_target": False}
     assert settings["slax-belief"]["class"] == "slax_drake.policies.belief:BeliefSearch"
 
 

@@ -1,0 +1,93 @@
+"""Failed trials in which the target was partly seen and not finished, and what the policy did after first seeing
+it. Prints Markdown.
+
+    python research/partly_seen_target.py FOLDER [--policy slax-belief] [--compare FOLDER2 --compare-policy NAME]
+
+FOLDER holds a benchmark's ``trials/<policy>/DD_NNNN.json`` (``slax-drake benchmark``; a shelf-simulator trial
+records ``visible_fractions``, the target's true visible fraction before each decision: the simulator's knowledge,
+never the policy's). A trial "saw" the target when that fraction was above 0 before some decision. Per failed
+trial that saw it: the decision it was first seen at, the fractions, the decisions whose belief collapsed onto it
+(slax-belief's ``decision_log`` records ``target_seen``), and each action after it with the simulator's note.
+With ``--compare``: the scenes one folder reveals and the other does not, and the totals of both.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def load(folder: Path, policy: str) -> dict:
+    """Trial id (``DD_NNNN``) -> the trial file's content."""
+    return {f.stem: json.loads(f.read_text()) for f in sorted((folder / "trials" / policy).glob("*.json"))}
+
+
+def first_seen(trial: dict) -> int | None:
+    """The index of the first decision before which some of the target was visible (None: never, or not
+    recorded)."""
+    return next((i for i, v in enumerate(trial.get("visible_fractions", [])) if v > 0), None)
+
+
+def report(trials: dict, title: str) -> list[str]:
+    lines = [f"## {title}", ""]
+    failed = {k: t for k, t in trials.items() if not t["success"]}
+    seen_failed = {k: t for k, t in failed.items() if first_seen(t) is not None}
+    seen_ok = sum(1 for t in trials.values() if t["success"] and first_seen(t) is not None)
+    lines.append(f"{len(trials)} trials, {len(trials) - len(failed)} revealed ({seen_ok} of them after a partly seen "
+                 f"target), {len(failed)} failed, {len(seen_failed)} of those with the target partly seen.")
+    lines.append("")
+    for key, t in seen_failed.items():
+        fr = t["visible_fractions"]
+        k0 = first_seen(t)
+        collapsed = sum(1 for log in t.get("decision_log", [])[k0:] if log.get("target_seen"))
+        lines.append(f"- `{key}` ({t['reason']}): first seen before decision {k0 + 1} at {fr[k0]:.2f}, at most "
+                     f"{max(fr):.2f}, {t['visible_fraction']:.2f} at the end; belief collapsed at {collapsed} of the "
+                     f"{len(fr) - k0} decisions after; fractions {' '.join(f'{v:.2f}' for v in fr)}")
+        for i in range(k0, len(t["actions"])):
+            notes = [n.split(": ", 1)[1] for n in t["notes"] if n.startswith(f"step {i + 1}:")]
+            lines.append(f"    - {i + 1}: `{t['actions'][i]}`{' (' + '; '.join(notes) + ')' if notes else ''}")
+    lines.append("")
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folder", type=Path)
+    parser.add_argument("--policy", default="slax-belief")
+    parser.add_argument("--compare", type=Path, default=None)
+    parser.add_argument("--compare-policy", default=None)
+    args = parser.parse_args(argv)
+    runs = [(args.folder, args.policy)]
+    if args.compare is not None:
+        runs.append((args.compare, args.compare_policy or args.policy))
+    loaded = []
+    for folder, policy in runs:
+        trials = load(folder, policy)
+        if not trials:
+            print(f"error: no trial files in {folder / 'trials' / policy}", file=sys.stderr)
+            return 2
+        loaded.append(trials)
+    out = []
+    for (folder, policy), trials in zip(runs, loaded):
+        out += report(trials, f"{folder} ({policy})")
+    if len(loaded) == 2:
+        a, b = loaded
+        common = sorted(set(a) & set(b))
+        out += ["## Compared", "",
+                f"Revealed by the second only: {', '.join(k for k in common if b[k]['success'] and not a[k]['success']) or 'none'}; "
+                f"by the first only: {', '.join(k for k in common if a[k]['success'] and not b[k]['success']) or 'none'}; "
+                f"the same actions in {sum(a[k]['actions'] == b[k]['actions'] for k in common)} of {len(common)} scenes.",
+                ""]
+        for (folder, policy), trials in zip(runs, loaded):
+            ts = [trials[k] for k in common]
+            out.append(f"- {policy} ({folder}): {sum(t['success'] for t in ts)} revealed, {sum(t['steps'] for t in ts)} "
+                       f"actions, {sum(len(t['notes']) for t in ts)} simulator notes (wasted actions)")
+        out.append("")
+    print("\n".join(out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
