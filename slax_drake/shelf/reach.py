@@ -21,6 +21,14 @@ collision-free IK solution from the observation pose, on the empty shelf, for ea
 :meth:`ReachMap.refuses` is conservative: a point is refused only when every grid node of every cell within
 ``margin`` of it (the cells its neighbourhood touches) is unreachable, so a refused point lies inside a region
 where the planner found nothing; points off the grid are never refused.
+
+Optional hold layers ``hold@-30/3cm`` ... ``hold@+30/20cm`` (:data:`HOLD_YAWS_DEG` x :data:`HOLD_HEIGHTS`), on
+their own grid (the map's ``xs`` and ``hold_ys``, which reaches from 0.27 m in front of the opening to the back of
+the bay): the cup tip itself (not a contact) at (x, y) and that height (m above the support), the tool turned that
+many degrees about S z, the blade up and suction on, as while the cup holds an object. These are the poses of a
+lifted suction's carry (pulled out, translated across in front of the opening or inside the bay, pushed in) and of
+its lowered placement. :meth:`ReachMap.refuses_hold` refuses a hold pose only when the layers of every yaw node
+around its yaw and every height node spanning its height range exist and refuse it.
 """
 
 from __future__ import annotations
@@ -39,6 +47,8 @@ LAYERS = ("push+x", "push-x", "cup")
 RELEASE_LAYERS = ("back off", "retract")
 TURNED_CUP_YAWS_DEG = (-30, -20, -10, 10, 20, 30)  # the tool's yaw of the optional turned-cup layers (deg)
 TURNED_CUP_HEIGHTS = (0.03, 0.06, 0.10)  # their contact heights (m above the support)
+HOLD_YAWS_DEG = (-30, -15, 0, 15, 30)  # the tool's yaw of the optional hold layers (deg)
+HOLD_HEIGHTS = (0.03, 0.11, 0.20)  # the cup tip's height of the hold layers (m above the support)
 
 
 def turned_cup_layer(yaw_deg: int, height: float) -> str:
@@ -56,28 +66,80 @@ def turned_cup_layers() -> tuple[str, ...]:
     return tuple(turned_cup_layer(d, h) for d in TURNED_CUP_YAWS_DEG for h in TURNED_CUP_HEIGHTS)
 
 
+def hold_layer(yaw_deg: int, height: float) -> str:
+    """The name of the hold layer at tool yaw ``yaw_deg`` (deg) and cup height ``height`` (m)."""
+    return f"hold@{yaw_deg:+d}/{round(height * 100):d}cm"
+
+
+def hold_params(layer: str) -> tuple[float, float]:
+    """(yaw in rad, cup height in m) of a hold layer's name."""
+    yaw, height = layer[len("hold@"):].split("/")
+    return math.radians(float(yaw)), float(height[:-2]) / 100.0
+
+
+def hold_layers() -> tuple[str, ...]:
+    """Every hold layer's name, yaw 0 first, then +-30 deg, then the others (the order the map is computed in)."""
+    order = sorted(HOLD_YAWS_DEG, key=lambda d: (d != 0, -abs(d), d))
+    return tuple(hold_layer(d, h) for d in order for h in HOLD_HEIGHTS)
+
+
+def hold_height_span(z_lo: float, z_hi: float) -> tuple[int, int] | None:
+    """(first, last) indices of the :data:`HOLD_HEIGHTS` nodes that span heights ``z_lo`` .. ``z_hi`` (m): from the
+    node at or below ``z_lo`` to the one at or above ``z_hi``; None when the range leaves the nodes."""
+    h = HOLD_HEIGHTS
+    if not (h[0] - 1e-9 <= z_lo <= z_hi + 1e-12 and z_hi <= h[-1] + 1e-9):
+        return None
+    lo = max(k for k, v in enumerate(h) if v <= z_lo + 1e-9)
+    hi = min(k for k, v in enumerate(h) if v >= z_hi - 1e-9)
+    return lo, hi
+
+
+def _refuses_on(xs: np.ndarray, ys: np.ndarray, values: np.ndarray, x: float, y: float, margin: float) -> bool:
+    """True when every node of ``values`` (len(ys), len(xs)) around (x +- margin, y +- margin) is False; False off
+    the grid or where any such node is True."""
+    if not (xs[0] - 1e-9 <= x <= xs[-1] + 1e-9 and ys[0] - 1e-9 <= y <= ys[-1] + 1e-9):
+        return False
+    i0 = max(0, int(np.searchsorted(xs, x - margin - 1e-9, side="right")) - 1)
+    i1 = min(len(xs) - 1, int(np.searchsorted(xs, x + margin + 1e-9, side="left")))
+    j0 = max(0, int(np.searchsorted(ys, y - margin - 1e-9, side="right")) - 1)
+    j1 = min(len(ys) - 1, int(np.searchsorted(ys, y + margin + 1e-9, side="left")))
+    return not bool(values[j0:j1 + 1, i0:i1 + 1].any())
+
+
+def _refuses_many(xs: np.ndarray, ys: np.ndarray, values: np.ndarray, x: np.ndarray, y: np.ndarray,
+                  margin: float) -> np.ndarray:
+    """:func:`_refuses_on` at every point of the arrays ``x``, ``y`` (a summed-area table counts the reached nodes
+    of each point's window)."""
+    on = (xs[0] - 1e-9 <= x) & (x <= xs[-1] + 1e-9) & (ys[0] - 1e-9 <= y) & (y <= ys[-1] + 1e-9)
+    i0 = np.maximum(0, np.searchsorted(xs, x - margin - 1e-9, side="right") - 1)
+    i1 = np.minimum(len(xs) - 1, np.searchsorted(xs, x + margin + 1e-9, side="left"))
+    j0 = np.maximum(0, np.searchsorted(ys, y - margin - 1e-9, side="right") - 1)
+    j1 = np.minimum(len(ys) - 1, np.searchsorted(ys, y + margin + 1e-9, side="left"))
+    table = np.zeros((len(ys) + 1, len(xs) + 1), int)
+    table[1:, 1:] = np.asarray(values, int).cumsum(0).cumsum(1)
+    reached = table[j1 + 1, i1 + 1] - table[j0, i1 + 1] - table[j1 + 1, i0] + table[j0, i0]
+    return on & (reached == 0)
+
+
 @dataclasses.dataclass(frozen=True)
 class ReachMap:
     """``xs``, ``ys``: grid coordinates (S, m, increasing); ``reach[layer]``: bool (len(ys), len(xs)), True where
-    the planner reached; ``heights``: the tool's height per layer (m); ``station``: the station file it is of."""
+    the planner reached; ``heights``: the tool's height per layer (m); ``station``: the station file it is of;
+    ``hold_ys`` and ``hold``: the optional hold layers' y grid and layers, bool (len(hold_ys), len(xs)) (empty
+    when the map has none)."""
 
     station: str
     xs: np.ndarray
     ys: np.ndarray
     reach: dict
     heights: dict
+    hold_ys: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    hold: dict = dataclasses.field(default_factory=dict)
 
     def refuses(self, layer: str, x: float, y: float, margin: float = 0.0) -> bool:
         """True when every grid node around (x +- margin, y +- margin) is unreachable in ``layer`` (see the
         module docstring); False off the grid or where any such node was reached."""
-        xs, ys = self.xs, self.ys
-        if not (xs[0] - 1e-9 <= x <= xs[-1] + 1e-9 and ys[0] - 1e-9 <= y <= ys[-1] + 1e-9):
-            return False
-        i0 = max(0, int(np.searchsorted(xs, x - margin - 1e-9, side="right")) - 1)
-        i1 = min(len(xs) - 1, int(np.searchsorted(xs, x + margin + 1e-9, side="left")))
-        j0 = max(0, int(np.searchsorted(ys, y - margin - 1e-9, side="right")) - 1)
-        j1 = min(len(ys) - 1, int(np.searchsorted(ys, y + margin + 1e-9, side="left")))
-        return not bool(self.reach[layer][j0:j1 + 1, i0:i1 + 1].any())
+        return _refuses_on(self.xs, self.ys, self.reach[layer], x, y, margin)
 
     def refuses_cup(self, x: float, y: float, z: float, yaw: float, margin: float = 0.0) -> bool:
         """A suction's cup at contact (x, y, z) with the tool turned ``yaw`` (rad): at yaw 0 the ``cup`` layer's
@@ -109,15 +171,50 @@ class ReachMap:
         the release layers and the back-off or the retract layer refuses (x, y); False when it has none."""
         return any(layer in self.reach and self.refuses(layer, x, y, margin) for layer in RELEASE_LAYERS)
 
+    def hold_refusals(self, x, y, yaw: float, margin: float = 0.0) -> np.ndarray:
+        """Per point of ``x``, ``y`` (S, m; arrays of one shape, or scalars) and height node of
+        :data:`HOLD_HEIGHTS` (the last axis): whether the hold layer of every yaw node around ``yaw`` (rad; one
+        node where it is on one) at that height exists and refuses the cup tip there. All False when the map has no
+        hold layers, beyond the yaw nodes, and off the grid."""
+        x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
+        out = np.zeros(x.shape + (len(HOLD_HEIGHTS),), bool)
+        deg = math.degrees(yaw)
+        yaws = HOLD_YAWS_DEG
+        if not self.hold or not yaws[0] - 1e-9 <= deg <= yaws[-1] + 1e-9:
+            return out
+        around_yaw = {max(n for n in yaws if n <= deg + 1e-9), min(n for n in yaws if n >= deg - 1e-9)}
+        for k, h in enumerate(HOLD_HEIGHTS):
+            refused = np.ones(x.shape, bool)
+            for d in around_yaw:
+                values = self.hold.get(hold_layer(d, h))
+                refused &= False if values is None else _refuses_many(self.xs, self.hold_ys, values, x, y, margin)
+            out[..., k] = refused
+        return out
+
+    def refuses_hold(self, x: float, y: float, z_lo: float, z_hi: float, yaw: float, margin: float = 0.0) -> bool:
+        """The cup tip holding an object at (x, y) (S, m), somewhere between heights ``z_lo`` and ``z_hi`` (m above
+        the support), the tool turned ``yaw`` (rad) about S z: True only when the map holds the hold layers of every
+        yaw node around ``yaw`` and every height node from the one at or below ``z_lo`` to the one at or above
+        ``z_hi`` (:func:`hold_height_span`), and each refuses (x, y); False beyond the nodes, off the grid or where
+        a layer is missing."""
+        span = hold_height_span(z_lo, z_hi)
+        return span is not None and bool(self.hold_refusals(x, y, yaw, margin)[..., span[0]:span[1] + 1].all())
+
     def to_dict(self) -> dict:
-        return {"station": self.station, "xs": [round(float(v), 6) for v in self.xs],
+        data = {"station": self.station, "xs": [round(float(v), 6) for v in self.xs],
                 "ys": [round(float(v), 6) for v in self.ys], "heights": dict(self.heights),
                 "reach": {k: np.asarray(v, int).tolist() for k, v in self.reach.items()}}
+        if self.hold:
+            data["hold_ys"] = [round(float(v), 6) for v in self.hold_ys]
+            data["hold"] = {k: np.asarray(v, int).tolist() for k, v in self.hold.items()}
+        return data
 
     @staticmethod
     def from_dict(data: dict) -> "ReachMap":
         return ReachMap(data["station"], np.array(data["xs"], float), np.array(data["ys"], float),
-                        {k: np.array(v, bool) for k, v in data["reach"].items()}, dict(data["heights"]))
+                        {k: np.array(v, bool) for k, v in data["reach"].items()}, dict(data["heights"]),
+                        np.array(data.get("hold_ys", []), float),
+                        {k: np.array(v, bool) for k, v in data.get("hold", {}).items()})
 
 
 def reach_map_file(path: str) -> Path:
@@ -146,6 +243,10 @@ def load_reach_map(path: str) -> ReachMap:
         if values.shape != (len(rmap.ys), len(rmap.xs)):
             raise ConfigError(f"{path}: reach map layer {layer!r} is {' x '.join(map(str, values.shape))}, not "
                               f"{len(rmap.ys)} x {len(rmap.xs)}")
+    for layer, values in rmap.hold.items():
+        if values.shape != (len(rmap.hold_ys), len(rmap.xs)):
+            raise ConfigError(f"{path}: reach map hold layer {layer!r} is {' x '.join(map(str, values.shape))}, not "
+                              f"{len(rmap.hold_ys)} x {len(rmap.xs)}")
     return rmap
 
 

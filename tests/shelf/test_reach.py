@@ -284,3 +284,125 @@ def test_the_release_layers_agree_with_the_planner_on_a_sample_of_poses(sim_scen
         for (x, y), expected in [(p, False) for p in refused] + [(p, True) for p in accepted]:
             got = any(planner.reaches(scene, release_waypoint(layer, x, y, scene, tool, m)) for m in margins)
             assert got == expected, (layer, x, y)
+
+
+def _hold_map(refused_layers=(), refuse_x_above=None):
+    """The toy grid with every hold layer on hold rows y = -0.4 .. 0.2: the layers in ``refused_layers`` reach
+    nothing (or, with ``refuse_x_above``, nothing beyond that x), the others everything."""
+    from slax_drake.shelf.reach import hold_layers
+
+    m = _toy_map()
+    hold_ys = np.array([-0.4, -0.2, 0.0, 0.2])
+    hold = {}
+    for name in hold_layers():
+        ok = np.ones((len(hold_ys), len(m.xs)), bool)
+        if name in refused_layers:
+            ok[:] = False if refuse_x_above is None else (m.xs <= refuse_x_above)[None, :]
+        hold[name] = ok
+    return ReachMap("toy", m.xs, m.ys, m.reach, m.heights, hold_ys, hold)
+
+
+def test_a_hold_pose_is_refused_only_where_every_layer_around_its_yaw_and_heights_refuses():
+    from slax_drake.shelf.reach import hold_layer
+
+    rad = np.radians
+    low = {hold_layer(d, h) for d in (0, 15) for h in (0.03, 0.11)}
+    m = _hold_map(low)
+    assert m.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(5.0))  # yaw nodes 0 and 15, heights 3 and 11 cm: all refuse
+    assert m.refuses_hold(0.1, -0.3, 0.03, 0.03, 0.0)  # on a yaw node and a height node
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.15, rad(5.0))  # the 20 cm layers reach
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(-5.0))  # the -15 deg layers reach
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.25, rad(5.0))  # above the highest node: not refused
+    assert not m.refuses_hold(0.1, -0.3, 0.02, 0.05, rad(5.0))  # below the lowest node
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(35.0))  # beyond the yaw nodes
+    assert not m.refuses_hold(0.1, -0.5, 0.05, 0.08, rad(5.0))  # off the hold grid (in front of its first row)
+    # a layer missing from the map refuses nothing: drop one of the four
+    missing = ReachMap("toy", m.xs, m.ys, m.reach, m.heights, m.hold_ys,
+                       {k: v for k, v in m.hold.items() if k != hold_layer(15, 0.11)})
+    assert not missing.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(5.0))
+    again = ReachMap.from_dict(m.to_dict())
+    assert again.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(5.0)) and (again.hold_ys == m.hold_ys).all()
+    # the vectorised verdicts agree with the scalar lookup
+    xs, ys = np.meshgrid(np.linspace(-0.1, 0.4, 11), np.linspace(-0.5, 0.3, 9))
+    many = m.hold_refusals(xs, ys, rad(5.0), 0.015)
+    for idx in np.ndindex(xs.shape):
+        assert (many[idx] == m.hold_refusals(float(xs[idx]), float(ys[idx]), rad(5.0), 0.015)).all()
+
+
+def test_a_map_without_hold_layers_loads_and_refuses_no_hold_pose(tmp_path):
+    import json
+
+    m = _toy_map()
+    assert not m.hold and not m.refuses_hold(0.25, 0.05, 0.05, 0.05, 0.0)
+    data = m.to_dict()
+    assert "hold" not in data and "hold_ys" not in data  # an older map's keys, no more
+    path = tmp_path / "old_map.json"
+    path.write_text(json.dumps(data))
+    loaded = load_reach_map(str(path))
+    assert not loaded.hold and not loaded.refuses_hold(0.25, 0.05, 0.05, 0.05, 0.0)
+
+
+def test_a_map_whose_hold_layer_has_the_wrong_shape_is_one_config_error(tmp_path):
+    import json
+
+    from slax_drake.errors import ConfigError
+
+    import re
+
+    data = _hold_map().to_dict()
+    name = next(iter(data["hold"]))
+    data["hold"][name] = data["hold"][name][:-1]
+    path = tmp_path / "bad_hold.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ConfigError, match=re.escape(f"hold layer '{name}' is 3 x 4, not 4 x 4")):
+        load_reach_map(str(path))
+
+
+def _hold_tool(sim_scenario, tmp_path, rmap):
+    import json
+
+    path = tmp_path / "hold_map.json"
+    path.write_text(json.dumps(rmap.to_dict()))
+    load_reach_map.cache_clear()
+    return tool_config(sim_scenario, "station", reach_map=str(path), max_suction_moment=float("inf"))
+
+
+def test_the_action_model_refuses_the_carries_the_hold_layers_refuse(sim_scenario, tmp_path):
+    """A box near the front, suctioned: with hold layers that reach everything the action model offers what it
+    offers without them; with layers that refuse every cup pose right of x = 0 it keeps only the placements whose
+    carry stays left of it; with layers that refuse everything the suction is refused, typed REACH_MAP."""
+    import dataclasses
+
+    from slax_drake.shelf.actions import RefusalKind, Suction
+    from slax_drake.shelf.reach import hold_layers
+
+    shelf = shelf_of(sim_scenario)
+    sim = load_reach_map(SIM_MAP)
+    box = SceneObject("b", "box", (0.08, 0.08, 0.10), planar_pose(-0.12, -0.18, 0.05, 0.0))
+
+    def suctions(rmap):
+        model = ActionModel(shelf, (0.0, -0.75, 0.2), _hold_tool(sim_scenario, tmp_path, rmap))
+        c = model.enumerate((box,), pushes=False)
+        return [a for a in c.feasible if isinstance(a, Suction)], c.rejected
+
+    hold_ys = np.linspace(-0.57, 0.25, 15)
+    shape = (len(hold_ys), len(sim.xs))
+
+    def with_hold(hold):
+        return dataclasses.replace(sim, hold_ys=hold_ys, hold=hold)
+
+    everywhere = {k: np.ones(shape, bool) for k in hold_layers()}
+    none_held, _ = suctions(dataclasses.replace(sim, hold_ys=np.zeros(0), hold={}))
+    all_held, _ = suctions(with_hold(everywhere))
+    assert none_held and all_held == none_held
+    left = {k: np.broadcast_to(sim.xs <= 0.0, shape).copy() for k in hold_layers()}
+    kept, _ = suctions(with_hold(left))
+    assert kept and len(kept) < len(none_held)
+    assert all(a.q[0] + a.dx <= 0.0 + 0.05 for a in kept)  # the cup across stays within a cell of x = 0
+    assert [a for a in none_held if a.q[0] + a.dx > 0.1] and not [a for a in kept if a.q[0] + a.dx > 0.1]
+    nowhere = {k: np.zeros(shape, bool) for k in hold_layers()}
+    gone, rejected = suctions(with_hold(nowhere))
+    assert not gone
+    why = [r for r in rejected if r.what == "suction b"]
+    assert why and why[0].kind is RefusalKind.REACH_MAP and "carry" in why[0].reason
+    load_reach_map.cache_clear()
