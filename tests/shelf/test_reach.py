@@ -358,6 +358,16 @@ def test_a_map_whose_hold_layer_has_the_wrong_shape_is_one_config_error(tmp_path
         load_reach_map(str(path))
 
 
+def test_the_sim_map_holds_the_hold_layers():
+    from slax_drake.shelf.reach import hold_layers
+
+    rmap = load_reach_map(SIM_MAP)
+    assert rmap.hold_ys[0] < -0.5 and rmap.hold_ys[-1] == rmap.ys[-1]  # from well in front of the opening to the back
+    for name in hold_layers():
+        layer = rmap.hold[name]
+        assert layer.shape == (len(rmap.hold_ys), len(rmap.xs)) and layer.any() and not layer.all(), name
+
+
 def _hold_tool(sim_scenario, tmp_path, rmap):
     import json
 
@@ -406,3 +416,60 @@ def test_the_action_model_refuses_the_carries_the_hold_layers_refuse(sim_scenari
     why = [r for r in rejected if r.what == "suction b"]
     assert why and why[0].kind is RefusalKind.REACH_MAP and "carry" in why[0].reason
     load_reach_map.cache_clear()
+
+
+@pytest.mark.slow
+def test_a_carry_pose_the_hold_layers_refuse_has_no_ik_solution(sim_scenario):
+    """Seeded random cup poses of a carry (x across the bay, y from in front of the opening to its back, height
+    3-20 cm, tool yaw within +-30 deg): each one the hold layers refuse has no collision-free IK solution from the
+    observation pose; each one whose grid cells are reached in every layer around it has one."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.planning.reach import hold_waypoint
+    from slax_drake.shelf.reach import HOLD_HEIGHTS, HOLD_YAWS_DEG, hold_layer
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    rmap = load_reach_map(station.reach_map)
+    planner = MotionPlanner(station, tool_config(sim_scenario, "station"))
+    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    yaws, heights, xs, ys = HOLD_YAWS_DEG, HOLD_HEIGHTS, rmap.xs, rmap.hold_ys
+    rng = np.random.default_rng(31)
+    refused, accepted = [], []
+    for _ in range(20000):
+        if len(refused) >= 8 and len(accepted) >= 4:
+            break
+        x, y = rng.uniform(xs[0], xs[-1]), rng.uniform(ys[0], ys[-1])
+        deg, z = rng.uniform(yaws[0], yaws[-1]), rng.uniform(heights[0], heights[-1])
+        if rmap.refuses_hold(x, y, z, z, np.radians(deg), 0.015):
+            if len(refused) < 8:
+                refused.append((x, y, z, deg))
+            continue
+        i = min(len(xs) - 2, int(np.searchsorted(xs, x)) - 1)
+        j = min(len(ys) - 2, int(np.searchsorted(ys, y)) - 1)
+        layers = [hold_layer(d, h) for d in {max(n for n in yaws if n <= deg), min(n for n in yaws if n >= deg)}
+                  for h in {max(n for n in heights if n <= z), min(n for n in heights if n >= z)}]
+        if all(rmap.hold[k][j:j + 2, i:i + 2].all() for k in layers) and len(accepted) < 4:
+            accepted.append((x, y, z, deg))
+    assert len(refused) == 8 and len(accepted) == 4
+    for (x, y, z, deg), expected in [(p, False) for p in refused] + [(p, True) for p in accepted]:
+        assert planner.reaches(scene, hold_waypoint(x, y, z, np.radians(deg))) == expected, (x, y, z, deg)
+
+
+def test_the_hold_waypoint_is_the_translate_waypoint_of_a_carry():
+    """The hold layers are computed at the pose the planner's carry puts the cup at: a suction's translate
+    waypoint (turned carry included) is :func:`hold_waypoint` at its position and the tool's yaw."""
+    from slax_drake.planning.reach import hold_waypoint
+    from slax_drake.planning.waypoints import action_waypoints
+    from slax_drake.shelf.actions import Suction
+    from slax_drake.config import load_scenario
+
+    shelf = shelf_of(load_scenario("sim_configs/sim_shelf.yaml"))
+    box = SceneObject("b", "box", (0.08, 0.08, 0.10), planar_pose(-0.12, -0.18, 0.05, 0.0))
+    action = Suction("b", (-0.12, -0.22, 0.06), 0.2, -0.1, np.radians(10.0))
+    for carry_yaw in (0.0, np.radians(30.0)):
+        wps = {w.label: w for w in action_waypoints(action, (box,), shelf, carry_yaw=carry_yaw)}
+        for label, yaw in (("translate", action.yaw + carry_yaw), ("lower", action.yaw)):
+            w, h = wps[label], hold_waypoint(*wps[label].position, yaw)
+            assert np.allclose(w.X_SF, h.X_SF) and (w.frame, w.shaft, w.suction) == (h.frame, h.shaft, h.suction)
