@@ -533,6 +533,18 @@ class ActionModel:
                 ok[a, b] = not self.reach.refuses_release(cx + float(dx), cy + (float(y_placed) - oy), REACH_MARGIN)
         return ok
 
+    def pre_approach_refused(self, cx: float, cy: float, cz: float, yaw: float) -> bool:
+        """Whether the reach map's pre-approach layers refuse the first waypoint of a suction whose contact is
+        (cx, cy, cz) (S, m) with the tool turned ``yaw`` (rad): the cup tip on the tube's axis in front of the
+        opening, at each of ``APPROACH_MARGINS`` (the planner tries each); True only when every one is refused."""
+        ax, ay = -math.sin(yaw), math.cos(yaw)
+        for margin in APPROACH_MARGINS:
+            y_pre = -self.shelf.depth / 2.0 - margin
+            back = (cy - y_pre) / ay
+            if not self.reach.refuses_approach(cx - back * ax, y_pre, cz, yaw, REACH_MARGIN):
+                return False
+        return True
+
     def carry_cup_ys(self, lat: "SuctionLattice", obj: SceneObject, fp: Footprint) -> list[tuple[float, float]]:
         """(cup y in S (m), turn of the tool about the cup's vertical axis (rad)) of every way the planner may carry
         the object of a lifted suction across (:func:`slax_drake.planning.waypoints.carry_options` at each of
@@ -679,6 +691,10 @@ class ActionModel:
             turned = f" turned {math.degrees(yaw):+.0f} deg" if yaw else ""
             return SuctionLattice.refused(f"the arm cannot reach the cup{turned} at {obj.name}'s face "
                                           f"({cx:+.2f}, {cy:+.2f}) m (reach map)", RefusalKind.REACH_MAP)
+        if self.reach is not None and self.reach.approach and self.pre_approach_refused(cx, cy, cz, yaw):
+            turned = f" turned {math.degrees(yaw):+.0f} deg" if yaw else ""
+            return SuctionLattice.refused(f"the arm cannot hold the cup{turned} in front of the opening on its way to "
+                                          f"{obj.name}'s face (reach map)", RefusalKind.REACH_MAP)
         tube_r = t.geometry.tube_diameter / 2
         # the tube's straight way in along its (turned) axis, from in front of the opening to the contact
         length = (cy - self.y_front) / math.cos(yaw)

@@ -29,6 +29,12 @@ many degrees about S z, the blade up and suction on, as while the cup holds an o
 lifted suction's carry (pulled out, translated across in front of the opening or inside the bay, pushed in) and of
 its lowered placement. :meth:`ReachMap.refuses_hold` refuses a hold pose only when the layers of every yaw node
 around its yaw and every height node spanning its height range exist and refuse it.
+
+Optional pre-approach layers ``approach@-30/3cm`` ... (:data:`APPROACH_YAWS_DEG` x :data:`HOLD_HEIGHTS`), on a
+grid of their own (``approach_xs``, wide enough for a turned tool's pre-approach far to the side, and
+``approach_ys``, the two rows of the tool's tip at the planner's approach margins in front of the opening): the cup
+tip there, the tool turned, the blade up, suction off, as the planner's first waypoint of a suction. :meth:`ReachMap.refuses_approach` refuses a
+pre-approach only where every layer around its yaw and height refuses it.
 """
 
 from __future__ import annotations
@@ -49,6 +55,9 @@ TURNED_CUP_YAWS_DEG = (-30, -20, -10, 10, 20, 30)  # the tool's yaw of the optio
 TURNED_CUP_HEIGHTS = (0.03, 0.06, 0.10)  # their contact heights (m above the support)
 HOLD_YAWS_DEG = (-30, -15, 0, 15, 30)  # the tool's yaw of the optional hold layers (deg)
 HOLD_HEIGHTS = (0.03, 0.11, 0.20)  # the cup tip's height of the hold layers (m above the support)
+# the tool's yaw of the optional pre-approach layers (deg; finer than the hold layers': in front of the opening the
+# reach ends sharply with the turn, and a layer there is 2 rows)
+APPROACH_YAWS_DEG = tuple(range(-30, 31, 5))
 
 
 def turned_cup_layer(yaw_deg: int, height: float) -> str:
@@ -66,21 +75,28 @@ def turned_cup_layers() -> tuple[str, ...]:
     return tuple(turned_cup_layer(d, h) for d in TURNED_CUP_YAWS_DEG for h in TURNED_CUP_HEIGHTS)
 
 
-def hold_layer(yaw_deg: int, height: float) -> str:
-    """The name of the hold layer at tool yaw ``yaw_deg`` (deg) and cup height ``height`` (m)."""
-    return f"hold@{yaw_deg:+d}/{round(height * 100):d}cm"
+def hold_layer(yaw_deg: int, height: float, family: str = "hold") -> str:
+    """The name of the hold (or, with ``family`` "approach", pre-approach) layer at tool yaw ``yaw_deg`` (deg) and
+    cup height ``height`` (m)."""
+    return f"{family}@{yaw_deg:+d}/{round(height * 100):d}cm"
 
 
 def hold_params(layer: str) -> tuple[float, float]:
-    """(yaw in rad, cup height in m) of a hold layer's name."""
-    yaw, height = layer[len("hold@"):].split("/")
+    """(yaw in rad, cup height in m) of a hold or pre-approach layer's name."""
+    yaw, height = layer.split("@", 1)[1].split("/")
     return math.radians(float(yaw)), float(height[:-2]) / 100.0
 
 
-def hold_layers() -> tuple[str, ...]:
-    """Every hold layer's name, yaw 0 first, then +-30 deg, then the others (the order the map is computed in)."""
-    order = sorted(HOLD_YAWS_DEG, key=lambda d: (d != 0, -abs(d), d))
-    return tuple(hold_layer(d, h) for d in order for h in HOLD_HEIGHTS)
+def hold_layers(family: str = "hold") -> tuple[str, ...]:
+    """Every hold (or pre-approach) layer's name, yaw 0 first, then +-30 deg, then the others (the order the map is
+    computed in)."""
+    order = sorted(family_yaws_deg(family), key=lambda d: (d != 0, -abs(d), d))
+    return tuple(hold_layer(d, h, family) for d in order for h in HOLD_HEIGHTS)
+
+
+def family_yaws_deg(family: str) -> tuple[int, ...]:
+    """The yaw nodes (deg) of the hold layers (``family`` "hold") or of the pre-approach layers ("approach")."""
+    return HOLD_YAWS_DEG if family == "hold" else APPROACH_YAWS_DEG
 
 
 def hold_height_span(z_lo: float, z_hi: float) -> tuple[int, int] | None:
@@ -126,7 +142,8 @@ class ReachMap:
     """``xs``, ``ys``: grid coordinates (S, m, increasing); ``reach[layer]``: bool (len(ys), len(xs)), True where
     the planner reached; ``heights``: the tool's height per layer (m); ``station``: the station file it is of;
     ``hold_ys`` and ``hold``: the optional hold layers' y grid and layers, bool (len(hold_ys), len(xs)) (empty
-    when the map has none)."""
+    when the map has none); ``approach_xs``, ``approach_ys`` and ``approach``: the optional pre-approach layers'
+    grid and layers, bool (len(approach_ys), len(approach_xs))."""
 
     station: str
     xs: np.ndarray
@@ -135,6 +152,9 @@ class ReachMap:
     heights: dict
     hold_ys: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     hold: dict = dataclasses.field(default_factory=dict)
+    approach_xs: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    approach_ys: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    approach: dict = dataclasses.field(default_factory=dict)
 
     def refuses(self, layer: str, x: float, y: float, margin: float = 0.0) -> bool:
         """True when every grid node around (x +- margin, y +- margin) is unreachable in ``layer`` (see the
@@ -171,25 +191,36 @@ class ReachMap:
         the release layers and the back-off or the retract layer refuses (x, y); False when it has none."""
         return any(layer in self.reach and self.refuses(layer, x, y, margin) for layer in RELEASE_LAYERS)
 
-    def hold_refusals(self, x, y, yaw: float, margin: float = 0.0) -> np.ndarray:
+    def hold_refusals(self, x, y, yaw: float, margin: float = 0.0, family: str = "hold") -> np.ndarray:
         """Per point of ``x``, ``y`` (S, m; arrays of one shape, or scalars) and height node of
-        :data:`HOLD_HEIGHTS` (the last axis): whether the hold layer of every yaw node around ``yaw`` (rad; one
-        node where it is on one) at that height exists and refuses the cup tip there. All False when the map has no
-        hold layers, beyond the yaw nodes, and off the grid."""
+        :data:`HOLD_HEIGHTS` (the last axis): whether the hold layer (``family`` "approach": the pre-approach
+        layer) of every yaw node around ``yaw`` (rad; one node where it is on one) at that height exists and
+        refuses the cup tip there. All False when the map has no such layers, beyond the yaw nodes, and off the
+        grid."""
+        layers, xs, ys = ((self.hold, self.xs, self.hold_ys) if family == "hold"
+                          else (self.approach, self.approach_xs, self.approach_ys))
         x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
         out = np.zeros(x.shape + (len(HOLD_HEIGHTS),), bool)
         deg = math.degrees(yaw)
-        yaws = HOLD_YAWS_DEG
-        if not self.hold or not yaws[0] - 1e-9 <= deg <= yaws[-1] + 1e-9:
+        yaws = family_yaws_deg(family)
+        if not layers or not yaws[0] - 1e-9 <= deg <= yaws[-1] + 1e-9:
             return out
         around_yaw = {max(n for n in yaws if n <= deg + 1e-9), min(n for n in yaws if n >= deg - 1e-9)}
         for k, h in enumerate(HOLD_HEIGHTS):
             refused = np.ones(x.shape, bool)
             for d in around_yaw:
-                values = self.hold.get(hold_layer(d, h))
-                refused &= False if values is None else _refuses_many(self.xs, self.hold_ys, values, x, y, margin)
+                values = layers.get(hold_layer(d, h, family))
+                refused &= False if values is None else _refuses_many(xs, ys, values, x, y, margin)
             out[..., k] = refused
         return out
+
+    def refuses_approach(self, x: float, y: float, z: float, yaw: float, margin: float = 0.0) -> bool:
+        """A suction's pre-approach, the cup tip at (x, y, z) (S, m) with the tool turned ``yaw`` (rad) and suction
+        off: True only when the pre-approach layers of every yaw node and height node around it exist and refuse
+        it (:meth:`hold_refusals` with ``family`` "approach")."""
+        span = hold_height_span(z, z)
+        return span is not None and bool(
+            self.hold_refusals(x, y, yaw, margin, "approach")[..., span[0]:span[1] + 1].all())
 
     def refuses_hold(self, x: float, y: float, z_lo: float, z_hi: float, yaw: float, margin: float = 0.0) -> bool:
         """The cup tip holding an object at (x, y) (S, m), somewhere between heights ``z_lo`` and ``z_hi`` (m above
@@ -207,6 +238,10 @@ class ReachMap:
         if self.hold:
             data["hold_ys"] = [round(float(v), 6) for v in self.hold_ys]
             data["hold"] = {k: np.asarray(v, int).tolist() for k, v in self.hold.items()}
+        if self.approach:
+            data["approach_xs"] = [round(float(v), 6) for v in self.approach_xs]
+            data["approach_ys"] = [round(float(v), 6) for v in self.approach_ys]
+            data["approach"] = {k: np.asarray(v, int).tolist() for k, v in self.approach.items()}
         return data
 
     @staticmethod
@@ -214,7 +249,9 @@ class ReachMap:
         return ReachMap(data["station"], np.array(data["xs"], float), np.array(data["ys"], float),
                         {k: np.array(v, bool) for k, v in data["reach"].items()}, dict(data["heights"]),
                         np.array(data.get("hold_ys", []), float),
-                        {k: np.array(v, bool) for k, v in data.get("hold", {}).items()})
+                        {k: np.array(v, bool) for k, v in data.get("hold", {}).items()},
+                        np.array(data.get("approach_xs", []), float), np.array(data.get("approach_ys", []), float),
+                        {k: np.array(v, bool) for k, v in data.get("approach", {}).items()})
 
 
 def reach_map_file(path: str) -> Path:
@@ -247,6 +284,10 @@ def load_reach_map(path: str) -> ReachMap:
         if values.shape != (len(rmap.hold_ys), len(rmap.xs)):
             raise ConfigError(f"{path}: reach map hold layer {layer!r} is {' x '.join(map(str, values.shape))}, not "
                               f"{len(rmap.hold_ys)} x {len(rmap.xs)}")
+    for layer, values in rmap.approach.items():
+        if values.shape != (len(rmap.approach_ys), len(rmap.approach_xs)):
+            raise ConfigError(f"{path}: reach map pre-approach layer {layer!r} is {' x '.join(map(str, values.shape))}, "
+                              f"not {len(rmap.approach_ys)} x {len(rmap.approach_xs)}")
     return rmap
 
 

@@ -473,3 +473,83 @@ def test_the_hold_waypoint_is_the_translate_waypoint_of_a_carry():
         for label, yaw in (("translate", action.yaw + carry_yaw), ("lower", action.yaw)):
             w, h = wps[label], hold_waypoint(*wps[label].position, yaw)
             assert np.allclose(w.X_SF, h.X_SF) and (w.frame, w.shaft, w.suction) == (h.frame, h.shaft, h.suction)
+
+
+def test_a_pre_approach_is_refused_only_where_every_layer_around_it_refuses():
+    from slax_drake.shelf.reach import hold_layer, hold_layers
+
+    rad = np.radians
+    m = _toy_map()
+    xs, ys = np.linspace(-0.6, 0.6, 25), np.array([-0.35, -0.31])
+    far_right = np.broadcast_to(xs < 0.3, (2, 25))
+    from slax_drake.shelf.reach import APPROACH_YAWS_DEG
+
+    turned = {hold_layer(d, h, "approach") for d in APPROACH_YAWS_DEG if d <= -15 for h in (0.03, 0.11)}
+    approach = {k: (far_right.copy() if k in turned else np.ones((2, 25), bool)) for k in hold_layers("approach")}
+    m = ReachMap("toy", m.xs, m.ys, m.reach, m.heights, approach_xs=xs, approach_ys=ys, approach=approach)
+    assert m.refuses_approach(0.45, -0.35, 0.06, rad(-20.0))  # right of x = 0.3, yaw -30..-15, 3..11 cm
+    assert m.refuses_approach(0.45, -0.35, 0.06, rad(-17.0))  # between the nodes -20 and -15, both refuse
+    assert not m.refuses_approach(0.2, -0.35, 0.06, rad(-20.0))  # left of it
+    assert not m.refuses_approach(0.45, -0.35, 0.15, rad(-20.0))  # the 20 cm layers reach
+    assert not m.refuses_approach(0.45, -0.35, 0.06, rad(-12.0))  # the -10 deg layers reach
+    assert not m.refuses_approach(0.7, -0.35, 0.06, rad(-20.0))  # off the grid
+    assert not _toy_map().refuses_approach(0.45, -0.35, 0.06, rad(-20.0))  # a map without the layers
+    again = ReachMap.from_dict(m.to_dict())
+    assert again.refuses_approach(0.45, -0.35, 0.06, rad(-20.0)) and np.allclose(again.approach_xs, xs)
+
+
+def test_the_action_model_refuses_a_suction_whose_pre_approach_the_map_refuses(sim_scenario, tmp_path):
+    """A box turned 20 deg near the bay's left wall, suctioned with the tool turned: offered with pre-approach
+    layers that reach everything, refused (typed REACH_MAP) with layers that reach nothing."""
+    import dataclasses
+
+    from slax_drake.shelf.actions import RefusalKind, Suction
+    from slax_drake.shelf.reach import hold_layers
+
+    shelf = shelf_of(sim_scenario)
+    sim = load_reach_map(SIM_MAP)
+    box = SceneObject("b", "box", (0.08, 0.08, 0.10), planar_pose(-0.2, 0.0, 0.05, np.radians(-20.0)))
+    xs, ys = np.linspace(-0.6, 0.6, 25), np.array([-0.35, -0.31])
+
+    def suctions(value):
+        rmap = dataclasses.replace(sim, approach_xs=xs, approach_ys=ys,
+                                   approach={k: np.full((2, 25), value) for k in hold_layers("approach")})
+        model = ActionModel(shelf, (0.0, -0.75, 0.2), _hold_tool(sim_scenario, tmp_path, rmap))
+        c = model.enumerate((box,), pushes=False)
+        return [a for a in c.feasible if isinstance(a, Suction)], [r for r in c.rejected if r.what == "suction b"]
+
+    offered, _ = suctions(True)
+    assert offered and offered[0].yaw != 0.0
+    gone, why = suctions(False)
+    assert not gone and why[0].kind is RefusalKind.REACH_MAP and "in front of the opening" in why[0].reason
+    load_reach_map.cache_clear()
+
+
+@pytest.mark.slow
+def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(sim_scenario):
+    """Seeded random pre-approach poses (x across the layers' width, at either approach margin, 3-20 cm high, the
+    tool turned within +-30 deg): each one the pre-approach layers refuse has no collision-free IK solution from
+    the observation pose."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.planning.reach import hold_waypoint
+    from slax_drake.shelf.reach import HOLD_HEIGHTS, HOLD_YAWS_DEG
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    rmap = load_reach_map(station.reach_map)
+    planner = MotionPlanner(station, tool_config(sim_scenario, "station"))
+    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    rng = np.random.default_rng(37)
+    refused = []
+    for _ in range(20000):
+        if len(refused) >= 8:
+            break
+        x, y = rng.uniform(rmap.approach_xs[0], rmap.approach_xs[-1]), float(rng.choice(rmap.approach_ys))
+        deg, z = rng.uniform(HOLD_YAWS_DEG[0], HOLD_YAWS_DEG[-1]), rng.uniform(HOLD_HEIGHTS[0], HOLD_HEIGHTS[-1])
+        if rmap.refuses_approach(x, y, z, np.radians(deg), 0.015):
+            refused.append((x, y, z, deg))
+    assert len(refused) == 8
+    for x, y, z, deg in refused:
+        assert not planner.reaches(scene, hold_waypoint(x, y, z, np.radians(deg), suction=False)), (x, y, z, deg)
