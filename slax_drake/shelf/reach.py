@@ -22,7 +22,7 @@ collision-free IK solution from the observation pose, on the empty shelf, for ea
 ``margin`` of it (the cells its neighbourhood touches) is unreachable, so a refused point lies inside a region
 where the planner found nothing; points off the grid are never refused.
 
-Optional hold layers ``hold@-30/3cm`` ... ``hold@+30/20cm`` (:data:`HOLD_YAWS_DEG` x :data:`HOLD_HEIGHTS`), on
+Optional hold layers ``hold@-30/3cm`` ... ``hold@+30/36cm`` (:data:`HOLD_YAWS_DEG` x :data:`HOLD_HEIGHTS`), on
 their own grid (the map's ``xs`` and ``hold_ys``, which reaches from 0.27 m in front of the opening to the back of
 the bay): the cup tip itself (not a contact) at (x, y) and that height (m above the support), the tool turned that
 many degrees about S z, the blade up and suction on, as while the cup holds an object. These are the poses of a
@@ -30,7 +30,7 @@ lifted suction's carry (pulled out, translated across in front of the opening or
 its lowered placement. :meth:`ReachMap.refuses_hold` refuses a hold pose only when the layers of every yaw node
 around its yaw and every height node spanning its height range exist and refuse it.
 
-Optional pre-approach layers ``approach@-30/3cm`` ... (:data:`APPROACH_YAWS_DEG` x :data:`HOLD_HEIGHTS`), on a
+Optional pre-approach layers ``approach@-30/3cm`` ... (:data:`APPROACH_YAWS_DEG` x :data:`APPROACH_HEIGHTS`), on a
 grid of their own (``approach_xs``, wide enough for a turned tool's pre-approach far to the side, and
 ``approach_ys``, the two rows of the tool's tip at the planner's approach margins in front of the opening): the cup
 tip there, the tool turned, the blade up, suction off, as the planner's first waypoint of a suction. :meth:`ReachMap.refuses_approach` refuses a
@@ -54,7 +54,9 @@ RELEASE_LAYERS = ("back off", "retract")
 TURNED_CUP_YAWS_DEG = (-30, -20, -10, 10, 20, 30)  # the tool's yaw of the optional turned-cup layers (deg)
 TURNED_CUP_HEIGHTS = (0.03, 0.06, 0.10)  # their contact heights (m above the support)
 HOLD_YAWS_DEG = (-30, -15, 0, 15, 30)  # the tool's yaw of the optional hold layers (deg)
-HOLD_HEIGHTS = (0.03, 0.11, 0.20)  # the cup tip's height of the hold layers (m above the support)
+HOLD_HEIGHTS = (0.03, 0.11, 0.20, 0.28, 0.36)  # the cup tip's height of the hold layers (m above the support;
+# a carry lifted over a tall object rises to about 0.35 m)
+APPROACH_HEIGHTS = HOLD_HEIGHTS[:3]  # those of the pre-approach layers (a contact is at most 0.2 m high)
 # the tool's yaw of the optional pre-approach layers (deg; finer than the hold layers': in front of the opening the
 # reach ends sharply with the turn, and a layer there is 2 rows)
 APPROACH_YAWS_DEG = tuple(range(-30, 31, 5))
@@ -91,7 +93,8 @@ def hold_layers(family: str = "hold") -> tuple[str, ...]:
     """Every hold (or pre-approach) layer's name, yaw 0 first, then +-30 deg, then the others (the order the map is
     computed in)."""
     order = sorted(family_yaws_deg(family), key=lambda d: (d != 0, -abs(d), d))
-    return tuple(hold_layer(d, h, family) for d in order for h in HOLD_HEIGHTS)
+    heights = HOLD_HEIGHTS if family == "hold" else APPROACH_HEIGHTS
+    return tuple(hold_layer(d, h, family) for d in order for h in heights)
 
 
 def family_yaws_deg(family: str) -> tuple[int, ...]:

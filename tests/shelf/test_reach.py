@@ -312,7 +312,7 @@ def test_a_hold_pose_is_refused_only_where_every_layer_around_its_yaw_and_height
     assert m.refuses_hold(0.1, -0.3, 0.03, 0.03, 0.0)  # on a yaw node and a height node
     assert not m.refuses_hold(0.1, -0.3, 0.05, 0.15, rad(5.0))  # the 20 cm layers reach
     assert not m.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(-5.0))  # the -15 deg layers reach
-    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.25, rad(5.0))  # above the highest node: not refused
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.40, rad(5.0))  # above the highest node: not refused
     assert not m.refuses_hold(0.1, -0.3, 0.02, 0.05, rad(5.0))  # below the lowest node
     assert not m.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(35.0))  # beyond the yaw nodes
     assert not m.refuses_hold(0.1, -0.5, 0.05, 0.08, rad(5.0))  # off the hold grid (in front of its first row)
@@ -421,7 +421,7 @@ def test_the_action_model_refuses_the_carries_the_hold_layers_refuse(sim_scenari
 @pytest.mark.slow
 def test_a_carry_pose_the_hold_layers_refuse_has_no_ik_solution(sim_scenario):
     """Seeded random cup poses of a carry (x across the bay, y from in front of the opening to its back, height
-    3-20 cm, tool yaw within +-30 deg): each one the hold layers refuse has no collision-free IK solution from the
+    3-36 cm, tool yaw within +-30 deg): each one the hold layers refuse has no collision-free IK solution from the
     observation pose; each one whose grid cells are reached in every layer around it has one."""
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.planning.reach import hold_waypoint
@@ -547,7 +547,7 @@ def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(sim_scenario):
         if len(refused) >= 8:
             break
         x, y = rng.uniform(rmap.approach_xs[0], rmap.approach_xs[-1]), float(rng.choice(rmap.approach_ys))
-        deg, z = rng.uniform(HOLD_YAWS_DEG[0], HOLD_YAWS_DEG[-1]), rng.uniform(HOLD_HEIGHTS[0], HOLD_HEIGHTS[-1])
+        deg, z = rng.uniform(HOLD_YAWS_DEG[0], HOLD_YAWS_DEG[-1]), rng.uniform(HEIGHTS[0], HEIGHTS[-1])
         if rmap.refuses_approach(x, y, z, np.radians(deg), 0.015):
             refused.append((x, y, z, deg))
     assert len(refused) == 8
