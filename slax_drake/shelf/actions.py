@@ -625,9 +625,13 @@ class ActionModel:
         lowered = (np.zeros(at_placement.shape[:2], bool) if seal is None
                    else at_placement[..., seal[0]:seal[1] + 1].all(-1))
         ways = self.carry_cup_ys(lat, obj, fp)
-        pull_out = np.array([rmap.hold_refusals(px, y, yaw + w, REACH_MARGIN) for y, w in ways])  # (O, H)
-        translate = np.stack([rmap.hold_refusals(x2, np.full(len(x2), y), yaw + w, REACH_MARGIN) for y, w in ways],
-                             axis=1)  # (A, O, H)
+        way_ys, turns = np.array([y for y, _ in ways]), np.array([w for _, w in ways])
+        pull_out = np.zeros((len(ways), at_placement.shape[-1]), bool)  # (O, H)
+        translate = np.zeros((len(x2), len(ways), at_placement.shape[-1]), bool)  # (A, O, H)
+        for w in np.unique(turns):  # the ways of one turn of the tool together
+            k = np.flatnonzero(turns == w)
+            pull_out[k] = rmap.hold_refusals(np.full(len(k), px), way_ys[k], yaw + float(w), REACH_MARGIN)
+            translate[:, k] = rmap.hold_refusals(x2[:, None], way_ys[k][None, :], yaw + float(w), REACH_MARGIN)
         pre = dict(dxs=dxs, lowered=lowered, at_placement=at_placement, pull_out=pull_out, translate=translate)
         if lat.drag:  # one way, at the seal's height: pulled, dragged across, pushed in
             if seal is None:

@@ -125,17 +125,24 @@ def _refuses_on(xs: np.ndarray, ys: np.ndarray, values: np.ndarray, x: float, y:
     return not bool(values[j0:j1 + 1, i0:i1 + 1].any())
 
 
+def summed_area(values: np.ndarray) -> np.ndarray:
+    """The summed-area table of a layer's reached nodes: (rows + 1, columns + 1), zeros in the first row and column."""
+    table = np.zeros((values.shape[0] + 1, values.shape[1] + 1), int)
+    table[1:, 1:] = np.asarray(values, int).cumsum(0).cumsum(1)
+    return table
+
+
 def _refuses_many(xs: np.ndarray, ys: np.ndarray, values: np.ndarray, x: np.ndarray, y: np.ndarray,
-                  margin: float) -> np.ndarray:
+                  margin: float, table: np.ndarray | None = None) -> np.ndarray:
     """:func:`_refuses_on` at every point of the arrays ``x``, ``y`` (a summed-area table counts the reached nodes
-    of each point's window)."""
+    of each point's window; ``table``: the layer's :func:`summed_area`, computed when not given)."""
     on = (xs[0] - 1e-9 <= x) & (x <= xs[-1] + 1e-9) & (ys[0] - 1e-9 <= y) & (y <= ys[-1] + 1e-9)
     i0 = np.maximum(0, np.searchsorted(xs, x - margin - 1e-9, side="right") - 1)
     i1 = np.minimum(len(xs) - 1, np.searchsorted(xs, x + margin + 1e-9, side="left"))
     j0 = np.maximum(0, np.searchsorted(ys, y - margin - 1e-9, side="right") - 1)
     j1 = np.minimum(len(ys) - 1, np.searchsorted(ys, y + margin + 1e-9, side="left"))
-    table = np.zeros((len(ys) + 1, len(xs) + 1), int)
-    table[1:, 1:] = np.asarray(values, int).cumsum(0).cumsum(1)
+    if table is None:
+        table = summed_area(values)
     reached = table[j1 + 1, i1 + 1] - table[j0, i1 + 1] - table[j1 + 1, i0] + table[j0, i0]
     return on & (reached == 0)
 
@@ -158,6 +165,7 @@ class ReachMap:
     approach_xs: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     approach_ys: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     approach: dict = dataclasses.field(default_factory=dict)
+    _tables: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)  # summed-area tables per layer
 
     def refuses(self, layer: str, x: float, y: float, margin: float = 0.0) -> bool:
         """True when every grid node around (x +- margin, y +- margin) is unreachable in ``layer`` (see the
@@ -212,8 +220,15 @@ class ReachMap:
         for k, h in enumerate(HOLD_HEIGHTS):
             refused = np.ones(x.shape, bool)
             for d in around_yaw:
-                values = layers.get(hold_layer(d, h, family))
-                refused &= False if values is None else _refuses_many(xs, ys, values, x, y, margin)
+                name = hold_layer(d, h, family)
+                values = layers.get(name)
+                if values is None:
+                    refused &= False
+                    continue
+                table = self._tables.get(name)
+                if table is None:
+                    table = self._tables[name] = summed_area(values)
+                refused &= _refuses_many(xs, ys, values, x, y, margin, table)
             out[..., k] = refused
         return out
 
