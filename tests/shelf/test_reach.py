@@ -532,7 +532,7 @@ def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(sim_scenario):
     the observation pose."""
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.planning.reach import hold_waypoint
-    from slax_drake.shelf.reach import HOLD_HEIGHTS, HOLD_YAWS_DEG
+    from slax_drake.shelf.reach import APPROACH_HEIGHTS as HEIGHTS, HOLD_YAWS_DEG
     from slax_drake.scene.camera import Camera
     from slax_drake.scene.model import Scene
     from slax_drake.station.scenario import load_station_scenario
