@@ -12,7 +12,11 @@ those rule values but not with the station's (the ones the station's rules remov
 too: "removed" counts them and "removed plannable" those the planner would have planned (a conservative rule
 removes none); the rejected rate of the baseline model is printed beside. The JSON holds every planned candidate
 (verdict, planning seconds); ``--compare EARLIER.json`` prints the candidates whose verdict changed since that run
-and the planning times of those both runs planned.
+and the planning times of those both runs planned. ``--stances DX [DX ...]`` (m) plans every candidate the planner
+rejects (offered, or removed by the station's rules beyond the baseline) again with the robot's base moved DX along
+the shelf's x (the shelf, the objects and the observation pose relative to the base unchanged: the scene camera moved
+with the base), and counts those that some stance plans: whether choosing the base's stance per action would make
+them executable.
 
     python research/reach_rule.py --station sim_configs/station_sim_shelf.yaml --scenes 2
     python research/reach_rule.py --config sim_configs/table2.yaml \\
@@ -45,6 +49,8 @@ def main(argv=None) -> int:
                         help="rule values of a baseline model whose extra candidates are planned too")
     parser.add_argument("--compare", default=None, metavar="EARLIER.json",
                         help="an earlier run's --json: list the candidates whose verdict changed")
+    parser.add_argument("--stances", type=float, nargs="+", default=[], metavar="DX",
+                        help="base shifts along the shelf's x (m) from which to plan every rejected candidate again")
     args = parser.parse_args(argv)
     from slax_drake.config import load_scenario
     from slax_drake.errors import UserError
@@ -96,6 +102,8 @@ def main(argv=None) -> int:
                         if args.list_rejected:
                             print(f"    rejected {action}: {result.reason}", flush=True)
                     row[f"offered_{action.kind}"] += 1
+                failed = [a for a, c in zip(cands.feasible, planned[-len(cands.feasible):] if cands.feasible else [])
+                          if not c["feasible"]]
                 for action in removed:
                     result = checker.planner.plan(action, checker.scene)
                     row["removed"] += 1
@@ -103,6 +111,16 @@ def main(argv=None) -> int:
                     if result.feasible:
                         row["removed_plannable"] += 1
                         print(f"    removed but plannable: {action}", flush=True)
+                    else:
+                        failed.append(action)
+                if args.stances:
+                    for action, shifts in _from_stances(checker, failed, args.stances):
+                        row["stance_tried"] += 1
+                        row["stance_planned"] += bool(shifts)
+                        for dx in shifts:
+                            row[f"stance_planned_{dx:+.2f}"] += 1
+                        print(f"    rejected {action}: planned from base shift "
+                              f"{', '.join(f'{dx:+.2f}' for dx in shifts) or 'none'}", flush=True)
                 print(f"  n={n} scene {index}: {len(cands.feasible)} offered, "
                       f"{row['rejected']} rejected so far at this density"
                       + (f"; {len(removed)} removed by the rules beyond the baseline" if baseline is not None else ""),
@@ -136,6 +154,13 @@ def main(argv=None) -> int:
               "the planner would have planned")
         summary["baseline"] = {"rules": args.baseline, "offered": base_offered, "rejected": base_rejected,
                                "removed": row["removed"], "removed_plannable": row["removed_plannable"]}
+    if args.stances:
+        row = sum(rows.values(), collections.Counter())
+        print(f"base stances {' '.join(f'{dx:+.2f}' for dx in args.stances)} m: {row['stance_planned']} of "
+              f"{row['stance_tried']} rejected candidates plan from some stance ("
+              + ", ".join(f"{dx:+.2f}: {row[f'stance_planned_{dx:+.2f}']}" for dx in args.stances) + ")")
+        summary["stances"] = {"shifts": args.stances, "tried": row["stance_tried"], "planned": row["stance_planned"],
+                              **{f"{dx:+.2f}": row[f"stance_planned_{dx:+.2f}"] for dx in args.stances}}
     print("planner rejections by first reason:")
     for reason, count in why.most_common(8):
         print(f"  {count:4d}  {reason}")
@@ -151,6 +176,22 @@ def main(argv=None) -> int:
         summary["candidates"] = planned
         write_text_atomic(Path(args.json), json.dumps(summary, indent=1) + "\n")
     return 0
+
+
+def _from_stances(checker, actions, shifts):
+    """(action, [the base shifts (m, along S x) from which the planner plans it]) per action: each planned with a
+    fresh planner in the checker's scene whose camera (on the robot, at the observation pose) is moved by the
+    shift along S x, so the shelf stands shifted the other way relative to the base."""
+    from slax_drake.planning.planner import MotionPlanner
+
+    planners = {}
+    for dx in shifts:
+        X = np.array(checker.scene.camera.X_SC, float, copy=True)
+        X[0, 3] += dx
+        scene = dataclasses.replace(checker.scene, camera=dataclasses.replace(checker.scene.camera, X_SC=X))
+        planners[dx] = (MotionPlanner(checker.planner.scenario, checker.planner.tool), scene)
+    for action in actions:
+        yield action, [dx for dx, (planner, scene) in planners.items() if planner.plan(action, scene).feasible]
 
 
 def _earlier_candidates(path: str) -> list:

@@ -14,6 +14,18 @@ The optional release layers (``--add-release``; :data:`slax_drake.shelf.reach.RE
 suction whose cup releases the object with its contact at (x, y), ``CUP_HEIGHT`` high: "back off" (the cup backed
 off along the tube from there) and "retract" (the tool drawn back out in front of the opening, at either approach
 margin: reached when either is).
+
+The optional hold layers (``--add-hold``; :func:`slax_drake.shelf.reach.hold_layers`) are of the cup tip itself
+while it holds an object (suction on, the blade up, the tool turned each of ``HOLD_YAWS_DEG`` about S z), at each
+of ``HOLD_HEIGHTS``, on their own grid of y (:func:`hold_grid`: from ``HOLD_FRONT`` in front of the opening to the
+map's deepest row, ``HOLD_STEP`` apart) and the map's x: the poses of a carry's pull-out, translation and push-in
+and of the lowered placement. The map file is written after each layer, so a stopped run keeps what it computed
+and a run again adds the layers still missing.
+
+The optional pre-approach layers (``--add-approach``) are of a suction's first waypoint: the cup tip at the
+planner's approach margins in front of the opening (``approach_ys``: one row per margin), suction off, the tool
+turned; their x reaches ``APPROACH_HALF_WIDTH`` to either side (a turned tool's pre-approach lies far to the side
+of a deep contact).
 """
 
 from __future__ import annotations
@@ -23,12 +35,16 @@ import time
 
 import numpy as np
 
-from slax_drake.shelf.reach import LAYERS, RELEASE_LAYERS, ReachMap, grid, turned_cup_layers, turned_cup_params
+from slax_drake.shelf.reach import (LAYERS, RELEASE_LAYERS, ReachMap, grid, hold_layers, hold_params, turned_cup_layers,
+                                    turned_cup_params)
 
 CUP_HEIGHT = 0.10  # m, the cup layer's contact height (contacts sit 1.5-18.5 cm high)
 STEP = 0.05  # m
 WALL_INSET = 0.035  # m: the first blade lane's centre from a side wall
 BACK_INSET = 0.05  # m: the deepest node from the back wall
+HOLD_FRONT = 0.27  # m: the hold layers' first row this far in front of the opening (a deep object pulled all the way out)
+HOLD_STEP = 0.06  # m between the hold layers' rows
+APPROACH_HALF_WIDTH = 0.6  # m: the pre-approach layers' x from -this to +this
 
 
 def layer_waypoint(layer: str, x: float, y: float, scene, tool):
@@ -77,6 +93,83 @@ def cup_waypoint(x: float, y: float, yaw: float, scene, tool, height: float = CU
     dummy = SceneObject("reach_probe", "box", (0.06, 0.06, 0.06), planar_pose(x, y + 0.03, 0.03, 0.0))
     wps = action_waypoints(Suction(dummy.name, (x, y, height), 0.0, y + 0.03, yaw), (dummy,), scene.shelf, tool)
     return next(w for w in wps if w.label == "seal")
+
+
+def hold_waypoint(x: float, y: float, z: float, yaw: float, suction: bool = True):
+    """The cup tip at (x, y, z) (S, m) holding an object, the tool turned ``yaw`` (rad) about S z: the pose of a
+    lifted suction's "translate" waypoint (and of its pull-out, push-in and lowering) with the blade up, suction on;
+    with ``suction`` False the pose of its "pre-approach"."""
+    from slax_drake.planning.waypoints import ToolWaypoint, suction_rotation
+    from slax_drake.station import robot as robot_model
+
+    X = np.eye(4)
+    X[:3, :3] = suction_rotation(yaw)
+    X[:3, 3] = (x, y, z)
+    if not suction:
+        return ToolWaypoint("pre-approach", robot_model.CUP_TIP_FRAME, X, robot_model.SHAFT_BLADE_UP)
+    return ToolWaypoint("translate", robot_model.CUP_TIP_FRAME, X, robot_model.SHAFT_BLADE_UP, contact=True,
+                        suction=True, carried="clear")
+
+
+def hold_grid(shelf, ys: np.ndarray, step: float = HOLD_STEP) -> np.ndarray:
+    """The hold layers' y (S, m): from ``HOLD_FRONT`` in front of the opening to the map's deepest row ``ys[-1]``."""
+    return grid(-shelf.depth / 2 - HOLD_FRONT, float(ys[-1]), step)
+
+
+def add_hold_layers(station_path: str, base: ReachMap, out, layers=None, progress: bool = True,
+                    family: str = "hold") -> ReachMap:
+    """``base`` with the hold layers it lacks (``layers``: default every one of :func:`hold_layers`), on its x
+    grid and :func:`hold_grid`; with ``family`` "approach" the pre-approach layers, on their grid (x within
+    ``APPROACH_HALF_WIDTH``, the map's step; y at each approach margin); the map is written to ``out`` after each
+    layer."""
+    import dataclasses
+    import json
+    from pathlib import Path
+
+    from slax_drake.config import load_scenario
+    from slax_drake.io import write_text_atomic
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.shelf.tool import tool_config
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.scene.sampling import shelf_of
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario(station_path)
+    scenario = load_scenario(station.scene_config)
+    shelf = shelf_of(scenario)
+    scene = Scene(shelf, Camera.from_config(scenario.camera), (), None, 0)
+    planner = MotionPlanner(station, tool_config(scenario, "station"))
+    from slax_drake.shelf.actions import APPROACH_MARGINS
+
+    if family == "hold":
+        xs, ys = base.xs, (base.hold_ys if base.hold else hold_grid(shelf, base.ys))
+        hold = dict(base.hold)
+    else:
+        step = float(base.xs[1] - base.xs[0])
+        xs = base.approach_xs if base.approach else grid(-APPROACH_HALF_WIDTH, APPROACH_HALF_WIDTH, step)
+        ys = base.approach_ys if base.approach else np.array(sorted(-shelf.depth / 2 - m for m in APPROACH_MARGINS))
+        hold = dict(base.approach)
+    rmap = base
+    t0 = time.perf_counter()
+    for layer in (hold_layers(family) if layers is None else layers):
+        if layer in hold:
+            continue
+        yaw, z = hold_params(layer)
+        ok = np.zeros((len(ys), len(xs)), bool)
+        for j, y in enumerate(ys):
+            for i, x in enumerate(xs):
+                ok[j, i] = planner.reaches(scene, hold_waypoint(float(x), float(y), z, yaw, suction=family == "hold"))
+        hold[layer] = ok
+        if family == "hold":
+            rmap = dataclasses.replace(rmap, hold_ys=np.asarray(ys, float), hold=dict(hold))
+        else:
+            rmap = dataclasses.replace(rmap, approach_xs=np.asarray(xs, float), approach_ys=np.asarray(ys, float),
+                                       approach=dict(hold))
+        write_text_atomic(Path(out), json.dumps(rmap.to_dict()) + "\n")
+        if progress:
+            print(f"{layer}: {int(ok.sum())} of {ok.size} nodes reached ({time.perf_counter() - t0:.0f} s)", flush=True)
+    return rmap
 
 
 def map_grid(shelf, step: float = STEP) -> tuple[np.ndarray, np.ndarray]:
@@ -188,8 +281,20 @@ def main(argv=None) -> int:
                         help="read the map at --out and add the turned-cup layers it lacks, on its grid")
     parser.add_argument("--add-release", action="store_true",
                         help="read the map at --out and add the release layers (back off, retract) it lacks")
+    parser.add_argument("--add-hold", action="store_true",
+                        help="read the map at --out and add the hold layers (the carry's and the lowered placement's "
+                             "cup poses) it lacks, writing it after each layer")
+    parser.add_argument("--add-approach", action="store_true",
+                        help="read the map at --out and add the pre-approach layers (a turned suction's first "
+                             "waypoint) it lacks, writing it after each layer")
     args = parser.parse_args(argv)
-    if args.add_release:
+    if args.add_hold or args.add_approach:
+        from slax_drake.shelf.reach import load_reach_map
+
+        rmap = load_reach_map(args.out)
+        for family in ("hold",) * args.add_hold + ("approach",) * args.add_approach:
+            rmap = add_hold_layers(args.station, rmap, args.out, family=family)
+    elif args.add_release:
         from slax_drake.shelf.reach import load_reach_map
 
         base = load_reach_map(args.out)

@@ -42,33 +42,34 @@ import dataclasses
 
 import numpy as np
 
-from slax_drake.shelf.actions import BLADE_LIFT, DRAG_FRONT_MARGIN, TUBE_STANDOFF, Push, Suction
+from slax_drake.shelf.actions import (APPROACH_MARGINS, BLADE_LIFT, CARRY_YAWS_DEG, DRAG_FRONT_MARGIN, LIFT, LIFT_CLEARANCE,
+                                      OUT_MARGIN, PULL_STEP, SEAL_PRESS, TUBE_STANDOFF, Push, Suction)
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject, Shelf
 from slax_drake.station import robot as robot_model
 
-APPROACH_MARGIN = 0.05  # the tool's tip this far in front of the opening before entering (m)
-# The planner's margins to try in turn: the nominal one, then with the tip just outside the opening, which keeps
-# the wrist 4 cm farther from the robot's body (the front of the bay is at the edge of the arm's folded reach).
-APPROACH_MARGINS = (APPROACH_MARGIN, 0.01)
+# APPROACH_MARGINS (the action model's): the planner's margins of the tool's tip in front of the opening before
+# entering (m), to try in turn: the nominal one, then with the tip just outside the opening, which keeps the wrist
+# 4 cm farther from the robot's body (the front of the bay is at the edge of the arm's folded reach).
+APPROACH_MARGIN = APPROACH_MARGINS[0]
 BLADE_HALF_LENGTH = 0.0325  # blade_face_frame to the blade's tip along the tube (m, URDF)
 BLADE_HALF_THICKNESS = 0.002  # m (URDF)
 TUBE_RADIUS = 0.015  # m (URDF); the tube runs along the blade's upper edge, centred on the blade's plane
 PUSH_STANDOFF = TUBE_RADIUS + TUBE_STANDOFF - BLADE_HALF_THICKNESS  # blade face to the object's extreme (m): the tube clears it
 # BLADE_LIFT (the blade's lower edge above the support, m) is the action model's, whose push_tube_check reads it
-SEAL_PRESS = 0.001  # cup pressed this far into the face (m)
+# SEAL_PRESS (the action model's): the cup pressed this far into the face (m)
 CUP_STANDOFF = 0.01  # m before the face, then the cup moves in with suction on
-LIFT = 0.01  # m
-LIFT_CLEARANCE = 0.01  # the carried object's bottom this far above the tallest object it passes over (m)
-PULL_STEP = 0.04  # m between the pull-out depths the planner tries
+# LIFT (m), LIFT_CLEARANCE (the carried object's bottom this far above the tallest object it passes over, m) and
+# PULL_STEP (m between the pull-out depths the planner tries) are the action model's, which checks the carry
+# against the reach map's hold layers
 # Turns of the tool about the cup's vertical axis (rad) while it carries an object pulled all the way out, tried
 # (each way round) when no depth of the straight carry plans (:func:`carry_options`). At 30 deg every pull-out
 # and translate pose of the Table I carries the arm could not reach straight has an IK solution.
-CARRY_YAWS = (np.radians(30.0),)
+CARRY_YAWS = tuple(float(np.radians(d)) for d in CARRY_YAWS_DEG)
 TARGET_CLEARANCE = 0.005  # m, an object carried across inside the shelf keeps this far from the target
 SWEEP_STEP = 0.005  # m between footprints of the carried object's sweep when looking for objects it crosses
-OUT_MARGIN = 0.01  # the carried object's back this far in front of the opening (m)
+# OUT_MARGIN (the action model's): the carried object's back this far in front of the opening (m)
 RELEASE_BACKOFF = 0.02  # m
 DWELL = 0.3  # s at rest after sealing and after releasing
 

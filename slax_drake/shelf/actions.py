@@ -56,7 +56,7 @@ from slax_drake.shelf.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
     push_end_hidden,
 )
-from slax_drake.shelf.reach import load_reach_map
+from slax_drake.shelf.reach import hold_height_span, load_reach_map
 from slax_drake.scene import mass as scene_mass
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import SceneObject, Shelf
@@ -78,6 +78,19 @@ BLADE_LIFT = 0.008  # m
 # thick, clears the floor by 1 cm).
 DRAG_FRONT_MARGIN = 0.01  # m
 DRAG_MIN_SEAL_Z = 0.025  # m
+# A suction's motion as the planner makes it (slax_drake.planning.waypoints reads these; the reach map's hold
+# layers are checked along it): the cup presses SEAL_PRESS into the face; the tool's tip is APPROACH_MARGINS in
+# front of the opening before it enters (each margin tried in turn); the object is lifted LIFT, or LIFT_CLEARANCE
+# above the tallest object its way crosses, pulled out until its back is OUT_MARGIN in front of the opening or
+# carried across at shallower depths PULL_STEP apart, or pulled all the way out with the tool turned by
+# CARRY_YAWS_DEG either way about the cup's vertical axis.
+SEAL_PRESS = 0.001  # m
+APPROACH_MARGINS = (0.05, 0.01)  # m
+LIFT = 0.01  # m
+LIFT_CLEARANCE = 0.01  # m
+OUT_MARGIN = 0.01  # m
+PULL_STEP = 0.04  # m
+CARRY_YAWS_DEG = (30.0,)  # deg
 TUBE_CHECK_SLACK = 0.004  # m: how far the planned tool may stray from its straight segment (the planner's
 # DEVIATION_TOLERANCE); the push_tube_check corridor is narrowed and lowered by it, so it refuses only sure hits
 
@@ -483,6 +496,13 @@ class ActionModel:
                                               f"{obj.name} (reach map)", kind=RefusalKind.REACH_MAP))
                 return
             ok &= released
+        if self.reach is not None and self.reach.hold and ok.any():
+            held = ~self._hold_refused(ctx, i, lat, obj, fp)
+            if not (ok & held).any():
+                rejected.append(refused(what, f"the arm cannot carry {obj.name} to any placement: its carry or its "
+                                              f"lowered placement is out of reach (reach map)", kind=RefusalKind.REACH_MAP))
+                return
+            ok &= held
         a_index, b_index = np.nonzero(ok)
         if len(a_index) == 0:
             only_back = lat.drag and not lat.base[lat.a_all != 0].any()
@@ -512,6 +532,119 @@ class ActionModel:
             for b, y_placed in enumerate(lat.y_placed):
                 ok[a, b] = not self.reach.refuses_release(cx + float(dx), cy + (float(y_placed) - oy), REACH_MARGIN)
         return ok
+
+    def pre_approach_refused(self, cx: float, cy: float, cz: float, yaw: float) -> bool:
+        """Whether the reach map's pre-approach layers refuse the first waypoint of a suction whose contact is
+        (cx, cy, cz) (S, m) with the tool turned ``yaw`` (rad): the cup tip on the tube's axis in front of the
+        opening, at each of ``APPROACH_MARGINS`` (the planner tries each); True only when every one is refused."""
+        ax, ay = -math.sin(yaw), math.cos(yaw)
+        for margin in APPROACH_MARGINS:
+            y_pre = -self.shelf.depth / 2.0 - margin
+            back = (cy - y_pre) / ay
+            if not self.reach.refuses_approach(cx - back * ax, y_pre, cz, yaw, REACH_MARGIN):
+                return False
+        return True
+
+    def carry_cup_ys(self, lat: "SuctionLattice", obj: SceneObject, fp: Footprint) -> list[tuple[float, float]]:
+        """(cup y in S (m), turn of the tool about the cup's vertical axis (rad)) of every way the planner may carry
+        the object of a lifted suction across (:func:`slax_drake.planning.waypoints.carry_options` at each of
+        ``APPROACH_MARGINS``, none left out for the target): pulled all the way out (its back ``OUT_MARGIN`` in front
+        of the opening, the cup at least the approach margin out), at shallower depths ``PULL_STEP`` apart while the
+        cup is pulled at least ``PULL_STEP`` back from the contact, and all the way out turned by ``CARRY_YAWS_DEG``
+        either way. A drag has one: the cup where the drag's pull leaves the object."""
+        cy = float(lat.q[1])
+        oy = float(obj.center[1])
+        if lat.drag:
+            return [(cy + (float(lat.y_pull) - oy) + SEAL_PRESS * math.cos(lat.yaw), 0.0)]
+        y_open = -self.shelf.depth / 2.0
+        ey = fp.extents()[1]
+        y_out = cy + (y_open - ey - OUT_MARGIN - oy)
+        options = []
+        for margin in APPROACH_MARGINS:
+            y_full = min(y_out, y_open - margin)
+            options.append((y_full, 0.0))
+            y = y_full + PULL_STEP
+            while y <= cy - PULL_STEP + 1e-9:
+                options.append((y, 0.0))
+                y += PULL_STEP
+            options.extend((y_full, sign * math.radians(d)) for d in CARRY_YAWS_DEG for sign in (1.0, -1.0))
+        return list(dict.fromkeys((round(y, 9), w) for y, w in options))
+
+    def _hold_refused(self, ctx, i: int, lat: "SuctionLattice", obj: SceneObject, fp: Footprint) -> np.ndarray:
+        """(A, B) bool: placements of object i's suction whose motion the reach map's hold layers refuse: the cup
+        lowered at the placement, or (a lifted carry) pushed in there, or every way across of
+        :meth:`carry_cup_ys` refused at its pull-out or its translation. A lifted carry's cup is anywhere from
+        ``LIFT`` above the seal to ``LIFT_CLEARANCE`` above the tallest other object near its way (any whose
+        bounding box meets the box around every footprint the carried object may sweep); a drag's stays at the
+        seal's height. What depends on the object alone is kept with its lattice."""
+        pre = lat._hold.get("pre")
+        if pre is None:
+            pre = lat._hold["pre"] = self._hold_precompute(lat, obj, fp)
+        cz = float(lat.q[2])
+        refused = pre["lowered"].copy()
+        if lat.drag:
+            return refused | pre["carry_at_seal"]
+        # the tallest other object near each placement's way (A, B)
+        ox, oy = float(obj.center[0]), float(obj.center[1])
+        dxs, y_placed = pre["dxs"], lat.y_placed
+        r = pre["sweep_radius"]
+        x_lo, x_hi = ox + np.minimum(0.0, dxs) - r, ox + np.maximum(0.0, dxs) + r
+        y_lo, y_hi = pre["y_far_centre"] - r, np.maximum(oy, y_placed) + r
+        tallest = np.zeros((len(dxs), len(y_placed)))
+        for j in ctx.others(i):
+            other = ctx.all_fps[j]
+            ejx, ejy = other.extents()
+            near_x = (x_lo <= other.x + ejx) & (other.x - ejx <= x_hi)
+            near_y = (y_lo <= other.y + ejy) & (other.y - ejy <= y_hi)
+            tallest = np.maximum(tallest, float(ctx.all_heights[j]) * (near_x[:, None] & near_y[None, :]))
+        z_top = cz + np.maximum(LIFT, np.where(tallest > 0.0, tallest + LIFT_CLEARANCE, 0.0))
+        for zt in np.unique(np.round(z_top, 6)):
+            span = hold_height_span(cz + LIFT, float(zt))
+            if span is None:
+                continue  # beyond the map's heights: not refused
+            lo, hi = span[0], span[1] + 1
+            sel = np.isclose(z_top, zt, atol=1e-6)
+            pushed_in = pre["at_placement"][..., lo:hi].all(-1)  # (A, B)
+            ways = pre["pull_out"][None, :, lo:hi].all(-1) | pre["translate"][:, :, lo:hi].all(-1)  # (A, O)
+            refused[sel] |= (pushed_in | ways.all(-1)[:, None])[sel]
+        return refused
+
+    def _hold_precompute(self, lat: "SuctionLattice", obj: SceneObject, fp: Footprint) -> dict:
+        """The hold layers' verdicts (per height node, last axis) on the poses of object ``obj``'s suction that
+        depend on it alone; see :meth:`_hold_refused`."""
+        rmap = self.reach
+        cx, cy, cz = (float(v) for v in lat.q)
+        yaw = float(lat.yaw)
+        px, py = cx - SEAL_PRESS * math.sin(yaw), cy + SEAL_PRESS * math.cos(yaw)
+        oy = float(obj.center[1])
+        dxs = np.asarray(lat.a_all, float) * lat.res
+        x2 = px + dxs  # (A,) the cup's x across
+        y_in = py + (np.asarray(lat.y_placed, float) - oy)  # (B,) the cup's y at each placement
+        at_placement = rmap.hold_refusals(x2[:, None], y_in[None, :], yaw, REACH_MARGIN)  # (A, B, H)
+        seal = hold_height_span(cz, cz)
+        lowered = (np.zeros(at_placement.shape[:2], bool) if seal is None
+                   else at_placement[..., seal[0]:seal[1] + 1].all(-1))
+        ways = self.carry_cup_ys(lat, obj, fp)
+        way_ys, turns = np.array([y for y, _ in ways]), np.array([w for _, w in ways])
+        pull_out = np.zeros((len(ways), at_placement.shape[-1]), bool)  # (O, H)
+        translate = np.zeros((len(x2), len(ways), at_placement.shape[-1]), bool)  # (A, O, H)
+        for w in np.unique(turns):  # the ways of one turn of the tool together
+            k = np.flatnonzero(turns == w)
+            pull_out[k] = rmap.hold_refusals(np.full(len(k), px), way_ys[k], yaw + float(w), REACH_MARGIN)
+            translate[:, k] = rmap.hold_refusals(x2[:, None], way_ys[k][None, :], yaw + float(w), REACH_MARGIN)
+        pre = dict(dxs=dxs, lowered=lowered, at_placement=at_placement, pull_out=pull_out, translate=translate)
+        if lat.drag:  # one way, at the seal's height: pulled, dragged across, pushed in
+            if seal is None:
+                pre["carry_at_seal"] = np.zeros_like(lowered)
+            else:
+                s0, s1 = seal[0], seal[1] + 1
+                across = pull_out[0, s0:s1].all() | translate[:, 0, s0:s1].all(-1)  # (A,)
+                pre["carry_at_seal"] = across[:, None] | at_placement[..., s0:s1].all(-1)
+            return pre
+        ex, ey = fp.extents()
+        pre["sweep_radius"] = math.hypot(float(obj.center[0]) - cx, oy - cy) + math.hypot(ex, ey)
+        pre["y_far_centre"] = oy + (min(y for y, _ in ways) - py)
+        return pre
 
     def suction_lattice(self, obj: SceneObject, fp: Footprint, mask: np.ndarray) -> "SuctionLattice":
         """Object ``obj``'s :class:`SuctionLattice` (``fp`` its footprint, ``mask`` its footprint mask on the
@@ -562,6 +695,10 @@ class ActionModel:
             turned = f" turned {math.degrees(yaw):+.0f} deg" if yaw else ""
             return SuctionLattice.refused(f"the arm cannot reach the cup{turned} at {obj.name}'s face "
                                           f"({cx:+.2f}, {cy:+.2f}) m (reach map)", RefusalKind.REACH_MAP)
+        if self.reach is not None and self.reach.approach and self.pre_approach_refused(cx, cy, cz, yaw):
+            turned = f" turned {math.degrees(yaw):+.0f} deg" if yaw else ""
+            return SuctionLattice.refused(f"the arm cannot hold the cup{turned} in front of the opening on its way to "
+                                          f"{obj.name}'s face (reach map)", RefusalKind.REACH_MAP)
         tube_r = t.geometry.tube_diameter / 2
         # the tube's straight way in along its (turned) axis, from in front of the opening to the contact
         length = (cy - self.y_front) / math.cos(yaw)
@@ -968,6 +1105,7 @@ class SuctionLattice:
     y_pull: float = 0.0
     _actions: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
     _release: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)  # _release_reachable's mask
+    _hold: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)  # _hold_precompute's verdicts
 
     @classmethod
     def refused(cls, reason: str, kind: "RefusalKind") -> "SuctionLattice":

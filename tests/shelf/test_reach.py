@@ -284,3 +284,272 @@ def test_the_release_layers_agree_with_the_planner_on_a_sample_of_poses(sim_scen
         for (x, y), expected in [(p, False) for p in refused] + [(p, True) for p in accepted]:
             got = any(planner.reaches(scene, release_waypoint(layer, x, y, scene, tool, m)) for m in margins)
             assert got == expected, (layer, x, y)
+
+
+def _hold_map(refused_layers=(), refuse_x_above=None):
+    """The toy grid with every hold layer on hold rows y = -0.4 .. 0.2: the layers in ``refused_layers`` reach
+    nothing (or, with ``refuse_x_above``, nothing beyond that x), the others everything."""
+    from slax_drake.shelf.reach import hold_layers
+
+    m = _toy_map()
+    hold_ys = np.array([-0.4, -0.2, 0.0, 0.2])
+    hold = {}
+    for name in hold_layers():
+        ok = np.ones((len(hold_ys), len(m.xs)), bool)
+        if name in refused_layers:
+            ok[:] = False if refuse_x_above is None else (m.xs <= refuse_x_above)[None, :]
+        hold[name] = ok
+    return ReachMap("toy", m.xs, m.ys, m.reach, m.heights, hold_ys, hold)
+
+
+def test_a_hold_pose_is_refused_only_where_every_layer_around_its_yaw_and_heights_refuses():
+    from slax_drake.shelf.reach import hold_layer
+
+    rad = np.radians
+    low = {hold_layer(d, h) for d in (0, 15) for h in (0.03, 0.11)}
+    m = _hold_map(low)
+    assert m.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(5.0))  # yaw nodes 0 and 15, heights 3 and 11 cm: all refuse
+    assert m.refuses_hold(0.1, -0.3, 0.03, 0.03, 0.0)  # on a yaw node and a height node
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.15, rad(5.0))  # the 20 cm layers reach
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(-5.0))  # the -15 deg layers reach
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.40, rad(5.0))  # above the highest node: not refused
+    assert not m.refuses_hold(0.1, -0.3, 0.02, 0.05, rad(5.0))  # below the lowest node
+    assert not m.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(35.0))  # beyond the yaw nodes
+    assert not m.refuses_hold(0.1, -0.5, 0.05, 0.08, rad(5.0))  # off the hold grid (in front of its first row)
+    # a layer missing from the map refuses nothing: drop one of the four
+    missing = ReachMap("toy", m.xs, m.ys, m.reach, m.heights, m.hold_ys,
+                       {k: v for k, v in m.hold.items() if k != hold_layer(15, 0.11)})
+    assert not missing.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(5.0))
+    again = ReachMap.from_dict(m.to_dict())
+    assert again.refuses_hold(0.1, -0.3, 0.05, 0.08, rad(5.0)) and (again.hold_ys == m.hold_ys).all()
+    # the vectorised verdicts agree with the scalar lookup
+    xs, ys = np.meshgrid(np.linspace(-0.1, 0.4, 11), np.linspace(-0.5, 0.3, 9))
+    many = m.hold_refusals(xs, ys, rad(5.0), 0.015)
+    for idx in np.ndindex(xs.shape):
+        assert (many[idx] == m.hold_refusals(float(xs[idx]), float(ys[idx]), rad(5.0), 0.015)).all()
+
+
+def test_a_map_without_hold_layers_loads_and_refuses_no_hold_pose(tmp_path):
+    import json
+
+    m = _toy_map()
+    assert not m.hold and not m.refuses_hold(0.25, 0.05, 0.05, 0.05, 0.0)
+    data = m.to_dict()
+    assert "hold" not in data and "hold_ys" not in data  # an older map's keys, no more
+    path = tmp_path / "old_map.json"
+    path.write_text(json.dumps(data))
+    loaded = load_reach_map(str(path))
+    assert not loaded.hold and not loaded.refuses_hold(0.25, 0.05, 0.05, 0.05, 0.0)
+
+
+def test_a_map_whose_hold_layer_has_the_wrong_shape_is_one_config_error(tmp_path):
+    import json
+
+    from slax_drake.errors import ConfigError
+
+    import re
+
+    data = _hold_map().to_dict()
+    name = next(iter(data["hold"]))
+    data["hold"][name] = data["hold"][name][:-1]
+    path = tmp_path / "bad_hold.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ConfigError, match=re.escape(f"hold layer '{name}' is 3 x 4, not 4 x 4")):
+        load_reach_map(str(path))
+
+
+def test_the_sim_map_holds_the_hold_layers():
+    from slax_drake.shelf.reach import hold_layers
+
+    rmap = load_reach_map(SIM_MAP)
+    assert rmap.hold_ys[0] < -0.5 and rmap.hold_ys[-1] == rmap.ys[-1]  # from well in front of the opening to the back
+    for name in hold_layers():
+        layer = rmap.hold[name]
+        assert layer.shape == (len(rmap.hold_ys), len(rmap.xs)) and layer.any() and not layer.all(), name
+
+
+def _hold_tool(sim_scenario, tmp_path, rmap):
+    import json
+
+    path = tmp_path / "hold_map.json"
+    path.write_text(json.dumps(rmap.to_dict()))
+    load_reach_map.cache_clear()
+    return tool_config(sim_scenario, "station", reach_map=str(path), max_suction_moment=float("inf"))
+
+
+def test_the_action_model_refuses_the_carries_the_hold_layers_refuse(sim_scenario, tmp_path):
+    """A box near the front, suctioned: with hold layers that reach everything the action model offers what it
+    offers without them; with layers that refuse every cup pose right of x = 0 it keeps only the placements whose
+    carry stays left of it; with layers that refuse everything the suction is refused, typed REACH_MAP."""
+    import dataclasses
+
+    from slax_drake.shelf.actions import RefusalKind, Suction
+    from slax_drake.shelf.reach import hold_layers
+
+    shelf = shelf_of(sim_scenario)
+    sim = load_reach_map(SIM_MAP)
+    box = SceneObject("b", "box", (0.08, 0.08, 0.10), planar_pose(-0.12, -0.18, 0.05, 0.0))
+
+    def suctions(rmap):
+        model = ActionModel(shelf, (0.0, -0.75, 0.2), _hold_tool(sim_scenario, tmp_path, rmap))
+        c = model.enumerate((box,), pushes=False)
+        return [a for a in c.feasible if isinstance(a, Suction)], c.rejected
+
+    hold_ys = np.linspace(-0.57, 0.25, 15)
+    shape = (len(hold_ys), len(sim.xs))
+
+    def with_hold(hold):
+        return dataclasses.replace(sim, hold_ys=hold_ys, hold=hold)
+
+    everywhere = {k: np.ones(shape, bool) for k in hold_layers()}
+    none_held, _ = suctions(dataclasses.replace(sim, hold_ys=np.zeros(0), hold={}))
+    all_held, _ = suctions(with_hold(everywhere))
+    assert none_held and all_held == none_held
+    left = {k: np.broadcast_to(sim.xs <= 0.0, shape).copy() for k in hold_layers()}
+    kept, _ = suctions(with_hold(left))
+    assert kept and len(kept) < len(none_held)
+    assert all(a.q[0] + a.dx <= 0.0 + 0.05 for a in kept)  # the cup across stays within a cell of x = 0
+    assert [a for a in none_held if a.q[0] + a.dx > 0.1] and not [a for a in kept if a.q[0] + a.dx > 0.1]
+    nowhere = {k: np.zeros(shape, bool) for k in hold_layers()}
+    gone, rejected = suctions(with_hold(nowhere))
+    assert not gone
+    why = [r for r in rejected if r.what == "suction b"]
+    assert why and why[0].kind is RefusalKind.REACH_MAP and "carry" in why[0].reason
+    load_reach_map.cache_clear()
+
+
+@pytest.mark.slow
+def test_a_carry_pose_the_hold_layers_refuse_has_no_ik_solution(sim_scenario):
+    """Seeded random cup poses of a carry (x across the bay, y from in front of the opening to its back, height
+    3-36 cm, tool yaw within +-30 deg): each one the hold layers refuse has no collision-free IK solution from the
+    observation pose; each one whose grid cells are reached in every layer around it has one."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.planning.reach import hold_waypoint
+    from slax_drake.shelf.reach import HOLD_HEIGHTS, HOLD_YAWS_DEG, hold_layer
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    rmap = load_reach_map(station.reach_map)
+    planner = MotionPlanner(station, tool_config(sim_scenario, "station"))
+    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    yaws, heights, xs, ys = HOLD_YAWS_DEG, HOLD_HEIGHTS, rmap.xs, rmap.hold_ys
+    rng = np.random.default_rng(31)
+    refused, accepted = [], []
+    for _ in range(20000):
+        if len(refused) >= 8 and len(accepted) >= 4:
+            break
+        x, y = rng.uniform(xs[0], xs[-1]), rng.uniform(ys[0], ys[-1])
+        deg, z = rng.uniform(yaws[0], yaws[-1]), rng.uniform(heights[0], heights[-1])
+        if rmap.refuses_hold(x, y, z, z, np.radians(deg), 0.015):
+            if len(refused) < 8:
+                refused.append((x, y, z, deg))
+            continue
+        i = min(len(xs) - 2, int(np.searchsorted(xs, x)) - 1)
+        j = min(len(ys) - 2, int(np.searchsorted(ys, y)) - 1)
+        layers = [hold_layer(d, h) for d in {max(n for n in yaws if n <= deg), min(n for n in yaws if n >= deg)}
+                  for h in {max(n for n in heights if n <= z), min(n for n in heights if n >= z)}]
+        if all(rmap.hold[k][j:j + 2, i:i + 2].all() for k in layers) and len(accepted) < 4:
+            accepted.append((x, y, z, deg))
+    assert len(refused) == 8 and len(accepted) == 4
+    for (x, y, z, deg), expected in [(p, False) for p in refused] + [(p, True) for p in accepted]:
+        assert planner.reaches(scene, hold_waypoint(x, y, z, np.radians(deg))) == expected, (x, y, z, deg)
+
+
+def test_the_hold_waypoint_is_the_translate_waypoint_of_a_carry():
+    """The hold layers are computed at the pose the planner's carry puts the cup at: a suction's translate
+    waypoint (turned carry included) is :func:`hold_waypoint` at its position and the tool's yaw."""
+    from slax_drake.planning.reach import hold_waypoint
+    from slax_drake.planning.waypoints import action_waypoints
+    from slax_drake.shelf.actions import Suction
+    from slax_drake.config import load_scenario
+
+    shelf = shelf_of(load_scenario("sim_configs/sim_shelf.yaml"))
+    box = SceneObject("b", "box", (0.08, 0.08, 0.10), planar_pose(-0.12, -0.18, 0.05, 0.0))
+    action = Suction("b", (-0.12, -0.22, 0.06), 0.2, -0.1, np.radians(10.0))
+    for carry_yaw in (0.0, np.radians(30.0)):
+        wps = {w.label: w for w in action_waypoints(action, (box,), shelf, carry_yaw=carry_yaw)}
+        for label, yaw in (("translate", action.yaw + carry_yaw), ("lower", action.yaw)):
+            w, h = wps[label], hold_waypoint(*wps[label].position, yaw)
+            assert np.allclose(w.X_SF, h.X_SF) and (w.frame, w.shaft, w.suction) == (h.frame, h.shaft, h.suction)
+
+
+def test_a_pre_approach_is_refused_only_where_every_layer_around_it_refuses():
+    from slax_drake.shelf.reach import hold_layer, hold_layers
+
+    rad = np.radians
+    m = _toy_map()
+    xs, ys = np.linspace(-0.6, 0.6, 25), np.array([-0.35, -0.31])
+    far_right = np.broadcast_to(xs < 0.3, (2, 25))
+    from slax_drake.shelf.reach import APPROACH_YAWS_DEG
+
+    turned = {hold_layer(d, h, "approach") for d in APPROACH_YAWS_DEG if d <= -15 for h in (0.03, 0.11)}
+    approach = {k: (far_right.copy() if k in turned else np.ones((2, 25), bool)) for k in hold_layers("approach")}
+    m = ReachMap("toy", m.xs, m.ys, m.reach, m.heights, approach_xs=xs, approach_ys=ys, approach=approach)
+    assert m.refuses_approach(0.45, -0.35, 0.06, rad(-20.0))  # right of x = 0.3, yaw -30..-15, 3..11 cm
+    assert m.refuses_approach(0.45, -0.35, 0.06, rad(-17.0))  # between the nodes -20 and -15, both refuse
+    assert not m.refuses_approach(0.2, -0.35, 0.06, rad(-20.0))  # left of it
+    assert not m.refuses_approach(0.45, -0.35, 0.15, rad(-20.0))  # the 20 cm layers reach
+    assert not m.refuses_approach(0.45, -0.35, 0.06, rad(-12.0))  # the -10 deg layers reach
+    assert not m.refuses_approach(0.7, -0.35, 0.06, rad(-20.0))  # off the grid
+    assert not _toy_map().refuses_approach(0.45, -0.35, 0.06, rad(-20.0))  # a map without the layers
+    again = ReachMap.from_dict(m.to_dict())
+    assert again.refuses_approach(0.45, -0.35, 0.06, rad(-20.0)) and np.allclose(again.approach_xs, xs)
+
+
+def test_the_action_model_refuses_a_suction_whose_pre_approach_the_map_refuses(sim_scenario, tmp_path):
+    """A box turned 20 deg near the bay's left wall, suctioned with the tool turned: offered with pre-approach
+    layers that reach everything, refused (typed REACH_MAP) with layers that reach nothing."""
+    import dataclasses
+
+    from slax_drake.shelf.actions import RefusalKind, Suction
+    from slax_drake.shelf.reach import hold_layers
+
+    shelf = shelf_of(sim_scenario)
+    sim = load_reach_map(SIM_MAP)
+    box = SceneObject("b", "box", (0.08, 0.08, 0.10), planar_pose(-0.2, 0.0, 0.05, np.radians(-20.0)))
+    xs, ys = np.linspace(-0.6, 0.6, 25), np.array([-0.35, -0.31])
+
+    def suctions(value):
+        rmap = dataclasses.replace(sim, approach_xs=xs, approach_ys=ys,
+                                   approach={k: np.full((2, 25), value) for k in hold_layers("approach")})
+        model = ActionModel(shelf, (0.0, -0.75, 0.2), _hold_tool(sim_scenario, tmp_path, rmap))
+        c = model.enumerate((box,), pushes=False)
+        return [a for a in c.feasible if isinstance(a, Suction)], [r for r in c.rejected if r.what == "suction b"]
+
+    offered, _ = suctions(True)
+    assert offered and offered[0].yaw != 0.0
+    gone, why = suctions(False)
+    assert not gone and why[0].kind is RefusalKind.REACH_MAP and "in front of the opening" in why[0].reason
+    load_reach_map.cache_clear()
+
+
+@pytest.mark.slow
+def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(sim_scenario):
+    """Seeded random pre-approach poses (x across the layers' width, at either approach margin, 3-20 cm high, the
+    tool turned within +-30 deg): each one the pre-approach layers refuse has no collision-free IK solution from
+    the observation pose."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.planning.reach import hold_waypoint
+    from slax_drake.shelf.reach import APPROACH_HEIGHTS as HEIGHTS, HOLD_YAWS_DEG
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    rmap = load_reach_map(station.reach_map)
+    planner = MotionPlanner(station, tool_config(sim_scenario, "station"))
+    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    rng = np.random.default_rng(37)
+    refused = []
+    for _ in range(20000):
+        if len(refused) >= 8:
+            break
+        x, y = rng.uniform(rmap.approach_xs[0], rmap.approach_xs[-1]), float(rng.choice(rmap.approach_ys))
+        deg, z = rng.uniform(HOLD_YAWS_DEG[0], HOLD_YAWS_DEG[-1]), rng.uniform(HEIGHTS[0], HEIGHTS[-1])
+        if rmap.refuses_approach(x, y, z, np.radians(deg), 0.015):
+            refused.append((x, y, z, deg))
+    assert len(refused) == 8
+    for x, y, z, deg in refused:
+        assert not planner.reaches(scene, hold_waypoint(x, y, z, np.radians(deg), suction=False)), (x, y, z, deg)
