@@ -1,0 +1,111 @@
+"""A guarded push-in: stop a carried object on contact, sensed from the arm's joint efforts alone.
+
+What a real arm has: its joint positions and velocities, the efforts its joint controllers apply
+(the station's ``measured_efforts``; a Fetch's ``joint_states``) and its own dynamic model (the robot's URDF).
+What it does not have: the poses of objects it cannot see, or contact results. The guard reads only the former.
+
+:class:`EffortModel` (the robot alone, the station's controller plant): the effort the free arm needs at (q, v, a)
+(inverse dynamics with gravity), and two joint-space signatures at the cup tip (``cup_tip_frame``): of a unit
+force along the push direction u (J^T u) and of a unit upward force (J^T z), in world W.
+
+:class:`ContactMonitor` (pure arithmetic, immutable): the residual r = measured effort - model effort holds what
+the model does not know, the carried object's weight and any contact. At the first sample of the push-in (the arm
+starts it at rest) the monitor fits the payload as a weight m g at the cup (least squares of r on J^T z) and keeps
+what that leaves unexplained; at every later sample it removes the fitted weight at the present configuration and
+that remainder, and projects what is left on the push signature: the force resisting the push (N, positive when it
+pushes back against u). It stops when that force exceeds ``threshold`` (N) plus ``expected`` (N; the friction a
+dragged object needs to slide, which the floor adds once it moves).
+
+Units: efforts in N (the torso) and N m (the rest), forces in N, positions m / rad, times s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+GRAVITY = 9.81  # m/s^2
+UP_W = np.array([0.0, 0.0, 1.0])
+
+
+class EffortModel:
+    """The free arm's efforts and the cup's force signatures on the robot of ``scenario`` (a StationScenario), in
+    ``PLANNED_JOINTS`` order, the head held at ``head_configuration``."""
+
+    def __init__(self, scenario):
+        from slax_drake.station import robot as robot_model
+        from slax_drake.station.plant import controller_plant
+
+        self.plant = controller_plant(scenario)
+        self.context = self.plant.CreateDefaultContext()
+        names = robot_model.PLANNED_JOINTS
+        self._iq = np.array([self.plant.GetJointByName(n).position_start() for n in names])
+        self._iv = np.array([self.plant.GetJointByName(n).velocity_start() for n in names])
+        self._q = self.plant.GetPositions(self.context).copy()
+        for name, value in scenario.head_configuration.items():
+            self._q[self.plant.GetJointByName(name).position_start()] = value
+        self._cup = self.plant.GetFrameByName(robot_model.CUP_TIP_FRAME)
+
+    def _set(self, q, v=None):
+        full = self._q.copy()
+        full[self._iq] = q
+        self.plant.SetPositions(self.context, full)
+        vf = np.zeros(self.plant.num_velocities())
+        if v is not None:
+            vf[self._iv] = v
+        self.plant.SetVelocities(self.context, vf)
+
+    def effort(self, q, v, a) -> np.ndarray:
+        """The efforts (9,) the free arm needs at positions q, velocities v and accelerations a (inverse dynamics
+        with gravity and the other force elements)."""
+        from pydrake.multibody.tree import MultibodyForces
+
+        self._set(q, v)
+        forces = MultibodyForces(self.plant)
+        self.plant.CalcForceElementsContribution(self.context, forces)
+        af = np.zeros(self.plant.num_velocities())
+        af[self._iv] = a
+        return self.plant.CalcInverseDynamics(self.context, af, forces)[self._iv]
+
+    def signatures(self, q, push_W) -> tuple[np.ndarray, np.ndarray]:
+        """(J^T u, J^T z) at q: the efforts (9,) that balance a 1 N force on the cup tip pushing back against the
+        unit push direction ``push_W`` (world), and a 1 N weight hanging at the cup tip."""
+        from pydrake.multibody.tree import JacobianWrtVariable
+
+        self._set(q)
+        world = self.plant.world_frame()
+        J = self.plant.CalcJacobianTranslationalVelocity(self.context, JacobianWrtVariable.kV, self._cup,
+                                                         np.zeros(3), world, world)[:, self._iv]
+        return J.T @ np.asarray(push_W, float), J.T @ UP_W
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactMonitor:
+    """The guard's state along one push-in (see the module docstring): ``threshold`` and ``expected`` in N."""
+
+    threshold: float
+    expected: float = 0.0
+    weight: float | None = None  # N, the payload's weight fitted at the first sample (None before it)
+    offset: tuple | None = None  # the residual the fit leaves unexplained at the first sample (9 efforts)
+    force: float = 0.0  # N, the last estimate of the force resisting the push
+    peak: float = 0.0  # N, its largest value so far
+
+    @property
+    def stopped(self) -> bool:
+        return self.weight is not None and self.force > self.threshold + self.expected
+
+    def update(self, residual, push_signature, weight_signature) -> "ContactMonitor":
+        """The monitor after one sample: ``residual`` (measured minus model efforts), the signatures of a 1 N
+        force resisting the push and of a 1 N weight at the cup, at the sample's configuration."""
+        r = np.asarray(residual, float)
+        s = np.asarray(push_signature, float)
+        w = np.asarray(weight_signature, float)
+        if self.weight is None:
+            ww = float(w @ w)
+            weight = float(w @ r) / ww if ww > 0 else 0.0
+            return dataclasses.replace(self, weight=weight, offset=tuple(r - weight * w), force=0.0, peak=0.0)
+        left = r - self.weight * w - np.asarray(self.offset)
+        ss = float(s @ s)
+        force = float(s @ left) / ss if ss > 0 else 0.0
+        return dataclasses.replace(self, force=force, peak=max(self.peak, force))
