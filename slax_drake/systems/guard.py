@@ -109,3 +109,78 @@ class ContactMonitor:
         ss = float(s @ s)
         force = float(s @ left) / ss if ss > 0 else 0.0
         return dataclasses.replace(self, force=force, peak=max(self.peak, force))
+
+
+@dataclasses.dataclass(frozen=True)
+class GuardRun:
+    """A guarded push-in being watched: the monitor, the motion's push-in window [t0, t1] (s from the motion's
+    start), the cup's planned y (S, m) at the push-in's start and end, and the record once it ended."""
+
+    monitor: ContactMonitor
+    t0: float
+    t1: float
+    y_start: float
+    y_end: float
+
+
+def push_in_window(motion) -> tuple[float, float] | None:
+    """(start, end) in s from the motion's start of a guarded suction's push-in (the segment arriving at "push in"),
+    or None when the motion's action is not a guarded suction."""
+    action = motion.action
+    if not getattr(action, "guarded", False):
+        return None
+    times = motion.waypoint_times
+    labels = [label for label, _ in times]
+    if "push in" not in labels:
+        return None
+    k = labels.index("push in")
+    return float(times[k - 1][1]), float(times[k][1])
+
+
+def planned_acceleration(trajectory, t: float) -> np.ndarray:
+    """The planned joint accelerations at ``t`` (s from the trajectory's start; the nearest sample)."""
+    k = int(np.clip(np.searchsorted(trajectory.times, t), 0, len(trajectory.times) - 1))
+    return trajectory.a[k]
+
+
+class Guard:
+    """What a guarded push-in needs at run time: the effort model of the station's robot, the push direction
+    (S +y, in world) and the stop threshold ``threshold`` (N; the station's ``guarded_stop_force``). ``period``:
+    seconds between the checks (the joint-state rate)."""
+
+    def __init__(self, scenario, R_WS, threshold: float, period: float = 0.01):
+        self.model = EffortModel(scenario)
+        self.push_W = np.asarray(R_WS, float)[:, 1].copy()
+        self.threshold = float(threshold)
+        self.period = float(period)
+
+    def start(self, motion, cup_y_S, expected: float = 0.0) -> GuardRun | None:
+        """A GuardRun for ``motion`` when it is a guarded suction, else None. ``cup_y_S(q)``: the cup's y (S, m) at
+        planned joint positions q; ``expected``: N of resistance the free push-in meets (a drag's friction)."""
+        window = push_in_window(motion)
+        if window is None:
+            return None
+        traj = motion.trajectory
+        q0, _ = traj.value(window[0])
+        q1, _ = traj.value(window[1])
+        return GuardRun(ContactMonitor(self.threshold, expected), window[0], window[1], float(cup_y_S(q0)),
+                        float(cup_y_S(q1)))
+
+    def observe(self, run: GuardRun, motion, t: float, q, v, efforts) -> GuardRun:
+        """``run`` after one joint-state sample at ``t`` (s from the motion's start) inside its window."""
+        a = planned_acceleration(motion.trajectory, t)
+        residual = np.asarray(efforts, float) - self.model.effort(q, v, a)
+        push, weight = self.model.signatures(q, self.push_W)
+        return dataclasses.replace(run, monitor=run.monitor.update(residual, push, weight))
+
+
+def guard_record(run: GuardRun, stopped: bool, cup_y: float | None = None) -> dict:
+    """The trial record of a guarded push-in: whether it stopped on contact, how far the cup had pushed in then
+    and how far short of the planned placement (m, along S y), the largest resisting force seen and the
+    threshold (N)."""
+    out = {"guarded": True, "stopped": bool(stopped), "threshold_n": round(run.monitor.threshold + run.monitor.expected, 3),
+           "peak_force_n": round(run.monitor.peak, 3)}
+    if stopped and cup_y is not None:
+        out["pushed_in_m"] = round(cup_y - run.y_start, 4)
+        out["short_m"] = round(run.y_end - cup_y, 4)
+    return out
