@@ -26,6 +26,9 @@ import dataclasses
 import numpy as np
 
 GRAVITY = 9.81  # m/s^2
+# N: the least stop force the guard uses. On the sim station's free push-ins the estimate peaked at 0.3-0.8 N
+# (docs/research/guarded-placement.md); a stop force the cup's hold would put lower is raised to this.
+MIN_STOP_FORCE = 1.5
 UP_W = np.array([0.0, 0.0, 1.0])
 
 
@@ -153,17 +156,28 @@ class Guard:
         self.push_W = np.asarray(R_WS, float)[:, 1].copy()
         self.threshold = float(threshold)
         self.period = float(period)
+        self.lip_moment = float(scenario.suction.lip_moment)
 
-    def start(self, motion, cup_y_S, expected: float = 0.0) -> GuardRun | None:
+    def stop_force(self, held_moment: float, lever: float) -> float:
+        """The stop force (N) for a lifted object hanging ``held_moment`` (N m) off the cup: a force resisting the
+        push at the object's bottom, ``lever`` (m) below the cup, adds its moment to the weight's, and the seal
+        peels when they exceed the cup's lip moment; so the station's ``threshold``, or less, what the lip has left
+        over the lever, but not under ``MIN_STOP_FORCE`` (the effort estimate's noise)."""
+        if lever <= 0.0:
+            return self.threshold
+        return min(self.threshold, max(MIN_STOP_FORCE, (self.lip_moment - held_moment) / lever))
+
+    def start(self, motion, cup_y_S, expected: float = 0.0, threshold: float | None = None) -> GuardRun | None:
         """A GuardRun for ``motion`` when it is a guarded suction, else None. ``cup_y_S(q)``: the cup's y (S, m) at
-        planned joint positions q; ``expected``: N of resistance the free push-in meets (a drag's friction)."""
+        planned joint positions q; ``expected``: N of resistance the free push-in meets (a drag's friction);
+        ``threshold``: the stop force (N; default the station's)."""
         window = push_in_window(motion)
         if window is None:
             return None
         traj = motion.trajectory
         q0, _ = traj.value(window[0])
         q1, _ = traj.value(window[1])
-        return GuardRun(ContactMonitor(self.threshold, expected), window[0], window[1], float(cup_y_S(q0)),
+        return GuardRun(ContactMonitor(self.threshold if threshold is None else threshold, expected), window[0], window[1], float(cup_y_S(q0)),
                         float(cup_y_S(q1)))
 
     def observe(self, run: GuardRun, motion, t: float, q, v, efforts) -> GuardRun:

@@ -74,7 +74,7 @@ class GuardedMotionSource(LeafSystem):
     contact, plays ``planner.guarded_stop`` from the measured positions instead. ``believed``: the Scene the motion
     was planned in. :meth:`record` is the guard's record (:func:`slax_drake.systems.guard.guard_record`)."""
 
-    def __init__(self, motion, planner, believed, guard, expected: float = 0.0):
+    def __init__(self, motion, planner, believed, guard, expected: float = 0.0, threshold: float | None = None):
         from pydrake.common.value import AbstractValue
 
         LeafSystem.__init__(self)
@@ -86,7 +86,7 @@ class GuardedMotionSource(LeafSystem):
         self._n = n
         self._measured = self.DeclareVectorInputPort("measured_state", 2 * n)
         self._efforts = self.DeclareVectorInputPort("measured_efforts", n)
-        start = (motion, 0.0, guard.start(motion, self._cup_y, expected), None)
+        start = (motion, 0.0, guard.start(motion, self._cup_y, expected, threshold), None)
         self._state = self.DeclareAbstractState(AbstractValue.Make(start))
         self.DeclarePeriodicUnrestrictedUpdateEvent(guard.period, 0.0, self._watch)
         ticket = {self.abstract_state_ticket(self._state)} | {self.time_ticket()}
@@ -148,7 +148,16 @@ def run_guarded_motion(station_scenario, scene, believed, motion, planner, names
     guard = Guard(station_scenario, X_WS.rotation().matrix(), station_scenario.guarded_stop_force)
     builder = DiagramBuilder()
     station = builder.AddSystem(MakeStation(station_scenario, scene, camera=False))
-    source = builder.AddSystem(GuardedMotionSource(motion, planner, believed, guard, expected))
+    threshold = None
+    action = motion.action
+    if not action.drag:  # a lift: the stop force the cup's hold allows (the PlannerSystem's rule)
+        from slax_drake.shelf.actions import ActionModel
+        from slax_drake.systems.planner import held_moment
+
+        obj = next(o for o in believed.objects if o.name == action.name)
+        model = ActionModel(believed.shelf, believed.camera.position, planner.tool)
+        threshold = guard.stop_force(held_moment(model, obj, action), float(action.q[2]))
+    source = builder.AddSystem(GuardedMotionSource(motion, planner, believed, guard, expected, threshold))
     builder.Connect(source.GetOutputPort("desired_state"), station.GetInputPort("desired_state"))
     builder.Connect(source.GetOutputPort("suction_command"), station.GetInputPort("suction_command"))
     builder.Connect(station.GetOutputPort("measured_state"), source.GetInputPort("measured_state"))

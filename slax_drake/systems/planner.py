@@ -51,7 +51,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from slax_drake.perception.belief import ObservedBelief
 from slax_drake.planning.planner import MotionPlanner
-from slax_drake.shelf.actions import Push
+from slax_drake.shelf.actions import Push, Suction
 from slax_drake.shelf.distribution import support
 from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
@@ -243,7 +243,8 @@ class PlannerSystem(LeafSystem):
         entry["predicted_objects"] = _predicted(belief.known, action)
         guard = None
         if self.guard is not None:
-            guard = self.guard.start(motion, self._cup_y(believed, motion), self._expected_resistance(action, belief.known))
+            guard = self.guard.start(motion, self._cup_y(believed, motion), self._expected_resistance(action, belief.known),
+                                     self._stop_force(action, belief.known))
         if self.on_step is not None:
             self.on_step(entry, depth, labels, frame.target_mask, history, obs.p1d)
         return dataclasses.replace(
@@ -263,6 +264,17 @@ class PlannerSystem(LeafSystem):
             return 0.0
         obj = next((o for o in known if o.name == action.name), None)
         return 0.0 if obj is None else float(self.policy.action_model.drag_limits(obj, action.q[2]).pull)
+
+    def _stop_force(self, action, known) -> float | None:
+        """The stop force (N) of a guarded lift: :meth:`~slax_drake.systems.guard.Guard.stop_force` of the moment
+        the believed object's weight hangs off the cup (the action model's mass) and the cup's height above the
+        floor (the lever of a push back at the object's bottom); None (the station's) for a drag."""
+        if not isinstance(action, Suction) or action.drag:
+            return None
+        obj = next((o for o in known if o.name == action.name), None)
+        if obj is None:
+            return None
+        return self.guard.stop_force(held_moment(self.policy.action_model, obj, action), float(action.q[2]))
 
     def _watch(self, context, state):
         """Every ``guard.period`` s while a guarded push-in plays: one joint-state sample to the contact monitor;
@@ -331,6 +343,14 @@ def stop_record(policy, known, rejected: list, stop_reason: str | None) -> dict:
     if exclusions is not None:
         out["excluded"] = [{"action": a.describe(), "reason": why} for a, why in exclusions]
     return out
+
+
+def held_moment(model, obj, action) -> float:
+    """N m: the moment ``obj``'s weight (the action model's mass) hangs off the cup at ``action``'s contact."""
+    from slax_drake.shelf.actions import GRAVITY, object_mass
+
+    mass = object_mass(obj, model.tool.physics.object_density, model.tool.physics)
+    return mass * GRAVITY * float(np.hypot(float(obj.center[0]) - action.q[0], float(obj.center[1]) - action.q[1]))
 
 
 def _describe(action) -> dict:

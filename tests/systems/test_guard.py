@@ -43,3 +43,15 @@ def test_a_force_along_the_push_does_not_stop_it_and_the_expected_drag_raises_th
     sliding = [3.0 * WEIGHT[k] + (8.0 if k > 10 else 0.0) * PUSH[k] for k in range(50)]  # 8 N of floor friction
     assert _run(ContactMonitor(threshold=5.0), sliding)[1] == 11
     assert _run(ContactMonitor(threshold=5.0, expected=8.0), sliding)[1] is None
+
+
+def test_the_stop_force_of_a_lift_is_what_the_cup_s_lip_has_left_over_the_lever():
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.guard import MIN_STOP_FORCE, Guard
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    guard = Guard(station, np.eye(3), threshold=5.0)
+    lip = station.suction.lip_moment  # 0.64 N m
+    assert guard.stop_force(0.1, 0.05) == 5.0  # a light box sealed low: the station's force
+    assert guard.stop_force(0.4, 0.12) == pytest.approx((lip - 0.4) / 0.12)  # 2 N: more would peel the seal
+    assert guard.stop_force(0.6, 0.12) == MIN_STOP_FORCE  # never under the estimate's noise
