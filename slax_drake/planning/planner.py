@@ -27,6 +27,10 @@
 5. Ruckig times the chain rest to rest (:mod:`slax_drake.planning.timing`), with dwells at rest where the
    waypoints ask for them; the suction command is on during the segments that carry the object.
 
+A guarded lift (``Suction.guarded``) whose push-in would carry the object higher than ``LIFT`` is rejected
+(:attr:`~slax_drake.planning.failures.FailureKind.GUARDED_LIFTED`; a shallower carry may avoid it): it would pass
+over a lower object hidden in its way and lower onto it, where the guard, which senses the push, is blind.
+
 When the waypoints in front of the opening fail (out of reach, no free way) or a straight segment cannot be kept
 (:attr:`~slax_drake.planning.failures.PlanningFailure.straight_segment`), the action is planned again with the tool's tip 1 cm in front of the opening
 (``APPROACH_MARGINS``); when a carried segment fails, a suctioned object is carried across at shallower depths
@@ -191,6 +195,7 @@ class MotionPlanner:
                 try:
                     waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool, approach_margin=margin,
                                                  pull_to=pull, carry_yaw=carry_yaw)
+                    _reject_a_lifted_guarded_push_in(action, waypoints)
                     motion = self._plan(world, action, waypoints, q_start, timings)
                     break
                 except _Reject as e:
@@ -601,6 +606,20 @@ def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) 
     is a straight-segment failure."""
     return (failures[0].names_any(dependent) or failures[0].kind in kinds
             or any(f.straight_segment for f in failures))
+
+
+def _reject_a_lifted_guarded_push_in(action, waypoints) -> None:
+    """Raises _Reject (:attr:`FailureKind.GUARDED_LIFTED`) when ``action`` is a guarded lift whose push-in carries the
+    object higher than ``LIFT`` (over a known object on the way across or in): pushed in at that height it would pass
+    over a lower object hidden in its way and be lowered onto it; the guard senses the push, not the lowering."""
+    if not isinstance(action, Suction) or not action.guarded or action.drag:
+        return
+    by = {w.label: w for w in waypoints}
+    if "push in" not in by or "lower" not in by:
+        return
+    height = float(by["push in"].position[2] - by["lower"].position[2])
+    if height > LIFT + 1e-6:
+        raise _Reject(PlanningFailure(FailureKind.GUARDED_LIFTED, "push in", deviation=height))
 
 
 def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q) -> None:
