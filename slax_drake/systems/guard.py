@@ -13,7 +13,7 @@ the model does not know, the carried object's weight and any contact. At the fir
 starts it at rest) the monitor fits the payload as a weight m g at the cup (least squares of r on J^T z) and keeps
 what that leaves unexplained; at every later sample it removes the fitted weight at the present configuration and
 that remainder, and projects what is left on the push signature: the force resisting the push (N, positive when it
-pushes back against u). It stops when that force exceeds ``threshold`` (N) plus ``expected`` (N; the friction a
+pushes back against u, the push-in's direction: S +y, or -y for a push-in that ends shallower than it starts). It stops when that force exceeds ``threshold`` (N) plus ``expected`` (N; the friction a
 dragged object needs to slide, which the floor adds once it moves).
 
 Units: efforts in N (the torso) and N m (the rest), forces in N, positions m / rad, times s.
@@ -125,6 +125,12 @@ class GuardRun:
     y_start: float
     y_end: float
 
+    @property
+    def direction(self) -> float:
+        """+1 when the push-in runs into the shelf (S +y), -1 when it runs out (a placement shallower than the
+        carry's depth)."""
+        return 1.0 if self.y_end >= self.y_start else -1.0
+
 
 def push_in_window(motion) -> tuple[float, float] | None:
     """(start, end) in s from the motion's start of a guarded suction's push-in (the segment arriving at "push in"),
@@ -184,17 +190,17 @@ class Guard:
         """``run`` after one joint-state sample at ``t`` (s from the motion's start) inside its window."""
         a = planned_acceleration(motion.trajectory, t)
         residual = np.asarray(efforts, float) - self.model.effort(q, v, a)
-        push, weight = self.model.signatures(q, self.push_W)
+        push, weight = self.model.signatures(q, run.direction * self.push_W)
         return dataclasses.replace(run, monitor=run.monitor.update(residual, push, weight))
 
 
 def guard_record(run: GuardRun, stopped: bool, cup_y: float | None = None) -> dict:
     """The trial record of a guarded push-in: whether it stopped on contact, how far the cup had pushed in then
-    and how far short of the planned placement (m, along S y), the largest resisting force seen and the
+    and how far short of the planned placement (m, along the push-in), the largest resisting force seen and the
     threshold (N)."""
     out = {"guarded": True, "stopped": bool(stopped), "threshold_n": round(run.monitor.threshold + run.monitor.expected, 3),
            "peak_force_n": round(run.monitor.peak, 3)}
     if stopped and cup_y is not None:
-        out["pushed_in_m"] = round(cup_y - run.y_start, 4)
-        out["short_m"] = round(run.y_end - cup_y, 4)
+        out["pushed_in_m"] = round(abs(cup_y - run.y_start), 4)
+        out["short_m"] = round(run.direction * (run.y_end - cup_y), 4)
     return out

@@ -55,3 +55,13 @@ def test_the_stop_force_of_a_lift_is_what_the_cup_s_lip_has_left_over_the_lever(
     assert guard.stop_force(0.1, 0.05) == 5.0  # a light box sealed low: the station's force
     assert guard.stop_force(0.4, 0.12) == pytest.approx((lip - 0.4) / 0.12)  # 2 N: more would peel the seal
     assert guard.stop_force(0.6, 0.12) == MIN_STOP_FORCE  # never under the estimate's noise
+
+
+def test_a_push_in_that_ends_shallower_than_it_starts_is_watched_along_minus_y():
+    from slax_drake.systems.guard import GuardRun, guard_record
+
+    run = GuardRun(ContactMonitor(5.0), 1.0, 2.0, y_start=0.10, y_end=-0.05)
+    assert run.direction == -1.0
+    assert GuardRun(ContactMonitor(5.0), 1.0, 2.0, y_start=-0.2, y_end=0.15).direction == 1.0
+    record = guard_record(run, stopped=True, cup_y=0.0)
+    assert record["pushed_in_m"] == pytest.approx(0.10) and record["short_m"] == pytest.approx(0.05)
