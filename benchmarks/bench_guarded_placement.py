@@ -2,6 +2,7 @@
 
     python benchmarks/bench_guarded_placement.py                       # every case below, one line each
     python benchmarks/bench_guarded_placement.py --masses 0.2 --dz 0.25 --hidden none,wall
+    python benchmarks/bench_guarded_placement.py --station my_station.yaml   # another guarded_stop_force
 
 The believed scene: a wide box at the front left (0.30 x 0.06 x 0.30 m, at x = -0.12, y = -0.15) and the carried
 box (0.08 x 0.08 x 0.10 m at x = +0.20, y = -0.10, of each mass in ``--masses``), suctioned straight back to y =
@@ -43,9 +44,11 @@ def main():
     parser.add_argument("--masses", default="0.2,0.6,1.0", help="kg of the carried box")
     parser.add_argument("--dz", default="0.25,0.15", help="placement depths d_z (m, S y of the box's centre)")
     parser.add_argument("--hidden", default="none,wall,free,tall")
+    parser.add_argument("--station", default="sim_configs/station_sim_shelf.yaml",
+                        help="the station file (a copy with another guarded_stop_force, say)")
     args = parser.parse_args()
     scenario = load_scenario("sim_configs/sim_shelf.yaml")
-    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    station = load_station_scenario(args.station)
     rules = {k: v for k, v in station_tool_rules(station).items() if k != "reach_map"}
     tool = tool_config(scenario, "station", suction_hidden_rule="guarded", **rules)
     shelf, camera = shelf_of(scenario), Camera.from_config(scenario.camera)
