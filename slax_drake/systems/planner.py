@@ -24,7 +24,8 @@ Guarded push-ins (``guard``, a :class:`slax_drake.systems.guard.Guard`; the tria
 ``suction_hidden_rule=guarded``): an extra input, ``measured_efforts`` (9: the joint efforts the station's
 controllers apply), and a check every ``guard.period`` s. While a guarded suction's push-in plays, the contact
 monitor compares the efforts with what the free arm and its carried weight need; when the force resisting the push
-exceeds the station's ``guarded_stop_force``, the motion is replaced, from that instant, by the planner's stop
+exceeds the stop force (the station's ``guarded_stop_force``; for a lift at most what the cup's seal holds over the
+lever, :meth:`~slax_drake.systems.guard.Guard.stop_force`; for a drag plus its floor friction), the motion is replaced, from that instant, by the planner's stop
 motion from the measured joint positions (:meth:`slax_drake.planning.planner.MotionPlanner.guarded_stop`: hold,
 lower, release, back off, the planned way back). The record (stopped or completed, how far it pushed in, the
 peak force) is added to the action's log entry as ``guarded``. It reads joint states and efforts only.
