@@ -154,6 +154,8 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
         a["planning_s"] = entry["planning_s"]
         a["motion"] = entry["motion"]
         a["rejected_before"] = entry["rejected"]
+        if a["type"] == "suction":  # a guarded placement: whether it stopped on contact, where (guard_record)
+            a["guard"] = entry.get("guarded")
         a["predicted"] = pred
         segment = entry.get("segment_of", {}).get(a["object"], a["object"])  # the tracked object's segment
         a["true_object"] = entry.get("segments", {}).get(segment)  # the object the hypothesis was
@@ -216,13 +218,17 @@ def _with_ground_truth(entry: dict, snapshots) -> dict:
 
 def executed_trajectory(planner, motions, t_end: float):
     """The commanded trajectory over the whole trial: holds between ``motions`` ((start time s, PlannedMotion)),
-    each motion at its start time, from ``planner``'s observation pose."""
+    each motion at its start time (a motion cut where the next one starts before its end: a guarded push-in that
+    stopped on contact, replaced by its stop motion), from ``planner``'s observation pose."""
     from slax_drake.planning.trajectory import JointTrajectory
 
     names = planner.limits.names
     q_hold = planner.q_observation
     traj = JointTrajectory.hold(names, q_hold, 0.0)
     for t_start, motion in motions:
+        if t_start < traj.times[-1] - 1e-9:  # a motion replaced before its end (a guarded push-in stopped)
+            k = int(np.searchsorted(traj.times, t_start - 1e-9))
+            traj = JointTrajectory(names, traj.times[:k + 1], traj.q[:k + 1], traj.v[:k + 1], traj.a[:k + 1])
         gap = t_start - traj.times[-1]
         if gap > 0.0015:
             traj = traj.then(JointTrajectory.hold(names, traj.q[-1], gap))

@@ -5,6 +5,7 @@ trial) shows where the object went::
 
     step 3/12: push track_2 -0.100 m, planned in 0.4 s after 1 rejected candidate, executed, object_4 moved as predicted
     step 4/12: suction track_1 by +0.050 m to y = -0.190 m, planned in 1.2 s, executed, object_1 ended 3.4 cm from the prediction
+    step 5/12: suction track_3 by -0.100 m to y = +0.150 m, planned in 0.9 s, guarded, stopped on contact after 0.212 m, executed, object_2 ended 6.1 cm from the prediction
     done after 4 actions: target revealed (96% of it visible)
 
 What a line says is what the trial knows at that moment: the policy's action on a camera segment, the planner's
@@ -37,6 +38,11 @@ class DecisionPrinter:
 
     def update(self, log, snapshots) -> None:
         """Handles the log entries that arrived since the last call; ``snapshots``: the evaluator's so far."""
+        if self.open is not None:  # the open action's entry as it stands now (a guarded push-in adds its record)
+            step = self.open[0]["step"]
+            latest = next((e for e in log if e.get("step") == step and "action" in e), None)
+            if latest is not None:
+                self.open = (latest, self.open[1])
         for entry in log[self.seen:]:
             snap = _snapshot_at(snapshots, entry["time"])
             if self.open is not None:
@@ -91,6 +97,10 @@ class DecisionPrinter:
 
         entry, snap = self.open
         self.open = None
+        guard = entry.get("guarded")
+        if guard:
+            self._write("guarded, " + (f"stopped on contact after {guard.get('pushed_in_m', 0.0):.3f} m, "
+                                       if guard["stopped"] else "completed, "))
         segment = entry.get("segment_of", {}).get(entry["action"]["object"], entry["action"]["object"])
         true_object = snap.segments.get(segment) if snap is not None else None
         if true_object is None or poses is None or true_object not in poses or true_object not in snap.poses:

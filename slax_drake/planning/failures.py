@@ -43,6 +43,8 @@ class FailureKind(enum.Enum):
     SEGMENT_COLLIDES = "segment collides"  # a checked joint segment collides
     CARRIED_COLLIDES = "carried object collides"  # the carried object collides on a joint segment
     JOINT_LIMIT = "joint limit"  # the timed trajectory comes within the IK limit margin of a joint's limit
+    GUARDED_LIFTED = "guarded push-in lifted"  # a guarded placement's push-in is carried higher than LIFT: it
+    # would pass over what it cannot see and lower the object onto it, where the guard (which senses the push) is blind
 
 
 STRAIGHT_SEGMENT_KINDS = frozenset({FailureKind.LEAVES_STRAIGHT_SEGMENT, FailureKind.STRAIGHT_SEGMENT_OUT_OF_REACH})
@@ -57,7 +59,7 @@ class PlanningFailure:
     ``hits``: what it met (colliding pairs or bodies, the carried object's obstacles; "X (environment)" for a tool that meets the
     environment with no colliding pair named; for :attr:`FailureKind.JOINT_LIMIT` the joint).
     ``carried``: the carried object's name (:attr:`FailureKind.CARRIED_COLLIDES`). ``deviation``: how far the tool
-    leaves its segment (m). ``margin``: the joint-limit margin (rad or m). ``seeds``: the number of IK seeds tried
+    leaves its segment (m; for :attr:`FailureKind.GUARDED_LIFTED` the carried object's height above the floor). ``margin``: the joint-limit margin (rad or m). ``seeds``: the number of IK seeds tried
     (:attr:`FailureKind.FIRST_OUT_OF_REACH`); ``collides``: whether those seeds' solutions all collided rather than
     none existing.
     """
@@ -117,6 +119,9 @@ class PlanningFailure:
             return f"segment to {w}: the carried {self.carried} collides with {self.hits}"
         if k is FailureKind.JOINT_LIMIT:
             return f"{self.hits} comes within {self.margin} of its position limit"
+        if k is FailureKind.GUARDED_LIFTED:
+            return (f"{w}: a guarded push-in carried {self.deviation * 100:.1f} cm above the floor would lower the object "
+                    "onto what it cannot see")
         raise AssertionError(k)
 
 

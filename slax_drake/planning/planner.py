@@ -27,6 +27,10 @@
 5. Ruckig times the chain rest to rest (:mod:`slax_drake.planning.timing`), with dwells at rest where the
    waypoints ask for them; the suction command is on during the segments that carry the object.
 
+A guarded lift (``Suction.guarded``) whose push-in would carry the object higher than ``LIFT`` is rejected
+(:attr:`~slax_drake.planning.failures.FailureKind.GUARDED_LIFTED`; a shallower carry may avoid it): it would pass
+over a lower object hidden in its way and lower onto it, where the guard, which senses the push, is blind.
+
 When the waypoints in front of the opening fail (out of reach, no free way) or a straight segment cannot be kept
 (:attr:`~slax_drake.planning.failures.PlanningFailure.straight_segment`), the action is planned again with the tool's tip 1 cm in front of the opening
 (``APPROACH_MARGINS``); when a carried segment fails, a suctioned object is carried across at shallower depths
@@ -54,7 +58,7 @@ from slax_drake.planning.free_path import free_path
 from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
-from slax_drake.planning.waypoints import LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
+from slax_drake.planning.waypoints import DWELL, LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
 from slax_drake.planning.world import PlanningWorld, pairs_text
 from slax_drake.shelf.actions import Suction
 from slax_drake.shelf.rules import ToolConfig
@@ -89,6 +93,7 @@ KINEMATIC_IK_CACHE_SIZE = 50_000  # kinematic IK solutions kept across planning 
 # IK's default tolerances (0.5 mm, 0.01 rad) would let it wander ~2 mm between waypoints.
 HOLD_POSITION_TOLERANCE = 1e-4  # m
 HOLD_ANGLE_TOLERANCE = 1e-3  # rad
+GUARD_HOLD = 0.2  # s, a guarded push-in stopped on contact holds the pose reached this long before it lowers
 
 
 @dataclasses.dataclass
@@ -190,6 +195,7 @@ class MotionPlanner:
                 try:
                     waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool, approach_margin=margin,
                                                  pull_to=pull, carry_yaw=carry_yaw)
+                    _reject_a_lifted_guarded_push_in(action, waypoints)
                     motion = self._plan(world, action, waypoints, q_start, timings)
                     break
                 except _Reject as e:
@@ -224,6 +230,92 @@ class MotionPlanner:
         except _Reject:
             return False
         return True
+
+    def guarded_stop(self, motion: PlannedMotion, q_stop, scene: Scene, hold: float = GUARD_HOLD) -> PlannedMotion:
+        """The rest of a guarded suction stopped on contact during its push-in at the measured joint positions
+        ``q_stop`` (9,), as a new motion from there (t = 0): hold still ``hold`` s with the cup on, lower the
+        object as the plan lowers it (a lift's "lower"; a drag's object is on the floor already), release and
+        dwell, back off along the cup's axis as planned, move to the planned "retract" configuration and return
+        by the plan's own way back to the observation pose. The tool keeps the plan's orientation; the new poses
+        are the stop's tool position shifted as the plan shifts the completed placement's. ``scene``: the
+        believed scene the motion was planned in. The segments are refined to straight tool segments where IK
+        allows and timed rest to rest with Ruckig; they are not collision-checked (the tool backs out the way the
+        object came in)."""
+        from pydrake.math import RigidTransform
+
+        timings = {"world_s": 0.0, "ik_s": 0.0, "check_s": 0.0, "timing_s": 0.0, "ik_solves": 0}
+        t_all = time.perf_counter()
+        world = self.world(scene)
+        q_stop = np.asarray(q_stop, float)
+        wps = {w.label: w for w in motion.waypoints}
+        push, release, back = wps["push in"], wps["release"], wps["back off"]
+        rest = wps.get("lower", release)
+        traj = motion.trajectory
+        t_retract = dict(motion.waypoint_times)["retract"]
+        k_retract = int(np.argmin(np.abs(traj.times - t_retract)))
+        q_retract = traj.q[k_retract]
+        X_stop = world.tool_pose_S(q_stop, push.frame).GetAsMatrix4()
+
+        def at(wp, shift):  # wp's orientation at the stop's position shifted by the plan's shift
+            X = wp.X_SF.copy()
+            X[:3, 3] = X_stop[:3, 3] + shift
+            return dataclasses.replace(wp, X_SF=X)
+
+        low = at(rest, rest.X_SF[:3, 3] - push.X_SF[:3, 3])
+        off = at(back, low.X_SF[:3, 3] - X_stop[:3, 3] + back.X_SF[:3, 3] - release.X_SF[:3, 3])
+        chain = [(q_stop, True, None)]  # (q, suction on while arriving, waypoint label)
+        max_dev = 0.0
+        prev_q, prev_X = q_stop, X_stop
+        for wp, label, suction in ((low, "lower", True), (off, "back off", False)):
+            q = self._ik(world, wp, prev_q, timings)
+            if q is None:
+                q = self._ik(world, dataclasses.replace(wp, suction=False), prev_q, timings)
+            if q is None:  # out of reach: stay where it stopped (the back off and retract follow from here)
+                continue
+            inner, dev = self._refine_or_straight(world, prev_q, prev_X, q, wp.X_SF, wp, timings)
+            max_dev = max(max_dev, dev)
+            chain.extend((p, suction, None) for p in inner)
+            chain.append((q, suction, label))
+            prev_q, prev_X = q, wp.X_SF
+        retract = wps["retract"]
+        inner, dev = self._refine_or_straight(world, prev_q, prev_X, q_retract, retract.X_SF, retract, timings)
+        max_dev = max(max_dev, dev)
+        chain.extend((p, False, None) for p in inner)
+        chain.append((q_retract, False, "retract"))
+        t0 = time.perf_counter()
+        lim = self.limits
+        out = JointTrajectory.hold(lim.names, q_stop, hold)
+        waypoint_times = [("stop", 0.0), ("hold", round(float(out.times[-1]), 6))]
+        suction_off = None
+        for (qa, _, _), (qb, on, label) in zip(chain[:-1], chain[1:]):
+            if not on and suction_off is None:
+                suction_off = float(out.times[-1])
+                out = out.then(JointTrajectory.hold(lim.names, qa, DWELL))  # released, at rest
+                waypoint_times.append(("release", round(suction_off, 6)))
+            t, q, v, a = time_segment(qa, qb, lim.velocity, lim.acceleration, lim.jerk, SAMPLE_PERIOD)
+            if len(t) > 1:
+                out = out.then(JointTrajectory(lim.names, t, q, v, a))
+            if label is not None:
+                waypoint_times.append((label, round(float(out.times[-1]), 6)))
+        t_join = float(out.times[-1])
+        tail = JointTrajectory(lim.names, traj.times[k_retract:] - traj.times[k_retract], traj.q[k_retract:],
+                               traj.v[k_retract:], traj.a[k_retract:])
+        if len(tail.times) > 1:
+            out = out.then(tail)
+        waypoint_times += [(label, round(t - t_retract + t_join, 6)) for label, t in motion.waypoint_times
+                           if t > t_retract]
+        timings["timing_s"] += time.perf_counter() - t0
+        timings["total_s"] = time.perf_counter() - t_all
+        return PlannedMotion(motion.action, out, [(0.0, round(float(suction_off), 6))], waypoint_times, float(max_dev),
+                             _rounded(timings), [], list(motion.waypoints))
+
+    def _refine_or_straight(self, world, qa, Xa, qb, Xb, wp, timings):
+        """:meth:`_refine`'s inserted configurations, or none (the joint-space line) when it cannot keep the tool
+        on the straight segment; and the deviation it found (m; nan when it gave up)."""
+        try:
+            return self._refine(world, qa, np.asarray(Xa), qb, np.asarray(Xb), wp, timings, 0)
+        except _Reject:
+            return [], float("nan")
 
     # -----------------------------------------------------------------------------------------------------
     def _ik(self, world, wp: ToolWaypoint, guess, timings, min_distance=None):
@@ -514,6 +606,20 @@ def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) 
     is a straight-segment failure."""
     return (failures[0].names_any(dependent) or failures[0].kind in kinds
             or any(f.straight_segment for f in failures))
+
+
+def _reject_a_lifted_guarded_push_in(action, waypoints) -> None:
+    """Raises _Reject (:attr:`FailureKind.GUARDED_LIFTED`) when ``action`` is a guarded lift whose push-in carries the
+    object higher than ``LIFT`` (over a known object on the way across or in): pushed in at that height it would pass
+    over a lower object hidden in its way and be lowered onto it; the guard senses the push, not the lowering."""
+    if not isinstance(action, Suction) or not action.guarded or action.drag:
+        return
+    by = {w.label: w for w in waypoints}
+    if "push in" not in by or "lower" not in by:
+        return
+    height = float(by["push in"].position[2] - by["lower"].position[2])
+    if height > LIFT + 1e-6:
+        raise _Reject(PlanningFailure(FailureKind.GUARDED_LIFTED, "push in", deviation=height))
 
 
 def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q) -> None:

@@ -213,8 +213,8 @@ class SuctionHiddenRule(Rule):
     stops at the first contact and the object rests there (the shelf simulator stops it at the first unseen
     object along the way in; a drag's way out and across still stay out of hidden space). ``paper``: "none",
     the FOSS admits any collision-free placement. ``station``: "placement", the physical tool must not put an
-    object down onto something it cannot see. "guarded" is a named variant of no profile: the Drake planner does
-    not yet stop a push in on contact."""
+    object down onto something it cannot see. "guarded" is a named variant of no profile; in a Drake trial the
+    PlannerSystem stops the push in when the joint efforts show contact (:mod:`slax_drake.systems.guard`)."""
 
     name, type, paper, station, choices = ("suction_hidden_rule", str, "none", "placement",
                                            ("path", "placement", "none", "guarded"))

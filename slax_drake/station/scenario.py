@@ -79,6 +79,9 @@ class StationScenario:
     # The station's reach map (models/reach/*.json, slax_drake.planning.reach), "" for none: the action model's
     # reach_map rule in Drake trials on this station (slax_drake.shelf.reach).
     reach_map: str = ""
+    # A guarded push-in (suction_hidden_rule=guarded) stops when the force resisting the push, estimated from the
+    # joint efforts (slax_drake.systems.guard), exceeds this (N).
+    guarded_stop_force: float = 5.0
 
 
 def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:

@@ -66,3 +66,119 @@ def run_motion(station_scenario, scene, motion, name: str, times=(), settle: flo
     simulator.AdvanceTo(motion.trajectory.duration + settle)
     out["end"] = pose()
     return out
+
+
+class GuardedMotionSource(LeafSystem):
+    """As :class:`MotionSource`, with the guarded push-in of the PlannerSystem (:mod:`slax_drake.systems.guard`):
+    reads ``measured_state`` and ``measured_efforts`` every ``guard.period`` s while the push-in plays and, on
+    contact, plays ``planner.guarded_stop`` from the measured positions instead. ``believed``: the Scene the motion
+    was planned in. :meth:`record` is the guard's record (:func:`slax_drake.systems.guard.guard_record`)."""
+
+    def __init__(self, motion, planner, believed, guard, expected: float = 0.0, threshold: float | None = None):
+        from pydrake.common.value import AbstractValue
+
+        LeafSystem.__init__(self)
+        self.planner, self.believed, self.guard = planner, believed, guard
+        world = planner.world(believed)
+        frame = motion.waypoints[0].frame
+        self._cup_y = lambda q: float(world.tool_pose_S(q, frame).translation()[1])
+        n = len(motion.trajectory.names)
+        self._n = n
+        self._measured = self.DeclareVectorInputPort("measured_state", 2 * n)
+        self._efforts = self.DeclareVectorInputPort("measured_efforts", n)
+        start = (motion, 0.0, guard.start(motion, self._cup_y, expected, threshold), None)
+        self._state = self.DeclareAbstractState(AbstractValue.Make(start))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(guard.period, 0.0, self._watch)
+        ticket = {self.abstract_state_ticket(self._state)} | {self.time_ticket()}
+        self.DeclareVectorOutputPort("desired_state", BasicVector(2 * n), self._desired, prerequisites_of_calc=ticket)
+        self.DeclareVectorOutputPort("suction_command", BasicVector(1), self._suction, prerequisites_of_calc=ticket)
+
+    def state(self, context):
+        return context.get_abstract_state(self._state).get_value()
+
+    def record(self, context) -> dict | None:
+        return self.state(context)[3]
+
+    def _desired(self, context, out):
+        motion, t0, _, _ = self.state(context)
+        q, v = motion.trajectory.value(context.get_time() - t0)
+        out.SetFromVector(np.concatenate([q, v]))
+
+    def _suction(self, context, out):
+        motion, t0, _, _ = self.state(context)
+        out.SetAtIndex(0, 1.0 if motion.suction_at(context.get_time() - t0) else 0.0)
+
+    def _watch(self, context, state):
+        from slax_drake.systems.guard import guard_record
+
+        motion, t0, run, record = self.state(context)
+        if run is None:
+            return
+        t = context.get_time() - t0
+        if t < run.t0:
+            return
+        if t > run.t1:
+            state.get_mutable_abstract_state(0).set_value((motion, t0, None, guard_record(run, stopped=False)))
+            return
+        x = self._measured.Eval(context)
+        run = self.guard.observe(run, motion, t, x[:self._n], x[self._n:], self._efforts.Eval(context))
+        if not run.monitor.stopped:
+            state.get_mutable_abstract_state(0).set_value((motion, t0, run, None))
+            return
+        q = np.asarray(x[:self._n], float)
+        record = guard_record(run, stopped=True, cup_y=self._cup_y(q))
+        stop = self.planner.guarded_stop(motion, q, self.believed)
+        record["stop_time"] = round(context.get_time(), 4)
+        state.get_mutable_abstract_state(0).set_value((stop, context.get_time(), None, record))
+
+
+def run_guarded_motion(station_scenario, scene, believed, motion, planner, names, expected: float = 0.0,
+                       settle: float = 1.0) -> tuple[dict, dict]:
+    """Runs a guarded suction's ``motion`` (planned by ``planner`` in ``believed``) in the station on the true
+    ``scene`` with the guarded push-in; returns ({name: {"x", "y", "z", "yaw", "tilt_deg"}} of the objects
+    ``names`` at the end, in S; the guard's record)."""
+    from pydrake.systems.analysis import Simulator
+    from pydrake.systems.framework import DiagramBuilder
+
+    from slax_drake.station.plant import shelf_pose
+    from slax_drake.systems.guard import Guard
+    from slax_drake.systems.station import MakeStation
+
+    X_WS = shelf_pose(station_scenario, scene.camera)
+    guard = Guard(station_scenario, X_WS.rotation().matrix(), station_scenario.guarded_stop_force)
+    builder = DiagramBuilder()
+    station = builder.AddSystem(MakeStation(station_scenario, scene, camera=False))
+    threshold = None
+    action = motion.action
+    if not action.drag:  # a lift: the stop force the cup's hold allows (the PlannerSystem's rule)
+        from slax_drake.shelf.actions import ActionModel
+        from slax_drake.systems.planner import held_moment
+
+        obj = next(o for o in believed.objects if o.name == action.name)
+        model = ActionModel(believed.shelf, believed.camera.position, planner.tool)
+        threshold = guard.stop_force(held_moment(model, obj, action), float(action.q[2]))
+    source = builder.AddSystem(GuardedMotionSource(motion, planner, believed, guard, expected, threshold))
+    builder.Connect(source.GetOutputPort("desired_state"), station.GetInputPort("desired_state"))
+    builder.Connect(source.GetOutputPort("suction_command"), station.GetInputPort("suction_command"))
+    builder.Connect(station.GetOutputPort("measured_state"), source.GetInputPort("measured_state"))
+    builder.Connect(station.GetOutputPort("measured_efforts"), source.GetInputPort("measured_efforts"))
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    context = simulator.get_mutable_context()
+    source_context = source.GetMyContextFromRoot(context)
+    t_end = motion.trajectory.duration
+    while True:
+        played, t0, _, _ = source.state(source_context)
+        t_end = t0 + played.trajectory.duration
+        if context.get_time() >= t_end + settle - 1e-9:
+            break
+        simulator.AdvanceTo(min(t_end + settle, context.get_time() + 1.0))
+    plant = station.GetSubsystemByName("plant")
+    plant_context = plant.GetMyContextFromRoot(context)
+    X_SW = X_WS.inverse()
+    out = {}
+    for name in names:
+        X = (X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.GetBodyByName(name))).GetAsMatrix4()
+        out[name] = {"x": float(X[0, 3]), "y": float(X[1, 3]), "z": float(X[2, 3]), "yaw": math.atan2(X[1, 0], X[0, 0]),
+                     "tilt_deg": math.degrees(math.acos(min(1.0, abs(float(X[2, 2])))))}
+    return out, source.record(source_context)

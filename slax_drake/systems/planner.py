@@ -20,6 +20,16 @@ ended ``settle_time`` ago). When it is, the system decides:
    reason and handed back with ``policy.exclude`` (the whole group when the tool could not reach the object), and
    the policy decides again (its next candidate). The planner touches the policy through the protocol only.
 
+Guarded push-ins (``guard``, a :class:`slax_drake.systems.guard.Guard`; the trial gives one under
+``suction_hidden_rule=guarded``): an extra input, ``measured_efforts`` (9: the joint efforts the station's
+controllers apply), and a check every ``guard.period`` s. While a guarded suction's push-in plays, the contact
+monitor compares the efforts with what the free arm and its carried weight need; when the force resisting the push
+exceeds the stop force (the station's ``guarded_stop_force``; for a lift at most what the cup's seal holds over the
+lever, :meth:`~slax_drake.systems.guard.Guard.stop_force`; for a drag plus its floor friction), the motion is replaced, from that instant, by the planner's stop
+motion from the measured joint positions (:meth:`slax_drake.planning.planner.MotionPlanner.guarded_stop`: hold,
+lower, release, back off, the planned way back). The record (stopped or completed, how far it pushed in, the
+peak force) is added to the action's log entry as ``guarded``. It reads joint states and efforts only.
+
 Outputs: ``desired_state`` (18: q and v of ``PLANNED_JOINTS``, sampled from the running motion, else holding
 the last pose), ``suction_command`` (1) and ``deciding`` (1: 1.0 at a tick where it decides; the evaluator records
 the ground truth at exactly those ticks).
@@ -42,11 +52,12 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from slax_drake.perception.belief import ObservedBelief
 from slax_drake.planning.planner import MotionPlanner
-from slax_drake.shelf.actions import Push
+from slax_drake.shelf.actions import Push, Suction
 from slax_drake.shelf.distribution import support
 from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
+from slax_drake.systems.guard import guard_record
 
 MAX_PLAN_ATTEMPTS = 25
 
@@ -64,6 +75,8 @@ class TrialState:
     motions: tuple = ()  # (start time s, PlannedMotion) per executed action
     result: str | None = None  # None while running
     cost: float = 0.0  # pushes 1, suctions ``suction_cost``
+    guard: object = None  # GuardRun of the running guarded push-in (slax_drake.systems.guard), None otherwise
+    believed: object = None  # the believed Scene the running motion was planned in
 
     def __deepcopy__(self, memo):
         return self
@@ -78,7 +91,7 @@ class PlannerSystem(LeafSystem):
 
     def __init__(self, policy, planner: MotionPlanner, template: Scene, source, horizon: int, width: int,
                  height: int, decision_period: float = 0.1, settle_time: float = 0.5, on_step=None,
-                 suction_cost: float = 1.3):
+                 suction_cost: float = 1.3, guard=None):
         LeafSystem.__init__(self)
         if policy.needs_true_scene:
             raise ValueError(f"policy '{policy.name}' needs the true scene (an oracle): it cannot run on a station")
@@ -95,6 +108,7 @@ class PlannerSystem(LeafSystem):
         self.horizon = horizon
         self.settle_time = settle_time
         self.suction_cost = suction_cost
+        self.guard = guard
         self.on_step = on_step
         self._q_obs = planner.q_observation.copy()
         self._background = background_depth(template.shelf, template.camera.with_resolution(width, height))
@@ -104,9 +118,13 @@ class PlannerSystem(LeafSystem):
         self._hypotheses = self.DeclareAbstractInputPort("hypotheses", AbstractValue.Make(()))
         self._occupancy = self.DeclareVectorInputPort("occupancy_1d", width)
         self._stop = self.DeclareVectorInputPort("stop", 1)
+        if guard is not None:
+            self._efforts = self.DeclareVectorInputPort("measured_efforts", n)
         self._state = self.DeclareAbstractState(AbstractValue.Make(TrialState()))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(decision_period, 0.0, self._update)
+        if guard is not None:
+            self.DeclarePeriodicUnrestrictedUpdateEvent(guard.period, 0.0, self._watch)
         ticket = {self.abstract_state_ticket(self._state)} | {self.time_ticket()}
         self.DeclareVectorOutputPort("desired_state", BasicVector(2 * n), self._calc_desired,
                                      prerequisites_of_calc=ticket)
@@ -224,11 +242,73 @@ class PlannerSystem(LeafSystem):
                            "max_deviation_m": round(motion.max_deviation, 5),
                            "waypoint_times": motion.waypoint_times, "suction_intervals": motion.suction_intervals}
         entry["predicted_objects"] = _predicted(belief.known, action)
+        guard = None
+        if self.guard is not None:
+            guard = self.guard.start(motion, self._cup_y(believed, motion), self._expected_resistance(action, belief.known),
+                                     self._stop_force(action, belief.known))
         if self.on_step is not None:
             self.on_step(entry, depth, labels, frame.target_mask, history, obs.p1d)
         return dataclasses.replace(
             s, motion=motion, t_start=now, steps=s.steps + 1, log=s.log + (entry,), motions=s.motions + ((now, motion),),
-            cost=s.cost + (1.0 if isinstance(action, Push) else self.suction_cost))
+            cost=s.cost + (1.0 if isinstance(action, Push) else self.suction_cost), guard=guard, believed=believed)
+
+    # the guarded push-in ---------------------------------------------------------------------------------
+    def _cup_y(self, believed, motion):
+        """q -> the cup's y (S, m) at planned joint positions q, on the planning world of ``believed``."""
+        world = self.planner.world(believed)
+        frame = motion.waypoints[0].frame if motion.waypoints else robot_model.CUP_TIP_FRAME
+        return lambda q: float(world.tool_pose_S(q, frame).translation()[1])
+
+    def _expected_resistance(self, action, known) -> float:
+        """N the free push-in meets: a drag's floor friction as the action model bounds it (its pull), else 0."""
+        if not getattr(action, "drag", False):
+            return 0.0
+        obj = next((o for o in known if o.name == action.name), None)
+        return 0.0 if obj is None else float(self.policy.action_model.drag_limits(obj, action.q[2]).pull)
+
+    def _stop_force(self, action, known) -> float | None:
+        """The stop force (N) of a guarded lift: :meth:`~slax_drake.systems.guard.Guard.stop_force` of the moment
+        the believed object's weight hangs off the cup (the action model's mass) and the cup's height above the
+        floor (the lever of a push back at the object's bottom); None (the station's) for a drag."""
+        if not isinstance(action, Suction) or action.drag:
+            return None
+        obj = next((o for o in known if o.name == action.name), None)
+        if obj is None:
+            return None
+        return self.guard.stop_force(held_moment(self.policy.action_model, obj, action), float(action.q[2]))
+
+    def _watch(self, context, state):
+        """Every ``guard.period`` s while a guarded push-in plays: one joint-state sample to the contact monitor;
+        on contact, the motion is replaced by the planner's stop motion from the measured positions (hold,
+        lower, release, back off, the planned way back). The record goes into the action's log entry."""
+        s = self._plan_state(context)
+        run = s.guard
+        if run is None or s.motion is None:
+            return
+        t = context.get_time() - s.t_start
+        if t < run.t0:
+            return
+        n = len(self._q_obs)
+        if t > run.t1:  # completed: no contact all the way in
+            record = guard_record(run, stopped=False)
+            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
+                s, guard=None, log=s.log[:-1] + ({**s.log[-1], "guarded": record},)))
+            return
+        x = self._measured.Eval(context)
+        run = self.guard.observe(run, s.motion, t, x[:n], x[n:], self._efforts.Eval(context))
+        if not run.monitor.stopped:
+            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, guard=run))
+            return
+        q = np.asarray(x[:n], float)
+        record = guard_record(run, stopped=True, cup_y=self._cup_y(s.believed, s.motion)(q))
+        stop = self.planner.guarded_stop(s.motion, q, s.believed)
+        now = context.get_time()
+        record["stop_time"] = round(now, 4)
+        record["stop_motion"] = {"duration_s": round(stop.trajectory.duration, 3), "waypoint_times": stop.waypoint_times,
+                                 "suction_intervals": stop.suction_intervals}
+        state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
+            s, motion=stop, t_start=now, guard=None, motions=s.motions + ((now, stop),),
+            log=s.log[:-1] + ({**s.log[-1], "guarded": record},)))
 
     def _finish(self, s: TrialState, result: str, entry: dict, frame, hold: bool = False) -> TrialState:
         """The trial ends with ``result``; ``hold``: no motion runs now (the robot holds the last motion's end
@@ -269,11 +349,19 @@ def stop_record(policy, known, rejected: list, stop_reason: str | None) -> dict:
     return out
 
 
+def held_moment(model, obj, action) -> float:
+    """N m: the moment ``obj``'s weight (the action model's mass) hangs off the cup at ``action``'s contact."""
+    from slax_drake.shelf.actions import GRAVITY, object_mass
+
+    mass = object_mass(obj, model.tool.physics.object_density, model.tool.physics)
+    return mass * GRAVITY * float(np.hypot(float(obj.center[0]) - action.q[0], float(obj.center[1]) - action.q[1]))
+
+
 def _describe(action) -> dict:
     if isinstance(action, Push):
         return {"type": "push", "object": action.name, "q": list(action.q), "d": action.d}
     return {"type": "suction", "object": action.name, "q": list(action.q), "dx": action.dx, "dz": action.dz,
-            "yaw": action.yaw, "grip": action.grip}
+            "yaw": action.yaw, "grip": action.grip, "guarded": bool(action.guarded)}
 
 
 def _predicted(objects, action) -> dict:

@@ -19,6 +19,10 @@ inputs
 
 outputs
 - ``measured_state`` (18): [q, v] of ``PLANNED_JOINTS``.
+- ``measured_efforts`` (9): the effort each joint controller of ``PLANNED_JOINTS`` applies (N for the torso, N m
+  for the arm and the shaft): the plant's net actuation (the PD torque plus the gravity feed-forward, clamped to
+  the effort limits), what a Fetch's ``joint_states`` reports as ``effort`` (its motor currents times their
+  torque constants). Sampled from the last plant step (the discrete plant's output).
 - ``robot_state``: the full state of the robot model instance; ``plant_state``: the plant's whole state.
 - ``depth_image`` (ImageDepth32F, metres), ``label_image`` (ImageLabel16I: shelf 0, objects[i] i + 1, target
   last, background/robot empty), ``color_image``: the tool camera, rendered only when evaluated (camera=True).
@@ -129,6 +133,14 @@ def MakeStation(scenario: StationScenario, scene: Scene | None = None, meshcat=N
     measured = builder.AddNamedSystem("measured_planned_state", MatrixGain(S))
     builder.Connect(plant.get_state_output_port(robot), measured.get_input_port())
     builder.ExportOutput(measured.get_output_port(), "measured_state")
+    # Joint efforts of the planned joints: the net actuation (actuator order) picked in PLANNED_JOINTS order.
+    E = np.zeros((n_planned, nu))
+    for k, name in enumerate(actuated_joints):
+        if name in robot_model.PLANNED_JOINTS:
+            E[robot_model.PLANNED_JOINTS.index(name), k] = 1.0
+    efforts = builder.AddNamedSystem("measured_planned_efforts", MatrixGain(E))
+    builder.Connect(plant.get_net_actuation_output_port(robot), efforts.get_input_port())
+    builder.ExportOutput(efforts.get_output_port(), "measured_efforts")
     builder.ExportOutput(plant.get_state_output_port(robot), "robot_state")
     builder.ExportOutput(plant.get_state_output_port(), "plant_state")
 

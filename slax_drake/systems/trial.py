@@ -127,9 +127,7 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
     station_path = opts.station or station_for(opts.config)
     station = load_station_scenario(station_path)
     tool_rules = station_tool_rules(station, opts.tool_rules, opts.profile)
-    if tool_rules.get("suction_hidden_rule") == "guarded":
-        raise TrialError("suction_hidden_rule=guarded is a shelf-simulator variant: the Drake planner does not stop "
-                         "a push in on contact yet")
+    guarded = tool_rules.get("suction_hidden_rule") == "guarded"
     target_size = None if opts.target_size is None else tuple(float(v) for v in opts.target_size)
     scene = sample_scene(scenario, opts.objects, seed=opts.seed, target_size=target_size)
     horizon = opts.horizon if opts.horizon is not None else 2 * opts.objects
@@ -167,9 +165,15 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
                       None if p1d is None else np.array(p1d)))
 
     camera = perception.camera
+    guard = None
+    if guarded:  # guarded push-ins stop on contact, sensed from the arm's joint efforts
+        from slax_drake.systems.guard import Guard
+
+        guard = Guard(station, X_WS.rotation().matrix(), station.guarded_stop_force)
     planner_system = builder.AddNamedSystem("planner", PlannerSystem(
         policy, planner, Scene(scene.shelf, scene.camera, (), None), make_source(source_kind, scene.shelf, size),
-        horizon, camera.width, camera.height, suction_cost=scenario.protocol.suction_cost, on_step=on_step))
+        horizon, camera.width, camera.height, suction_cost=scenario.protocol.suction_cost, on_step=on_step,
+        guard=guard))
     evaluator = builder.AddNamedSystem("evaluator", EvaluatorSystem(
         scene, bodies, X_WS, threshold=scenario.target.visibility_threshold,
         image_size=(scene.camera.width, scene.camera.height)))
@@ -177,6 +181,9 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
         builder.Connect(perception.GetOutputPort(name), planner_system.GetInputPort(name))
     builder.Connect(station_diagram.GetOutputPort("measured_state"), planner_system.GetInputPort("measured_state"))
     builder.Connect(evaluator.GetOutputPort("stop"), planner_system.GetInputPort("stop"))
+    if guard is not None:
+        builder.Connect(station_diagram.GetOutputPort("measured_efforts"),
+                        planner_system.GetInputPort("measured_efforts"))
     builder.Connect(station_diagram.GetOutputPort("label_image"), evaluator.GetInputPort("label_image"))
     builder.Connect(station_diagram.GetOutputPort("body_poses"), evaluator.GetInputPort("body_poses"))
     builder.Connect(planner_system.GetOutputPort("deciding"), evaluator.GetInputPort("deciding"))

@@ -104,3 +104,25 @@ def test_a_tracked_object_is_judged_through_its_segment_in_that_frame():
                                                                                            _snap(20.0, -0.045)))
     assert out.getvalue().splitlines()[0] == ("step 1/12: push track_3 -0.100 m, planned in 0.4 s, executed, "
                                               "object_4 moved as predicted")
+
+
+def test_a_guarded_placement_says_whether_it_stopped_on_contact():
+    """The record the PlannerSystem adds to the action's entry during its motion (a new entry replaces the old one)
+    is read when the line closes."""
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    entry = {**_decision(0, 0.5), "action": {"type": "suction", "object": "segment_2", "dx": 0.0, "dz": 0.15,
+                                             "grip": "lift", "guarded": True}}
+    printer.update((entry,), (_snap(0.5, 0.05),))
+    stopped = {**entry, "guarded": {"guarded": True, "stopped": True, "pushed_in_m": 0.212, "short_m": 0.07}}
+    printer.update((stopped, {"step": 1, "time": 20.0, "final": True, "result": "horizon"}),
+                   (_snap(0.5, 0.05), _snap(20.0, -0.05)))
+    assert out.getvalue().splitlines()[0].endswith(
+        "planned in 0.4 s, guarded, stopped on contact after 0.212 m, executed, object_4 moved as predicted")
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    printer.update((entry,), (_snap(0.5, 0.05),))
+    done = {**entry, "guarded": {"guarded": True, "stopped": False}}
+    printer.update((done, {"step": 1, "time": 20.0, "final": True, "result": "horizon"}),
+                   (_snap(0.5, 0.05), _snap(20.0, -0.05)))
+    assert "planned in 0.4 s, guarded, completed, executed" in out.getvalue()

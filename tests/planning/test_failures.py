@@ -34,6 +34,8 @@ MESSAGES = [
      "segment to pull out: the carried object_1 collides with object_3, the shelf"),
     (PlanningFailure(K.JOINT_LIMIT, hits="wrist_flex_joint", margin=0.02),
      "wrist_flex_joint comes within 0.02 of its position limit"),
+    (PlanningFailure(K.GUARDED_LIFTED, "push in", deviation=0.18),
+     "push in: a guarded push-in carried 18.0 cm above the floor would lower the object onto what it cannot see"),
 ]
 
 
@@ -73,6 +75,7 @@ DECISIONS = [
     (PlanningFailure(K.NO_WAY_BACK), False, True, False),
     (PlanningFailure(K.SEGMENT_COLLIDES, RETURN), False, False, False),
     (PlanningFailure(K.JOINT_LIMIT, hits="torso_lift_joint", margin=0.02), False, False, False),
+    (PlanningFailure(K.GUARDED_LIFTED, "push in", deviation=0.18), False, False, True),
 ]
 
 

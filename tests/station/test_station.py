@@ -56,6 +56,22 @@ def test_objects_rest_at_their_json_poses_and_the_arm_holds(station):
     assert np.abs(q - observation_positions(scenario)).max() < 1e-3
 
 
+def test_the_measured_efforts_at_rest_are_the_gravity_torques(station):
+    """Holding the observation pose, the joint controllers apply what gravity needs (the PD part is ~0): the
+    efforts of the planned joints equal the robot's gravity torques there, in PLANNED_JOINTS order."""
+    scenario, _, diagram = station
+    simulator = _simulator(diagram, 0.6)
+    context = simulator.get_context()
+    efforts = diagram.GetOutputPort("measured_efforts").Eval(context)
+    plant = diagram.GetSubsystemByName("plant")
+    plant_context = plant.GetMyContextFromRoot(context)
+    tau_g = plant.CalcGravityGeneralizedForces(plant_context)  # generalized forces gravity applies
+    robot = plant.GetModelInstanceByName(scenario.robot_model)
+    expected = [-tau_g[plant.GetJointByName(n, robot).velocity_start()] for n in robot_model.PLANNED_JOINTS]
+    assert np.abs(np.asarray(expected)).max() > 1.0  # the arm is held against gravity
+    assert np.allclose(efforts, expected, atol=0.05 + 0.02 * np.abs(expected))
+
+
 def test_tool_camera_is_the_scene_camera_at_the_observation_pose(station):
     scenario, scene, diagram = station
     plant = diagram.GetSubsystemByName("plant")
@@ -71,7 +87,9 @@ def test_ports(station):
     inputs = {diagram.get_input_port(i).get_name() for i in range(diagram.num_input_ports())}
     outputs = {diagram.get_output_port(i).get_name() for i in range(diagram.num_output_ports())}
     assert inputs == {"desired_state", "suction_command"}
-    assert {"measured_state", "robot_state", "query_object", "body_poses", "contact_results", "suction_force"} <= outputs
+    assert {"measured_state", "measured_efforts", "robot_state", "query_object", "body_poses", "contact_results",
+            "suction_force"} <= outputs
+    assert diagram.GetOutputPort("measured_efforts").size() == len(robot_model.PLANNED_JOINTS)
     assert diagram.GetInputPort("desired_state").size() == 18
 
 

@@ -74,3 +74,16 @@ def test_unknown_segmentation_is_refused():
 
     with pytest.raises(TrialError, match="segmentation"):
         build_trial(TrialOptions(segmentation="colour"))
+
+
+def test_a_guarded_trial_feeds_the_planner_the_arm_s_efforts_and_nothing_of_the_hidden_objects():
+    """Under suction_hidden_rule=guarded the planner also reads the station's joint efforts (what a Fetch's
+    joint_states reports), and still no true pose or contact result."""
+    trial = build_trial(TrialOptions(objects=3, seed=7, tool_rules={"suction_hidden_rule": "guarded"}))
+    planner = trial.planner_system
+    names = {planner.get_input_port(i).get_name() for i in range(planner.num_input_ports())}
+    assert names == PLANNER_INPUTS | {"measured_efforts"}
+    feeds = {(src, port) for src, port, dst, _ in _connections(trial.diagram) if dst == "planner"}
+    assert ("station", "measured_efforts") in feeds
+    assert not {port for _, port in feeds} & {"body_poses", "contact_results", "plant_state", "query_object"}
+    assert trial.tool_rules["suction_hidden_rule"] == "guarded"

@@ -1,0 +1,206 @@
+"""A guarded push-in: stop a carried object on contact, sensed from the arm's joint efforts alone.
+
+What a real arm has: its joint positions and velocities, the efforts its joint controllers apply
+(the station's ``measured_efforts``; a Fetch's ``joint_states``) and its own dynamic model (the robot's URDF).
+What it does not have: the poses of objects it cannot see, or contact results. The guard reads only the former.
+
+:class:`EffortModel` (the robot alone, the station's controller plant): the effort the free arm needs at (q, v, a)
+(inverse dynamics with gravity), and two joint-space signatures at the cup tip (``cup_tip_frame``): of a unit
+force along the push direction u (J^T u) and of a unit upward force (J^T z), in world W.
+
+:class:`ContactMonitor` (pure arithmetic, immutable): the residual r = measured effort - model effort holds what
+the model does not know, the carried object's weight and any contact. At the first sample of the push-in (the arm
+starts it at rest) the monitor fits the payload as a weight m g at the cup (least squares of r on J^T z) and keeps
+what that leaves unexplained; at every later sample it removes the fitted weight at the present configuration and
+that remainder, and projects what is left on the push signature: the force resisting the push (N, positive when it
+pushes back against u, the push-in's direction: S +y, or -y for a push-in that ends shallower than it starts). It stops when that force exceeds ``threshold`` (N) plus ``expected`` (N; the friction a
+dragged object needs to slide, which the floor adds once it moves).
+
+Units: efforts in N (the torso) and N m (the rest), forces in N, positions m / rad, times s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+GRAVITY = 9.81  # m/s^2
+# N: the least stop force the guard uses. On the sim station's free push-ins the estimate peaked at 0.3-0.8 N
+# (docs/research/guarded-placement.md); a stop force the cup's hold would put lower is raised to this.
+MIN_STOP_FORCE = 1.5
+UP_W = np.array([0.0, 0.0, 1.0])
+
+
+class EffortModel:
+    """The free arm's efforts and the cup's force signatures on the robot of ``scenario`` (a StationScenario), in
+    ``PLANNED_JOINTS`` order, the head held at ``head_configuration``."""
+
+    def __init__(self, scenario):
+        from slax_drake.station import robot as robot_model
+        from slax_drake.station.plant import controller_plant
+
+        self.plant = controller_plant(scenario)
+        self.context = self.plant.CreateDefaultContext()
+        names = robot_model.PLANNED_JOINTS
+        self._iq = np.array([self.plant.GetJointByName(n).position_start() for n in names])
+        self._iv = np.array([self.plant.GetJointByName(n).velocity_start() for n in names])
+        self._q = self.plant.GetPositions(self.context).copy()
+        for name, value in scenario.head_configuration.items():
+            self._q[self.plant.GetJointByName(name).position_start()] = value
+        self._cup = self.plant.GetFrameByName(robot_model.CUP_TIP_FRAME)
+
+    def _set(self, q, v=None):
+        full = self._q.copy()
+        full[self._iq] = q
+        self.plant.SetPositions(self.context, full)
+        vf = np.zeros(self.plant.num_velocities())
+        if v is not None:
+            vf[self._iv] = v
+        self.plant.SetVelocities(self.context, vf)
+
+    def effort(self, q, v, a) -> np.ndarray:
+        """The efforts (9,) the free arm needs at positions q, velocities v and accelerations a (inverse dynamics
+        with gravity and the other force elements)."""
+        from pydrake.multibody.tree import MultibodyForces
+
+        self._set(q, v)
+        forces = MultibodyForces(self.plant)
+        self.plant.CalcForceElementsContribution(self.context, forces)
+        af = np.zeros(self.plant.num_velocities())
+        af[self._iv] = a
+        return self.plant.CalcInverseDynamics(self.context, af, forces)[self._iv]
+
+    def signatures(self, q, push_W) -> tuple[np.ndarray, np.ndarray]:
+        """(J^T u, J^T z) at q: the efforts (9,) that balance a 1 N force on the cup tip pushing back against the
+        unit push direction ``push_W`` (world), and a 1 N weight hanging at the cup tip."""
+        from pydrake.multibody.tree import JacobianWrtVariable
+
+        self._set(q)
+        world = self.plant.world_frame()
+        J = self.plant.CalcJacobianTranslationalVelocity(self.context, JacobianWrtVariable.kV, self._cup,
+                                                         np.zeros(3), world, world)[:, self._iv]
+        return J.T @ np.asarray(push_W, float), J.T @ UP_W
+
+
+@dataclasses.dataclass(frozen=True)
+class ContactMonitor:
+    """The guard's state along one push-in (see the module docstring): ``threshold`` and ``expected`` in N."""
+
+    threshold: float
+    expected: float = 0.0
+    weight: float | None = None  # N, the payload's weight fitted at the first sample (None before it)
+    offset: tuple | None = None  # the residual the fit leaves unexplained at the first sample (9 efforts)
+    force: float = 0.0  # N, the last estimate of the force resisting the push
+    peak: float = 0.0  # N, its largest value so far
+
+    @property
+    def stopped(self) -> bool:
+        return self.weight is not None and self.force > self.threshold + self.expected
+
+    def update(self, residual, push_signature, weight_signature) -> "ContactMonitor":
+        """The monitor after one sample: ``residual`` (measured minus model efforts), the signatures of a 1 N
+        force resisting the push and of a 1 N weight at the cup, at the sample's configuration."""
+        r = np.asarray(residual, float)
+        s = np.asarray(push_signature, float)
+        w = np.asarray(weight_signature, float)
+        if self.weight is None:
+            ww = float(w @ w)
+            weight = float(w @ r) / ww if ww > 0 else 0.0
+            return dataclasses.replace(self, weight=weight, offset=tuple(r - weight * w), force=0.0, peak=0.0)
+        left = r - self.weight * w - np.asarray(self.offset)
+        ss = float(s @ s)
+        force = float(s @ left) / ss if ss > 0 else 0.0
+        return dataclasses.replace(self, force=force, peak=max(self.peak, force))
+
+
+@dataclasses.dataclass(frozen=True)
+class GuardRun:
+    """A guarded push-in being watched: the monitor, the motion's push-in window [t0, t1] (s from the motion's
+    start), the cup's planned y (S, m) at the push-in's start and end, and the record once it ended."""
+
+    monitor: ContactMonitor
+    t0: float
+    t1: float
+    y_start: float
+    y_end: float
+
+    @property
+    def direction(self) -> float:
+        """+1 when the push-in runs into the shelf (S +y), -1 when it runs out (a placement shallower than the
+        carry's depth)."""
+        return 1.0 if self.y_end >= self.y_start else -1.0
+
+
+def push_in_window(motion) -> tuple[float, float] | None:
+    """(start, end) in s from the motion's start of a guarded suction's push-in (the segment arriving at "push in"),
+    or None when the motion's action is not a guarded suction."""
+    action = motion.action
+    if not getattr(action, "guarded", False):
+        return None
+    times = motion.waypoint_times
+    labels = [label for label, _ in times]
+    if "push in" not in labels:
+        return None
+    k = labels.index("push in")
+    return float(times[k - 1][1]), float(times[k][1])
+
+
+def planned_acceleration(trajectory, t: float) -> np.ndarray:
+    """The planned joint accelerations at ``t`` (s from the trajectory's start; the nearest sample)."""
+    k = int(np.clip(np.searchsorted(trajectory.times, t), 0, len(trajectory.times) - 1))
+    return trajectory.a[k]
+
+
+class Guard:
+    """What a guarded push-in needs at run time: the effort model of the station's robot, the push direction
+    (S +y, in world) and the stop threshold ``threshold`` (N; the station's ``guarded_stop_force``). ``period``:
+    seconds between the checks (the joint-state rate)."""
+
+    def __init__(self, scenario, R_WS, threshold: float, period: float = 0.01):
+        self.model = EffortModel(scenario)
+        self.push_W = np.asarray(R_WS, float)[:, 1].copy()
+        self.threshold = float(threshold)
+        self.period = float(period)
+        self.lip_moment = float(scenario.suction.lip_moment)
+
+    def stop_force(self, held_moment: float, lever: float) -> float:
+        """The stop force (N) for a lifted object hanging ``held_moment`` (N m) off the cup: a force resisting the
+        push at the object's bottom, ``lever`` (m) below the cup, adds its moment to the weight's, and the seal
+        peels when they exceed the cup's lip moment; so the station's ``threshold``, or less, what the lip has left
+        over the lever, but not under ``MIN_STOP_FORCE`` (the effort estimate's noise)."""
+        if lever <= 0.0:
+            return self.threshold
+        return min(self.threshold, max(MIN_STOP_FORCE, (self.lip_moment - held_moment) / lever))
+
+    def start(self, motion, cup_y_S, expected: float = 0.0, threshold: float | None = None) -> GuardRun | None:
+        """A GuardRun for ``motion`` when it is a guarded suction, else None. ``cup_y_S(q)``: the cup's y (S, m) at
+        planned joint positions q; ``expected``: N of resistance the free push-in meets (a drag's friction);
+        ``threshold``: the stop force (N; default the station's)."""
+        window = push_in_window(motion)
+        if window is None:
+            return None
+        traj = motion.trajectory
+        q0, _ = traj.value(window[0])
+        q1, _ = traj.value(window[1])
+        return GuardRun(ContactMonitor(self.threshold if threshold is None else threshold, expected), window[0], window[1], float(cup_y_S(q0)),
+                        float(cup_y_S(q1)))
+
+    def observe(self, run: GuardRun, motion, t: float, q, v, efforts) -> GuardRun:
+        """``run`` after one joint-state sample at ``t`` (s from the motion's start) inside its window."""
+        a = planned_acceleration(motion.trajectory, t)
+        residual = np.asarray(efforts, float) - self.model.effort(q, v, a)
+        push, weight = self.model.signatures(q, run.direction * self.push_W)
+        return dataclasses.replace(run, monitor=run.monitor.update(residual, push, weight))
+
+
+def guard_record(run: GuardRun, stopped: bool, cup_y: float | None = None) -> dict:
+    """The trial record of a guarded push-in: whether it stopped on contact, how far the cup had pushed in then
+    and how far short of the planned placement (m, along the push-in), the largest resisting force seen and the
+    threshold (N)."""
+    out = {"guarded": True, "stopped": bool(stopped), "threshold_n": round(run.monitor.threshold + run.monitor.expected, 3),
+           "peak_force_n": round(run.monitor.peak, 3)}
+    if stopped and cup_y is not None:
+        out["pushed_in_m"] = round(abs(cup_y - run.y_start), 4)
+        out["short_m"] = round(run.direction * (run.y_end - cup_y), 4)
+    return out

@@ -1,0 +1,67 @@
+"""The guarded push-in's stop logic on synthetic effort sequences (the Drake runs: tests/systems/test_guarded_drake.py)."""
+
+import numpy as np
+import pytest
+
+from slax_drake.systems.guard import ContactMonitor
+
+RNG = np.random.default_rng(0)
+PUSH = RNG.normal(size=(50, 9))  # J^T u along a push-in, one row per sample
+WEIGHT = RNG.normal(size=(50, 9))  # J^T z
+
+
+def _run(monitor, residuals):
+    forces = []
+    for k, r in enumerate(residuals):
+        monitor = monitor.update(r, PUSH[k], WEIGHT[k])
+        forces.append(monitor.force)
+        if monitor.stopped:
+            return monitor, k, forces
+    return monitor, None, forces
+
+
+def test_a_carried_weight_never_stops_the_push_however_the_arm_turns():
+    residuals = [12.0 * WEIGHT[k] for k in range(50)]  # a 12 N payload, its efforts changing with the pose
+    monitor, stop, forces = _run(ContactMonitor(threshold=5.0), residuals)
+    assert stop is None
+    assert monitor.weight == pytest.approx(12.0)
+    assert max(abs(f) for f in forces) < 1e-6
+
+
+def test_the_push_stops_at_the_first_sample_whose_resisting_force_crosses_the_threshold():
+    resisting = np.concatenate([np.zeros(30), np.arange(1, 21) * 1.0])  # N: contact from sample 30, +1 N a sample
+    residuals = [3.0 * WEIGHT[k] + resisting[k] * PUSH[k] for k in range(50)]
+    monitor, stop, forces = _run(ContactMonitor(threshold=5.0), residuals)
+    assert stop == 35  # 6 N > 5 N
+    assert monitor.force == pytest.approx(6.0)
+    assert all(f <= 5.0 + 1e-9 for f in forces[:-1])
+
+
+def test_a_force_along_the_push_does_not_stop_it_and_the_expected_drag_raises_the_threshold():
+    pulling = [3.0 * WEIGHT[k] - (20.0 if k > 10 else 0.0) * PUSH[k] for k in range(50)]  # helps the push
+    assert _run(ContactMonitor(threshold=5.0), pulling)[1] is None
+    sliding = [3.0 * WEIGHT[k] + (8.0 if k > 10 else 0.0) * PUSH[k] for k in range(50)]  # 8 N of floor friction
+    assert _run(ContactMonitor(threshold=5.0), sliding)[1] == 11
+    assert _run(ContactMonitor(threshold=5.0, expected=8.0), sliding)[1] is None
+
+
+def test_the_stop_force_of_a_lift_is_what_the_cup_s_lip_has_left_over_the_lever():
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.guard import MIN_STOP_FORCE, Guard
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    guard = Guard(station, np.eye(3), threshold=5.0)
+    lip = station.suction.lip_moment  # 0.64 N m
+    assert guard.stop_force(0.1, 0.05) == 5.0  # a light box sealed low: the station's force
+    assert guard.stop_force(0.4, 0.12) == pytest.approx((lip - 0.4) / 0.12)  # 2 N: more would peel the seal
+    assert guard.stop_force(0.6, 0.12) == MIN_STOP_FORCE  # never under the estimate's noise
+
+
+def test_a_push_in_that_ends_shallower_than_it_starts_is_watched_along_minus_y():
+    from slax_drake.systems.guard import GuardRun, guard_record
+
+    run = GuardRun(ContactMonitor(5.0), 1.0, 2.0, y_start=0.10, y_end=-0.05)
+    assert run.direction == -1.0
+    assert GuardRun(ContactMonitor(5.0), 1.0, 2.0, y_start=-0.2, y_end=0.15).direction == 1.0
+    record = guard_record(run, stopped=True, cup_y=0.0)
+    assert record["pushed_in_m"] == pytest.approx(0.10) and record["short_m"] == pytest.approx(0.05)
