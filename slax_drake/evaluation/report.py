@@ -15,13 +15,15 @@ typed by hand. What a folder feeds is read from its files:
 Each table names the command, the rule profile and the observation mode it was made with, and every page the
 exact ``slax-drake report`` command that regenerates it. With ``readme`` the headline table (the first Table I
 folder's success rates) replaces the text between the README's ``<!-- results:begin -->`` and
-``<!-- results:end -->`` markers.
+``<!-- results:end -->`` markers, and the first physics folder's section (not a Table II run) the text between
+``<!-- physics:begin -->`` and ``<!-- physics:end -->``.
 """
 
 from __future__ import annotations
 
 import json
 import shlex
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,6 +34,7 @@ from slax_drake.io import file_in_the_way, write_text_atomic
 
 KEYS = ("4", "6", "8", "10", "all")
 README_BEGIN, README_END = "<!-- results:begin -->", "<!-- results:end -->"
+PHYSICS_BEGIN, PHYSICS_END = "<!-- physics:begin -->", "<!-- physics:end -->"  # the README's Drake headline
 NAMES = {"oracle-p": "Oracle-P", "oracle-p+s": "Oracle-P+S", "dar": "DAR", "der-3": "DER-3",
          "bluction-dar": "Bluction-DAR", "dar-literal": "DAR, literal", "bluction-dar-literal": "Bluction-DAR, literal"}
 # Paper Table II (Sec. VI-B): successes of 3 physical shelves per density with the real Fetch.
@@ -297,7 +300,9 @@ def physics_section(folder: ResultFolder) -> str:
     rules = ", ".join(f"{k} = {v}" for k, v in (meta.get("tool_rules") or {}).items())
     mode, seen = _drake_mode(folder)
     lines = [f"### `{folder.path.name}`: profile `{folder.profile}`, {mode}", "",
-             f"{seen}; the shelf simulator beside them {meta.get('shelf_observation', 'privileged')}. "
+             f"{seen}; the shelf simulator beside them "
+             + ("in camera mode (the same labels and noise model)" if meta.get("shelf_observation") == "camera"
+                else "privileged") + ". "
              f"Object masses: {mass_model_words(meta.get('mass_model'))}. "
              + (f"Rules beyond the profile: {rules}. " if rules else "") + "Made with:", "",
              "```bash", benchmark_command(folder), "```", "",
@@ -319,6 +324,9 @@ def physics_section(folder: ResultFolder) -> str:
               "through because they uncover space no earlier arrangement uncovered (\"-\": a run from before it was "
               "counted). Planning per executed action: every candidate motion planned for that decision, the "
               "rejected ones included."]
+    # prose wrapped (a paragraph in Markdown), tables and commands as they are
+    lines = [textwrap.fill(l, 116, break_long_words=False, break_on_hyphens=False)
+             if len(l) > 116 and not l.startswith(("|", "slax-drake", "`")) else l for l in lines]
     return "\n".join(lines) + "\n"
 
 
@@ -448,6 +456,15 @@ def write_report(folders: list[Path], docs: Path | None = None, readme: Path | N
         if not {README_BEGIN, README_END} <= _markers(Path(readme)):
             raise UserError(f"{readme} has no {README_BEGIN} ... {README_END} section to replace")
         headline = headline_table(first) + f"\nRegenerate with `{command}`.\n"
+        drake = next((f for f in loaded if f.kind == "physics" and not f.is_table2), None)
+        if drake is not None and {PHYSICS_BEGIN, PHYSICS_END} <= _markers(Path(readme), (PHYSICS_BEGIN, PHYSICS_END)):
+            # the headline physics run (the first physics folder), its section one heading level down
+            physics_headline = physics_section(drake).replace("### ", "", 1) + f"\nRegenerate with `{command}`.\n"
+        elif drake is not None:
+            raise UserError(f"{readme} has no {PHYSICS_BEGIN} ... {PHYSICS_END} section for the physics folder "
+                            f"{drake.path}")
+        else:
+            physics_headline = None
     pages = {}
     if docs is not None:
         blocker = Path(docs) if Path(docs).exists() and not Path(docs).is_dir() else file_in_the_way(Path(docs))
@@ -461,10 +478,12 @@ def write_report(folders: list[Path], docs: Path | None = None, readme: Path | N
         written.append(path)
     if headline is not None:
         replace_between_markers(Path(readme), README_BEGIN, README_END, headline)
+        if physics_headline is not None:
+            replace_between_markers(Path(readme), PHYSICS_BEGIN, PHYSICS_END, physics_headline)
         written.append(Path(readme))
     return written
 
 
-def _markers(path: Path) -> set[str]:
+def _markers(path: Path, markers=(README_BEGIN, README_END)) -> set[str]:
     text = path.read_text()
-    return {m for m in (README_BEGIN, README_END) if m in text}
+    return {m for m in markers if m in text}

@@ -72,3 +72,22 @@ def test_report_refuses_bad_input_in_one_line_before_writing(tmp_path, capsys, s
     assert code == 2
     assert message in err and err.count("\n") == 1
     assert not (tmp_path / "docs").exists()
+
+
+def test_report_writes_the_readme_drake_headline_from_the_first_physics_folder(tmp_path, capsys):
+    from slax_drake.evaluation.report import PHYSICS_BEGIN, PHYSICS_END
+
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{README_BEGIN}\n{README_END}\nmiddle\n{PHYSICS_BEGIN}\nstale text\n{PHYSICS_END}\nafter\n")
+    folders = [str(RESULTS / "table1_paper"), str(RESULTS / "physics_belief_household_first"),
+               str(RESULTS / "physics_camera")]
+    assert main(["report", *folders, "--readme", str(readme)]) == 0
+    text = readme.read_text()
+    block = text.split(PHYSICS_BEGIN)[1].split(PHYSICS_END)[0]
+    assert "stale text" not in block and "`physics_belief_household_first`" in block and "physics_camera`" not in block
+    assert "household goods' masses" in block and "in camera mode (the same labels" in block
+    assert text.endswith("after\n") and "middle" in text
+    # a physics folder but no place for it in the README: one line, exit 2, nothing written
+    readme.write_text(f"{README_BEGIN}\n{README_END}\n")
+    assert main(["report", *folders[:2], "--readme", str(readme)]) == 2
+    assert "physics:begin" in capsys.readouterr().err and readme.read_text() == f"{README_BEGIN}\n{README_END}\n"
