@@ -41,6 +41,7 @@ class ActionCheck:
     timings: dict = dataclasses.field(default_factory=dict)
     planned: object = None  # the Push or Suction checked (None when the action model knows no such action)
     object_name: str = ""  # the object of a candidate the action model refuses
+    kind: str = ""  # the typed reason: the action model's RefusalKind value or the planner's FailureKind value
 
     def line(self) -> str:
         if self.feasible:
@@ -129,7 +130,8 @@ class Checker:
         text = text or spec_of(action)
         timings = {k: result.timings[k] for k in ("ik_s", "check_s", "timing_s", "total_s") if k in result.timings}
         if not result.feasible:
-            return ActionCheck(text, False, "motion", result.reason, None, timings, action)
+            kind = result.failure.kind.value if result.failure is not None else ""
+            return ActionCheck(text, False, "motion", result.reason, None, timings, action, kind=kind)
         return ActionCheck(text, True, "ok", "", round(float(result.trajectory.duration), 3), timings, action)
 
 
@@ -184,21 +186,22 @@ def check_all(scene_path: str | Path, station: str | None = None,
     cands = checker.candidates()
     checks = [checker.plan(a) for a in tqdm(cands.feasible, desc="planning candidates", unit="candidate",
                                             disable=None if progress is None else not progress, leave=False)]
-    checks += [ActionCheck(r.spec(), False, "action model", r.reason, object_name=r.object_name)
+    checks += [ActionCheck(r.spec(), False, "action model", r.reason, object_name=r.object_name,
+                           kind=r.kind.value if r.kind is not None else "")
                for r in cands.rejected]
     return checker, checks
 
 
 def table(checks: list[ActionCheck]) -> str:
-    """A plain-text table: action, verdict, motion duration, planning times, reason."""
-    rows = [("action", "verdict", "motion s", "plan s", "IK s", "check s", "Ruckig s", "reason")]
+    """A plain-text table: action, verdict, the reason's kind (typed), motion duration, planning times, reason."""
+    rows = [("action", "verdict", "kind", "motion s", "plan s", "IK s", "check s", "Ruckig s", "reason")]
     for c in checks:
         t = c.timings
 
         def s(key):
             return f"{t[key]:.3f}" if key in t else "-"
 
-        rows.append((c.action, "feasible" if c.feasible else f"no ({c.stage})",
+        rows.append((c.action, "feasible" if c.feasible else f"no ({c.stage})", c.kind or "-",
                      "-" if c.duration_s is None else f"{c.duration_s:.2f}", s("total_s"), s("ik_s"), s("check_s"),
                      s("timing_s"), c.reason[:90]))
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]) - 1)]

@@ -82,3 +82,17 @@ def test_all_candidates_show_a_progress_bar_while_planning(default_scene, capfd)
 
     check_all(default_scene, progress=True)
     assert "planning candidates" in capfd.readouterr().err
+
+
+def test_the_table_names_each_refusals_typed_kind():
+    from slax_drake.hardware.check_action import ActionCheck, table
+    from slax_drake.planning.failures import FailureKind
+    from slax_drake.shelf.actions import RefusalKind
+
+    model_kind, motion_kind = next(iter(RefusalKind)).value, FailureKind.TOOL_COLLIDES.value
+    text = table([ActionCheck("push:a:+x", False, "action model", "why", object_name="a", kind=model_kind),
+                  ActionCheck("push:b:+0.0500", False, "motion", "insert: ...", kind=motion_kind),
+                  ActionCheck("push:c:+0.0500", True, "ok", "", 8.0, {"total_s": 0.1})])
+    header, refused, unplanned, feasible = text.splitlines()[:4]
+    assert header.split()[:3] == ["action", "verdict", "kind"]
+    assert model_kind in refused and motion_kind in unplanned and feasible.split()[2] == "-"
