@@ -182,7 +182,10 @@ def _run_scene(job) -> dict:
     if last.get("reasons") is not None:  # ended with no action to execute: why, by stage and kind
         drake["end_reasons"] = last["reasons"]
         drake["end_rejected"] = [{"kind": r.get("kind"), "waypoint": r.get("waypoint")} for r in last.get("rejected", [])]
-    shelf_keep = {k: shelf[k] for k in ("success", "steps", "cost", "reason", "actions", "notes", "visible_fraction")}
+        if last.get("screened") is not None:  # the feasible candidates the policy's corrections screened out
+            drake["end_screened"] = last["screened"]
+    shelf_keep = {k: shelf[k] for k in ("success", "steps", "cost", "reason", "actions", "notes", "visible_fraction",
+                                        "screened") if k in shelf}
     return {"policy": policy_name, "density": density, "index": index, "seed": seed, "shelf": shelf_keep,
             "drake": drake, "profile": profile, "tool_rules": tool_rules}
 
