@@ -353,6 +353,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "drake_wall_s": d["wall_s"],
             "planning_s": [a["planning_s"] for a in d["actions"] if a.get("planning_s") is not None],
             "reversals": reversals(d["actions"]),
+            "undoes": undoes(d["actions"]),
             "judged_by_kind": {kind: [sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"]),
                                       sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"] is not None)]
                                for kind in ACTION_KINDS},
@@ -385,6 +386,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 **_planning_stats([s for t in sel for s in t["planning_s"]]),
                 "reversals": sum(t["reversals"] for t in sel),
                 "trials_with_reversal": sum(1 for t in sel if t["reversals"]),
+                "trials_with_undo": sum(1 for t in sel if t.get("undoes")) if all("undoes" in t for t in sel) else None,
                 "match_by_action": _match_by_action(sel),
                 "mismatch_kinds": _mismatch_counts(sel),
             }
@@ -396,14 +398,13 @@ REVERSAL_MIN = 0.01  # m: both moves' components along the reversed axis exceed 
 SAME_PLACE = 0.02  # m: an action's object stood within this of where an earlier action left it (the same object)
 
 
-def reversals(actions: list[dict]) -> int:
-    """How many of a Drake trial's executed actions moved an object back along x or y against the previous move of
-    the same physical object (both components over :data:`REVERSAL_MIN`): the shuttles the no-shuttle rule forbids,
-    plus the ones it lets through because they uncover space no earlier arrangement did. Judged from the true poses
-    of the record (``before``, ``outcome``, m in S): an action's object is the one an earlier action left within
-    :data:`SAME_PLACE` of where this one found it (the track names of the record are the planner's and may change)."""
+def _reversed_axes(actions: list[dict]):
+    """Per executed action that moved an object back along x or y against the previous move of the same physical
+    object (both components over :data:`REVERSAL_MIN`): (that previous move, this move, the reversed axes' indices).
+    Judged from the true poses of the record (``before``, ``outcome``, m in S): an action's object is the one an
+    earlier action left within :data:`SAME_PLACE` of where this one found it (the record's track names are the
+    planner's and may change)."""
     last_moves = []  # (where the object was left (x, y), its displacement (dx, dy)), latest first
-    count = 0
     for a in actions:
         before, after = a.get("before"), a.get("outcome")
         if before is None or after is None:
@@ -411,11 +412,27 @@ def reversals(actions: list[dict]) -> int:
         move = (after["x"] - before["x"], after["y"] - before["y"])
         previous = next((m for (x, y), m in last_moves
                          if math.hypot(before["x"] - x, before["y"] - y) <= SAME_PLACE), None)
-        if previous is not None and any(p * c < 0 and abs(p) > REVERSAL_MIN and abs(c) > REVERSAL_MIN
-                                        for p, c in zip(previous, move)):
-            count += 1
+        if previous is not None:
+            axes = [k for k, (p, c) in enumerate(zip(previous, move))
+                    if p * c < 0 and abs(p) > REVERSAL_MIN and abs(c) > REVERSAL_MIN]
+            if axes:
+                yield previous, move, axes
         last_moves.insert(0, ((after["x"], after["y"]), move))
-    return count
+
+
+def reversals(actions: list[dict]) -> int:
+    """How many of a Drake trial's executed actions moved an object back along x or y against its previous move
+    (:func:`_reversed_axes`): the shuttles the no-shuttle rule forbids, plus the ones it lets through because they
+    uncover space no earlier arrangement did (most carry the object past where it stood)."""
+    return sum(1 for _ in _reversed_axes(actions))
+
+
+def undoes(actions: list[dict]) -> int:
+    """The reversals that undo the previous move: along a reversed axis the object ends no farther from where it
+    stood before that move than the move took it (|previous + this| <= |previous|, within :data:`REVERSAL_MIN`):
+    put back, or past by no more than the move; a reversal that carries it farther past is a relocation."""
+    return sum(1 for previous, move, axes in _reversed_axes(actions)
+               if any(abs(previous[k] + move[k]) <= abs(previous[k]) + REVERSAL_MIN for k in axes))
 
 
 ACTION_KINDS = ("push", "suction", "drag")  # "suction": lifted; "drag": slid on the floor (the drag grasp)

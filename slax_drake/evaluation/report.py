@@ -307,7 +307,7 @@ def physics_section(folder: ResultFolder) -> str:
              + (f"Rules beyond the profile: {rules}. " if rules else "") + "Made with:", "",
              "```bash", benchmark_command(folder), "```", "",
              "| policy | objects | scenes | shelf simulator | Drake | Drake, nothing lost | actions matching the "
-             "prediction | Drake endings | trials with a reversal | planning per action, median / p90 (s) |",
+             "prediction | Drake endings | trials with a reversal / an undo | planning per action, median / p90 (s) |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for policy, per in folder.summary["policies"].items():
         for key in _density_keys(per):
@@ -317,12 +317,15 @@ def physics_section(folder: ResultFolder) -> str:
                          f"{_pct(e['shelf_success_rate'])} | {_pct(e['drake_success_rate'])} | "
                          f"{_pct(e.get('drake_clean_success_rate'))} | {_pct(e['match_rate'])} "
                          f"({e['actions_matched']}/{e['actions_judged']}) | {endings} | "
-                         f"{_count(e.get('trials_with_reversal'))} | {_seconds(e.get('planning_median_s'))} / "
+                         f"{_count(e.get('trials_with_reversal'))} / {_count(e.get('trials_with_undo'))} | "
+                         f"{_seconds(e.get('planning_median_s'))} / "
                          f"{_seconds(e.get('planning_p90_s'))} |")
     lines += ["", "Reversal: an executed move of an object back along x or y against its previous move (both over "
               "1 cm, judged from the true poses): the shuttles the no-shuttle rule forbids and the reversals it lets "
-              "through because they uncover space no earlier arrangement uncovered (\"-\": a run from before it was "
-              "counted). Planning per executed action: every candidate motion planned for that decision, the "
+              "through because they uncover space no earlier arrangement uncovered; most carry the object past where it "
+              "stood. Undo: a reversal that ends no farther from where the object stood before its previous move "
+              "than that move took it (put back, or past by no more: the shuttle of the issue that asked for the "
+              "rule) (\"-\": a run from before it was counted). Planning per executed action: every candidate motion planned for that decision, the "
               "rejected ones included."]
     # prose wrapped (a paragraph in Markdown), tables and commands as they are
     lines = [textwrap.fill(l, 116, break_long_words=False, break_on_hyphens=False)

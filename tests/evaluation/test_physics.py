@@ -289,3 +289,14 @@ def test_reversals_count_moves_back_against_the_same_objects_previous_move():
     assert reversals([_moved(0.0, -0.05, 0.0, -0.2), _moved(0.0, -0.2, 0.0, -0.06)]) == 1
     # an action with no outcome (the trial ended) is skipped
     assert reversals([_moved(0.0, -0.1, 0.1, -0.1), {"before": None, "outcome": None}]) == 0
+
+
+def test_undoes_count_the_reversals_that_put_an_object_back_or_just_past():
+    from slax_drake.evaluation.physics import reversals, undoes
+
+    # the shuttle: -0.05, +0.10 (past the start by as much as the first move): both reversals undo
+    shuttle = [_moved(0.0, -0.1, -0.05, -0.1), _moved(-0.05, -0.1, 0.05, -0.1), _moved(0.05, -0.1, -0.10, -0.1)]
+    assert reversals(shuttle) == 2 and undoes(shuttle) == 2
+    # a short push, then a suction carrying it far the other way: a reversal, not an undo
+    relocation = [_moved(0.0, -0.1, 0.11, -0.1), _moved(0.11, -0.1, -0.24, -0.1)]
+    assert reversals(relocation) == 1 and undoes(relocation) == 0
