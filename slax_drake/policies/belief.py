@@ -855,10 +855,16 @@ class BeliefSearch(Hindsight):
     def uncovering_moves(self, worlds, known, alive: np.ndarray, cands: list) -> list:
         """With the belief collapsed onto a partly seen target (``seen_target`` and ``uncover_seen``): the feasible
         moves not among ``cands`` (refused by the no-return or no-shuttle correction; a failed action's exclusion
-        and a blocked placement box still apply) whose object hides fewer points of the ``alive`` worlds' targets
-        after the move than before it: the moves that clear part of what still hides the rest of the target. The
-        corrections keep a distribution policy from shuttling an object between arrangements that reveal nothing
-        new; here every world is the seen target, so uncovering it is progress whatever was observed before."""
+        and a blocked placement box still apply) whose object hides part of the ``alive`` worlds' targets and after
+        which the arrangement hides fewer of their points than the current one and than every arrangement observed
+        in this trial: the moves that clear more of the seen target than was ever cleared. The corrections keep a
+        distribution policy from shuttling an object between arrangements that reveal nothing new; here every
+        world is the seen target, so clearing more of it than before is progress, while a move back to where the
+        target was hidden as much as now is not (without that test an object in front of the target was pushed
+        right then carried left, each move clearing more than the arrangement before it, until the horizon).
+
+        An observed arrangement holds the objects seen then; an object not seen then counts where it stands now
+        (only acted-on objects move)."""
         found = maximal_pushes_only(self._action_model.enumerate(known, pushes=True, suctions=True).feasible)
         allowed = self._exclusions.allowed(found, known)
         taken = set(cands)
@@ -867,21 +873,34 @@ class BeliefSearch(Hindsight):
             return []
         by_name = {o.name: o for o in known}
 
-        def hidden(obj) -> int:
+        def masked(obj):
             m = worlds.mask(obj)
-            return 0 if m is None else int(_popcount(m[alive_rows]).sum())
+            return None if m is None else m[alive_rows]
 
-        before: dict = {}
+        def hidden_by(objects) -> int:
+            """Points of the alive worlds' targets that ``objects`` hide together."""
+            union = None
+            for o in objects:
+                m = masked(o)
+                if m is not None:
+                    union = m if union is None else union | m
+            return 0 if union is None else int(_popcount(union).sum())
+
+        def filled(arrangement):
+            names = {o.name for o in arrangement}
+            return tuple(arrangement) + tuple(o for o in known if o.name not in names)
+
+        least = min([hidden_by(known)] + [hidden_by(filled(seen)) for seen in self.memory.observed])
+        hides_now: dict = {}
         out = []
         for a in allowed:
             if a in taken or (isinstance(a, Suction) and not self.placement_allowed(known, a)):
                 continue
-            if a.name not in before:
-                before[a.name] = hidden(by_name[a.name])
-            if not before[a.name]:
+            if a.name not in hides_now:
+                hides_now[a.name] = masked(by_name[a.name]) is not None
+            if not hides_now[a.name]:
                 continue  # its object hides nothing of the seen target
-            moved = next(o for o in apply_action(known, a) if o.name == a.name)
-            if hidden(moved) < before[a.name]:
+            if hidden_by(apply_action(known, a)) < least:
                 out.append(a)
         return out
 

@@ -44,12 +44,11 @@ def test_the_first_action_uncovers_a_partly_seen_target_and_reveals_it(paper):
     assert "target_seen" not in blind.decision_log[0]
 
 
-@pytest.mark.parametrize("uncover", [True, False])
-def test_a_move_the_no_shuttle_correction_refuses_is_taken_when_it_uncovers_the_seen_target(paper, uncover):
-    """The trial's memory says the box in front of the target got there from where the uncovering move would put
-    it (an earlier arrangement observed, then the opposite move): the no-return and no-shuttle corrections refuse
-    moving it back. With ``uncover_seen`` the policy still takes that move first (its decision log counts the moves let
-    through); without it, the policy's first action is another one."""
+def refused_uncovering_move(paper, uncover, wide_earlier):
+    """A policy whose trial memory says the box in front of the target got there from where the uncovering move
+    would put it (an earlier arrangement observed, then the opposite move), so that the no-return and no-shuttle
+    corrections refuse moving it back; in the earlier arrangement the wide box stood at ``wide_earlier`` (x, y; m)
+    or, for None, where it stands now. Returns (policy, its observation, the uncovering move)."""
     scene = partly_seen_scene(paper)
     first = make_policy("slax-belief", paper, horizon=6)
     first.reset(scene)
@@ -62,6 +61,8 @@ def test_a_move_the_no_shuttle_correction_refuses_is_taken_when_it_uncovers_the_
     policy = make_policy("slax-belief", paper, horizon=6, policy_options={"uncover_seen": uncover})
     policy.reset(scene)
     earlier = apply_action(obs.known, move)  # where the box stood before a move brought it here
+    if wide_earlier is not None:
+        earlier = tuple(o if names[o.name] != "wide" else o.moved_to(*wide_earlier) for o in earlier)
     before = next(o for o in obs.known if o.name == front)
     dx = float(next(o for o in earlier if o.name == front).center[0] - before.center[0])
     assert abs(dx) > 0.02
@@ -69,11 +70,29 @@ def test_a_move_the_no_shuttle_correction_refuses_is_taken_when_it_uncovers_the_
     policy.memory.observe(obs.known)
     policy.memory.moves[front] = (-dx, 0.0)
     assert move not in policy.candidates(obs.known, True, True)  # refused as a shuttle
+    return policy, obs, move
+
+
+@pytest.mark.parametrize("uncover", [True, False])
+def test_a_move_the_no_shuttle_correction_refuses_is_taken_when_it_uncovers_the_seen_target(paper, uncover):
+    """In the earlier arrangement the wide box stood in front of the target too (it has been carried away since):
+    moving the front box back shows more of the target than any arrangement observed. With ``uncover_seen`` the
+    policy takes that move first (its decision log counts the moves let through); without it, another one."""
+    policy, obs, move = refused_uncovering_move(paper, uncover, wide_earlier=(-0.1, -0.2))
     decision = policy.decide(obs)
     if uncover:
         assert decision.best == move and policy.decision_log[0]["uncovering"] >= 1
     else:
         assert decision.best != move and "uncovering" not in policy.decision_log[0]
+
+
+def test_a_move_back_to_an_arrangement_that_showed_no_more_of_the_target_stays_refused(paper):
+    """The earlier arrangement is the one the move would lead back to, the wide box where it stands now: that
+    arrangement showed as much of the target as the move would, so ``uncover_seen`` does not let the move through
+    (the cycle of a Drake trial: pushed right, carried left, pushed right, ... until the horizon)."""
+    policy, obs, move = refused_uncovering_move(paper, True, wide_earlier=None)
+    decision = policy.decide(obs)
+    assert decision.best != move and "uncovering" not in policy.decision_log[0]
 
 
 def test_unseen_risk_keeps_the_hidden_space_of_the_placement_risk_after_the_collapse(paper):
