@@ -161,7 +161,8 @@ def _run_scene(job) -> dict:
         params = {k: a[k] for k in ("d", "dx", "dz") if k in a}
         timings = (a.get("motion") or {}).get("timings", {})
         record = {"type": a["type"], "object": a["object"], **params,
-                  **({"grip": a["grip"]} if "grip" in a else {}), "predicted": a["predicted"],
+                  **({"grip": a["grip"]} if "grip" in a else {}),
+                  **({"reversal_rule": a["reversal_rule"]} if "reversal_rule" in a else {}), "predicted": a["predicted"],
                   "before": a.get("before"), "outcome": a["outcome"], "lost_after": a.get("lost_after"),
                   "matched": action_matches(a["predicted"], a["outcome"], a.get("before")),
                   "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
@@ -354,6 +355,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "planning_s": [a["planning_s"] for a in d["actions"] if a.get("planning_s") is not None],
             "reversals": reversals(d["actions"]),
             "undoes": undoes(d["actions"]),
+            "undo_rules": undo_rules(d["actions"]),
             "judged_by_kind": {kind: [sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"]),
                                       sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"] is not None)]
                                for kind in ACTION_KINDS},
@@ -387,6 +389,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "reversals": sum(t["reversals"] for t in sel),
                 "trials_with_reversal": sum(1 for t in sel if t["reversals"]),
                 "trials_with_undo": sum(1 for t in sel if t.get("undoes")) if all("undoes" in t for t in sel) else None,
+                "undo_rules": dict(sum((collections.Counter(t.get("undo_rules", {})) for t in sel),
+                                       collections.Counter())),
                 "match_by_action": _match_by_action(sel),
                 "mismatch_kinds": _mismatch_counts(sel),
             }
@@ -398,7 +402,7 @@ REVERSAL_MIN = 0.01  # m: both moves' components along the reversed axis exceed 
 SAME_PLACE = 0.02  # m: an action's object stood within this of where an earlier action left it (the same object)
 
 
-def _reversed_axes(actions: list[dict]):
+def _reversed_axes(actions: list[dict], with_action: bool = False):
     """Per executed action that moved an object back along x or y against the previous move of the same physical
     object (both components over :data:`REVERSAL_MIN`): (that previous move, this move, the reversed axes' indices).
     Judged from the true poses of the record (``before``, ``outcome``, m in S): an action's object is the one an
@@ -416,7 +420,7 @@ def _reversed_axes(actions: list[dict]):
             axes = [k for k, (p, c) in enumerate(zip(previous, move))
                     if p * c < 0 and abs(p) > REVERSAL_MIN and abs(c) > REVERSAL_MIN]
             if axes:
-                yield previous, move, axes
+                yield (a, (previous, move, axes)) if with_action else (previous, move, axes)
         last_moves.insert(0, ((after["x"], after["y"]), move))
 
 
@@ -427,12 +431,35 @@ def reversals(actions: list[dict]) -> int:
     return sum(1 for _ in _reversed_axes(actions))
 
 
+def _undo_actions(actions: list[dict]):
+    """The actions of :func:`undoes`, in order."""
+    for a, (previous, move, axes) in _reversed_axes(actions, with_action=True):
+        if any(abs(previous[k] + move[k]) <= abs(previous[k]) + REVERSAL_MIN for k in axes):
+            yield a
+
+
 def undoes(actions: list[dict]) -> int:
     """The reversals that undo the previous move: along a reversed axis the object ends no farther from where it
     stood before that move than the move took it (|previous + this| <= |previous|, within :data:`REVERSAL_MIN`):
     put back, or past by no more than the move; a reversal that carries it farther past is a relocation."""
-    return sum(1 for previous, move, axes in _reversed_axes(actions)
-               if any(abs(previous[k] + move[k]) <= abs(previous[k]) + REVERSAL_MIN for k in axes))
+    return sum(1 for _ in _undo_actions(actions))
+
+
+UNDO_RULES = ("uncovers new width", "let through", "not a move back by the estimate", "not recorded")
+
+
+def undo_rules(actions: list[dict]) -> dict:
+    """{how the policy's no-shuttle correction judged it: count} over the undos of :func:`undoes`, from each
+    action's ``reversal_rule`` (:meth:`slax_drake.policies.policies.Policy.reversal_rule`): "uncovers new width"
+    (it passed the correction by uncovering space never seen), "let through" (the correction screened it out and
+    an exception took it), "not a move back by the estimate" (on the poses the policy estimated it did not reverse
+    its object's last move: a tracking or estimation miss, or no correction applied) or "not recorded" (a record
+    from before the field)."""
+    counts = collections.Counter()
+    for a in _undo_actions(actions):
+        rule = a["reversal_rule"] if "reversal_rule" in a else "not recorded"
+        counts[rule or "not a move back by the estimate"] += 1
+    return {k: counts[k] for k in UNDO_RULES if counts[k]}
 
 
 ACTION_KINDS = ("push", "suction", "drag")  # "suction": lifted; "drag": slid on the floor (the drag grasp)

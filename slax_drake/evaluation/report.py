@@ -320,6 +320,11 @@ def physics_section(folder: ResultFolder) -> str:
                          f"{_count(e.get('trials_with_reversal'))} / {_count(e.get('trials_with_undo'))} | "
                          f"{_seconds(e.get('planning_median_s'))} / "
                          f"{_seconds(e.get('planning_p90_s'))} |")
+    for policy, per in folder.summary["policies"].items():
+        rules = per.get("all", {}).get("undo_rules")
+        if rules:
+            lines += ["", f"{policy}, the undos by how its no-shuttle correction judged them (the action's "
+                      "`reversal_rule`): " + ", ".join(f"{k} {v}" for k, v in rules.items()) + "."]
     lines += ["", "Reversal: an executed move of an object back along x or y against its previous move (both over "
               "1 cm, judged from the true poses): the shuttles the no-shuttle rule forbids and the reversals it lets "
               "through because they uncover space no earlier arrangement uncovered; most carry the object past where it "

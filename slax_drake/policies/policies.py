@@ -179,6 +179,18 @@ class DistributionPolicy:
         c = self._action_model.enumerate(objects, pushes=True, suctions=True)
         return dict(collections.Counter(why for _, why in self.screen(objects, c.feasible) if why is not None))
 
+    def reversal_rule(self, action, objects=None) -> str | None:
+        """How correction 3 judged ``action``, chosen on ``objects`` (default: those of the last decision), for the
+        trial record: None when it does not move its object back against the last executed move on it (this trial's
+        memory, on the estimated poses) or the policy applies no correction (the literal variants); "uncovers new
+        width" when it does and passed the correction by uncovering at least ``shuttle_reveal`` m never seen;
+        "let through" when the correction screens it out as a shuttle and the policy took it all the same (the
+        last resort, or slax-belief's move that clears more of a partly seen target)."""
+        objects = self._objects if objects is None else tuple(objects)
+        if not (self.corrected and self.shuttle_reveal is not None and self.memory.undoes(objects, action)):
+            return None
+        return "uncovers new width" if self.reveals_new(objects, action) else "let through"
+
     def reveals_new(self, objects, action) -> bool:
         """Whether ``action`` on ``objects`` uncovers at least ``shuttle_reveal`` m of width (along x) that its
         object covered in every arrangement observed in this trial (correction 3)."""

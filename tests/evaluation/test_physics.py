@@ -51,6 +51,8 @@ def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
         assert a["matched"] == action_matches(a["predicted"], a["outcome"], a["before"])
         assert a["planning_s"] > 0.0 and a["rejected_before"] >= 0
         assert set(a["motion_timings"]) == {"ik_s", "check_s", "timing_s"}
+        assert "reversal_rule" in a  # kept from the trial's record, for undo_rules
+    assert sum(e["undo_rules"].values()) == row["undoes"]
     planned = sorted(a["planning_s"] for a in drake["actions"])
     assert e["planned_actions"] == len(planned) == drake["steps"]
     if planned:
@@ -300,3 +302,17 @@ def test_undoes_count_the_reversals_that_put_an_object_back_or_just_past():
     # a short push, then a suction carrying it far the other way: a reversal, not an undo
     relocation = [_moved(0.0, -0.1, 0.11, -0.1), _moved(0.11, -0.1, -0.24, -0.1)]
     assert reversals(relocation) == 1 and undoes(relocation) == 0
+
+
+def test_undo_rules_say_how_the_policys_correction_judged_each_undo():
+    from slax_drake.evaluation.physics import undo_rules
+
+    # the shuttle above, its second move let through by an exception and its third passed as uncovering new width
+    shuttle = [_moved(0.0, -0.1, -0.05, -0.1), {**_moved(-0.05, -0.1, 0.05, -0.1), "reversal_rule": "let through"},
+               {**_moved(0.05, -0.1, -0.10, -0.1), "reversal_rule": "uncovers new width"}]
+    assert undo_rules(shuttle) == {"uncovers new width": 1, "let through": 1}
+    # on the policy's estimate the move was no reversal (None); a record from before the field
+    assert undo_rules([shuttle[0], {**shuttle[1], "reversal_rule": None}]) == {"not a move back by the estimate": 1}
+    assert undo_rules([shuttle[0], _moved(-0.05, -0.1, 0.05, -0.1)]) == {"not recorded": 1}
+    # a relocation is no undo: nothing to judge
+    assert undo_rules([_moved(0.0, -0.1, 0.11, -0.1), {**_moved(0.11, -0.1, -0.24, -0.1), "reversal_rule": None}]) == {}

@@ -217,3 +217,29 @@ def test_screening_names_the_correction_and_the_last_resort_offers_only_shuttles
     assert policy.candidates(after) == [backs[0]]
     policy.shuttle_last_resort = False
     assert policy.candidates(after) == []
+
+
+def test_the_reversal_rule_records_how_correction_3_judged_a_chosen_action(paper):
+    """The box of the test above, pushed -x by 5 cm (it went 3.5 cm): a push on along -x is no move back (None); a
+    short push back is a shuttle, so taken anyway it was "let through"; a push back far enough to uncover space the
+    box covered in both arrangements "uncovers new width"; a literal policy applies no correction (None)."""
+    from slax_drake.shelf.actions import Push
+
+    for name in ("dar", "dar-literal"):
+        policy = make_policy(name, paper, horizon=4)
+        start = (box("a", 0.0, 0.0),)
+        policy.reset(hand_scene(paper, start, (-0.2, 0.2)))
+        policy.memory.observe(start)
+        push = Push("a", (0.05, -0.04, 0.05), -0.05)
+        policy.memory.propose(push, start)
+        after = (box("a", -0.035, 0.0),)
+        policy.memory.outcome(after)
+        policy.memory.observe(after)
+        on, short, far = (Push("a", (0.015, -0.04, 0.05), -0.05), Push("a", (-0.085, -0.04, 0.05), 0.03),
+                          Push("a", (-0.085, -0.04, 0.05), 0.15))
+        rules = [policy.reversal_rule(a, after) for a in (on, short, far)]
+        if name == "dar":
+            assert not policy.reveals_new(after, short) and policy.reveals_new(after, far)
+            assert rules == [None, "let through", "uncovers new width"]
+        else:
+            assert rules == [None, None, None]

@@ -36,6 +36,9 @@ def test_short_trial_reveals_the_target(short_trial):
     for a in d["actions"]:
         assert a["type"] in ("push", "suction") and a["motion"]["duration_s"] > 0
         assert a["outcome"] is not None and a["predicted"]["object"] == a["object"]
+        # how the no-shuttle correction judged it (Policy.reversal_rule): the first move of an object is no move back
+        assert a["reversal_rule"] in (None, "uncovers new width", "let through")
+    assert d["actions"][0]["reversal_rule"] is None
     assert set(d["final_objects"]) == {"object_0", "object_1"}
     assert (out / "step_00.png").stat().st_size > 1000
     with np.load(out / "step_depth.npz") as z:  # each decision's depth image, for export --format mcap
