@@ -322,7 +322,7 @@ def physics_section(folder: ResultFolder) -> str:
                          f"{_seconds(e.get('planning_p90_s'))} |")
     for policy, per in folder.summary["policies"].items():
         rules = per.get("all", {}).get("undo_rules")
-        if rules:
+        if rules and set(rules) != {"not recorded"}:
             lines += ["", f"{policy}, the undos by how its no-shuttle correction judged them (the action's "
                       "`reversal_rule`): " + ", ".join(f"{k} {v}" for k, v in rules.items()) + "."]
     lines += ["", "Reversal: an executed move of an object back along x or y against its previous move (both over "
