@@ -83,20 +83,23 @@ def _draw_action(ax, points_uv: np.ndarray, kind: str) -> None:
 
 
 def step_png(step: int, depth: np.ndarray, labels: np.ndarray, history, p1d, scene, action: dict | None = None,
-             object_y: float | None = None, visible_fraction: float | None = None) -> bytes:
+             object_y: float | None = None, visible_fraction: float | None = None, tracks: dict | None = None) -> bytes:
     """:func:`step_figure` as PNG bytes (80 dpi)."""
     from slax_drake.io import figure_png
 
-    return figure_png(step_figure(step, depth, labels, history, p1d, scene, action, object_y, visible_fraction), 80)
+    return figure_png(step_figure(step, depth, labels, history, p1d, scene, action, object_y, visible_fraction,
+                                  tracks), 80)
 
 
 def step_figure(step: int, depth: np.ndarray, labels: np.ndarray, history, p1d, scene, action: dict | None = None,
-                object_y: float | None = None, visible_fraction: float | None = None):
+                object_y: float | None = None, visible_fraction: float | None = None, tracks: dict | None = None):
     """The matplotlib figure of decision ``step``: ``depth`` (H, W) m and ``labels`` (H, W) as the planner read
     them, the 1D distributions ``p1d`` (P_t; None at the final observation, where none is computed) and
     ``history`` (P'_t), ``scene`` (its camera, shelf and object names), the ``action`` chosen there (a trial.json
     action, or None) with ``object_y``, its object's centre y before the action (m, for a suction's path), and
-    the target's ``visible_fraction`` for the title."""
+    the target's ``visible_fraction`` for the title. ``tracks``: {true object name: the tracker's name for it at
+    that decision}; the legend and the action then name each object as trial.json and the step lines do
+    ("track_7 (= object_7)")."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -118,7 +121,15 @@ def step_figure(step: int, depth: np.ndarray, labels: np.ndarray, history, p1d, 
     axes[1].set_title(f"labels{visible}")
     present = set(int(v) for v in np.unique(labels))
     colors = label_colors(n)
-    handles = [Patch(color=colors[i + 2], label=o.name) for i, o in enumerate(scene.objects) if i + 1 in present]
+    tracks = tracks or {}
+    true_of = {track: name for name, track in tracks.items()}
+
+    def named(name: str) -> str:
+        if name in tracks:
+            return f"{tracks[name]} (= {name})"
+        return f"{name} (= {true_of[name]})" if name in true_of else name
+
+    handles = [Patch(color=colors[i + 2], label=named(o.name)) for i, o in enumerate(scene.objects) if i + 1 in present]
     if target_mask.any():
         handles.append(Patch(color=TARGET_COLOR, label="target"))
     for ax in axes[:2]:
@@ -133,8 +144,8 @@ def step_figure(step: int, depth: np.ndarray, labels: np.ndarray, history, p1d, 
         ax.set_xlim(-0.5, w - 0.5)
         ax.set_ylim(h - 0.5, -0.5)
     if action is not None:
-        what = (f"push {action['object']} d={action['d']:+.3f} m" if action["type"] == "push"
-                else f"suction {action['object']} dx={action['dx']:+.3f} m, to y={action['dz']:+.3f} m")
+        what = (f"push {named(action['object'])} d={action['d']:+.3f} m" if action["type"] == "push"
+                else f"suction {named(action['object'])} dx={action['dx']:+.3f} m, to y={action['dz']:+.3f} m")
         handles.append(plt.Line2D([], [], color=ACTION_COLOR, lw=2.5, label=what))
     if target_mask.any():
         handles.append(plt.Line2D([], [], color="black", lw=1.5, label="target outline"))
@@ -172,5 +183,7 @@ def step_png_of_record(record, step: int, depth, labels, history, p1d) -> bytes:
     if action is not None:
         pose = entry.get("hypotheses", {}).get(action["object"]) or entry.get("poses_before", {}).get(action["object"])
         object_y = (pose or {}).get("y")
+    segments = entry.get("segments", {})  # this frame's segment -> true object
+    tracks = {segments[seg]: track for track, seg in entry.get("segment_of", {}).items() if seg in segments}
     return step_png(step, depth, labels, history, p1d, record.scene, action=action, object_y=object_y,
-                    visible_fraction=entry.get("visible_fraction"))
+                    visible_fraction=entry.get("visible_fraction"), tracks=tracks)

@@ -200,3 +200,17 @@ def test_trial_cli_summary_quiet_log_and_replay_opening_into_the_bay(tmp_path, c
     b, g, r = (image[..., i].astype(int) for i in range(3))
     target_red = (r > 150) & (g < 90) & (b < 90)  # the target is (0.9, 0.2, 0.2), shaded; nothing else is red
     assert np.count_nonzero(target_red) > 50
+
+
+def test_step_figure_names_objects_as_the_tracker_and_trial_json_do(scene):
+    """With the decision's tracks, the legend and the action name each object by its track name and its true
+    object ("track_3 (= object_0)"), the names of trial.json and the step lines; without, the true names alone."""
+    depth, labels = _images(scene)
+    labels[80:90, 10:30] = 1  # object_0 in view
+    p = np.ones(40) / 40
+    action = {"type": "push", "object": "track_3", "q": [0.04, -0.04, 0.04], "d": -0.12}
+    fig = step_figure(0, depth, labels, p, p, scene, action, 0.06, None, tracks={"object_0": "track_3"})
+    texts = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
+    assert "track_3 (= object_0)" in texts and "push track_3 (= object_0) d=-0.120 m" in texts
+    plain = step_figure(0, depth, labels, p, p, scene)
+    assert "object_0" in [t.get_text() for t in plain.axes[1].get_legend().get_texts()]
