@@ -1,6 +1,7 @@
 """Bad arguments of the benchmark scripts: one line on stderr and exit code 2, before any long run."""
 
 import importlib.util
+import json
 from pathlib import Path
 
 import pytest
@@ -69,3 +70,21 @@ def test_table1_ablation_rule_costs_are_the_success_gained_without_the_rule():
     assert lines == ["- `blade_gap` (station 0.035, paper 0.001): costs oracle-p +25.0, bluction-dar -5.0 points"]
     assert ablation.rule_cost_lines({"station-without-blade_gap": rates["station-without-blade_gap"]},
                                     ["oracle-p"]) == []  # no station row: nothing to subtract from
+
+
+def test_camera_realism_table_refuses_folders_of_other_protocols(tmp_path, capsys):
+    """Folders that differ in more than the camera's realism (here the profile), or that are no camera-mode run,
+    are refused with one line and exit code 2."""
+    import shutil
+
+    results = BENCHMARKS.parent / "docs" / "results"
+    other = tmp_path / "other"
+    shutil.copytree(results / "realism_depth", other)
+    settings = json.loads((other / "settings.json").read_text())
+    (other / "settings.json").write_text(json.dumps({**settings, "profile": "station"}))
+    table = script("camera_realism_table").main
+    for folders in ([results / "realism_labels", other], [results / "table1_paper"], [tmp_path / "missing"]):
+        assert table([str(f) for f in folders] + ["--out", str(tmp_path / "page.md")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("error: ")
+    assert not (tmp_path / "page.md").exists()

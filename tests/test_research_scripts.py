@@ -34,3 +34,26 @@ def test_noisy_faces_refuses_bad_densities(capsys, densities):
         script("noisy_faces").main(["--densities", densities])
     assert exit_info.value.code == 2
     assert "--densities: takes comma-separated whole numbers" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", [["--scenes", "0"], ["--width", "8"], ["--config", "no/such.yaml"]])
+def test_depth_segment_merges_refuses_bad_arguments(capsys, argv):
+    assert script("depth_segment_merges").main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: ")
+
+
+def test_depth_segment_merges_counts_a_merged_segment_and_a_split_object():
+    """Hand-made labels: objects 1 and 2 share segment 1 (merged); object 3 spreads over segments 2 and 3 and its own
+    region is in two parts (split around an occluder)."""
+    import numpy as np
+
+    labels = np.zeros((10, 20), int)
+    labels[2:8, 0:4], labels[2:8, 4:8] = 1, 2
+    labels[2:8, 10:13], labels[2:8, 15:18] = 3, 3
+    seg = np.zeros_like(labels)
+    seg[2:8, 0:8] = 1
+    seg[2:8, 10:13], seg[2:8, 15:18] = 2, 3
+    c = script("depth_segment_merges").frame_counts(None, labels, seg, 3)
+    assert c["merged segments"] == 1 and c["objects in merged segments"] == 2
+    assert c["split objects"] == 1 and c["split around an occluder"] == 1 and c["visible objects"] == 3

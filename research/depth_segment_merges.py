@@ -1,0 +1,96 @@
+"""How depth-only segmentation goes wrong on the Table I scenes' first frames: segments that hold two objects or more
+(merged) and objects spread over two segments or more (split), against the render's labels. Prints one line per
+density and the totals.
+
+    python research/depth_segment_merges.py [--config sim_configs/table1.yaml] [--scenes 20] [--seed 0]
+        [--width 160] [--sensor-noise]
+
+The scenes are the benchmark's (``scene_seed(seed, density, index)``); each is ray-cast at ``width`` px with the
+target, optionally with the L515 noise model (seeded by the scene index), and segmented by
+:func:`slax_drake.perception.segmentation.segment_depth`. An object is "in" a segment when it holds at least 20 % of
+the segment's pixels; a true object is split when two segments each hold at least 20 % of its pixels, and counted as
+"split around an occluder" when its own visible region is disconnected (depth alone cannot join such parts).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import sys
+
+import cv2
+import numpy as np
+
+SHARE = 0.2  # of a segment's (or an object's) pixels
+MIN_VISIBLE = 6  # px for an object to count as visible
+
+
+def frame_counts(depth, labels, seg, n: int) -> collections.Counter:
+    """The counts of one frame: ``labels`` the render's (1..n objects, n + 1 the target), ``seg`` the segments."""
+    c = collections.Counter()
+    visible = [k for k in range(1, n + 1) if (labels == k).sum() >= MIN_VISIBLE]
+    c["visible objects"] += len(visible)
+    segments = [s for s in np.unique(seg) if s > 0]
+    c["segments"] += len(segments)
+    for s in segments:
+        owners = labels[seg == s]
+        _, counts = np.unique(owners[(owners >= 1) & (owners <= n)], return_counts=True)
+        big = int(np.sum(counts >= SHARE * len(owners)))
+        if big >= 2:
+            c["merged segments"] += 1
+            c["objects in merged segments"] += big
+    for k in visible:
+        px = seg[labels == k]
+        _, counts = np.unique(px[px > 0], return_counts=True)
+        if np.sum(counts >= SHARE * len(px)) >= 2:
+            c["split objects"] += 1
+            parts = cv2.connectedComponents((labels == k).astype(np.uint8), connectivity=4)[0] - 1
+            if parts > 1:
+                c["split around an occluder"] += 1
+    return c
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--config", default="sim_configs/table1.yaml")
+    parser.add_argument("--scenes", type=int, default=20, help="scenes per density (default 20)")
+    parser.add_argument("--seed", type=int, default=0, help="the protocol seed (default 0)")
+    parser.add_argument("--width", type=int, default=160, help="image width in px (default 160, the policies')")
+    parser.add_argument("--sensor-noise", action="store_true", help="the L515 depth-noise model on every frame")
+    args = parser.parse_args(argv)
+    if args.scenes < 1 or args.width < 16:
+        print("error: --scenes must be at least 1 and --width at least 16", file=sys.stderr)
+        return 2
+    from slax_drake.config import ConfigError, load_scenario
+    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.perception.segmentation import segment_depth
+    from slax_drake.perception.sensor_noise import l515_depth_noise
+    from slax_drake.scene.raycast import SceneRaycaster
+    from slax_drake.scene.sampling import sample_scene
+
+    try:
+        scenario = load_scenario(args.config)
+    except (OSError, ConfigError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    size = tuple(scenario.target.sizes[0])
+    total = collections.Counter()
+    for density in scenario.protocol.densities:
+        per = collections.Counter()
+        for index in range(args.scenes):
+            scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
+                                 target_size=size)
+            camera = scene.camera.with_resolution(args.width, max(1, round(scene.camera.height * args.width
+                                                                            / scene.camera.width)))
+            depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
+            if args.sensor_noise:
+                depth = l515_depth_noise(depth, camera, index, 0)
+            per += frame_counts(depth, labels, segment_depth(depth, camera, scene.shelf), len(scene.objects))
+        print(f"{density} objects: " + ", ".join(f"{k} {v}" for k, v in sorted(per.items())))
+        total += per
+    print("all: " + ", ".join(f"{k} {v}" for k, v in sorted(total.items())))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
