@@ -402,9 +402,10 @@ REVERSAL_MIN = 0.01  # m: both moves' components along the reversed axis exceed 
 SAME_PLACE = 0.02  # m: an action's object stood within this of where an earlier action left it (the same object)
 
 
-def _reversed_axes(actions: list[dict], with_action: bool = False):
+def _reversed_axes(actions: list[dict]):
     """Per executed action that moved an object back along x or y against the previous move of the same physical
-    object (both components over :data:`REVERSAL_MIN`): (that previous move, this move, the reversed axes' indices).
+    object (both components over :data:`REVERSAL_MIN`): (this action, that previous move, this move, the reversed
+    axes' indices).
     Judged from the true poses of the record (``before``, ``outcome``, m in S): an action's object is the one an
     earlier action left within :data:`SAME_PLACE` of where this one found it (the record's track names are the
     planner's and may change)."""
@@ -420,7 +421,7 @@ def _reversed_axes(actions: list[dict], with_action: bool = False):
             axes = [k for k, (p, c) in enumerate(zip(previous, move))
                     if p * c < 0 and abs(p) > REVERSAL_MIN and abs(c) > REVERSAL_MIN]
             if axes:
-                yield (a, (previous, move, axes)) if with_action else (previous, move, axes)
+                yield a, previous, move, axes
         last_moves.insert(0, ((after["x"], after["y"]), move))
 
 
@@ -433,7 +434,7 @@ def reversals(actions: list[dict]) -> int:
 
 def _undo_actions(actions: list[dict]):
     """The actions of :func:`undoes`, in order."""
-    for a, (previous, move, axes) in _reversed_axes(actions, with_action=True):
+    for a, previous, move, axes in _reversed_axes(actions):
         if any(abs(previous[k] + move[k]) <= abs(previous[k]) + REVERSAL_MIN for k in axes):
             yield a
 

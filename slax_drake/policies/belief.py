@@ -871,36 +871,38 @@ class BeliefSearch(Hindsight):
         alive_rows = np.flatnonzero(alive)
         if not len(alive_rows):
             return []
-        by_name = {o.name: o for o in known}
-
         def masked(obj):
             m = worlds.mask(obj)
             return None if m is None else m[alive_rows]
 
-        def hidden_by(objects) -> int:
-            """Points of the alive worlds' targets that ``objects`` hide together."""
+        def hidden_by(masks) -> int:
+            """Points of the alive worlds' targets that the objects of ``masks`` (None: hides none) hide together."""
             union = None
-            for o in objects:
-                m = masked(o)
+            for m in masks:
                 if m is not None:
                     union = m if union is None else union | m
             return 0 if union is None else int(_popcount(union).sum())
 
-        def filled(arrangement):
-            names = {o.name for o in arrangement}
-            return tuple(arrangement) + tuple(o for o in known if o.name not in names)
+        now = {o.name: masked(o) for o in known}  # each object's hidden points where it stands now
 
-        least = min([hidden_by(known)] + [hidden_by(filled(seen)) for seen in self.memory.observed])
-        hides_now: dict = {}
+        def filled(arrangement):
+            """The masks of an observed arrangement, an object not seen then where it stands now."""
+            then = {o.name: masked(o) for o in arrangement}
+            return list(then.values()) + [m for name, m in now.items() if name not in then]
+
+        least = min([hidden_by(now.values())] + [hidden_by(filled(seen)) for seen in self.memory.observed])
+        others: dict = {}  # name -> the union of every other object's mask now, as a one-element list
         out = []
         for a in allowed:
             if a in taken or (isinstance(a, Suction) and not self.placement_allowed(known, a)):
                 continue
-            if a.name not in hides_now:
-                hides_now[a.name] = masked(by_name[a.name]) is not None
-            if not hides_now[a.name]:
+            if now[a.name] is None:
                 continue  # its object hides nothing of the seen target
-            if hidden_by(apply_action(known, a)) < least:
+            if a.name not in others:
+                rest = [m for name, m in now.items() if name != a.name and m is not None]
+                others[a.name] = [np.bitwise_or.reduce(rest)] if rest else []
+            moved = next(o for o in apply_action(known, a) if o.name == a.name)
+            if hidden_by(others[a.name] + [masked(moved)]) < least:
                 out.append(a)
         return out
 
