@@ -18,7 +18,8 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
    points: the yaw in [0, pi/2) that packs them closest to two perpendicular edges (the "closeness" criterion of
    L-shape fitting on a 2 degree grid, then the least rms distance to the nearest edge within +-2 degrees). Yaw 0 when fewer than ``min_fit_points`` points are available.
 4. Extents along the box's two axes: the 0.5th and 99.5th percentiles of all the segment's points (side and top;
-   robust to flying pixels), except, on a noisy frame, the camera-facing faces: range noise spreads a face's points
+   robust to flying pixels), widened over the trimmed points that continue the surface without a gap (the few
+   returns of the far end of a face seen at a grazing angle; a stray return stands apart), except, on a noisy frame, the camera-facing faces: range noise spreads a face's points
    both ways along the rays, so a low percentile lies in front of the face; the face is placed at the median of
    its points near that edge (the band follows the range noise measured on the back panel). The extents are
    grown by half a pixel's footprint on the silhouette sides (pixel centres sample the surface, the edge lies on
@@ -117,6 +118,11 @@ class EstimatorConfig:
     min_fit_points: int = 5  # fewer outline points (image columns): yaw 0 (no line fit)
     max_fit_points: int = 600  # outline points used for the yaw and circle fits (evenly subsampled)
     edge_percentile: float = 0.5  # robust extents: this percentile and 100 minus it
+    # ... widened over the trimmed points that continue the surface, each with this many others within tail_radius
+    # on the support surface (the far end of a face seen at a grazing angle; 0: percentile only)
+    tail_neighbours: int = 3
+    tail_radius: float = 0.01
+    tail_gap: float = 0.01  # ... joining while each is within this of the edge so far
     yaw_step_deg: float = 2.0  # coarse yaw search step; refined to a twentieth of it
     closeness_floor: float = 0.001  # the L-shape criterion's minimum distance (m)
     cylinder_residual_ratio: float = 0.8  # circle rms below this fraction of the rectangle's rms -> cylinder
@@ -424,6 +430,7 @@ def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, con
     q = config.edge_percentile
     lo = np.percentile(coords, q, axis=0)
     hi = np.percentile(coords, 100 - q, axis=0)
+    lo, hi = _supported_tails(coords, lo, hi, config)
     if config.face_from_points and noise > 0 and face_xy is not None and len(face_xy) >= config.min_fit_points:
         centre = axes.T @ ((lo + hi) / 2)
         view = (centre - eye) / max(float(np.linalg.norm(centre - eye)), 1e-9)
@@ -458,6 +465,41 @@ def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, con
             elif grow_lo and not grow_hi:
                 lo[k] = hi[k] - need
     return _Box(yaw, lo, hi, observed_hi, observed_lo, height)
+
+
+def _supported_tails(coords: np.ndarray, lo: np.ndarray, hi: np.ndarray, config: EstimatorConfig):
+    """The percentile extents ``lo``, ``hi`` (per box axis) widened over the trimmed points that continue the
+    surface: walking outward from each edge, a point joins while it lies within ``config.tail_gap`` metres of the
+    edge so far and has at least ``config.tail_neighbours`` other points within ``config.tail_radius`` on the
+    support surface. The percentile drops stray returns (flying pixels, a neighbour's pixels at the silhouette,
+    which stand apart); it also drops the far end of a face seen at a grazing angle, whose few returns stack in
+    columns (a vertical face's pixels share their x-y) and continue the face without a gap."""
+    if config.tail_neighbours <= 0 or len(coords) <= config.tail_neighbours:
+        return lo, hi
+    lo, hi = lo.copy(), hi.copy()
+    tree = None
+    for k in range(coords.shape[1]):
+        for side in (-1.0, 1.0):
+            edge = lo[k] if side < 0 else hi[k]
+            beyond = np.nonzero(side * (coords[:, k] - edge) > 0)[0]
+            if len(beyond) == 0:
+                continue
+            if tree is None:
+                from scipy.spatial import cKDTree
+
+                tree = cKDTree(coords)
+            counts = np.array([len(n) - 1 for n in tree.query_ball_point(coords[beyond], config.tail_radius)])
+            steps = np.sort(side * (coords[beyond[counts >= config.tail_neighbours], k] - edge))
+            reach = 0.0
+            for step in steps:
+                if step - reach > config.tail_gap:
+                    break
+                reach = step
+            if side < 0:
+                lo[k] = edge - reach
+            else:
+                hi[k] = edge + reach
+    return lo, hi
 
 
 def _facing_edges(coords: np.ndarray, lo: np.ndarray, hi: np.ndarray, eye_c: np.ndarray, band: np.ndarray) -> None:
