@@ -9,7 +9,9 @@ The scenes are the benchmark's (``scene_seed(seed, density, index)``); each is r
 target, optionally with the L515 noise model (seeded by the scene index), and segmented by
 :func:`slax_drake.perception.segmentation.segment_depth`. An object is "in" a segment when it holds at least 20 % of
 the segment's pixels; a true object is split when two segments each hold at least 20 % of its pixels, and counted as
-"split around an occluder" when its own visible region is disconnected (depth alone cannot join such parts).
+"split around an occluder" when its own visible region is disconnected (depth alone cannot join such parts). Each
+line ends with the mean instance IoU (``segmentation.instance_mean_iou``, target pixels left out, objects with at
+least ``MIN_IOU_PIXELS`` visible pixels scored) over the frames.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import numpy as np
 
 SHARE = 0.2  # of a segment's (or an object's) pixels
 MIN_VISIBLE = 6  # px for an object to count as visible
+MIN_IOU_PIXELS = 38  # px (0.2 % of a 160 x 120 frame) for an object to be scored by the mean IoU
 
 
 def frame_counts(depth, labels, seg, n: int) -> collections.Counter:
@@ -63,7 +66,7 @@ def main(argv=None) -> int:
         return 2
     from slax_drake.config import ConfigError, load_scenario
     from slax_drake.evaluation.table1 import scene_seed
-    from slax_drake.perception.segmentation import segment_depth
+    from slax_drake.perception.segmentation import instance_mean_iou, segment_depth
     from slax_drake.perception.sensor_noise import l515_depth_noise
     from slax_drake.scene.raycast import SceneRaycaster
     from slax_drake.scene.sampling import sample_scene
@@ -74,9 +77,9 @@ def main(argv=None) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 2
     size = tuple(scenario.target.sizes[0])
-    total = collections.Counter()
+    total, all_ious = collections.Counter(), []
     for density in scenario.protocol.densities:
-        per = collections.Counter()
+        per, ious = collections.Counter(), []
         for index in range(args.scenes):
             scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
                                  target_size=size)
@@ -85,10 +88,16 @@ def main(argv=None) -> int:
             depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
             if args.sensor_noise:
                 depth = l515_depth_noise(depth, camera, index, 0)
-            per += frame_counts(depth, labels, segment_depth(depth, camera, scene.shelf), len(scene.objects))
-        print(f"{density} objects: " + ", ".join(f"{k} {v}" for k, v in sorted(per.items())))
+            n = len(scene.objects)
+            seg = segment_depth(depth, camera, scene.shelf)
+            per += frame_counts(depth, labels, seg, n)
+            truth = np.where((labels >= 1) & (labels <= n), labels, 0)
+            ious.append(instance_mean_iou(np.where(labels == n + 1, 0, seg), truth, min_true_pixels=MIN_IOU_PIXELS))
+        print(f"{density} objects: " + ", ".join(f"{k} {v}" for k, v in sorted(per.items()))
+              + f", mean IoU {np.mean(ious):.3f}")
         total += per
-    print("all: " + ", ".join(f"{k} {v}" for k, v in sorted(total.items())))
+        all_ious += ious
+    print("all: " + ", ".join(f"{k} {v}" for k, v in sorted(total.items())) + f", mean IoU {np.mean(all_ious):.3f}")
     return 0
 
 
