@@ -242,7 +242,8 @@ class _Box:
 
 def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorConfig = EstimatorConfig()
                      ) -> list[Hypothesis]:
-    """One hypothesis per occluder segment with at least ``config.min_points`` valid pixels, in segment order."""
+    """One hypothesis per occluder segment with at least ``config.min_points`` valid pixels off the back panel
+    (farther than ``config.back_wall_band`` from it), in segment order."""
     calibration = shelf_range_calibration(observation, shelf)
     if config.correct_range_offset:
         observation = without_range_offset(observation, calibration.offset)
@@ -254,9 +255,10 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
     for sid in observation.segment_ids:
         mask = labels == sid
         p, columns = _segment_points(observation.depth, camera, mask)
+        # A segment with too few points off the back panel is the panel itself (range noise brings its pixels
+        # past the segmentation's margin): no object is thinner than the band.
         inside = p[:, 1] < shelf.depth / 2 - config.back_wall_band
-        if np.count_nonzero(inside) >= config.min_points:
-            p, columns = p[inside], columns[inside]
+        p, columns = p[inside], columns[inside]
         if len(p) < config.min_points:
             continue
         left, right = _occluded_sides(observation, mask, sid, config.occluded_row_fraction)

@@ -238,3 +238,25 @@ def test_prediction_covers_the_target_and_leaves_the_input_alone(scenes, rendere
     predicted = predict_observation(obs, sid, 0.04, 0.0)
     assert predicted.target_mask.sum() < fake_target.sum()
     np.testing.assert_array_equal(obs.depth, before)
+
+
+def test_a_segment_of_back_panel_returns_yields_no_hypothesis(scenes, renderers):
+    """Range noise brings back-panel pixels past the segmentation's margin; such a segment is the panel, not an
+    object (before: a 4 mm deep phantom box against the back wall)."""
+    renderer = renderers[(128, 96)]
+    scene = scenes[0]
+    observation, label = observe(renderer, scene)
+    from slax_drake.perception.segmentation import back_project
+
+    p = back_project(observation.depth, renderer.camera)
+    with np.errstate(invalid="ignore"):
+        panel = (label == 0) & (p[..., 1] > scene.shelf.depth / 2 - 0.005) & (np.abs(p[..., 0]) < 0.05) \
+            & (p[..., 2] > 0.05)
+    assert panel.sum() >= 20
+    segmentation = observation.segmentation.copy()
+    panel_id = int(segmentation.max()) + 1
+    segmentation[panel] = panel_id
+    hypotheses = estimate_objects(dataclasses.replace(observation, segmentation=segmentation), scene.shelf)
+    ids = [h.segment_id for h in hypotheses]
+    assert panel_id not in ids
+    assert ids == [h.segment_id for h in estimate_objects(observation, scene.shelf)]
