@@ -9,8 +9,12 @@
    under ``min_pixels`` are dropped.
 4. The edge (and dropped) foreground pixels join an instance by depth continuity (:func:`grow_by_depth`): each
    joins the 8-neighbour instance whose depth is nearest its own, first where that step is within the jump
-   limit, then within three times it, then any step; one ring of pixels per pass. So a face seen at a grazing
-   angle, all edge pixels, grows from its own object's pixels, not from whichever neighbour comes first.
+   limit, then within 3 and 6 times it (``GROWTH_TIERS``); one ring of pixels per pass. So a face seen at a
+   grazing angle, all edge pixels (a box's top face seen from just above it can be one row, 4 cm deeper than the
+   front face's top row), grows from its own object's pixels, not from whichever neighbour comes first.
+5. What no instance reached is a surface of its own (a sliver of an object seen between or above nearer ones is
+   all edge pixels): its parts connected over depth steps within three jump limits, of at least ``min_pixels``
+   pixels, become instances; then every instance grows again, and finally over any depth step.
 
 Objects that touch at the same depth merge into one instance; :func:`instance_mean_iou` measures how often, and
 ``research/depth_segment_merges.py`` counts merged and split objects on the Table I scenes.
@@ -78,16 +82,69 @@ def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float
         min_pixels = max(4, int(round(depth.size * 2e-4)))
     fg = foreground_mask(depth, camera, shelf, margin)
     core = fg & ~depth_edges(depth, jump_abs, jump_rel)
-    count, comps, stats, _ = cv2.connectedComponentsWithStats(core.astype(np.uint8), connectivity=4)
-    keep = [i for i in range(1, count) if stats[i, cv2.CC_STAT_AREA] >= min_pixels]
-    keep.sort(key=lambda i: (stats[i, cv2.CC_STAT_LEFT], stats[i, cv2.CC_STAT_TOP]))
-    relabel = np.zeros(count, dtype=np.int32)
-    relabel[keep] = np.arange(1, len(keep) + 1, dtype=np.int32)
-    labels = relabel[comps]
     limit = np.maximum(jump_abs, jump_rel * np.where(np.isfinite(depth), depth, 0.0))
-    return grow_by_depth(labels, fg, depth, limit)
+    labels = _components(core, min_pixels)
+    labels = grow_by_depth(labels, fg, depth, limit, tiers=GROWTH_TIERS[:-1])
+    # What no instance reached is a surface of its own: a sliver of an object seen between or above nearer
+    # ones is all edge pixels, without a core of its own.
+    rest = _continuous_components(fg & (labels == 0), depth, 3.0 * limit, min_pixels)
+    labels = np.where(rest > 0, rest + labels.max(), labels)
+    labels = grow_by_depth(labels, fg, depth, limit)
+    return _left_to_right(labels)
 
 
+def _components(mask: np.ndarray, min_pixels: int) -> np.ndarray:
+    """Connected components (4-connectivity) of ``mask`` with at least ``min_pixels`` pixels, labelled 1..K."""
+    count, comps, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=4)
+    keep = np.zeros(count, dtype=np.int32)
+    big = [i for i in range(1, count) if stats[i, cv2.CC_STAT_AREA] >= min_pixels]
+    keep[big] = np.arange(1, len(big) + 1, dtype=np.int32)
+    return keep[comps]
+
+
+def _continuous_components(mask: np.ndarray, depth: np.ndarray, step: np.ndarray, min_pixels: int) -> np.ndarray:
+    """Components of ``mask`` whose 4-neighbours join only over a depth step within ``step`` (metres, H x W: the
+    smaller of the two pixels'), with at least ``min_pixels`` pixels, labelled 1..K."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    index = -np.ones(mask.shape, dtype=np.int64)
+    ys, xs = np.nonzero(mask)
+    index[ys, xs] = np.arange(len(ys))
+    if len(ys) == 0:
+        return np.zeros(mask.shape, dtype=np.int32)
+    rows, cols = [], []
+    for a, b, da, db, sa, sb in ((index[:, :-1], index[:, 1:], depth[:, :-1], depth[:, 1:], step[:, :-1], step[:, 1:]),
+                                 (index[:-1], index[1:], depth[:-1], depth[1:], step[:-1], step[1:])):
+        join = (a >= 0) & (b >= 0) & (np.abs(da - db) <= np.minimum(sa, sb))
+        rows.append(a[join])
+        cols.append(b[join])
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(ys), len(ys)))
+    _, part = connected_components(graph, directed=False)
+    sizes = np.bincount(part)
+    keep = np.zeros(len(sizes), dtype=np.int32)
+    big = np.nonzero(sizes >= min_pixels)[0]
+    keep[big] = np.arange(1, len(big) + 1, dtype=np.int32)
+    out = np.zeros(mask.shape, dtype=np.int32)
+    out[ys, xs] = keep[part]
+    return out
+
+
+def _left_to_right(labels: np.ndarray) -> np.ndarray:
+    """Labels renumbered 1..K by their leftmost pixel (then topmost); 0 stays 0."""
+    ids = np.unique(labels[labels > 0])
+    if len(ids) == 0:
+        return labels.astype(np.int32)
+    ys, xs = np.nonzero(labels > 0)
+    by_position = labels[ys, xs][np.lexsort((ys, xs))]  # by x, then y
+    ids, first = np.unique(by_position, return_index=True)
+    lut = np.zeros(int(labels.max()) + 1, dtype=np.int32)
+    lut[ids[np.argsort(first)]] = np.arange(1, len(ids) + 1, dtype=np.int32)
+    return lut[labels]
+
+
+GROWTH_TIERS = (1.0, 3.0, 6.0, np.inf)  # the depth steps an instance grows over, in jump limits, tier by tier
 _NEIGHBOURS8 = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 
 
@@ -101,7 +158,7 @@ def _neighbour(a: np.ndarray, dy: int, dx: int, fill) -> np.ndarray:
 
 
 def grow_by_depth(labels: np.ndarray, grow: np.ndarray, depth: np.ndarray, limit: np.ndarray,
-                  tiers: tuple[float, ...] = (1.0, 3.0, np.inf), max_passes: int = 40) -> np.ndarray:
+                  tiers: tuple[float, ...] = GROWTH_TIERS, max_passes: int = 40) -> np.ndarray:
     """Labels (H, W) int32, 0 unassigned -> a copy in which the ``grow`` pixels (bool, H x W) still at 0 take the
     label of the 8-neighbour whose depth (metres; no return: 0 or non-finite) is nearest theirs. Tier by tier, a
     pixel joins only over a depth step within ``tier * limit`` (metres, H x W) and the passes repeat until nothing

@@ -30,3 +30,36 @@ def test_only_the_pixels_allowed_to_grow_change_and_an_isolated_one_stays_unassi
     assert grown[0, 1] == 3
     assert grown[4, 4] == 0  # no labelled pixel reaches it through growable pixels
     assert np.count_nonzero(grown) == 2
+
+
+def test_a_sliver_seen_above_a_nearer_box_is_an_instance_and_the_box_keeps_its_top_face():
+    """Table I scene 8:4 (seed 0) after its first push: object_1's top is seen as one row of pixels above object_6
+    (13 cm deeper), whose own top face is one row 4 cm deeper than its front face; both rows are all edge
+    pixels. Before: the sliver joined object_6's segment and made its hypothesis 0.21 m deep instead of 0.06."""
+    import dataclasses
+
+    from slax_drake.config import load_scenario
+    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.perception.segmentation import segment_depth
+    from slax_drake.scene.raycast import SceneRaycaster
+    from slax_drake.scene.sampling import sample_scene
+    from slax_drake.shelf.actions import Push, apply_action
+
+    from tests.conftest import REPO
+
+    scenario = load_scenario(REPO / "sim_configs" / "table1.yaml")
+    scene = sample_scene(scenario, scenario.protocol.occluders(8), scene_seed(0, 8, 4),
+                         target_size=tuple(scenario.target.sizes[0]))
+    scene = dataclasses.replace(scene, objects=apply_action(scene.objects, Push("object_3", (0.0, 0.0, 0.0), 0.07)))
+    camera = scene.camera.with_resolution(160, 120)
+    depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
+    segments = segment_depth(depth, camera, scene.shelf)
+    sliver, box = labels == 2, labels == 7  # object_1, object_6
+    assert 10 <= sliver.sum() <= 40
+    sliver_ids = np.unique(segments[sliver])
+    assert len(sliver_ids) == 1 and sliver_ids[0] > 0
+    assert not np.isin(segments[box], sliver_ids).any()
+    box_id = np.bincount(segments[box][segments[box] > 0]).argmax()
+    others = (segments[box] > 0) & (segments[box] != box_id)
+    assert np.count_nonzero(others) <= 0.01 * box.sum()  # its top-face row stays with it (the rest is floor margin)
+    assert np.count_nonzero(segments[box] == box_id) >= 0.95 * box.sum()
