@@ -123,6 +123,7 @@ class EstimatorConfig:
     tail_neighbours: int = 3
     tail_radius: float = 0.01
     tail_gap: float = 0.01  # ... joining while each is within this of the edge so far
+    tail_gap_pixels: float = 6.0  # ... or within this many pixel footprints at the segment
     yaw_step_deg: float = 2.0  # coarse yaw search step; refined to a twentieth of it
     closeness_floor: float = 0.001  # the L-shape criterion's minimum distance (m)
     cylinder_residual_ratio: float = 0.8  # circle rms below this fraction of the rectangle's rms -> cylinder
@@ -432,7 +433,7 @@ def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, con
     q = config.edge_percentile
     lo = np.percentile(coords, q, axis=0)
     hi = np.percentile(coords, 100 - q, axis=0)
-    lo, hi = _supported_tails(coords, lo, hi, config)
+    lo, hi = _supported_tails(coords, lo, hi, config, pixel)
     if config.face_from_points and noise > 0 and face_xy is not None and len(face_xy) >= config.min_fit_points:
         centre = axes.T @ ((lo + hi) / 2)
         view = (centre - eye) / max(float(np.linalg.norm(centre - eye)), 1e-9)
@@ -469,10 +470,12 @@ def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, con
     return _Box(yaw, lo, hi, observed_hi, observed_lo, height)
 
 
-def _supported_tails(coords: np.ndarray, lo: np.ndarray, hi: np.ndarray, config: EstimatorConfig):
+def _supported_tails(coords: np.ndarray, lo: np.ndarray, hi: np.ndarray, config: EstimatorConfig,
+                     pixel: float):
     """The percentile extents ``lo``, ``hi`` (per box axis) widened over the trimmed points that continue the
-    surface: walking outward from each edge, a point joins while it lies within ``config.tail_gap`` metres of the
-    edge so far and has at least ``config.tail_neighbours`` other points within ``config.tail_radius`` on the
+    surface: walking outward from each edge, a point joins while it lies within ``config.tail_gap`` metres (or
+    ``config.tail_gap_pixels`` footprints of a pixel, ``pixel`` metres, at the segment: on a face at a grazing angle
+    neighbouring columns lie several footprints apart) of the edge so far and has at least ``config.tail_neighbours`` other points within ``config.tail_radius`` on the
     support surface. The percentile drops stray returns (flying pixels, a neighbour's pixels at the silhouette,
     which stand apart); it also drops the far end of a face seen at a grazing angle, whose few returns stack in
     columns (a vertical face's pixels share their x-y) and continue the face without a gap."""
@@ -492,9 +495,10 @@ def _supported_tails(coords: np.ndarray, lo: np.ndarray, hi: np.ndarray, config:
                 tree = cKDTree(coords)
             counts = np.array([len(n) - 1 for n in tree.query_ball_point(coords[beyond], config.tail_radius)])
             steps = np.sort(side * (coords[beyond[counts >= config.tail_neighbours], k] - edge))
+            gap = max(config.tail_gap, config.tail_gap_pixels * pixel)
             reach = 0.0
             for step in steps:
-                if step - reach > config.tail_gap:
+                if step - reach > gap:
                     break
                 reach = step
             if side < 0:

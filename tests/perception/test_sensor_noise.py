@@ -1,6 +1,7 @@
 """The L515 depth-noise model (numpy and LeafSystem), and the segmentation and estimator under it."""
 
 import numpy as np
+from scipy.spatial import cKDTree
 import pytest
 
 from slax_drake.perception.estimator import estimate_objects
@@ -102,7 +103,7 @@ def test_depth_noise_system_is_deterministic_per_seed_and_time(sim_scenario):
 def test_segmentation_and_estimator_tolerate_the_noise(sim_scenario, resolution):
     """With the L515 model on: depth-only segmentation (matched to the true instances; an object whose segment
     is merged with a neighbour or holds under 90 % of its returns is left out, and such splits stay rare) and the estimator keep every fully visible object's front face within 2 cm (median
-    under 1 cm), and its x-extent covers the segment's returns."""
+    under 1 cm), its x-extent covers the segment's returns but sparse ones, and its extent range all of them."""
     from slax_drake.station.renderer import SceneRenderer
 
     scenes = [sample_scene(sim_scenario, n, 300 + n) for n in (3, 5, 7, 9)]
@@ -139,9 +140,19 @@ def test_segmentation_and_estimator_tolerate_the_noise(sim_scenario, resolution)
             assert abs((fp.y - hy) - (true_fp.y - ty)) < 0.02, (scene.seed, i)
             # The x-extent of the segment's returns (a face at a grazing angle may return nothing or little, which
             # may land in another segment, and a yawed box's unseen back corners may reach farther).
-            seen = back_project(depth, camera)[returned & (segmentation == sid)][:, 0]
-            # The hypothesis covers what was seen (to 1 cm) and adds at most the unseen back corners and prior.
-            assert fp.x - hx <= seen.min() + 0.01 and fp.x + hx >= seen.max() - 0.01, (scene.seed, i)
+            points = back_project(depth, camera)[returned & (segmentation == sid)]
+            seen = points[:, 0]
+            # Its extent range holds everything seen (to 1 cm).
+            most = hypotheses[sid].uncertainty.extent.most()
+            mx, _ = most.extents()
+            assert most.x - mx <= seen.min() + 0.01 and most.x + mx >= seen.max() - 0.01, (scene.seed, i)
+            # The hypothesis covers what was seen (to 1 cm), but for sparse returns (under three others within 1 cm
+            # on the support surface: the far end of a face at a grazing angle under drop-outs, which the
+            # estimator's robust percentile cannot tell from strays), and adds at most the unseen back corners and
+            # prior.
+            neighbours = cKDTree(points[:, :2]).query_ball_point(points[:, :2], 0.01, return_length=True)
+            supported = seen[neighbours >= 4]  # itself and three others
+            assert fp.x - hx <= supported.min() + 0.01 and fp.x + hx >= supported.max() - 0.01, (scene.seed, i)
             assert (fp.x + hx) - (fp.x - hx) <= (seen.max() - seen.min()) + 0.10, (scene.seed, i)
             errors.append(abs((fp.y - hy) - (true_fp.y - ty)))
             checked += 1
