@@ -8,7 +8,8 @@
 3. Connected components (OpenCV, 4-connectivity) of foreground pixels off the edges are the instances; those
    under ``min_pixels`` are dropped.
 4. The edge (and dropped) foreground pixels join an instance by depth continuity (:func:`grow_by_depth`): each
-   joins the 8-neighbour instance whose depth is nearest its own, first where that step is within the jump
+   joins the 8-neighbour instance whose depth is nearest its own (or whose surface, continued by its own step
+   from the next pixel of that instance, meets it: a receding face), first where that step is within the jump
    limit, then within 3 and 6 times it (``GROWTH_TIERS``); one ring of pixels per pass. So a face seen at a
    grazing angle, all edge pixels (a box's top face seen from just above it can be one row, 4 cm deeper than the
    front face's top row), grows from its own object's pixels, not from whichever neighbour comes first.
@@ -158,9 +159,10 @@ def _neighbour(a: np.ndarray, dy: int, dx: int, fill) -> np.ndarray:
 
 
 def grow_by_depth(labels: np.ndarray, grow: np.ndarray, depth: np.ndarray, limit: np.ndarray,
-                  tiers: tuple[float, ...] = GROWTH_TIERS, max_passes: int = 40) -> np.ndarray:
+                  tiers: tuple[float, ...] = GROWTH_TIERS, max_passes: int = 40, slopes: bool = True) -> np.ndarray:
     """Labels (H, W) int32, 0 unassigned -> a copy in which the ``grow`` pixels (bool, H x W) still at 0 take the
-    label of the 8-neighbour whose depth (metres; no return: 0 or non-finite) is nearest theirs. Tier by tier, a
+    label of the 8-neighbour whose depth (metres; no return: 0 or non-finite) is nearest theirs, or (``slopes``)
+    whose surface, continued by its own step from the next pixel of the same label, meets theirs. Tier by tier, a
     pixel joins only over a depth step within ``tier * limit`` (metres, H x W) and the passes repeat until nothing
     joins (at most ``max_passes`` per tier); a pixel without a return joins the nearest labelled neighbour
     in the last tier. Pixels with no labelled pixel within reach stay 0."""
@@ -181,8 +183,13 @@ def grow_by_depth(labels: np.ndarray, grow: np.ndarray, depth: np.ndarray, limit
             best_step = np.full(sub.shape, np.inf)
             for dy, dx in _NEIGHBOURS8:
                 label = _neighbour(sub, dy, dx, 0)
+                d_n = _neighbour(d_sub, dy, dx, np.nan)
                 with np.errstate(invalid="ignore"):
-                    step = np.abs(_neighbour(d_sub, dy, dx, np.nan) - d_sub)
+                    step = np.abs(d_n - d_sub)
+                    if slopes:  # ... or to the neighbour's surface continued one pixel on (a receding face)
+                        same = _neighbour(sub, 2 * dy, 2 * dx, 0) == label
+                        ahead = np.abs(2.0 * d_n - _neighbour(d_sub, 2 * dy, 2 * dx, np.nan) - d_sub)
+                        step = np.where(same & (ahead < step), ahead, step)
                 step = np.where(np.isfinite(step), step, 1e3)  # no return on either side: joins last
                 better = todo & (label > 0) & (step < best_step)
                 best[better] = label[better]

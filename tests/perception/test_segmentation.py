@@ -63,3 +63,16 @@ def test_a_sliver_seen_above_a_nearer_box_is_an_instance_and_the_box_keeps_its_t
     others = (segments[box] > 0) & (segments[box] != box_id)
     assert np.count_nonzero(others) <= 0.01 * box.sum()  # its top-face row stays with it (the rest is floor margin)
     assert np.count_nonzero(segments[box] == box_id) >= 0.95 * box.sum()
+
+
+def test_a_receding_face_continues_its_own_slope_rather_than_joining_the_surface_behind():
+    """Columns: a face receding 1.5 cm per pixel (label 1), one unassigned pixel on it, then a flat surface behind
+    (label 2) 0.8 cm deeper than that pixel. By depth step alone it joins the surface behind; continued by its own
+    slope it is the face's."""
+    row = np.array([0.600, 0.615, 0.630, 0.638, 0.638])
+    depth = np.tile(row, (3, 1))
+    labels = np.tile(np.array([1, 1, 0, 2, 2], np.int32), (3, 1))
+    grow = labels == 0
+    limit = np.full(depth.shape, 0.01)
+    assert (grow_by_depth(labels, grow, depth, limit)[:, 2] == 1).all()
+    assert (grow_by_depth(labels, grow, depth, limit, slopes=False)[:, 2] == 2).all()
