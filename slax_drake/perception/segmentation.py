@@ -15,7 +15,9 @@
    front face's top row), grows from its own object's pixels, not from whichever neighbour comes first.
 5. What no instance reached is a surface of its own (a sliver of an object seen between or above nearer ones is
    all edge pixels): its parts connected over depth steps within three jump limits, of at least ``min_pixels``
-   pixels, become instances; then every instance grows again, and finally over any depth step.
+   pixels, become instances; then every instance grows again over the same steps. Foreground pixels that none
+   reaches (a fragment under ``min_pixels`` of a surface of its own) stay 0: joined to a neighbour over any step,
+   three pixels of an object far behind made a box's hypothesis twice as deep.
 
 Objects that touch at the same depth merge into one instance; :func:`instance_mean_iou` measures how often, and
 ``research/depth_segment_merges.py`` counts merged and split objects on the Table I scenes.
@@ -90,7 +92,7 @@ def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float
     # ones is all edge pixels, without a core of its own.
     rest = _continuous_components(fg & (labels == 0), depth, 3.0 * limit, min_pixels)
     labels = np.where(rest > 0, rest + labels.max(), labels)
-    labels = grow_by_depth(labels, fg, depth, limit)
+    labels = grow_by_depth(labels, fg, depth, limit, tiers=GROWTH_TIERS[:-1])
     return _left_to_right(labels)
 
 

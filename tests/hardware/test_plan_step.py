@@ -134,11 +134,12 @@ def test_round_trip_from_a_noisy_drake_frame_to_a_checked_trajectory(tmp_path, c
 
 
 def test_a_step_with_no_action_records_why(tmp_path):
-    """Six objects, seed 3, DER-3 (pushes only; a scene where the station's action model refuses every push): the
+    """Six objects, seed 23, DER-3 (pushes only; a scene where the station's action model refuses every push): the
     step file has no motion and records the refusals by kind. (Bluction-DAR found no action on seed 6 before the
-    depth segmentation and estimator changes of 2026-12-04; it now finds one on every seed tried: 0-39 with 6 and
-    8 objects, 0-14 with 10 and 12.)"""
-    _frame(tmp_path, objects=6, seed=3)
+    depth segmentation and estimator changes of 2026-12-04; it then found one on every seed tried: 0-39 with 6 and
+    8 objects, 0-14 with 10 and 12. Such scenes depend on the segmentation: DER-3 finds no push on 2 of seeds
+    0-24 with 6 and 8 objects.)"""
+    _frame(tmp_path, objects=6, seed=23)
     main(_args(tmp_path, "frame.npy", "step.json", "--policy", "der-3"))
     record = json.loads((tmp_path / "step.json").read_text())["metadata"]["plan_step"]
     assert record["action"] is None
