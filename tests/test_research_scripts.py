@@ -57,3 +57,23 @@ def test_depth_segment_merges_counts_a_merged_segment_and_a_split_object():
     c = script("depth_segment_merges").frame_counts(None, labels, seg, 3)
     assert c["merged segments"] == 1 and c["objects in merged segments"] == 2
     assert c["split objects"] == 1 and c["split around an occluder"] == 1 and c["visible objects"] == 3
+
+
+@pytest.mark.parametrize("argv", [["--scenes", "0"], ["--densities", "8,x"], ["--iou", "0"],
+                                  ["--config", "no/such.yaml"]])
+def test_depth_hypotheses_refuses_bad_arguments(capsys, argv):
+    assert script("depth_hypotheses").main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: ")
+
+
+def test_depth_hypotheses_footprint_iou_is_one_for_the_same_object_and_zero_apart():
+    from slax_drake.scene.model import SceneObject, planar_pose
+
+    def box(x):
+        return SceneObject("a", "box", (0.1, 0.1, 0.1), planar_pose(x, 0.0, 0.05, 0.0))
+
+    iou = script("depth_hypotheses").footprint_iou
+    assert iou(box(0.0), box(0.0)) == pytest.approx(1.0)
+    assert iou(box(0.0), box(0.05)) == pytest.approx(1 / 3)
+    assert iou(box(0.0), box(0.3)) == 0.0
