@@ -87,22 +87,29 @@ def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float
     core = fg & ~depth_edges(depth, jump_abs, jump_rel)
     limit = np.maximum(jump_abs, jump_rel * np.where(np.isfinite(depth), depth, 0.0))
     labels = _components(core, min_pixels)
-    labels = grow_by_depth(labels, fg, depth, limit, tiers=GROWTH_TIERS[:-1])
+    labels = grow_by_depth(labels, fg, depth, limit)
     # What no instance reached is a surface of its own: a sliver of an object seen between or above nearer
     # ones is all edge pixels, without a core of its own.
     rest = _continuous_components(fg & (labels == 0), depth, 3.0 * limit, min_pixels)
     labels = np.where(rest > 0, rest + labels.max(), labels)
-    labels = grow_by_depth(labels, fg, depth, limit, tiers=GROWTH_TIERS[:-1])
+    labels = grow_by_depth(labels, fg, depth, limit)
     return _left_to_right(labels)
 
 
 def _components(mask: np.ndarray, min_pixels: int) -> np.ndarray:
     """Connected components (4-connectivity) of ``mask`` with at least ``min_pixels`` pixels, labelled 1..K."""
     count, comps, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=4)
-    keep = np.zeros(count, dtype=np.int32)
-    big = [i for i in range(1, count) if stats[i, cv2.CC_STAT_AREA] >= min_pixels]
-    keep[big] = np.arange(1, len(big) + 1, dtype=np.int32)
-    return keep[comps]
+    sizes = stats[:, cv2.CC_STAT_AREA].copy()
+    sizes[0] = 0  # the background
+    return _renumber_big(sizes, min_pixels)[comps]
+
+
+def _renumber_big(sizes: np.ndarray, min_pixels: int) -> np.ndarray:
+    """A lookup from part index to label: 1..K for the parts of at least ``min_pixels`` (in index order), 0 else."""
+    lut = np.zeros(len(sizes), dtype=np.int32)
+    big = np.nonzero(sizes >= min_pixels)[0]
+    lut[big] = np.arange(1, len(big) + 1, dtype=np.int32)
+    return lut
 
 
 def _continuous_components(mask: np.ndarray, depth: np.ndarray, step: np.ndarray, min_pixels: int) -> np.ndarray:
@@ -125,21 +132,16 @@ def _continuous_components(mask: np.ndarray, depth: np.ndarray, step: np.ndarray
     rows, cols = np.concatenate(rows), np.concatenate(cols)
     graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(ys), len(ys)))
     _, part = connected_components(graph, directed=False)
-    sizes = np.bincount(part)
-    keep = np.zeros(len(sizes), dtype=np.int32)
-    big = np.nonzero(sizes >= min_pixels)[0]
-    keep[big] = np.arange(1, len(big) + 1, dtype=np.int32)
     out = np.zeros(mask.shape, dtype=np.int32)
-    out[ys, xs] = keep[part]
+    out[ys, xs] = _renumber_big(np.bincount(part), min_pixels)[part]
     return out
 
 
 def _left_to_right(labels: np.ndarray) -> np.ndarray:
     """Labels renumbered 1..K by their leftmost pixel (then topmost); 0 stays 0."""
-    ids = np.unique(labels[labels > 0])
-    if len(ids) == 0:
-        return labels.astype(np.int32)
     ys, xs = np.nonzero(labels > 0)
+    if len(ys) == 0:
+        return labels.astype(np.int32)
     by_position = labels[ys, xs][np.lexsort((ys, xs))]  # by x, then y
     ids, first = np.unique(by_position, return_index=True)
     lut = np.zeros(int(labels.max()) + 1, dtype=np.int32)
@@ -147,7 +149,7 @@ def _left_to_right(labels: np.ndarray) -> np.ndarray:
     return lut[labels]
 
 
-GROWTH_TIERS = (1.0, 3.0, 6.0, np.inf)  # the depth steps an instance grows over, in jump limits, tier by tier
+GROWTH_TIERS = (1.0, 3.0, 6.0)  # the depth steps an instance grows over, in jump limits, tier by tier
 _NEIGHBOURS8 = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 
 
@@ -166,8 +168,7 @@ def grow_by_depth(labels: np.ndarray, grow: np.ndarray, depth: np.ndarray, limit
     label of the 8-neighbour whose depth (metres; no return: 0 or non-finite) is nearest theirs, or (``slopes``)
     whose surface, continued by its own step from the next pixel of the same label, meets theirs. Tier by tier, a
     pixel joins only over a depth step within ``tier * limit`` (metres, H x W) and the passes repeat until nothing
-    joins (at most ``max_passes`` per tier); a pixel without a return joins the nearest labelled neighbour
-    in the last tier. Pixels with no labelled pixel within reach stay 0."""
+    joins (at most ``max_passes`` per tier). Pixels with no labelled pixel within reach stay 0."""
     labels = labels.astype(np.int32, copy=True)
     d = np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float64)
     ys, xs = np.nonzero(grow | (labels > 0))
@@ -176,6 +177,16 @@ def grow_by_depth(labels: np.ndarray, grow: np.ndarray, depth: np.ndarray, limit
     # Work on the bounding box of what may grow (and one pixel around it).
     box = (slice(max(ys.min() - 1, 0), ys.max() + 2), slice(max(xs.min() - 1, 0), xs.max() + 2))
     sub, todo_mask, d_sub, lim = labels[box], grow[box], d[box], limit[box]
+    # Per neighbour direction, the depth step to that neighbour and (``slopes``) to its surface continued one pixel
+    # on (a receding face); no return on either side: never the nearest. The depths do not change between passes.
+    with np.errstate(invalid="ignore"):
+        steps, ahead = [], []
+        for dy, dx in _NEIGHBOURS8:
+            d_n = _neighbour(d_sub, dy, dx, np.nan)
+            steps.append(np.nan_to_num(np.abs(d_n - d_sub), nan=1e3))
+            if slopes:
+                ahead.append(np.nan_to_num(np.abs(2.0 * d_n - _neighbour(d_sub, 2 * dy, 2 * dx, np.nan) - d_sub),
+                                           nan=1e3))
     for tier in tiers:
         for _ in range(max_passes):
             todo = todo_mask & (sub == 0)
@@ -183,16 +194,12 @@ def grow_by_depth(labels: np.ndarray, grow: np.ndarray, depth: np.ndarray, limit
                 break
             best = np.zeros(sub.shape, np.int32)
             best_step = np.full(sub.shape, np.inf)
-            for dy, dx in _NEIGHBOURS8:
+            for k, (dy, dx) in enumerate(_NEIGHBOURS8):
                 label = _neighbour(sub, dy, dx, 0)
-                d_n = _neighbour(d_sub, dy, dx, np.nan)
-                with np.errstate(invalid="ignore"):
-                    step = np.abs(d_n - d_sub)
-                    if slopes:  # ... or to the neighbour's surface continued one pixel on (a receding face)
-                        same = _neighbour(sub, 2 * dy, 2 * dx, 0) == label
-                        ahead = np.abs(2.0 * d_n - _neighbour(d_sub, 2 * dy, 2 * dx, np.nan) - d_sub)
-                        step = np.where(same & (ahead < step), ahead, step)
-                step = np.where(np.isfinite(step), step, 1e3)  # no return on either side: joins last
+                step = steps[k]
+                if slopes:
+                    same = _neighbour(sub, 2 * dy, 2 * dx, 0) == label
+                    step = np.where(same & (ahead[k] < step), ahead[k], step)
                 better = todo & (label > 0) & (step < best_step)
                 best[better] = label[better]
                 best_step[better] = step[better]

@@ -25,7 +25,6 @@ def test_only_the_pixels_allowed_to_grow_change_and_an_isolated_one_stays_unassi
     labels[0, 0] = 3
     grow = np.zeros((5, 5), bool)
     grow[0, 1] = grow[4, 4] = True
-    grow[4, 4] = True
     grown = grow_by_depth(labels, grow, depth, np.full(depth.shape, 0.01))
     assert grown[0, 1] == 3
     assert grown[4, 4] == 0  # no labelled pixel reaches it through growable pixels
