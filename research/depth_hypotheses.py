@@ -63,24 +63,21 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     from slax_drake.config import ConfigError, load_scenario
-    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
     from slax_drake.perception.segmentation import segment_depth
     from slax_drake.perception.sensor_noise import l515_depth_noise
     from slax_drake.scene.raycast import SceneRaycaster
-    from slax_drake.scene.sampling import sample_scene
 
     try:
         scenario = load_scenario(args.config)
     except (OSError, ConfigError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    size = tuple(scenario.target.sizes[0])
     total = collections.Counter()
     for density in densities:
         per = collections.Counter()
         for index in range(args.scenes):
-            scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
-                                 target_size=size)
+            scene = protocol_scene(scenario, density, scene_seed(args.seed, density, index))
             camera = scene.camera.with_resolution(args.width, max(1, round(scene.camera.height * args.width
                                                                             / scene.camera.width)))
             depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
@@ -91,15 +88,15 @@ def main(argv=None) -> int:
             by_labels = hypotheses_by_object(depth, labels, truth, camera, scene.shelf, n)
             by_depth = hypotheses_by_object(depth, labels, segment_depth(depth, camera, scene.shelf), camera,
                                             scene.shelf, n)
-            for k, (h,) in ((k, hs[:1]) for k, hs in by_labels.items()):
+            for k, (labelled, *_) in by_labels.items():
                 per["objects"] += 1
                 mine = by_depth.get(k, [])
                 if len(mine) != 1:
                     per["none or two in depth-only"] += 1
                     continue
-                if footprint_iou(h.object, mine[0].object) < args.iou:
+                if footprint_iou(labelled.object, mine[0].object) < args.iou:
                     per[f"IoU below {args.iou:g}"] += 1
-                if h.object.shape == "cylinder" and mine[0].object.shape == "box":
+                if labelled.object.shape == "cylinder" and mine[0].object.shape == "box":
                     per["cylinders fitted as boxes"] += 1
         print(f"{density} objects: " + ", ".join(f"{k} {v}" for k, v in sorted(per.items())))
         total += per

@@ -65,24 +65,21 @@ def main(argv=None) -> int:
         print("error: --scenes must be at least 1 and --width at least 16", file=sys.stderr)
         return 2
     from slax_drake.config import ConfigError, load_scenario
-    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
     from slax_drake.perception.segmentation import instance_mean_iou, segment_depth
     from slax_drake.perception.sensor_noise import l515_depth_noise
     from slax_drake.scene.raycast import SceneRaycaster
-    from slax_drake.scene.sampling import sample_scene
 
     try:
         scenario = load_scenario(args.config)
     except (OSError, ConfigError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    size = tuple(scenario.target.sizes[0])
     total, all_ious = collections.Counter(), []
     for density in scenario.protocol.densities:
         per, ious = collections.Counter(), []
         for index in range(args.scenes):
-            scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
-                                 target_size=size)
+            scene = protocol_scene(scenario, density, scene_seed(args.seed, density, index))
             camera = scene.camera.with_resolution(args.width, max(1, round(scene.camera.height * args.width
                                                                             / scene.camera.width)))
             depth, labels = SceneRaycaster(scene, include_target=True).render(camera)

@@ -61,6 +61,15 @@ def scene_seed(protocol_seed: int, density: int, index: int) -> int:
     return int(protocol_seed) * 1_000_003 + int(density) * 10_007 + int(index)
 
 
+def protocol_scene(scenario, density: int, seed: int):
+    """The protocol's scene with ``density`` objects for scene seed ``seed`` (see :func:`scene_seed`): the
+    protocol's occluder count for that density and its first target size."""
+    from slax_drake.scene.sampling import sample_scene
+
+    return sample_scene(scenario, scenario.protocol.occluders(density), seed,
+                        target_size=tuple(scenario.target.sizes[0]))
+
+
 def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return out / "trials" / policy / f"{density:02d}_{index:04d}.json"
 
@@ -70,10 +79,9 @@ def run_benchmark_trial(job) -> dict:
     scenario, policy_name, density, index, seed, perception, tool_rules, camera, profile, oracle_seconds = job
     from slax_drake.policies.registry import is_oracle, make_policy
     from slax_drake.shelf.simulator import CameraObserver, run_trial
-    from slax_drake.scene.sampling import sample_scene
 
     size = tuple(scenario.target.sizes[0])
-    scene = sample_scene(scenario, scenario.protocol.occluders(density), seed, target_size=size)
+    scene = protocol_scene(scenario, density, seed)
     horizon = scenario.protocol.horizon_per_object * density
     oracle_options = {"seconds": oracle_seconds} if is_oracle(policy_name) and oracle_seconds else None
     policy = make_policy(policy_name, scenario, perception=perception, horizon=horizon, tool_overrides=tool_rules,
