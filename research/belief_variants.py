@@ -2,13 +2,14 @@
 target was revealed, the steps, the cost and the longest decision (CPU s), then the count revealed. The trials are
 the benchmark's (`slax-drake benchmark`): the same scene seed per (protocol seed, density, index), the registry's
 policy with the protocol's horizon, privileged observation (``--observation camera``: the benchmark's camera mode,
-rendered frames with label segmentation), ground-truth distributions, the first-order shelf simulator; only the
+rendered frames with label segmentation; ``--segmentation depth`` and ``--sensor-noise`` as the benchmark's),
+ground-truth distributions, the first-order shelf simulator; only the
 options differ. It is how the variants of issue 19 item 5 were measured one by one without a
 registry row each.
 
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
-        [--observation camera] [--tool-rule FIELD=VALUE ...]
+        [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...]
 
 ``--compare``: a `slax-drake benchmark` results folder run with the same protocol seed; each trial also prints
 the folder's outcome of ``--compare-policy`` for the same trial, and the flips (won: revealed here, not there;
@@ -22,12 +23,11 @@ import time
 from pathlib import Path
 
 from slax_drake.config import load_scenario
-from slax_drake.evaluation.table1 import scene_seed
+from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.policies.registry import make_policy
 from slax_drake.errors import UserError
 from slax_drake.shelf.simulator import CameraObserver, run_trial
 from slax_drake.shelf.tool import parse_tool_rules
-from slax_drake.scene.sampling import sample_scene
 
 
 def parse_trials(text: str) -> list[tuple[int, int]]:
@@ -52,6 +52,10 @@ def main():
     ap.add_argument("--compare", default=None, help="a results folder: print its outcome per trial and the flips")
     ap.add_argument("--compare-policy", default="slax-belief", help="the policy of --compare's trials")
     ap.add_argument("--observation", choices=("privileged", "camera"), default="privileged")
+    ap.add_argument("--segmentation", choices=("labels", "depth"), default="labels",
+                    help="with --observation camera: the render's labels or depth-only segmentation")
+    ap.add_argument("--sensor-noise", action="store_true",
+                    help="with --observation camera: the L515 noise model, seeded by the scene seed")
     ap.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
                     help="override one rule of the profile, as the benchmark's --tool-rule; repeatable")
     args = ap.parse_args()
@@ -73,14 +77,15 @@ def main():
     revealed = 0
     trials = parse_trials(args.trials)
     for density, index in trials:
-        scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
-                             target_size=size)
+        seed = scene_seed(args.seed, density, index)
+        scene = protocol_scene(scenario, density, seed)
         horizon = scenario.protocol.horizon_per_object * density
         policy = make_policy(args.policy, scenario, horizon=horizon, profile=args.profile, policy_options=options,
                              tool_overrides=tool_rules)
         observer = None
         if args.observation == "camera":
-            observer = CameraObserver(scene.shelf, scene.camera, size, width=policy.observation_width)
+            observer = CameraObserver(scene.shelf, scene.camera, size, width=policy.observation_width,
+                                      segmentation=args.segmentation, noise_seed=seed if args.sensor_noise else None)
         t0 = time.process_time()
         result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                            suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)

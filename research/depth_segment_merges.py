@@ -9,7 +9,9 @@ The scenes are the benchmark's (``scene_seed(seed, density, index)``); each is r
 target, optionally with the L515 noise model (seeded by the scene index), and segmented by
 :func:`slax_drake.perception.segmentation.segment_depth`. An object is "in" a segment when it holds at least 20 % of
 the segment's pixels; a true object is split when two segments each hold at least 20 % of its pixels, and counted as
-"split around an occluder" when its own visible region is disconnected (depth alone cannot join such parts). Each
+"split around an occluder" when its own visible region is disconnected (depth alone cannot join such parts). A
+fragment is a segment most of whose pixels are an object that has a larger segment (each one becomes a hypothesis
+of its own: a small box where there is part of a bigger object). Each
 line ends with the mean instance IoU (``segmentation.instance_mean_iou``, target pixels left out, objects with at
 least ``MIN_IOU_PIXELS`` visible pixels scored) over the frames.
 """
@@ -35,13 +37,20 @@ def frame_counts(depth, labels, seg, n: int) -> collections.Counter:
     c["visible objects"] += len(visible)
     segments = [s for s in np.unique(seg) if s > 0]
     c["segments"] += len(segments)
+    main_segment = {}  # object -> (its pixels in its largest segment, that segment)
+    majority = {}  # segment -> the object holding most of its pixels
     for s in segments:
         owners = labels[seg == s]
-        _, counts = np.unique(owners[(owners >= 1) & (owners <= n)], return_counts=True)
+        ids, counts = np.unique(owners[(owners >= 1) & (owners <= n)], return_counts=True)
         big = int(np.sum(counts >= SHARE * len(owners)))
         if big >= 2:
             c["merged segments"] += 1
             c["objects in merged segments"] += big
+        if len(ids):
+            k = int(ids[counts.argmax()])
+            majority[s] = k
+            main_segment[k] = max(main_segment.get(k, (0, s)), (int(counts.max()), s))
+    c["fragments"] += sum(1 for s, k in majority.items() if main_segment[k][1] != s)
     for k in visible:
         px = seg[labels == k]
         _, counts = np.unique(px[px > 0], return_counts=True)

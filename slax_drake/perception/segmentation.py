@@ -4,7 +4,9 @@
    object when it stands above the support surface and inside the bay, away from the side walls, top and back
    panel by ``margin`` metres (the shelf and the camera are static relative to each other, Sec. III).
 2. Depth discontinuities: a pixel whose depth differs from a 4-neighbour by more than
-   ``max(jump_abs, jump_rel * depth)`` lies on an edge between instances (an occluder in front of another).
+   ``max(jump_abs, jump_rel * depth)`` lies on an edge between instances (an occluder in front of another), and so
+   does a pixel at the bottom of a concave crease (:func:`concave_creases`): every object is convex, so a valley in
+   the depth image is where two objects meet at the same depth.
 3. Connected components (OpenCV, 4-connectivity) of foreground pixels off the edges are the instances; those
    under ``min_pixels`` are dropped.
 4. The edge (and dropped) foreground pixels join an instance by depth continuity (:func:`grow_by_depth`): each
@@ -18,9 +20,13 @@
    pixels, become instances; then every instance grows again over the same steps. Foreground pixels that none
    reaches (a fragment under ``min_pixels`` of a surface of its own) stay 0: joined to a neighbour over any step,
    three pixels of an object far behind made a box's hypothesis twice as deep.
+6. Fragments (instances under ``FRAGMENT_SHARE`` of the image) merge into the larger neighbour whose surface they
+   continue along most of their boundary (:func:`merge_fragments`): range noise and missing returns break a
+   grazing face into islands of a few pixels.
 
-Objects that touch at the same depth merge into one instance; :func:`instance_mean_iou` measures how often, and
-``research/depth_segment_merges.py`` counts merged and split objects on the Table I scenes.
+Objects that touch at the same depth with parallel faces (no crease between them) merge into one instance;
+:func:`instance_mean_iou` measures how often, and ``research/depth_segment_merges.py`` counts merged and split
+objects and fragments on the Table I scenes.
 """
 
 from __future__ import annotations
@@ -32,6 +38,11 @@ from scipy.optimize import linear_sum_assignment
 from slax_drake.errors import ImageSizeError
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Shelf
+
+
+CREASE_BASELINE = 3  # px on each side of a concave crease's pixel
+CREASE_RANGE_SIGMA = 0.0025  # m, the range noise a crease must stand out from (the L515's precision at 1 m)
+CREASE_MIN_BEND = 0.35  # the least difference of the tangents of two faces' slopes that makes a crease
 
 
 def back_project(depth: np.ndarray, camera: Camera) -> np.ndarray:
@@ -71,8 +82,45 @@ def depth_edges(depth: np.ndarray, jump_abs: float = 0.01, jump_rel: float = 0.0
     return edges
 
 
+def concave_creases(depth: np.ndarray, camera: Camera, jump_abs: float = 0.01, jump_rel: float = 0.02,
+                    baseline: int = CREASE_BASELINE, range_sigma: float = CREASE_RANGE_SIGMA,
+                    min_bend: float = CREASE_MIN_BEND) -> np.ndarray:
+    """Pixels (H, W) bool at the bottom of a concave crease of the depth image: along a row (or a column) the
+    surface comes toward the camera on both sides of the pixel. Every occluder is convex (a box or a cylinder),
+    and the image of a convex surface is nowhere concave (a plane's depth is a convex function of the pixel
+    coordinate; an edge of a box seen from outside is a ridge toward the camera), so such a valley is where two
+    objects meet: two boxes side by side, their faces at different angles, touching or nearly so at the same depth.
+
+    With the one-sided slopes s_L = (z[u] - z[u - k]) / k and s_R = (z[u + k] - z[u]) / k (k = ``baseline``
+    pixels, metres per pixel), the pixel is a valley where s_L - s_R exceeds both three standard deviations of its
+    range noise (sqrt(6) * ``range_sigma`` / k; ``range_sigma`` metres per return) and ``min_bend`` times the
+    pixel's footprint z / fx (the two faces' slopes differ by ``min_bend``, a tangent). Every step inside the
+    window must be within twice the jump limit max(``jump_abs``, ``jump_rel`` z) (larger steps are occluding edges,
+    found by :func:`depth_edges`), and every pixel of it must have a return."""
+    d = np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float64)
+    limit = 2.0 * np.maximum(jump_abs, jump_rel * np.nan_to_num(d, nan=0.0))
+    threshold = np.maximum(3.0 * np.sqrt(6.0) * range_sigma / baseline,
+                           min_bend * np.nan_to_num(d, nan=0.0) / camera.fx)
+    valley = np.zeros(d.shape, dtype=bool)
+    k = int(baseline)
+    for a, lim, thr in ((d, limit, threshold), (d.T, limit.T, threshold.T)):
+        out = valley if a is d else valley.T
+        step = np.abs(np.diff(a, axis=1))  # (H, W - 1); NaN where a return is missing
+        with np.errstate(invalid="ignore"):
+            smooth = step <= np.minimum(lim[:, 1:], lim[:, :-1])  # False where NaN
+        # Every step of the window [u - k, u + k] smooth: a sliding count of smooth steps over 2k steps.
+        count = np.cumsum(np.pad(smooth.astype(np.int32), ((0, 0), (1, 0))), axis=1)
+        window_ok = (count[:, 2 * k:] - count[:, :-2 * k]) == 2 * k  # (H, W - 2k), for u = k .. W - k - 1
+        centre = a[:, k:-k]
+        bend = (2.0 * centre - a[:, :-2 * k] - a[:, 2 * k:]) / k
+        with np.errstate(invalid="ignore"):
+            out[:, k:-k] |= window_ok & (bend > thr[:, k:-k])
+    return valley
+
+
 def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float = 0.006,
-                  jump_abs: float = 0.01, jump_rel: float = 0.02, min_pixels: int | None = None) -> np.ndarray:
+                  jump_abs: float = 0.01, jump_rel: float = 0.02, min_pixels: int | None = None,
+                  creases: bool = True) -> np.ndarray:
     """Depth image (H, W) metres -> instance labels (H, W) int32: 0 shelf/background, 1..K objects, numbered
     left to right by their leftmost pixel. ``camera`` must have the image's resolution."""
     depth = np.asarray(depth, dtype=np.float32)
@@ -85,6 +133,8 @@ def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float
         min_pixels = max(4, int(round(depth.size * 2e-4)))
     fg = foreground_mask(depth, camera, shelf, margin)
     core = fg & ~depth_edges(depth, jump_abs, jump_rel)
+    crease = concave_creases(depth, camera, jump_abs, jump_rel) if creases else np.zeros(depth.shape, bool)
+    core &= ~crease
     limit = np.maximum(jump_abs, jump_rel * np.where(np.isfinite(depth), depth, 0.0))
     labels = _components(core, min_pixels)
     labels = grow_by_depth(labels, fg, depth, limit)
@@ -93,7 +143,73 @@ def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float
     rest = _continuous_components(fg & (labels == 0), depth, 3.0 * limit, min_pixels)
     labels = np.where(rest > 0, rest + labels.max(), labels)
     labels = grow_by_depth(labels, fg, depth, limit)
+    labels = merge_fragments(labels, depth, limit, crease, max(min_pixels, int(round(depth.size * FRAGMENT_SHARE))))
     return _left_to_right(labels)
+
+
+FRAGMENT_SHARE = 0.003  # an instance below this share of the image's pixels may be a fragment (58 px at 160 x 120)
+
+
+def merge_fragments(labels: np.ndarray, depth: np.ndarray, limit: np.ndarray, crease: np.ndarray,
+                    max_pixels: int) -> np.ndarray:
+    """Labels (H, W) int32 with each fragment merged into the neighbour it continues: an instance of fewer than
+    ``max_pixels`` pixels whose boundary with a larger neighbour is mostly (at least half of its 4-neighbour pairs)
+    continuous: a depth step within 1.5 times the jump limit ``limit`` (metres, H x W), or either side's surface
+    continued by its own slope meets the other within it; not both pixels on a concave ``crease``.
+    Range noise and missing returns break a face into islands of a few pixels, each of which became an instance
+    (a hypothesis of a 1 cm box inside a larger object); an object seen beside or behind another keeps its
+    instance, as depth jumps or a crease separate them. Smallest fragments first, each merged once."""
+    labels = labels.astype(np.int32, copy=True)
+    ids, sizes = np.unique(labels[labels > 0], return_counts=True)
+    small = ids[sizes < max_pixels]
+    if len(small) == 0:
+        return labels
+    size_of = dict(zip(ids.tolist(), sizes.tolist()))
+    d = np.where(np.isfinite(depth), depth, np.nan)
+    pairs = []  # (label a, label b, continuous) per 4-neighbour pair with different labels
+    for dy, dx in ((0, 1), (1, 0)):
+        a, b = labels, _neighbour(labels, dy, dx, 0)
+        d_b = _neighbour(d, dy, dx, np.nan)
+        differ = (a > 0) & (b > 0) & (a != b)
+        # The step between the two, or either surface continued by its own slope onto the other (a receding face
+        # meeting its object's other face at a convex edge: a box's top face seen from just above it).
+        own_a = np.where(_neighbour(labels, -dy, -dx, 0) == a, _neighbour(d, -dy, -dx, np.nan), np.nan)
+        own_b = np.where(_neighbour(labels, 2 * dy, 2 * dx, 0) == b, _neighbour(d, 2 * dy, 2 * dx, np.nan), np.nan)
+        with np.errstate(invalid="ignore"):
+            step = np.fmin(np.abs(d - d_b), np.fmin(np.abs(2.0 * d - own_a - d_b), np.abs(2.0 * d_b - own_b - d)))
+            cont = (step <= 1.5 * np.minimum(limit, _neighbour(limit, dy, dx, 0.0))) \
+                & ~(crease & _neighbour(crease, dy, dx, False))
+        pairs.append((a[differ], b[differ], cont[differ]))
+    a = np.concatenate([p[0] for p in pairs] + [p[1] for p in pairs])
+    b = np.concatenate([p[1] for p in pairs] + [p[0] for p in pairs])
+    cont = np.concatenate([p[2] for p in pairs] * 2)
+    parent = {i: i for i in ids.tolist()}
+
+    def root(i):
+        while parent[i] != i:
+            i = parent[i]
+        return i
+
+    for f in sorted(small.tolist(), key=lambda i: size_of[i]):
+        mine = a == f
+        if not mine.any():
+            continue
+        mine_f = root(f)
+        roots = np.array([root(n) for n in b[mine].tolist()])
+        others = roots != mine_f  # pairs with what an earlier merge joined to f are inside it now
+        if not others.any():
+            continue
+        counts = {}
+        for n, c in zip(roots[others].tolist(), cont[mine][others].tolist()):
+            counts[n] = counts.get(n, 0) + int(c)
+        best = max((n for n in counts if size_of[n] >= size_of[mine_f]), key=lambda n: counts[n], default=None)
+        if best is not None and counts[best] > 0 and 2 * counts[best] >= int(others.sum()):
+            parent[mine_f] = best
+            size_of[best] += size_of[mine_f]
+    lut = np.zeros(int(labels.max()) + 1, dtype=np.int32)
+    for i in ids.tolist():
+        lut[i] = root(i)
+    return lut[labels]
 
 
 def _components(mask: np.ndarray, min_pixels: int) -> np.ndarray:

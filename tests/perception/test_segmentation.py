@@ -75,3 +75,75 @@ def test_a_receding_face_continues_its_own_slope_rather_than_joining_the_surface
     limit = np.full(depth.shape, 0.01)
     assert (grow_by_depth(labels, grow, depth, limit)[:, 2] == 1).all()
     assert (grow_by_depth(labels, grow, depth, limit, slopes=False)[:, 2] == 2).all()
+
+
+def _table1_frame(density: int, index: int, noise: bool = False):
+    """The first frame of Table I scene (density, index) of protocol seed 0 at 160 px: depth (with the L515 noise
+    seeded by the scene seed when ``noise``), the render's labels, the camera and the scene."""
+    from slax_drake.config import load_scenario
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
+    from slax_drake.perception.sensor_noise import l515_depth_noise
+    from slax_drake.scene.raycast import SceneRaycaster
+
+    from tests.conftest import REPO
+
+    scenario = load_scenario(REPO / "sim_configs" / "table1.yaml")
+    seed = scene_seed(0, density, index)
+    scene = protocol_scene(scenario, density, seed)
+    camera = scene.camera.with_resolution(160, 120)
+    depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
+    if noise:
+        depth = l515_depth_noise(depth, camera, seed, 0)
+    return depth, labels, camera, scene
+
+
+def _main_segment(segments: np.ndarray, mask: np.ndarray) -> tuple[int, float]:
+    """The segment holding most of ``mask``'s segmented pixels and the share of them it holds (pixels without a
+    return, left unsegmented, are not counted)."""
+    ids = segments[mask]
+    ids = ids[ids > 0]
+    best = int(np.bincount(ids).argmax())
+    return best, float(np.count_nonzero(ids == best) / len(ids))
+
+
+def test_two_boxes_meeting_in_a_concave_crease_are_two_instances():
+    """Table I scene 4:15: object_1 (yawed 26 deg) and object_3 (16 deg) meet at the same depth; along a row the
+    depth rises over object_1's front face and falls over object_3's side face: a valley, which no convex object
+    shows. Before the crease edges both were one 0.31 m wide segment."""
+    from slax_drake.perception.segmentation import concave_creases, segment_depth
+
+    depth, labels, camera, scene = _table1_frame(4, 15)
+    left, right = labels == 2, labels == 4  # object_1, object_3
+    for noise in (False, True):
+        if noise:
+            depth = _table1_frame(4, 15, noise=True)[0]
+        segments = segment_depth(depth, camera, scene.shelf)
+        a, share_a = _main_segment(segments, left)
+        b, share_b = _main_segment(segments, right)
+        assert a != b, f"noise={noise}"
+        assert share_a >= 0.9 and share_b >= 0.85, (noise, share_a, share_b)
+    creases = concave_creases(_table1_frame(4, 15)[0], camera)
+    assert creases[left | right].any()
+    # A single box, a cylinder, the shelf: nowhere a valley on the clean frame but where objects meet.
+    assert not creases[labels == 1].any()  # object_0, the cylinder
+
+
+def test_two_boxes_merge_without_the_crease_edges():
+    from slax_drake.perception.segmentation import segment_depth
+
+    depth, labels, camera, scene = _table1_frame(4, 15)
+    segments = segment_depth(depth, camera, scene.shelf, creases=False)
+    assert _main_segment(segments, labels == 2)[0] == _main_segment(segments, labels == 4)[0]
+
+
+def test_range_noise_islands_on_a_face_merge_into_its_instance():
+    """With the L515 noise, object_3's grazing side face of scene 4:15 broke into islands of 10-50 px, each an
+    instance (and a hypothesis of a 1 cm box); merged into the face's instance, one segment holds it."""
+    from slax_drake.perception.segmentation import segment_depth
+
+    depth, labels, camera, scene = _table1_frame(4, 15, noise=True)
+    segments = segment_depth(depth, camera, scene.shelf)
+    box = labels == 4  # object_3
+    owners = [s for s in np.unique(segments[box]) if s > 0]
+    majority = [s for s in owners if np.count_nonzero(labels[segments == s] == 4) > 0.5 * np.count_nonzero(segments == s)]
+    assert len(majority) == 1, majority
