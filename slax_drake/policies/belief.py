@@ -138,11 +138,13 @@ REMEMBERED = "remembered_"  # camera mode: the name prefix of a remembered hypot
 
 class _NoActionsOnRemembered:
     """The policy's action model, enumerating no action on a remembered hypothesis (``remembered``: the camera
-    shows no segment of it to act on); it stays an obstacle. Everything else is the wrapped model's. Privileged
+    shows no segment of it to act on) nor on one named in ``unaimable`` (``aim_visible``: the camera shows too
+    little of it to aim the tool at); it stays an obstacle. Everything else is the wrapped model's. Privileged
     observations name no object so: there it is the wrapped model."""
 
     def __init__(self, model):
         self._model = model
+        self.unaimable: frozenset = frozenset()
 
     def __getattr__(self, name):
         if name == "_model":  # not set yet (e.g. while unpickling)
@@ -151,8 +153,8 @@ class _NoActionsOnRemembered:
 
     def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None):
         objects = tuple(objects)
-        if only is None and any(o.remembered for o in objects):
-            only = {o.name for o in objects if not o.remembered}
+        if only is None and any(o.remembered or o.name in self.unaimable for o in objects):
+            only = {o.name for o in objects if not o.remembered and o.name not in self.unaimable}
         return self._model.enumerate(objects, fixed, pushes, suctions, only)
 
 
@@ -223,6 +225,7 @@ class BeliefSearch(Hindsight):
         self.maybe_occupied = o.maybe_occupied  # camera mode: the weight of a placement in a hypothesis' assumed depth
         self._as_observed: dict = {}  # camera mode with camera_depth: name -> the observer's hypothesis (least depth)
         self._maybe: frozenset = frozenset()  # lattice keys of the placements weighed by maybe_occupied now
+        self.aim_visible = o.aim_visible  # camera mode: no action on a hypothesis too little seen to aim the tool at
         self.stuck_select = o.stuck_select  # the rule when no plan looked at reveals anything (module docstring)
         self.blocked_rule = o.blocked_rule  # which placements a failed placement's box refuses (placement_allowed)
         self.blocked_risk = float(o.blocked_risk)  # blocked_rule="risk": the failure chance a blocked box adds
@@ -296,7 +299,30 @@ class BeliefSearch(Hindsight):
     # ---- objects seen before and hidden now ---------------------------------------------------------------------
     def decide(self, obs) -> Decision:
         self._camera_mode = getattr(obs, "belief", None) is not None
+        self._action_model.unaimable = self.unaimable(obs) if self._camera_mode and self.aim_visible else frozenset()
         return super().decide(self.with_remembered(self.with_camera_hypotheses(obs)))
+
+    def unaimable(self, obs) -> frozenset:
+        """Camera mode: the names of the hypotheses whose segment shows no disc of the cup's diameter (its size in
+        pixels at the segment's median depth, ``cup_diameter * fx / z``) inside the segment's mask, closed by one
+        pixel to bridge dropped returns (``aim_visible``)."""
+        import cv2
+
+        frame = obs.belief.observation
+        cup = self.action_model.tool.geometry.cup_diameter
+        out = set()
+        for h in obs.belief.hypotheses:
+            mask = frame.segmentation == h.segment_id
+            z = frame.depth[mask & (frame.depth > 0)]
+            if len(z) == 0:
+                out.add(h.object.name)
+                continue
+            diameter = max(1, int(round(cup * frame.camera.fx / float(np.median(z)))))
+            closed = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))
+            disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (diameter, diameter))
+            if not cv2.erode(closed, disc, borderValue=0).any():
+                out.add(h.object.name)
+        return frozenset(out)
 
     def with_camera_hypotheses(self, obs):
         """Camera mode (``obs.belief`` set) with ``camera_depth``: ``obs`` with its hypotheses estimated again from

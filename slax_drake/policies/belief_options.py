@@ -82,6 +82,11 @@ class BeliefOptions:
     meeting something unseen reads the space never seen (the belief before the collapse, less what later frames
     show) rather than the collapsed belief, whose few placements make every placement away from the target look
     safe. Measured, not the default (docs/research/slax_belief.md, "A partly seen target")."""
+    aim_visible: bool = False
+    """Camera mode: no action is planned on a hypothesis whose segment shows no patch the tool could be aimed at
+    (a disc of the cup's diameter, at the segment's depth, inside its mask with dropped returns closed); it stays an
+    obstacle. A sliver of an object seen above or beside a nearer one is a hypothesis of its own, far smaller than
+    the object: a move planned on it moves the whole object (:meth:`BeliefSearch.unaimable`)."""
     shuttle_last_resort: bool = False
     """When the corrections screen out every feasible candidate and some only as shuttles (a move back against the
     object's last move that uncovers no new width), those shuttles are offered rather than stopping with no action
