@@ -201,6 +201,8 @@ class BeliefSearch(Hindsight):
         self.hidden_risk = o.hidden_risk
         self.select = o.select
         self._blocked: list = []  # boxes (x_lo, x_hi, y_lo, y_hi) where a placement failed: an unseen obstacle
+        self.deepen_failed = o.deepen_failed  # camera mode: an object whose placement failed is assumed deepest
+        self._deepened: set = set()  # camera mode with deepen_failed: the names of those objects
         self._last = None  # (the suction taken last, the pose it predicts for its object)
         self.evidence = o.evidence
         self.block_weight = float(o.block_weight)
@@ -234,6 +236,7 @@ class BeliefSearch(Hindsight):
         super().reset(scene_or_observation)
         self._plan, self._expected = [], None
         self._blocked, self._last = [], None
+        self._deepened = set()
         self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
         self._weights, self._executed, self.evidence_log = {}, None, []
         self._remembered = {}
@@ -295,6 +298,8 @@ class BeliefSearch(Hindsight):
         limit = max(0.005, self.camera_outcome_tolerance) if self._camera_mode else 0.005  # estimated poses: noisier
         if abs(x - (x_lo + x_hi) / 2) > limit or abs(y - (y_lo + y_hi) / 2) > limit:
             self._blocked.append((x_lo, x_hi, y_lo, y_hi))
+            if self._camera_mode and self.deepen_failed:
+                self._deepened.add(name)
 
     # ---- objects seen before and hidden now ---------------------------------------------------------------------
     def decide(self, obs) -> Decision:
@@ -329,24 +334,35 @@ class BeliefSearch(Hindsight):
         the same frame, each assumed at least ``camera_depth`` deep behind its visible surfaces (the estimator's
         ``DepthPrior(rule="fixed")``, shortened at the walls and the other hypotheses as every prior is). The
         observer's hypotheses assume the least depth an object can have (0.06 m), so a move planned on them can
-        run the moved object, or another one, into the unseen rest of a seen object. Privileged observation, or
-        ``camera_depth`` None: ``obs`` unchanged."""
+        run the moved object, or another one, into the unseen rest of a seen object. ``camera_extents``: likewise
+        with the range prior. ``deepen_failed``: the objects whose placement failed earlier in the trial are
+        estimated with the range prior at its farthest (the rest as above). Privileged observation, or none of the
+        three: ``obs`` unchanged."""
         belief = getattr(obs, "belief", None)
         self._as_observed = {}
-        if belief is None or (self.camera_depth is None and self.camera_extents is None):
+        deepened = belief is not None and any(h.object.name in self._deepened for h in belief.hypotheses)
+        if belief is None or (self.camera_depth is None and self.camera_extents is None and not deepened):
             return obs
         self._as_observed = {o.name: o for o in obs.known}
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.estimator import DepthPrior, EstimatorConfig, estimate_objects
 
-        if self.camera_extents is not None:
-            config = EstimatorConfig(prior=DepthPrior(rule="range", fraction=float(self.camera_extents)))
-        else:
-            config = EstimatorConfig(prior=DepthPrior(rule="fixed", fixed=float(self.camera_depth)))
         names = {h.segment_id: h.object.name for h in belief.hypotheses}  # the tracker's names, when it runs
+        if self.camera_extents is not None or self.camera_depth is not None:
+            if self.camera_extents is not None:
+                config = EstimatorConfig(prior=DepthPrior(rule="range", fraction=float(self.camera_extents)))
+            else:
+                config = EstimatorConfig(prior=DepthPrior(rule="fixed", fixed=float(self.camera_depth)))
+            hypotheses = estimate_objects(belief.observation, belief.shelf, config)
+        else:
+            hypotheses = list(belief.hypotheses)
+        if deepened:  # the objects whose placement failed, as deep and wide as the frame allows
+            deepest = {h.segment_id: h for h in estimate_objects(
+                belief.observation, belief.shelf, EstimatorConfig(prior=DepthPrior(rule="range", fraction=1.0)))}
+            hypotheses = [deepest.get(h.segment_id, h) if names.get(h.segment_id) in self._deepened else h
+                          for h in hypotheses]
         hypotheses = [dataclasses.replace(h, object=dataclasses.replace(h.object, name=names[h.segment_id]))
-                      if h.segment_id in names else h
-                      for h in estimate_objects(belief.observation, belief.shelf, config)]
+                      if h.segment_id in names else h for h in hypotheses]
         deeper = ObservedBelief(belief.observation, belief.shelf, belief.source, background=belief.background,
                                 hypotheses=hypotheses, p1d=belief.p1d, remembered=belief.remembered)
         known = deeper.known

@@ -87,6 +87,11 @@ class BeliefOptions:
     (a disc of the cup's diameter, at the segment's depth, inside its mask with dropped returns closed); it stays an
     obstacle. A sliver of an object seen above or beside a nearer one is a hypothesis of its own, far smaller than
     the object: a move planned on it moves the whole object (:meth:`BeliefSearch.unaimable`)."""
+    deepen_failed: bool = False
+    """Camera mode: an object whose suction placement failed (put back, or stopped early) is assumed, from then on
+    for the trial, as deep and wide as the frame allows (its extent range's farthest edges, the estimator's
+    ``DepthPrior(rule="range", fraction=1)``) rather than the least depth: its unseen part is the likeliest cause,
+    and a deeper object's failed placement box covers the neighbouring placements that fail alike."""
     shuttle_last_resort: bool = False
     """When the corrections screen out every feasible candidate and some only as shuttles (a move back against the
     object's last move that uncovers no new width), those shuttles are offered rather than stopping with no action
