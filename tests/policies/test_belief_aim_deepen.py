@@ -1,0 +1,70 @@
+"""slax-belief's camera-mode options ``aim_visible`` (no action on a hypothesis whose segment shows no cup-sized
+patch) and ``deepen_failed`` (an object whose placement failed is assumed as deep as the frame allows)."""
+
+import pytest
+
+from slax_drake.policies.registry import make_policy
+from slax_drake.scene import Camera
+from slax_drake.scene.model import Scene, Shelf, Target, planar_pose
+from slax_drake.shelf.simulator import CameraObserver
+
+from shelf_scenes import TARGET, box
+
+
+def _observe(paper, objects):
+    scene = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), tuple(objects),
+                  Target(TARGET, planar_pose(0.2, 0.22, 0.03, 0.0)), 7)
+    obs, names = CameraObserver(scene.shelf, scene.camera, TARGET, width=160).observe(scene)
+    return scene, obs, names
+
+
+def _sliver_scene(paper):
+    """A wide box in front and, behind it, a box 1 cm taller: the frame shows the far box only as a strip of its
+    top above the near one."""
+    return [box("near", -0.05, -0.15, 0.30, 0.10, 0.20), box("far", -0.05, 0.12, 0.20, 0.12, 0.21),
+            box("free", 0.22, -0.15, 0.08, 0.08, 0.15)]
+
+
+def test_aim_visible_takes_no_action_on_a_sliver_and_keeps_it_an_obstacle(paper):
+    scene, obs, names = _observe(paper, _sliver_scene(paper))
+    by_true = {names[h.object.name]: h for h in obs.belief.hypotheses}
+    assert set(by_true) == {"near", "far", "free"}
+    sliver = by_true["far"].object.name
+    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"aim_visible": True})
+    policy.reset()
+    unaimable = policy.unaimable(obs)
+    assert unaimable == {sliver}, (unaimable, {n: h.pixels for n, h in by_true.items()})
+    decision = policy.decide(obs)
+    assert decision.candidates and all(a.name != sliver for a in decision.candidates)
+    feasible = policy.action_model.enumerate(obs.known).feasible
+    assert feasible and all(a.name != sliver for a in feasible)
+    assert sliver in {o.name for o in obs.known}  # still an obstacle of the plans
+    plain = make_policy("slax-belief", paper, horizon=4)
+    plain.reset()
+    plain.decide(obs)
+    assert any(a.name == sliver for a in plain.action_model.enumerate(obs.known).feasible)
+
+
+def test_deepen_failed_assumes_the_object_of_a_failed_placement_as_deep_as_the_frame_allows(paper):
+    """A 0.16 m deep box seen face on: its hypothesis is as deep as the frame shows. After a suction of it whose
+    placement failed (the next frame shows it where it was), the policy plans on it deeper, its front face kept."""
+    scene, obs, names = _observe(paper, [box("deep", 0.05, 0.0, 0.12, 0.16, 0.15)])
+    (seen,) = obs.known
+    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"deepen_failed": True})
+    policy.reset()
+    assert policy.with_camera_hypotheses(obs) is obs  # nothing failed yet
+    policy._camera_mode = True
+    policy._last = ((-0.2, -0.08, -0.05, 0.05), seen.name)  # the placement box the suction predicted
+    policy.note_outcome(obs.known)  # the object stands where it stood: the placement failed
+    deeper = policy.with_camera_hypotheses(obs)
+    (assumed,) = deeper.known
+    assert assumed.name == seen.name
+    assert assumed.size[1] > seen.size[1] + 0.05
+    front = lambda o: o.center[1] - o.size[1] / 2  # noqa: E731 (square to the walls)
+    assert front(assumed) == pytest.approx(front(seen), abs=0.005)
+    off = make_policy("slax-belief", paper, horizon=4)
+    off.reset()
+    off._camera_mode = True
+    off._last = ((-0.2, -0.08, -0.05, 0.05), seen.name)
+    off.note_outcome(obs.known)
+    assert off.with_camera_hypotheses(obs) is obs
