@@ -10,13 +10,19 @@ threshold, the action-model rules (and the content of a reach map they name) and
 constructor options (the physics benchmark adds the station file's content and object sleep). A run into a folder
 recorded with other values is refused before anything runs, with one line naming the first setting that differs; a
 policy new to the folder is added to the record.
+
+The record also names the code that ran (``code``: slax-drake's version and, in a git checkout, the commit, with
+"+changes" when tracked files differ from it; every distinct one that wrote into the folder, in order). It is not
+compared: a default changed in the code (a segmenter's rule, an estimator's) shows there, not in the settings.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
+import subprocess
 from pathlib import Path
 
 from slax_drake.errors import SettingsMismatchError
@@ -50,6 +56,24 @@ def file_digest(path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+@functools.lru_cache(maxsize=1)
+def code_version() -> str:
+    """"slax-drake <version>", with " (git <commit>)" when the package runs from a git checkout (" +changes" when
+    tracked files differ from the commit). Read once per process."""
+    from slax_drake import __version__
+
+    text = f"slax-drake {__version__}"
+    here = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "-C", str(here), "rev-parse", "--short=10", "HEAD"], capture_output=True,
+                                text=True, timeout=10, check=True).stdout.strip()
+        changed = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
+                                 capture_output=True, text=True, timeout=10, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return text
+    return f"{text} (git {commit}{' +changes' if changed else ''})" if commit else text
+
+
 def policy_settings(names) -> dict:
     """Per policy name: its registry class and constructor options (what makes it that policy)."""
     from slax_drake.policies.registry import POLICY_TABLE
@@ -78,6 +102,7 @@ def protocol_settings(scenario, config: str, seed: int, perception: str, tool_ru
         "tool_rules": dict(tool_rules),
         "oracle_seconds": oracle_seconds,
         "policies": policy_settings(policies),
+        "code": [code_version()],
     }
     if tool_rules.get("reach_map"):  # the rule names a file: its content is what decides, not its path
         from slax_drake.shelf.reach import reach_map_file
@@ -133,6 +158,8 @@ def record_or_refuse(out: Path, settings: dict, has_results: bool, name: str = S
         for key in INFORMATIONAL:  # the first run's paths stay on record
             if key in recorded:
                 merged[key] = recorded[key]
+        codes = list(recorded.get("code", []))  # every code that wrote into the folder, in order
+        merged["code"] = codes + [c for c in settings.get("code", []) if c not in codes]
     elif has_results:
         raise SettingsMismatchError(f"{out} holds results but no {name} (made by an older slax-drake): its "
                                     "settings are unknown; use another --out")

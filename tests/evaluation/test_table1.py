@@ -90,3 +90,19 @@ def test_a_record_from_before_observation_modes_counts_as_privileged(sim_scenari
     del record["observation"], record["camera"]
     path.write_text(json.dumps(record))
     run_benchmark(sim_scenario, ["dar"], 1, 0, tmp_path, densities=[4], progress=False)  # resumes: not refused
+
+
+def test_the_record_names_every_code_that_wrote_into_the_folder_and_does_not_compare_it(sim_scenario, tmp_path):
+    from slax_drake import __version__
+    from slax_drake.evaluation.settings import code_version
+
+    run_benchmark(sim_scenario, ["dar"], 1, 0, tmp_path, densities=[4], progress=False)
+    path = tmp_path / "settings.json"
+    record = json.loads(path.read_text())
+    assert record["code"] == [code_version()] and code_version().startswith(f"slax-drake {__version__}")
+    record["code"] = ["slax-drake 0.0.1 (git 0123456789)"]  # an older code made the folder
+    path.write_text(json.dumps(record))
+    run_benchmark(sim_scenario, ["dar"], 2, 0, tmp_path, densities=[4], progress=False)  # resumes: not refused
+    assert json.loads(path.read_text())["code"] == ["slax-drake 0.0.1 (git 0123456789)", code_version()]
+    run_benchmark(sim_scenario, ["dar"], 2, 0, tmp_path, densities=[4], progress=False)
+    assert len(json.loads(path.read_text())["code"]) == 2  # the same code is named once
