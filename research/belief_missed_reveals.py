@@ -290,15 +290,13 @@ def probe_decision(policy, tap: SearchTap, scene, step: int, oracle, remaining: 
 def run(density: int, index: int, scenario, args) -> tuple[list[Probe], object]:
     """Replays the policy on Table I trial (density, index) with the benchmark's loop (the privileged observation,
     the first-order executor); returns the probes and the trial's outcome (revealed, actions)."""
-    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
     from slax_drake.policies.registry import make_policy
     from slax_drake.shelf.simulator import execute, observation_for
-    from slax_drake.scene.sampling import sample_scene, target_visible_fraction
+    from slax_drake.scene.sampling import target_visible_fraction
 
-    size = tuple(scenario.target.sizes[0])
     threshold = scenario.target.visibility_threshold
-    scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
-                         target_size=size)
+    scene = protocol_scene(scenario, density, scene_seed(args.seed, density, index))
     horizon = scenario.protocol.horizon_per_object * density
     policy = make_policy(args.policy, scenario, horizon=horizon, profile=args.profile,
                          policy_options=json.loads(args.options))

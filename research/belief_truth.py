@@ -18,10 +18,9 @@ import sys
 import numpy as np
 
 from slax_drake.config import load_scenario
-from slax_drake.evaluation.table1 import scene_seed
+from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.simulator import run_trial
-from slax_drake.scene.sampling import sample_scene
 
 
 def truth_rows(policy, truth_xy: np.ndarray, decide):
@@ -51,7 +50,6 @@ def main():
     ap.add_argument("--quiet", action="store_true", help="one line per trial")
     args = ap.parse_args()
     scenario = load_scenario(args.config)
-    size = tuple(scenario.target.sizes[0])
     try:
         trials = [tuple(int(v) for v in spec.split(":")) for spec in args.trials]
         if any(len(t) != 2 for t in trials):
@@ -60,8 +58,7 @@ def main():
         print(f"error: trials must be density:index pairs such as 10:9 (got {' '.join(args.trials)})", file=sys.stderr)
         return 2
     for density, index in trials:
-        scene = sample_scene(scenario, scenario.protocol.occluders(density), scene_seed(args.seed, density, index),
-                             target_size=size)
+        scene = protocol_scene(scenario, density, scene_seed(args.seed, density, index))
         horizon = scenario.protocol.horizon_per_object * density
         policy = make_policy("slax-belief", scenario, horizon=horizon, profile=args.profile)
         truth = np.asarray(scene.target.X_ST[:2, 3], dtype=float)

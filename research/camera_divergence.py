@@ -36,7 +36,7 @@ from slax_drake.shelf.actions import Push, Suction
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.simulator import execute
 from slax_drake.scene.raycast import SceneRaycaster
-from slax_drake.scene.sampling import sample_scene
+from slax_drake.evaluation.table1 import protocol_scene
 
 _PUSH = re.compile(r"push (\S+) d=([-+\d.]+)$")
 _SUCTION = re.compile(r"suction (\S+) dx=([-+\d.]+) dz=([-+\d.]+)$")
@@ -80,8 +80,7 @@ def blockers(scene, action, model) -> list[str]:
 def classify_trial(scenario, trial: dict, model, width: int = 160) -> list[tuple[int, str, str]]:
     """(step, note kind, blocker class) for every wasted action of a camera trial (see the module docstring)."""
     density = trial["density"]
-    size = tuple(scenario.target.sizes[0])
-    scene = sample_scene(scenario, scenario.protocol.occluders(density), trial["seed"], target_size=size)
+    scene = protocol_scene(scenario, density, trial["seed"])
     cam = scene.camera
     camera = cam.with_resolution(width, max(1, int(round(cam.height * width / cam.width))))
     names = [o.name for o in scene.objects]

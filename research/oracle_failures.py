@@ -18,11 +18,11 @@ import sys
 from pathlib import Path
 
 from slax_drake.config import load_scenario
-from slax_drake.evaluation.table1 import scene_seed
+from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.shelf.actions import ActionModel, Push
 from slax_drake.shelf.tool import tool_config
 from slax_drake.shelf.visibility import TargetOcclusion
-from slax_drake.scene.sampling import sample_scene, shelf_of
+from slax_drake.scene.sampling import shelf_of
 
 
 def push_evidence(model: ActionModel, objects, fixed, name: str) -> list[str]:
@@ -71,8 +71,7 @@ def main():
         model = ActionModel(shelf_of(scenario), scenario.camera.position,
                             tool_config(scenario, profile, **(trial.get("tool_rules") or {})))
         n, index = trial["density"], trial["index"]
-        scene = sample_scene(scenario, scenario.protocol.occluders(n), scene_seed(scenario.protocol.seed, n, index),
-                             target_size=tuple(scenario.target.sizes[0]))
+        scene = protocol_scene(scenario, n, scene_seed(scenario.protocol.seed, n, index))
         occlusion = TargetOcclusion(scene, threshold=scenario.target.visibility_threshold)
         fixed = (scene.target.as_object(),)
         occluders = [(o, occlusion.hidden_bits(o).bit_count() / max(1, occlusion.n)) for o in scene.objects]

@@ -54,18 +54,16 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from slax_drake.config import load_scenario
     from slax_drake.errors import UserError
-    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
     from slax_drake.hardware.check_action import make_checker
     from slax_drake.shelf.actions import ActionModel
     from slax_drake.shelf.tool import parse_tool_rules
-    from slax_drake.scene.sampling import sample_scene
 
     try:
         earlier = _earlier_candidates(args.compare) if args.compare else None  # read before the long run
         scenario = load_scenario(args.config)
         baseline = parse_tool_rules(args.baseline) if args.baseline else None
         seed = scenario.protocol.seed if args.seed is None else args.seed
-        size = tuple(scenario.target.sizes[0])
         rows = collections.defaultdict(lambda: collections.Counter())
         times = collections.defaultdict(list)
         why = collections.Counter()
@@ -73,8 +71,7 @@ def main(argv=None) -> int:
         print(f"{args.station} on {args.config}: {args.scenes} scenes per density, protocol seed {seed}", flush=True)
         for n in args.densities:
             for index in range(args.scenes):
-                scene = sample_scene(scenario, scenario.protocol.occluders(n), scene_seed(seed, n, index),
-                                     target_size=size)
+                scene = protocol_scene(scenario, n, scene_seed(seed, n, index))
                 checker = make_checker(scene, args.station)
                 cands = checker.candidates()
                 removed = []
