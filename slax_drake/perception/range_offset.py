@@ -52,10 +52,17 @@ def shelf_range_calibration(observation: Observation, shelf: Shelf, config: Rang
     """The frame's range offset and range noise, measured on the back panel (see the module docstring). Offset and
     noise are 0 when fewer than ``config.min_pixels`` panel pixels are seen; the offset is also 0 when it lies
     beyond ``config.max_offset`` or within ``config.deadband``."""
-    camera = observation.camera
-    depth = observation.depth
-    free = (observation.segmentation == 0) & ~observation.target_mask & (depth > 0)
-    v, u = np.nonzero(free)
+    free = (observation.segmentation == 0) & ~observation.target_mask
+    return range_calibration(observation.depth, observation.camera, shelf, free, config)
+
+
+def range_calibration(depth: np.ndarray, camera, shelf: Shelf, candidates: np.ndarray,
+                      config: RangeOffsetConfig = RangeOffsetConfig()) -> RangeCalibration:
+    """:func:`shelf_range_calibration` on a depth image (H, W) metres of ``camera``'s resolution, reading the
+    ``candidates`` pixels (bool, H x W) with a return: those whose point lies within ``config.band`` of the back
+    panel's plane and whose ray meets the panel inside the bay. Before any segmentation, every pixel may be a
+    candidate (the band keeps the objects' pixels out but for a few right against the panel; the median holds)."""
+    v, u = np.nonzero(candidates & (depth > 0))
     if len(v) == 0:
         return RangeCalibration(0.0, 0.0, 0)
     z = depth[v, u].astype(np.float64)

@@ -2,7 +2,9 @@
 
 1. Foreground: every pixel is back-projected with the camera model into the shelf frame S; a point counts as an
    object when it stands above the support surface and inside the bay, away from the side walls, top and back
-   panel by ``margin`` metres (the shelf and the camera are static relative to each other, Sec. III).
+   panel by ``margin`` metres (the shelf and the camera are static relative to each other, Sec. III). The frame's
+   range offset, measured on the back panel (:func:`~slax_drake.perception.range_offset.range_calibration`), is
+   taken off first: a camera reading 5 mm short made the whole panel foreground, a mosaic of small instances.
 2. Depth discontinuities: a pixel whose depth differs from a 4-neighbour by more than
    ``max(jump_abs, jump_rel * depth)`` lies on an edge between instances (an occluder in front of another), and so
    does a pixel at the bottom of a concave crease (:func:`concave_creases`): every object is convex, so a valley in
@@ -120,7 +122,7 @@ def concave_creases(depth: np.ndarray, camera: Camera, jump_abs: float = 0.01, j
 
 def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float = 0.006,
                   jump_abs: float = 0.01, jump_rel: float = 0.02, min_pixels: int | None = None,
-                  creases: bool = True) -> np.ndarray:
+                  creases: bool = True, correct_range_offset: bool = True) -> np.ndarray:
     """Depth image (H, W) metres -> instance labels (H, W) int32: 0 shelf/background, 1..K objects, numbered
     left to right by their leftmost pixel. ``camera`` must have the image's resolution."""
     depth = np.asarray(depth, dtype=np.float32)
@@ -131,7 +133,13 @@ def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float
         )
     if min_pixels is None:  # about a 1 cm x 1 cm patch at 1 m
         min_pixels = max(4, int(round(depth.size * 2e-4)))
-    fg = foreground_mask(depth, camera, shelf, margin)
+    if correct_range_offset:  # a range offset moves the back panel past the margin: all of it was foreground
+        from slax_drake.perception.range_offset import range_calibration
+
+        offset = range_calibration(depth, camera, shelf, np.ones(depth.shape, bool)).offset
+        fg = foreground_mask(np.where(depth > 0, depth - offset, 0.0), camera, shelf, margin)
+    else:
+        fg = foreground_mask(depth, camera, shelf, margin)
     core = fg & ~depth_edges(depth, jump_abs, jump_rel)
     crease = concave_creases(depth, camera, jump_abs, jump_rel) if creases else np.zeros(depth.shape, bool)
     core &= ~crease
