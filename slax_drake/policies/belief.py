@@ -106,6 +106,11 @@ walls. The options below address these; all but ``seen_target`` and ``uncover_se
   of it (its object hides fewer of the worlds' target points after it) is a first move even where the no-return
   and no-shuttle corrections refuse it (:meth:`uncovering_moves`; ``decision_log`` records ``uncovering``): an
   object carried in front of the target by an earlier action must be allowed back.
+- ``aim_visible``: no action on a hypothesis whose segment shows no disc of the cup's diameter (a sliver of an
+  object seen above or beside a nearer one: a move planned on it moves the whole object); it stays an obstacle
+  (:meth:`unaimable`);
+- ``deepen_failed``: an object whose suction placement failed is estimated, for the rest of the trial, with the
+  range prior at its farthest (:meth:`with_camera_hypotheses`).
 
 The privileged path does not read any of them. The measurements behind each option's default are in the
 research note docs/research/slax_belief.md.
