@@ -24,6 +24,10 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
    its points near that edge (the band follows the range noise measured on the back panel). The extents are
    grown by half a pixel's footprint on the silhouette sides (pixel centres sample the surface, the edge lies on
    average half a pixel beyond the outermost centre).
+4b. A segment whose fit stands mostly inside a larger segment's (its observed footprint, grown by 5 mm, at least
+   ``contained_share`` inside the other's footprint with its prior; ``drop_contained``) is a part of that object,
+   cut off by a depth-only segmentation (a top face seen as one row, a sliver beside the occluder), and yields no
+   hypothesis: two objects cannot stand in one place.
 5. The unseen depth -- the part of the object behind its visible surfaces -- is a stated prior
    (:class:`DepthPrior`): along each axis the box extends away from the camera to at least
 
@@ -131,6 +135,8 @@ class EstimatorConfig:
     floor_band: float = 0.015  # points this close to the support surface are left out (noisy floor)
     back_wall_band: float = 0.015  # ... and this close to the back panel (a range offset joins it to segments)
     overlap_tolerance: float = 1e-4  # m^2 of footprint overlap allowed between hypotheses
+    drop_contained: bool = True  # a segment whose fit lies mostly inside a larger segment's is a part of it
+    contained_share: float = 0.5  # ... the share of its observed footprint (grown by 5 mm) inside the other's
     wall_clearance: float = 0.0  # the prior keeps boxes this far inside the walls
     # The frame's range offset, measured on the shelf's back panel (not the support surface: see
     # :mod:`slax_drake.perception.range_offset`), is taken off every return before fitting; False: the depths are
@@ -244,7 +250,8 @@ class _Box:
 def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorConfig = EstimatorConfig()
                      ) -> list[Hypothesis]:
     """One hypothesis per occluder segment with at least ``config.min_points`` valid pixels off the back panel
-    (farther than ``config.back_wall_band`` from it), in segment order."""
+    (farther than ``config.back_wall_band`` from it) that is not a part of a larger segment's object (step 4b), in
+    segment order."""
     calibration = shelf_range_calibration(observation, shelf)
     if config.correct_range_offset:
         observation = without_range_offset(observation, calibration.offset)
@@ -264,6 +271,8 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
             continue
         left, right = _occluded_sides(observation, mask, sid, config.occluded_row_fraction)
         fits.append((sid, int(mask.sum()), left, right, _fit(p, columns, eye, camera, left, right, config, noise)))
+    if config.drop_contained:
+        fits = _without_contained(fits, config)
     boxes = [f[4] for f in fits]
     if config.prior.rule == "range":
         for i, fit in enumerate(boxes):
@@ -280,6 +289,29 @@ def estimate_objects(observation: Observation, shelf: Shelf, config: EstimatorCo
             h = dataclasses.replace(h, uncertainty=dataclasses.replace(h.uncertainty, extent=extent))
         out.append(h)
     return out
+
+
+def _without_contained(fits: list, config: EstimatorConfig) -> list:
+    """``fits`` (sid, pixels, left, right, _Fit) less those that are a part of a larger segment's object: the fit's
+    observed footprint, grown by 5 mm (a one-row strip has next to no area), lies at least ``config.contained_share``
+    inside the footprint of a fit of more pixels (with its prior). Two objects cannot stand in one place: a
+    depth-only segmentation cuts a box's top face seen as one row, or a sliver of an object beside its occluder,
+    into a segment of its own, whose fit (a 1 cm box, a 2 cm cylinder) stands inside the object's own fit. Fitted
+    alone, it was shrunk or moved out of the way (the farther one gives way) and became a hypothesis of its own."""
+    order = sorted(range(len(fits)), key=lambda k: fits[k][1])
+    full = [_fit_footprint(f[4], 1.0).polygon() for f in fits]
+    dropped = set()
+    for rank, i in enumerate(order):
+        own = _fit_footprint(fits[i][4], 0.0).polygon().buffer(0.005)
+        if own.area <= 0:
+            continue
+        for j in order[rank + 1:]:
+            if j in dropped or fits[j][1] <= fits[i][1]:
+                continue
+            if own.intersection(full[j]).area >= config.contained_share * own.area:
+                dropped.add(i)
+                break
+    return [f for k, f in enumerate(fits) if k not in dropped]
 
 
 def _segment_points(depth: np.ndarray, camera, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -260,3 +260,34 @@ def test_a_segment_of_back_panel_returns_yields_no_hypothesis(scenes, renderers)
     ids = [h.segment_id for h in hypotheses]
     assert panel_id not in ids
     assert ids == [h.segment_id for h in estimate_objects(observation, scene.shelf)]
+
+
+def test_a_fragment_whose_fit_stands_inside_a_larger_segments_object_is_no_hypothesis():
+    """Table I scene 10:19, depth-only segmentation: a 51 px sliver of object_8 (a cylinder 0.153 m across) was fitted
+    as a 1.6 cm cylinder inside object_8's own hypothesis (shrunk there by the separation of overlapping fits), and
+    scene 8:8's one-row top face of object_3 as a 1 cm box inside object_3's. Each object now has one hypothesis;
+    with the render's labels (one segment per object) nothing is dropped."""
+    import collections
+
+    from slax_drake.config import load_scenario
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
+    from slax_drake.perception.estimator import EstimatorConfig, estimate_objects
+    from slax_drake.shelf.simulator import CameraObserver
+
+    from tests.conftest import REPO
+
+    scenario = load_scenario(REPO / "sim_configs" / "table1.yaml")
+    size = tuple(scenario.target.sizes[0])
+    for density, index, name in ((10, 19, "object_8"), (8, 8, "object_3")):
+        scene = protocol_scene(scenario, density, scene_seed(0, density, index))
+        observation, names = CameraObserver(scene.shelf, scene.camera, size, segmentation="depth").observe(scene)
+        per_object = collections.Counter(names.values())
+        assert per_object[name] == 1, (density, index, per_object)
+        frame = observation.belief.observation
+        kept = estimate_objects(frame, scene.shelf)
+        every = estimate_objects(frame, scene.shelf, EstimatorConfig(drop_contained=False))
+        assert len(every) > len(kept)
+        labels_obs, _ = CameraObserver(scene.shelf, scene.camera, size, segmentation="labels").observe(scene)
+        labelled = labels_obs.belief.observation
+        assert len(estimate_objects(labelled, scene.shelf)) == len(
+            estimate_objects(labelled, scene.shelf, EstimatorConfig(drop_contained=False)))
