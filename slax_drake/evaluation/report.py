@@ -136,6 +136,11 @@ def benchmark_command(folder: ResultFolder) -> str:
     if folder.kind == "table1":
         parts.append(f"--profile {folder.profile}")
         parts.append(f"--observation {meta.get('observation') or settings.get('observation') or 'privileged'}")
+        camera = settings.get("camera") or {}
+        if camera.get("segmentation", "labels") != "labels":
+            parts.append(f"--segmentation {camera['segmentation']}")
+        if camera.get("sensor_noise"):
+            parts.append("--sensor-noise")
         perception = meta.get("perception") or settings.get("perception") or "ground-truth"
         if perception != "ground-truth":
             parts.append(f"--perception {perception}")
@@ -166,6 +171,11 @@ def _median_cost(trials: list[dict], policy: str) -> float | None:
 def _observation_words(folder: ResultFolder) -> str:
     meta = folder.meta
     observation = meta.get("observation") or folder.settings.get("observation") or "privileged"
+    camera = folder.settings.get("camera") or {}
+    if observation == "camera":
+        segmentation = camera.get("segmentation", "labels")
+        observation += (" (depth-only segmentation" if segmentation == "depth" else " (the render's labels")
+        observation += ", L515 depth noise)" if camera.get("sensor_noise") else ")"
     return f"{observation} observation, {meta.get('perception') or 'ground-truth'} distributions"
 
 

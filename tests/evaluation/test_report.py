@@ -91,3 +91,12 @@ def test_report_writes_the_readme_drake_headline_from_the_first_physics_folder(t
     readme.write_text(f"{README_BEGIN}\n{README_END}\n")
     assert main(["report", *folders[:2], "--readme", str(readme)]) == 2
     assert "physics:begin" in capsys.readouterr().err and readme.read_text() == f"{README_BEGIN}\n{README_END}\n"
+
+
+def test_the_command_and_heading_of_a_camera_run_name_its_segmentation_and_noise():
+    from slax_drake.evaluation.report import benchmark_command
+
+    realistic = load_folder(RESULTS / "slax_belief_depth_noise100_d98142d")
+    assert "--observation camera --segmentation depth --sensor-noise --policies" in benchmark_command(realistic)
+    labels = load_folder(RESULTS / "slax_belief_camera100_1339de7")
+    assert "--segmentation" not in benchmark_command(labels) and "--sensor-noise" not in benchmark_command(labels)
