@@ -100,6 +100,7 @@ class DistributionPolicy:
     def decide(self, obs) -> Decision:
         self._history = history_min(obs.p1d, self._history)
         self._objects = obs.known
+        self._exclusions.tolerant = getattr(obs, "belief", None) is not None  # camera mode: estimated poses
         if self.corrected:
             self.learn(obs)
         decision = self.rank(obs)

@@ -24,6 +24,7 @@ the table of :mod:`slax_drake.policies.registry`.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -92,18 +93,32 @@ class Exclusions:
 
     Single actions are excluded for the rest of the trial (an action names its absolute contact point, so it is
     specific to where its object stood); a group (see :func:`action_group`) is excluded while its object stands at
-    the pose it had when the group was excluded (``objects``: the objects the policy last decided on)."""
+    the pose it had when the group was excluded (``objects``: the objects the policy last decided on).
 
-    def __init__(self):
+    ``tolerant`` (set by a policy deciding on a camera frame): estimated poses differ from frame to frame by the
+    estimate's noise, and so do the contact points and placements the actions name, so exact comparison never
+    matches again (a push blocked at once was repeated to the horizon). Then an action is also excluded when an
+    excluded one names the same object, kind and displacement (a push's d; a suction's dx, and its placement dz
+    within ``position_tolerance``) while its object stands within ``position_tolerance`` (m) and
+    ``yaw_tolerance`` (rad) of where it stood then, and a group while its object stands so near its pose then."""
+
+    def __init__(self, position_tolerance: float = 0.01, yaw_tolerance: float = 0.05):
         self._records: list[tuple] = []
         self._actions: set = set()
         self._groups: set = set()
+        self._near: list[tuple] = []  # (action, whole group, the object's pose then) for the tolerant comparison
+        self.tolerant = False
+        self.position_tolerance = position_tolerance
+        self.yaw_tolerance = yaw_tolerance
 
     def add(self, action, reason: str, whole_group: bool, objects) -> None:
         self._records.append((action, reason))
         self._actions.add(action)
         if whole_group:
             self._groups.add((action_group(action), _pose_key(action.name, objects)))
+        pose = _pose_key(action.name, objects)
+        if pose is not None:
+            self._near.append((action, whole_group, pose))
 
     def allowed(self, actions, objects) -> list:
         """``actions`` less the excluded ones (``objects``: the state they were enumerated in)."""
@@ -112,7 +127,28 @@ class Exclusions:
         keep = [a for a in actions if a not in self._actions]
         if self._groups:
             keep = [a for a in keep if (action_group(a), _pose_key(a.name, objects)) not in self._groups]
+        if self.tolerant and self._near:
+            keep = [a for a in keep if not self._near_excluded(a, objects)]
         return keep
+
+    def _near_excluded(self, action, objects) -> bool:
+        pose = _pose_key(action.name, objects)
+        if pose is None:
+            return False
+        for excluded, whole_group, then in self._near:
+            if excluded.name != action.name or not self._same_place(pose, then):
+                continue
+            if whole_group and action_group(excluded) == action_group(action):
+                return True
+            if _same_move(excluded, action, self.position_tolerance):
+                return True
+        return False
+
+    def _same_place(self, a: tuple, b: tuple) -> bool:
+        """Two poses (name, x, y, yaw) of :func:`_pose_key` within the tolerances (a box turned by pi is the same)."""
+        if math.hypot(a[1] - b[1], a[2] - b[2]) > self.position_tolerance:
+            return False
+        return abs((a[3] - b[3] + math.pi / 2) % math.pi - math.pi / 2) <= self.yaw_tolerance
 
     @property
     def records(self) -> tuple:
@@ -120,6 +156,14 @@ class Exclusions:
 
     def __len__(self) -> int:
         return len(self._records)
+
+
+def _same_move(a, b, tolerance: float) -> bool:
+    """Whether actions ``a`` and ``b`` (of one object) move it alike: pushes by the same d; suctions by the same
+    dx to placements dz within ``tolerance`` (m)."""
+    if isinstance(a, Push) or isinstance(b, Push):
+        return isinstance(a, Push) and isinstance(b, Push) and abs(a.d - b.d) < 1e-9
+    return abs(a.dx - b.dx) < 1e-9 and abs(a.dz - b.dz) <= tolerance
 
 
 def read_only(array):

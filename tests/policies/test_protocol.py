@@ -132,3 +132,31 @@ def test_initialize_after_a_context_reset_replays_the_same_trial():
     assert first[0] == "revealed" and first[1] >= 1
     assert trial.planner_system.trial_state(default).log == ()  # the default context holds no trial
     assert run() == first
+
+
+def test_in_camera_mode_an_exclusion_holds_while_the_estimated_object_stands_within_the_tolerance():
+    """Estimated poses, and the contact points and placements named by the actions, move by millimetres from frame to
+    frame: a push blocked at once (excluded with its group) was proposed again at every step to the horizon
+    (Table I 10:52, depth-only with noise). Tolerant exclusions match it; exact ones keep the privileged behaviour."""
+    from slax_drake.policies.protocol import Exclusions
+    from slax_drake.scene.model import SceneObject, planar_pose
+    from slax_drake.shelf.actions import Push, Suction
+
+    def box(x, y, yaw=0.0):
+        return SceneObject("track_3", "box", (0.1, 0.1, 0.15), planar_pose(x, y, 0.075, yaw))
+
+    then, now, moved = (box(0.0, 0.0),), (box(0.004, -0.003, 0.02),), (box(0.03, 0.0),)
+    blocked = Push("track_3", (0.05, -0.05, 0.07), 0.225)
+    again = Push("track_3", (0.054, -0.053, 0.07), 0.150)  # same direction, another contact point and d
+    back = Push("track_3", (-0.046, -0.053, 0.07), -0.100)
+    put_back = Suction("track_3", (0.0, -0.05, 0.1), -0.2, 0.15)
+    retry = Suction("track_3", (0.004, -0.053, 0.1), -0.2, 0.155)
+    elsewhere = Suction("track_3", (0.004, -0.053, 0.1), -0.2, 0.25)
+    exclusions = Exclusions()
+    exclusions.add(blocked, "executed: moved nothing", True, then)
+    exclusions.add(put_back, "executed: put back", False, then)
+    candidates = [again, back, retry, elsewhere]
+    assert exclusions.allowed(candidates, now) == candidates  # exact: nothing matches the new estimates
+    exclusions.tolerant = True
+    assert exclusions.allowed(candidates, now) == [back, elsewhere]
+    assert exclusions.allowed(candidates, moved) == candidates  # the object moved 3 cm: everything may work now
