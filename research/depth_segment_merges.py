@@ -74,10 +74,8 @@ def main(argv=None) -> int:
         print("error: --scenes must be at least 1 and --width at least 16", file=sys.stderr)
         return 2
     from slax_drake.config import ConfigError, load_scenario
-    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
+    from slax_drake.evaluation.table1 import protocol_frame, protocol_scene, scene_seed
     from slax_drake.perception.segmentation import instance_mean_iou, segment_depth
-    from slax_drake.perception.sensor_noise import l515_depth_noise
-    from slax_drake.scene.raycast import SceneRaycaster
 
     try:
         scenario = load_scenario(args.config)
@@ -89,11 +87,7 @@ def main(argv=None) -> int:
         per, ious = collections.Counter(), []
         for index in range(args.scenes):
             scene = protocol_scene(scenario, density, scene_seed(args.seed, density, index))
-            camera = scene.camera.with_resolution(args.width, max(1, round(scene.camera.height * args.width
-                                                                            / scene.camera.width)))
-            depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
-            if args.sensor_noise:
-                depth = l515_depth_noise(depth, camera, index, 0)
+            camera, depth, labels = protocol_frame(scene, args.width, index if args.sensor_noise else None)
             n = len(scene.objects)
             seg = segment_depth(depth, camera, scene.shelf)
             per += frame_counts(depth, labels, seg, n)

@@ -70,6 +70,21 @@ def protocol_scene(scenario, density: int, seed: int):
                         target_size=tuple(scenario.target.sizes[0]))
 
 
+def protocol_frame(scene, width: int = 160, noise_seed: int | None = None):
+    """The camera's first frame of ``scene`` at ``width`` px (the height keeps the camera's aspect), the target
+    included: ``(camera, depth, labels)`` as the ray caster renders them (depth metres along the optical axis;
+    labels 0 shelf, i + 1 for ``scene.objects[i]``, n + 1 the target), the depth with the L515 noise model at step 0
+    when ``noise_seed`` is given."""
+    from slax_drake.perception.sensor_noise import l515_depth_noise
+    from slax_drake.scene.raycast import SceneRaycaster
+
+    camera = scene.camera.with_resolution(width, max(1, round(scene.camera.height * width / scene.camera.width)))
+    depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
+    if noise_seed is not None:
+        depth = l515_depth_noise(depth, camera, noise_seed, 0)
+    return camera, depth, labels
+
+
 def _trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return out / "trials" / policy / f"{density:02d}_{index:04d}.json"
 

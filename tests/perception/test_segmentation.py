@@ -81,19 +81,14 @@ def _table1_frame(density: int, index: int, noise: bool = False):
     """The first frame of Table I scene (density, index) of protocol seed 0 at 160 px: depth (with the L515 noise
     seeded by the scene seed when ``noise``), the render's labels, the camera and the scene."""
     from slax_drake.config import load_scenario
-    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
-    from slax_drake.perception.sensor_noise import l515_depth_noise
-    from slax_drake.scene.raycast import SceneRaycaster
+    from slax_drake.evaluation.table1 import protocol_frame, protocol_scene, scene_seed
 
     from tests.conftest import REPO
 
     scenario = load_scenario(REPO / "sim_configs" / "table1.yaml")
     seed = scene_seed(0, density, index)
     scene = protocol_scene(scenario, density, seed)
-    camera = scene.camera.with_resolution(160, 120)
-    depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
-    if noise:
-        depth = l515_depth_noise(depth, camera, seed, 0)
+    camera, depth, labels = protocol_frame(scene, 160, seed if noise else None)
     return depth, labels, camera, scene
 
 
