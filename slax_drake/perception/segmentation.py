@@ -68,13 +68,20 @@ def foreground_mask(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: flo
         )
 
 
+def jump_limit(depth: np.ndarray, jump_abs: float = 0.01, jump_rel: float = 0.02) -> np.ndarray:
+    """The depth step (H, W) metres beyond which two neighbouring pixels lie on different surfaces:
+    max(``jump_abs``, ``jump_rel`` * depth), ``jump_abs`` where a pixel has no return."""
+    d = np.where(np.isfinite(depth) & (depth > 0), depth, 0.0).astype(np.float64)
+    return np.maximum(jump_abs, jump_rel * d)
+
+
 def depth_edges(depth: np.ndarray, jump_abs: float = 0.01, jump_rel: float = 0.02) -> np.ndarray:
     """Pixels (H, W) bool with a depth jump to a 4-neighbour above max(jump_abs, jump_rel * depth) metres."""
     d = np.where(np.isfinite(depth), depth, 0.0).astype(np.float64)
     edges = np.zeros(d.shape, dtype=bool)
     dx = np.abs(np.diff(d, axis=1))
     dy = np.abs(np.diff(d, axis=0))
-    limit = np.maximum(jump_abs, jump_rel * d)
+    limit = jump_limit(depth, jump_abs, jump_rel)
     jx = dx > np.minimum(limit[:, 1:], limit[:, :-1])
     jy = dy > np.minimum(limit[1:, :], limit[:-1, :])
     edges[:, 1:] |= jx
@@ -100,7 +107,7 @@ def concave_creases(depth: np.ndarray, camera: Camera, jump_abs: float = 0.01, j
     window must be within twice the jump limit max(``jump_abs``, ``jump_rel`` z) (larger steps are occluding edges,
     found by :func:`depth_edges`), and every pixel of it must have a return."""
     d = np.where(np.isfinite(depth) & (depth > 0), depth, np.nan).astype(np.float64)
-    limit = 2.0 * np.maximum(jump_abs, jump_rel * np.nan_to_num(d, nan=0.0))
+    limit = 2.0 * jump_limit(depth, jump_abs, jump_rel)
     threshold = np.maximum(3.0 * np.sqrt(6.0) * range_sigma / baseline,
                            min_bend * np.nan_to_num(d, nan=0.0) / camera.fx)
     valley = np.zeros(d.shape, dtype=bool)
@@ -143,7 +150,7 @@ def segment_depth(depth: np.ndarray, camera: Camera, shelf: Shelf, margin: float
     core = fg & ~depth_edges(depth, jump_abs, jump_rel)
     crease = concave_creases(depth, camera, jump_abs, jump_rel) if creases else np.zeros(depth.shape, bool)
     core &= ~crease
-    limit = np.maximum(jump_abs, jump_rel * np.where(np.isfinite(depth), depth, 0.0))
+    limit = jump_limit(depth, jump_abs, jump_rel)
     labels = _components(core, min_pixels)
     labels = grow_by_depth(labels, fg, depth, limit)
     # What no instance reached is a surface of its own: a sliver of an object seen between or above nearer
