@@ -81,11 +81,16 @@ def action_group(action) -> tuple:
     return ("suction", action.name)
 
 
-def _pose_key(name: str, objects) -> tuple | None:
-    """Object ``name``'s planar pose in ``objects`` as :func:`~slax_drake.scene.model.state_key` rounds it."""
+def _pose_keys(objects) -> dict:
+    """Per object name in ``objects``, its planar pose as :func:`~slax_drake.scene.model.state_key` rounds it."""
     from slax_drake.scene.model import state_key
 
-    return next((k for k in state_key(tuple(objects)) if k[0] == name), None)
+    return {k[0]: k for k in state_key(tuple(objects))}
+
+
+def _pose_key(name: str, objects) -> tuple | None:
+    """Object ``name``'s planar pose in ``objects`` (:func:`_pose_keys`), None when it is not among them."""
+    return _pose_keys(objects).get(name)
 
 
 class Exclusions:
@@ -114,9 +119,9 @@ class Exclusions:
     def add(self, action, reason: str, whole_group: bool, objects) -> None:
         self._records.append((action, reason))
         self._actions.add(action)
-        if whole_group:
-            self._groups.add((action_group(action), _pose_key(action.name, objects)))
         pose = _pose_key(action.name, objects)
+        if whole_group:
+            self._groups.add((action_group(action), pose))
         if pose is not None:
             self._near.append((action, whole_group, pose))
 
@@ -125,14 +130,16 @@ class Exclusions:
         if not self._actions:
             return list(actions)
         keep = [a for a in actions if a not in self._actions]
+        poses = _pose_keys(objects)  # per object name, computed once for every candidate
         if self._groups:
-            keep = [a for a in keep if (action_group(a), _pose_key(a.name, objects)) not in self._groups]
+            keep = [a for a in keep if (action_group(a), poses.get(a.name)) not in self._groups]
         if self.tolerant and self._near:
-            keep = [a for a in keep if not self._near_excluded(a, objects)]
+            keep = [a for a in keep if not self._near_excluded(a, poses.get(a.name))]
         return keep
 
-    def _near_excluded(self, action, objects) -> bool:
-        pose = _pose_key(action.name, objects)
+    def _near_excluded(self, action, pose: tuple | None) -> bool:
+        """Whether ``action``, its object standing at ``pose`` (:func:`_pose_key`), is excluded within the
+        tolerances."""
         if pose is None:
             return False
         for excluded, whole_group, then in self._near:
