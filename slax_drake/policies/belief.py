@@ -353,14 +353,14 @@ class BeliefSearch(Hindsight):
         from slax_drake.perception.estimator import DepthPrior, EstimatorConfig, estimate_objects
 
         names = {h.segment_id: h.object.name for h in belief.hypotheses}  # the tracker's names, when it runs
-        if self.camera_extents is not None or self.camera_depth is not None:
-            if self.camera_extents is not None:
-                config = EstimatorConfig(prior=DepthPrior(rule="range", fraction=float(self.camera_extents)))
-            else:
-                config = EstimatorConfig(prior=DepthPrior(rule="fixed", fixed=float(self.camera_depth)))
-            hypotheses = estimate_objects(belief.observation, belief.shelf, config)
+        if self.camera_extents is not None:
+            prior = DepthPrior(rule="range", fraction=float(self.camera_extents))
+        elif self.camera_depth is not None:
+            prior = DepthPrior(rule="fixed", fixed=float(self.camera_depth))
         else:
-            hypotheses = list(belief.hypotheses)
+            prior = None  # the observer's hypotheses, but for the deepened ones below
+        hypotheses = (list(belief.hypotheses) if prior is None
+                      else estimate_objects(belief.observation, belief.shelf, EstimatorConfig(prior=prior)))
         if deepened:  # the objects whose placement failed, as deep and wide as the frame allows
             deepest = {h.segment_id: h for h in estimate_objects(
                 belief.observation, belief.shelf, EstimatorConfig(prior=DepthPrior(rule="range", fraction=1.0)))}
