@@ -89,7 +89,7 @@ def register(subparsers) -> None:
         "                 where the target's colour is seen\n"
         "  --joint-state  the arm's positions when the frame was taken, from /joint_states (sensor_msgs/\n"
         "                 JointState: name and position fields), as {\"joint_names\": [...], \"positions\": [...]}\n"
-        "  --history      the previous step's OUT, so that the policy's history carries over between steps")
+        "  --history      the previous step's OUT, so that the policy remembers its search (earlier steps are replayed)")
     s.add_argument("--scenario", default=None,
                    help="station YAML (e.g. sim_configs/station_sim_shelf.yaml; with --from-trial: the trial's)")
     s.add_argument("--depth", default=None, help="depth frame: .npy (float metres) or .png (16-bit millimetres)")
@@ -101,7 +101,8 @@ def register(subparsers) -> None:
                    "the trial in DIR (written beside OUT in OUT_STEM_inputs/)")
     s.add_argument("--step", type=arguments.positive_int, default=None,
                    help="with --from-trial: the decision, 1 to the trial's count (as its 'step N/H' lines count)")
-    s.add_argument("--history", default=None, help="the previous step's OUT (carries the policy's history over)")
+    s.add_argument("--history", default=None,
+                   help="the previous step's OUT (its frames are replayed: the policy remembers its search)")
     s.add_argument("--policy", default="bluction-dar", help="a non-oracle policy name (default bluction-dar)")
     s.add_argument("--out", required=True, help="output step JSON (the export format, ros-json)")
     s.set_defaults(func=run_plan_step)
@@ -356,6 +357,9 @@ def run_plan_step(args: argparse.Namespace) -> int:
     motion = result.trajectory.motions[0]
     print(f"{a['type']} {a['object']} ({params}): motion {motion.duration:.2f} s, {plural(len(motion.times), 'point')}, "
           "checked (limits, jerk, continuity, collisions with the believed scene)")
+    steps = len(result.trajectory.metadata["plan_step"]["history"]["frames"]) - 1
+    if steps:
+        print(f"the policy's memory: {plural(steps, 'earlier step')} replayed in {t['replay_s']:.2f} s")
     print(f"perception {t['perception_s']:.3f} s, decision {t['decision_s']:.3f} s, planning and check "
           f"{t['planning_s']:.2f} s; wrote {args.out}")
     return 0

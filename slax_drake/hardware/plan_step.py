@@ -9,8 +9,11 @@ Inputs (files, as a robot's driver writes them):
 - the joint state: JSON ``{"joint_names": [...], "positions": [...]}`` holding at least the nine planned joints
   (``slax_drake.station.robot.PLANNED_JOINTS``; radians, metres for the torso and the tool shaft), or
   ``{name: position}``;
-- optionally the history: the previous ``step.json`` (or its ``metadata.plan_step.history``): P'_{t-1} and the
-  step count, so that the policy's history encoding carries over between calls.
+- optionally the history: the previous ``step.json`` (or its ``metadata.plan_step.history``): P'_{t-1}, the step
+  count, the tracked objects and the frames of the earlier steps with what was decided on them. Those steps are
+  replayed through the same perception and policy before this one (:mod:`slax_drake.hardware.step_memory`), so the
+  policy remembers its search as in a simulated trial: a push that moved nothing is not planned again, an object is
+  not moved back and forth, no arrangement already observed is returned to.
 
 What it does, with nothing but the frame: the frame is validated (:class:`~slax_drake.perception.observation.
 Observation`: an unusable frame -- wrong size or type, millimetres given as metres, mostly no returns -- is refused
@@ -217,18 +220,10 @@ class StepPlanner:
                                 f"({self.camera.width}x{self.camera.height})")
         return self.camera.with_resolution(w, h)
 
-    def perceive(self, depth: np.ndarray, mask: np.ndarray, joint_state=None, history: dict | None = None):
-        """Frame -> (the policy's PolicyObservation, the ObservedBelief). Raises ObservationError for an unusable
-        frame. The hypotheses are named by the objects tracked so far (:class:`~slax_drake.perception.tracking.
-        ObjectTracker`): its state and the action last planned come from ``history`` (``tracks`` and ``action``,
-        as the previous step wrote them), a new tracker without; the updated state is written by this step."""
-        from slax_drake.perception.tracking import ObjectTracker
-        from slax_drake.perception.belief import ObservedBelief
-        from slax_drake.perception.estimator import EstimatorConfig
-        from slax_drake.perception.observation import Observation, occluder_segmentation
-        from slax_drake.perception.segmentation import segment_depth
-        from slax_drake.shelf.simulator import PolicyObservation
-        from slax_drake.scene.model import Scene
+    def working_frame(self, depth: np.ndarray, mask: np.ndarray, joint_state=None):
+        """(depth, target mask) at the policies' working resolution (nearest pixel) after validating the frame
+        (:class:`~slax_drake.perception.observation.Observation`; raises ObservationError for an unusable one)."""
+        from slax_drake.perception.observation import Observation
 
         camera = self.frame_camera(np.asarray(depth))
         mask = np.asarray(mask, dtype=bool)
@@ -236,16 +231,39 @@ class StepPlanner:
             raise PlanStepError(f"target mask of shape {mask.shape} and depth frame of shape {np.shape(depth)} differ")
         full = Observation(depth, np.zeros(mask.shape, np.int32), mask, camera, joint_state)  # validates the frame
         w, h = self.working.width, self.working.height
-        small_depth = resample_nearest(full.depth, w, h)
-        small_mask = resample_nearest(full.target_mask, w, h)
+        return resample_nearest(full.depth, w, h), resample_nearest(full.target_mask, w, h)
+
+    def perceive(self, depth: np.ndarray, mask: np.ndarray, joint_state=None, history: dict | None = None,
+                 replayed=None):
+        """Frame -> (the policy's PolicyObservation, the ObservedBelief). Raises ObservationError for an unusable
+        frame. The hypotheses are named by the objects tracked so far (:class:`~slax_drake.perception.tracking.
+        ObjectTracker`) and the action last planned: ``replayed`` (the tracker and the last action :meth:`replay`
+        left), else the tracker's state and the action in ``history`` (``tracks`` and ``action``, as the previous
+        step wrote them), else a new tracker. The updated state is written by this step."""
+        from slax_drake.perception.tracking import ObjectTracker
+
+        small_depth, small_mask = self.working_frame(depth, mask, joint_state)
+        if replayed is not None:
+            self.tracker, last = replayed
+        else:
+            tracks = (history or {}).get("tracks")
+            self.tracker = ObjectTracker.from_dict(tracks) if isinstance(tracks, dict) else ObjectTracker()
+            last = _action_of((history or {}).get("action"))
+        return self._perceive_working(small_depth, small_mask, joint_state, last)
+
+    def _perceive_working(self, small_depth, small_mask, joint_state, last):
+        """:meth:`perceive` on a frame already at the working resolution, with ``self.tracker`` and the action
+        ``last`` planned before it (None: none)."""
+        from slax_drake.perception.belief import ObservedBelief
+        from slax_drake.perception.estimator import EstimatorConfig, estimate_objects
+        from slax_drake.perception.observation import Observation, occluder_segmentation
+        from slax_drake.perception.segmentation import segment_depth
+        from slax_drake.shelf.simulator import PolicyObservation
+        from slax_drake.scene.model import Scene
+
         segments = occluder_segmentation(segment_depth(small_depth, self.working, self.shelf, margin=PANEL_MARGIN),
                                          small_mask)
         frame = Observation(small_depth, segments, small_mask, self.working, joint_state, min_valid_fraction=0.0)
-        from slax_drake.perception.estimator import estimate_objects
-
-        tracks = (history or {}).get("tracks")
-        self.tracker = ObjectTracker.from_dict(tracks) if isinstance(tracks, dict) else ObjectTracker()
-        last = _action_of((history or {}).get("action"))
         config = EstimatorConfig(overlap_tolerance=HYPOTHESIS_OVERLAP)
         hypotheses = self.tracker.update(estimate_objects(frame, self.shelf, config), last, frame,
                                          Scene(self.shelf, self.working, (), None))
@@ -253,6 +271,43 @@ class StepPlanner:
                                 config=config, remembered=self.tracker.hidden())
         believed = Scene(self.shelf, self.camera, belief.known, None)
         return PolicyObservation(small_depth, segments, belief.known, belief.p1d, believed, belief), belief
+
+    def replay(self, history: dict | None):
+        """Rebuilds the policy's memory of this search (:mod:`slax_drake.hardware.step_memory`): the steps recorded
+        in ``history["frames"]`` are perceived and decided again in order, each candidate the planner rejected there
+        excluded again, and each must choose the action that step chose (else PlanStepError: the history was
+        written by another policy or code version). Leaves the policy as it stood after the last recorded step and
+        returns (the tracker, the last step's action), or None when the history records no frames (a first step,
+        or a history of an older plan-step, which carries only P'_(t-1) and the tracks)."""
+        from slax_drake.hardware.step_memory import decode_frame
+        from slax_drake.perception.tracking import ObjectTracker
+        from slax_drake.systems.planner import _describe
+
+        frames = (history or {}).get("frames") or []
+        if not frames:
+            return None
+        if history.get("policy") not in (None, self.policy_name):
+            raise PlanStepError(f"the history was planned by policy '{history.get('policy')}', this step by "
+                                f"'{self.policy_name}': give the same --policy (or start a new history)")
+        self.tracker, last = ObjectTracker(), None  # _perceive_working updates self.tracker
+        for k, record in enumerate(frames, 1):
+            depth, mask, q = decode_frame(record, k)
+            if depth.shape != (self.working.height, self.working.width):
+                raise PlanStepError(f"history step {k}: a {depth.shape[1]}x{depth.shape[0]} frame, this planner works "
+                                    f"at {self.working.width}x{self.working.height}")
+            observation, _ = self._perceive_working(depth, mask, q, last)
+            if k == 1:
+                self.policy.reset(observation.scene_template)
+            decision = self.policy.decide(observation)
+            for rejected in record.get("rejected") or []:
+                if decision.best is None or decision.best.describe() != rejected.get("action"):
+                    raise _diverged(k, decision.best, rejected.get("action"))
+                self.policy.exclude(decision.best, str(rejected.get("reason")), bool(rejected.get("whole_group")))
+                decision = self.policy.decide(observation)
+            if decision.best is None or _describe(decision.best) != record.get("action"):
+                raise _diverged(k, decision.best, record.get("action"))
+            last = decision.best
+        return self.tracker, last
 
     def decide(self, observation, history: dict | None = None):
         """The policy's Decision on ``observation``, after restoring ``history`` (P'_{t-1})."""
@@ -329,15 +384,19 @@ class StepPlanner:
         self.check_joint_state(q)
         timings = {}
         t0 = time.perf_counter()
-        observation, belief = self.perceive(depth, mask, q, history)
+        replayed = self.replay(history)
+        timings["replay_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        observation, belief = self.perceive(depth, mask, q, history, replayed)
         visibility = self.target_visibility(depth, mask)
         timings["perception_s"] = time.perf_counter() - t0
+        frame = (observation.depth, observation.belief.observation.target_mask, q)  # recorded for the next step
         if visibility["revealed"]:
             reason = (f"the target is revealed: {visibility['share']:.0%} of the {visibility['expected']} pixels "
                       f"its size covers are seen (v = {visibility['threshold']:.0%})")
             return self._nothing(q, source, belief, observation, [], history, timings, reason, visibility)
         t0 = time.perf_counter()
-        decision = self.decide(observation, history)
+        decision = self.decide(observation, history) if replayed is None else self.policy.decide(observation)
         timings["decision_s"] = time.perf_counter() - t0
         believed = observation.scene_template
         rejected, reason = [], decision.stop_reason
@@ -356,13 +415,14 @@ class StepPlanner:
                 if report.ok:
                     timings["planning_s"] = time.perf_counter() - t0
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
-                                                              history, timings, visibility=visibility)
+                                                              history, timings, visibility=visibility, frame=frame)
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings, visibility)
                 why, early, kind, waypoint = "check: " + report.summary().splitlines()[-1], False, "check", None
             else:
                 why, early = motion.reason, motion.failure.early  # failed before the tool reached the object
                 kind, waypoint = motion.failure.kind.value, motion.failure.waypoint
-            rejected.append({"action": action.describe(), "reason": why, "kind": kind, "waypoint": waypoint})
+            rejected.append({"action": action.describe(), "reason": why, "kind": kind, "waypoint": waypoint,
+                             "whole_group": bool(early)})
             self.policy.exclude(action, why, whole_group=early)
             decision = self.policy.decide(observation)
             reason = "no feasible motion"
@@ -413,12 +473,19 @@ class StepPlanner:
         return exported
 
     def _record(self, action, belief, observation, rejected, report, history, timings, reason=None,
-                visibility=None) -> dict:
+                visibility=None, frame=None) -> dict:
+        """The step file's ``metadata.plan_step``; its ``history`` is what the next step reads: P'_t, the tracker's
+        state, the action planned and, per step that planned one, its ``frame`` (working-resolution depth, target
+        mask, joint state) with the candidates rejected on it (:mod:`slax_drake.hardware.step_memory`)."""
+        from slax_drake.hardware.step_memory import encode_frame
         from slax_drake.shelf.distribution import support
         from slax_drake.systems.planner import _describe
 
         steps = int(history.get("steps", 0)) if history else 0
         h = self.policy.history
+        frames = list((history or {}).get("frames") or [])
+        if action is not None and frame is not None:
+            frames.append({**encode_frame(*frame), "rejected": rejected, "action": _describe(action)})
         return {
             "action": None if action is None else _describe(action),
             "reason": reason,
@@ -438,8 +505,16 @@ class StepPlanner:
             "history": {"policy": self.policy_name, "steps": steps + (1 if action is not None else 0),
                         "history": [] if h is None else [float(v) for v in h],
                         "tracks": self.tracker.to_dict() if getattr(self, "tracker", None) is not None else None,
-                        "action": None if action is None else _describe(action)},
+                        "action": None if action is None else _describe(action), "frames": frames},
         }
+
+
+def _diverged(step: int, chosen, recorded) -> PlanStepError:
+    from slax_drake.systems.planner import _describe
+
+    chosen = None if chosen is None else _describe(chosen) if isinstance(recorded, dict) else chosen.describe()
+    return PlanStepError(f"history step {step}: replaying it chooses {chosen} "
+                         f"where that step chose {recorded} (a history of another policy or code version?)")
 
 
 def _action_of(doc):

@@ -129,7 +129,9 @@ def test_round_trip_from_a_noisy_drake_frame_to_a_checked_trajectory(tmp_path, c
     assert main(_args(tmp_path, "frame.npy", "step2.json", "--history", str(tmp_path / "step.json"))) == 0
     again = json.loads((tmp_path / "step2.json").read_text())["metadata"]["plan_step"]
     assert again["history"]["steps"] == 2
-    assert again["history"]["tracks"]["tracks"] and again["history"]["action"] == record["action"]
+    # the same frame again: the first action moved nothing, so the replayed memory excludes it
+    assert again["history"]["tracks"]["tracks"] and again["history"]["action"] != record["action"]
+    assert [f["action"] for f in again["history"]["frames"]] == [record["action"], again["action"]]
     assert all(b <= a + 1e-12 for a, b in zip(record["history"]["history"], again["history"]["history"]))
 
 
@@ -145,3 +147,59 @@ def test_a_step_with_no_action_records_why(tmp_path):
     assert record["action"] is None
     assert record["reasons"] and record["refused"]
     assert all(r["kind"] for r in record["refused"] + record["rejected"])
+
+
+def test_an_action_that_moved_nothing_is_not_planned_again_in_the_next_step(tmp_path):
+    """plan-step's policy remembers its search across calls (the frames of earlier steps are replayed): when the
+    robot reports the same frame after the planned action (it moved nothing), the next step excludes that action
+    and plans another. Before the replay every call started the policy afresh and planned the same action again."""
+    from slax_drake.hardware.plan_step import StepPlanner
+
+    depth = _frame(tmp_path)
+    mask = cv2.imread(str(tmp_path / "mask.png"), cv2.IMREAD_GRAYSCALE) > 0
+    q = np.array(json.loads((tmp_path / "q.json").read_text())["positions"])
+    first = StepPlanner(STATION).plan_step(depth, mask, q)
+    assert first.action is not None
+    history = json.loads(json.dumps(first.trajectory.metadata["plan_step"]["history"]))  # as the file holds it
+    assert len(history["frames"]) == 1 and history["frames"][0]["action"] == first.action
+    second = StepPlanner(STATION).plan_step(depth, mask, q, history)
+    assert second.action is not None and second.action != first.action
+    record = second.trajectory.metadata["plan_step"]
+    assert len(record["history"]["frames"]) == 2 and record["timings_s"]["replay_s"] > 0
+    planner = StepPlanner(STATION)
+    planner.replay(history)
+    assert [why for _, why in planner.policy.exclusions] == []  # the outcome is learned from the next frame
+    planner.policy.decide(planner.perceive(depth, mask, q, history, planner.replay(history))[0])
+    assert any("moved nothing" in why for _, why in planner.policy.exclusions)
+
+
+def test_a_history_that_does_not_replay_is_refused(tmp_path):
+    """A history written by another policy, or whose frame is corrupt or chooses another action when replayed,
+    is refused with one line (PlanStepError, exit code 2), not followed blindly."""
+    from slax_drake.errors import PlanStepError
+    from slax_drake.hardware.plan_step import StepPlanner
+    from slax_drake.hardware.step_memory import decode_frame, encode_frame
+
+    depth = _frame(tmp_path)
+    mask = cv2.imread(str(tmp_path / "mask.png"), cv2.IMREAD_GRAYSCALE) > 0
+    planner = StepPlanner(STATION)
+    small, small_mask = planner.working_frame(depth, mask)
+    record = encode_frame(small, small_mask, None)
+    back, back_mask, q = decode_frame(json.loads(json.dumps(record)), 1)
+    assert np.array_equal(back, small) and np.array_equal(back_mask, small_mask) and q is None
+    observation, _ = planner.perceive(depth, mask)
+    planner.policy.reset(observation.scene_template)
+    from slax_drake.systems.planner import _describe
+
+    chosen = _describe(planner.policy.decide(observation).best)
+    good = {"policy": "bluction-dar", "frames": [{**record, "rejected": [], "action": chosen}]}
+    tracker, last = StepPlanner(STATION).replay(good)
+    assert _describe(last) == chosen and tracker.to_dict()["tracks"]
+    other = {**chosen, "d": 0.5} if chosen["type"] == "push" else {**chosen, "dx": 0.5}
+    cases = {"another policy": {**good, "policy": "dar"},
+             "chooses": {**good, "frames": [{**record, "rejected": [], "action": other}]},
+             "corrupt": {**good, "frames": [{**record, "depth": record["depth"][:-8] + "AAAAAAAA", "rejected": [],
+                                             "action": chosen}]}}
+    for message, history in cases.items():
+        with pytest.raises(PlanStepError, match="policy 'dar'|replaying it chooses|corrupt"):
+            StepPlanner(STATION).replay(history)
