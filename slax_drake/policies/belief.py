@@ -190,6 +190,7 @@ class BeliefSearch(Hindsight):
         super().__init__(*args, samples=o.samples, seconds=o.seconds, failure_cost=o.failure_cost, safe_suctions=False,
                          shuttle_last_resort=o.shuttle_last_resort, **kwargs)
         self.options = o
+        self.put_back_group = o.put_back_group  # camera mode: a suction put back excludes its object's suctions
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
         self._risk_by_box: dict = {}  # placement box -> its placement_risk, for this decision's hidden centres
         self._risk_cache: dict = {}  # (id(object), action) -> (the object, its placement_risk), this decision

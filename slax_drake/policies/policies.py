@@ -68,6 +68,9 @@ class DistributionPolicy:
         # when the corrections leave no candidate, offer the ones screened out only as shuttles rather than stop
         self.shuttle_last_resort = shuttle_last_resort
         self.memory = TrialMemory()
+        # camera mode: a suction that left its object where it stood excludes that object's suctions while it stands
+        # there (slax-belief's option ``put_back_group``); False: only that action is excluded
+        self.put_back_group = False
         self._action_model = action_model
         self.distribution = distribution
         self.psi = psi
@@ -115,8 +118,8 @@ class DistributionPolicy:
         if failed is not None:
             proposal, how = failed
             unchanged = how.miss is Miss.UNCHANGED
-            self._exclusions.add(proposal.action, f"executed: {how.message}",
-                                 unchanged and isinstance(proposal.action, Push), proposal.before)
+            group = isinstance(proposal.action, Push) or (self.put_back_group and self._exclusions.tolerant)
+            self._exclusions.add(proposal.action, f"executed: {how.message}", unchanged and group, proposal.before)
         self.memory.observe(obs.known)
 
     def exclude(self, action, reason: str, whole_group: bool = False) -> None:

@@ -99,6 +99,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # when the corrections leave nothing but shuttles, a shuttle rather than no action (docs/research/tracking.md)
     "slax-belief-shuttle-last-resort": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, shuttle_last_resort=True), ours=True),
+    # camera mode: a suction put back excludes its object's suctions while it stands there (put_back_group)
+    "slax-belief-put-back-group": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, put_back_group=True), ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk"),

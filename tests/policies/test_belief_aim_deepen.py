@@ -68,3 +68,24 @@ def test_deepen_failed_assumes_the_object_of_a_failed_placement_as_deep_as_the_f
     off._last = ((-0.2, -0.08, -0.05, 0.05), seen.name)
     off.note_outcome(obs.known)
     assert off.with_camera_hypotheses(obs) is obs
+
+
+def test_put_back_group_excludes_the_objects_other_suctions_after_one_left_it_in_place(paper):
+    """Camera mode with ``put_back_group``: a suction after which the object stands where it stood (put back)
+    excludes that object's other suctions while it stands there; by default only that suction is excluded."""
+    from slax_drake.shelf.actions import Suction
+
+    scene, obs, names = _observe(paper, [box("deep", 0.05, 0.0, 0.12, 0.16, 0.15)])
+    (seen,) = obs.known
+    tried = Suction(seen.name, (0.05, -0.08, 0.1), -0.2, -0.15)
+    other = Suction(seen.name, (0.05, -0.08, 0.1), 0.15, 0.1)
+    outcome = {}
+    for option in (True, False):
+        policy = make_policy("slax-belief", paper, horizon=4, policy_options={"put_back_group": option})
+        policy.reset()
+        policy._exclusions.tolerant = True  # as decide() sets it on a camera frame
+        policy.memory.propose(tried, obs.known)
+        policy.learn(obs)  # the next frame shows the object where it stood
+        assert [a for a, _ in policy.exclusions] == [tried]
+        outcome[option] = policy._exclusions.allowed([tried, other], obs.known)
+    assert outcome == {True: [], False: [other]}
