@@ -99,6 +99,12 @@ class BeliefOptions:
     the object reaches beyond its hypothesis (a mostly hidden object is wider or deeper than its visible part), so
     its other placements fail alike: of 263 later suctions of an object put back in the camera-mode Table I run,
     176 failed again (privileged: 6 of 43)."""
+    shuttle_rule: str = "width"
+    """What a move back against its object's last move must uncover to pass the no-shuttle correction (at least
+    0.02 m of it): "width", width its own footprint covered in every arrangement observed in the trial; "sight",
+    width of shelf into which the camera would see deeper than in any observed arrangement, judged on every seen
+    object's footprint (:mod:`slax_drake.policies.sight`): the space behind an object moved far away was shown
+    when it stood elsewhere, and the space behind another object it stood in front of never was."""
     shuttle_last_resort: bool = False
     """When the corrections screen out every feasible candidate and some only as shuttles (a move back against the
     object's last move that uncovers no new width), those shuttles are offered rather than stopping with no action
@@ -126,6 +132,8 @@ class BeliefOptions:
             raise ValueError("stuck_select must be 'value' or 'progress'")
         if self.blocked_rule not in BLOCKED_RULES:
             raise ValueError("blocked_rule must be 'box', 'hidden' or 'risk'")
+        if self.shuttle_rule not in ("width", "sight"):
+            raise ValueError("shuttle_rule must be 'width' or 'sight'")
         if not 0 <= self.blocked_risk <= 1:
             raise ValueError(f"blocked_risk must be in [0, 1] (got {self.blocked_risk!r})")
 

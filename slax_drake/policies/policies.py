@@ -62,11 +62,18 @@ class DistributionPolicy:
 
     def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
                  observation_width: int = 160, max_placements: int = 4, corrected: bool = False,
-                 shuttle_reveal: float | None = 0.02, shuttle_last_resort: bool = False):
+                 shuttle_reveal: float | None = 0.02, shuttle_last_resort: bool = False, shuttle_rule: str = "width"):
         self.corrected = corrected  # the implementation's corrections (module docstring); False: the paper's text
         self.shuttle_reveal = shuttle_reveal  # m a shuttle must uncover never seen (correction 3); None: allowed
         # when the corrections leave no candidate, offer the ones screened out only as shuttles rather than stop
         self.shuttle_last_resort = shuttle_last_resort
+        # what a shuttle must uncover to pass correction 3: "width", width its own footprint covered in every
+        # observed arrangement (TrialMemory.vacates_unseen); "sight", width of shelf no observed arrangement let the
+        # camera see as deep (slax_drake.policies.sight)
+        if shuttle_rule not in ("width", "sight"):
+            raise ValueError(f"shuttle_rule must be 'width' or 'sight' (got {shuttle_rule!r})")
+        self.shuttle_rule = shuttle_rule
+        self._view = None  # the DeepestView of this trial (shuttle_rule "sight"), made for the first frame's camera
         self.memory = TrialMemory()
         # camera mode: a suction that left its object where it stood excludes that object's suctions while it stands
         # there (slax-belief's option ``put_back_group``); False: only that action is excluded
@@ -99,11 +106,18 @@ class DistributionPolicy:
         self._exclusions = Exclusions()
         self._objects = ()
         self.memory.reset()
+        if self._view is not None:
+            self._view.reset()
 
     def decide(self, obs) -> Decision:
         self._history = history_min(obs.p1d, self._history)
         self._objects = obs.known
         self._exclusions.tolerant = getattr(obs, "belief", None) is not None  # camera mode: estimated poses
+        if self.corrected and self.shuttle_rule == "sight" and self._view is None:
+            from slax_drake.policies.sight import DeepestView, SightDepths
+
+            self._view = DeepestView(SightDepths(obs.scene_template.camera, self.observation_width),
+                                     self.memory.position_tolerance)
         if self.corrected:
             self.learn(obs)
         decision = self.rank(obs)
@@ -121,6 +135,8 @@ class DistributionPolicy:
             group = isinstance(proposal.action, Push) or (self.put_back_group and self._exclusions.tolerant)
             self._exclusions.add(proposal.action, f"executed: {how.message}", unchanged and group, proposal.before)
         self.memory.observe(obs.known)
+        if self._view is not None:
+            self._view.observe(obs.known)
 
     def exclude(self, action, reason: str, whole_group: bool = False) -> None:
         self._exclusions.add(action, reason, whole_group, self._objects)
@@ -196,8 +212,12 @@ class DistributionPolicy:
         return "uncovers new width" if self.reveals_new(objects, action) else "let through"
 
     def reveals_new(self, objects, action) -> bool:
-        """Whether ``action`` on ``objects`` uncovers at least ``shuttle_reveal`` m of width (along x) that its
-        object covered in every arrangement observed in this trial (correction 3)."""
+        """Whether ``action`` on ``objects`` reveals space no arrangement observed in this trial revealed (correction
+        3), at least ``shuttle_reveal`` m of it: ``shuttle_rule`` "width", width (along x) that its object covered
+        in every observed arrangement; "sight", width of shelf the camera would see deeper into than in any
+        observed arrangement (:class:`~slax_drake.policies.sight.DeepestView`, every seen object's footprint)."""
+        if self.shuttle_rule == "sight" and self._view is not None:
+            return self._view.newly_shown(apply_action(tuple(objects), action)) >= self.shuttle_reveal
         return self.memory.vacates_unseen(objects, action) >= self.shuttle_reveal
 
     def unseen_space(self, obs, objects) -> int | None:

@@ -99,6 +99,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # when the corrections leave nothing but shuttles, a shuttle rather than no action (docs/research/tracking.md)
     "slax-belief-shuttle-last-resort": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, shuttle_last_resort=True), ours=True),
+    # a move back passes the no-shuttle correction when it lets the camera see deeper than any observed arrangement
+    "slax-belief-sight": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, shuttle_rule="sight"),
+                                     ours=True),
     # camera mode: a suction put back excludes its object's suctions while it stands there (put_back_group)
     "slax-belief-put-back-group": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, put_back_group=True), ours=True),
