@@ -1,6 +1,7 @@
 """Bad arguments of the research scripts: one line on stderr and exit code 2, before any long run."""
 
 import importlib.util
+import json
 from pathlib import Path
 
 import pytest
@@ -77,3 +78,20 @@ def test_depth_hypotheses_footprint_iou_is_one_for_the_same_object_and_zero_apar
     assert iou(box(0.0), box(0.0)) == pytest.approx(1.0)
     assert iou(box(0.0), box(0.05)) == pytest.approx(1 / 3)
     assert iou(box(0.0), box(0.3)) == 0.0
+
+
+def test_put_back_followups_counts_what_follows_a_put_back(tmp_path, capsys):
+    trials = tmp_path / "run" / "trials" / "slax-belief"
+    trials.mkdir(parents=True)
+    put_back = "could not place the object: put back"
+    (trials / "10_0000.json").write_text(json.dumps({
+        "actions": ["suction object_1 dx=+0.1 dz=-0.2", "push object_2 d=+0.05", "suction object_1 dx=+0.2 dz=-0.2",
+                    "suction object_1 dx=+0.3 dz=-0.1"],
+        "notes": [f"step 1: {put_back}", f"step 3: {put_back}"]}))
+    (trials / "10_0001.json").write_text(json.dumps({"actions": ["suction object_4 dx=-0.1 dz=0.1"],
+                                                      "notes": [f"step 1: {put_back}"]}))
+    c = script("put_back_followups").followups(tmp_path / "run", "slax-belief")
+    assert (c["put back"], c["suctioned again"], c["put back again"], c["as planned"]) == (3, 2, 1, 1)
+    assert c["at the next step"] == 1 and c["trials"] == 2
+    assert script("put_back_followups").main([str(tmp_path / "nothing")]) == 2
+    assert capsys.readouterr().err.startswith("error: ")

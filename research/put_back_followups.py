@@ -1,0 +1,73 @@
+"""What happens after a suction is put back: is the same object suctioned again, and does that fail too? Reads the
+trial files of `slax-drake benchmark` result folders (``trials/<policy>/DD_NNNN.json``: the executed actions and the
+simulator's notes) and prints one Markdown row per folder.
+
+    python research/put_back_followups.py FOLDER[:POLICY] [FOLDER[:POLICY] ...]
+
+POLICY defaults to slax-belief. A put-back is a step whose note reads "could not place the object: put back"; its
+follow-up is the next suction of the same object in that trial (on the true object: trial files name true objects
+in both observation modes): "put back again", "failed otherwise" (any other note on that step) or "as planned".
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import re
+import sys
+from pathlib import Path
+
+
+def followups(folder: Path, policy: str) -> collections.Counter:
+    counts = collections.Counter()
+    files = sorted((folder / "trials" / policy).glob("*.json"))
+    if not files:
+        raise FileNotFoundError(f"{folder}: no trial files under trials/{policy}/")
+    for path in files:
+        trial = json.loads(path.read_text())
+        notes = {}
+        for note in trial.get("notes", []):
+            m = re.match(r"step (\d+): (.*)", note)
+            if m:
+                notes[int(m.group(1))] = m.group(2)
+        actions = trial.get("actions", [])
+        counts["trials"] += 1
+        for step, action in enumerate(actions, 1):
+            if "put back" not in notes.get(step, ""):
+                continue
+            counts["put back"] += 1
+            name = action.split()[1]
+            later = [t for t, a in enumerate(actions, 1) if t > step and a.startswith("suction") and a.split()[1] == name]
+            if not later:
+                continue
+            counts["suctioned again"] += 1
+            note = notes.get(later[0], "")
+            counts["put back again" if "put back" in note else "failed otherwise" if note else "as planned"] += 1
+            counts["at the next step"] += later[0] == step + 1
+    return counts
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("folders", nargs="+", help="result folders, each optionally :POLICY")
+    args = ap.parse_args(argv)
+    try:
+        rows = [(spec, followups(Path(spec.partition(":")[0]), spec.partition(":")[2] or "slax-belief"))
+                for spec in args.folders]
+    except (FileNotFoundError, json.JSONDecodeError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    print("| folder | policy | trials | put back | same object suctioned again | ... put back again | ... failed "
+          "otherwise | ... as planned | ... at the next step |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for spec, c in rows:
+        folder, _, policy = spec.partition(":")
+        print(f"| `{Path(folder).name}` | {policy or 'slax-belief'} | {c['trials']} | {c['put back']} | "
+              f"{c['suctioned again']} | {c['put back again']} | {c['failed otherwise']} | {c['as planned']} | "
+              f"{c['at the next step']} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
