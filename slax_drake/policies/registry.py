@@ -102,6 +102,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # a move back passes the no-shuttle correction when it lets the camera see deeper than any observed arrangement
     "slax-belief-sight": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, shuttle_rule="sight"),
                                      ours=True),
+    # camera mode: the object of a failed placement is assumed as deep and wide as the frame allows (deepen_failed)
+    "slax-belief-deepen-failed": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, deepen_failed=True),
+                                             ours=True),
     # camera mode: a suction put back excludes its object's suctions while it stands there (put_back_group)
     "slax-belief-put-back-group": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, put_back_group=True), ours=True),
