@@ -514,7 +514,8 @@ def _diverged(step: int, chosen, recorded) -> PlanStepError:
 
     chosen = None if chosen is None else _describe(chosen) if isinstance(recorded, dict) else chosen.describe()
     return PlanStepError(f"history step {step}: replaying it chooses {chosen} "
-                         f"where that step chose {recorded} (a history of another policy or code version?)")
+                         f"where that step chose {recorded} (a history of another policy or code version, or a "
+                         "decision cut short by the policy's time budget; plan without --history to start afresh)")
 
 
 def _action_of(doc):
