@@ -78,25 +78,36 @@ class SightDepths:
 
 class DeepestView:
     """The deepest view (m) each column has had over the arrangements observed in a trial (:meth:`observe`), and
-    the width of the space a new arrangement would show for the first time (:meth:`newly_shown`)."""
+    the width of the space a new arrangement would show for the first time (:meth:`newly_shown`).
+
+    An object seen in an earlier arrangement and not among the objects of a new one (hidden behind another now,
+    and not remembered by the policy) is taken to stand where it was last seen: the robot moves only what it sees.
+    Without that, moving its occluder away again would "show" the space it stands in as if empty, every time."""
 
     def __init__(self, sight: SightDepths, tolerance: float = 0.01):
         self.sight = sight
         self.tolerance = tolerance
         self.deepest: np.ndarray | None = None
+        self.last_seen: dict = {}  # object name -> the object where it was last observed
 
     def reset(self) -> None:
         self.deepest = None
+        self.last_seen = {}
 
     def observe(self, objects) -> None:
+        objects = tuple(objects)
         view = self.sight.of(objects)
         self.deepest = view if self.deepest is None else np.maximum(self.deepest, view)
+        self.last_seen.update((o.name, o) for o in objects)
 
     def newly_shown(self, objects) -> float:
         """The width (m, at the depth where each column's deepest view so far stopped) of the columns in which the
-        arrangement ``objects`` would let the camera see more than ``tolerance`` deeper than any observed one."""
+        arrangement ``objects`` (with the objects seen before and absent from it where they were last seen) would
+        let the camera see more than ``tolerance`` deeper than any observed one."""
         if self.deepest is None:
             return float("inf")
-        view = self.sight.of(objects)
+        objects = tuple(objects)
+        names = {o.name for o in objects}
+        view = self.sight.of(objects + tuple(o for name, o in self.last_seen.items() if name not in names))
         new = np.isfinite(self.deepest) & (view > self.deepest + self.tolerance)
         return float(self.sight.column_width(self.deepest[new]).sum())

@@ -75,3 +75,21 @@ def test_the_sight_rule_is_an_option_of_slax_belief_and_the_corrected_policies(p
     with pytest.raises(ValueError, match="shuttle_rule"):
         make_policy("slax-belief", paper, horizon=4, policy_options={"shuttle_rule": "far"})
     assert math.isinf(DeepestView(None).newly_shown(()))  # before any frame everything is new
+
+
+def test_an_object_hidden_now_is_taken_to_stand_where_it_was_last_seen(sight):
+    """B stands behind A. A pushed right shows B; A pushed back hides it again, and a frame that lists only what it
+    sees then has no B. Pushing A right again shows nothing new: B is remembered where it was seen, so the space it
+    stands in does not count as newly shown."""
+    a, b = box("A", 0.0, -0.15, 0.1, 0.1, 0.15), box("B", 0.0, 0.15, 0.08, 0.1, 0.15)
+    view = DeepestView(sight)
+    view.observe([a])  # B hidden behind A
+    view.observe([box("A", 0.15, -0.15, 0.1, 0.1, 0.15), b])  # A moved: B seen
+    view.observe([a])  # A back: B hidden again, not listed
+    again = [box("A", 0.15, -0.15, 0.1, 0.1, 0.15)]
+    assert view.newly_shown(again) < 0.02
+    forgetful = DeepestView(sight)
+    forgetful.observe([a])
+    forgetful.observe([box("A", 0.15, -0.15, 0.1, 0.1, 0.15), b])
+    forgetful.last_seen.pop("B")  # what the view would do without its memory of B
+    assert forgetful.newly_shown(again) >= 0.02
