@@ -88,3 +88,18 @@ def test_camera_realism_table_refuses_folders_of_other_protocols(tmp_path, capsy
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("error: ")
     assert not (tmp_path / "page.md").exists()
+
+
+def test_compare_variant_runs_counts_moves_back_and_refuses_empty_folders(tmp_path, capsys):
+    compare = script("compare_variant_runs")
+    actions = ["push object_1 d=+0.100", "suction object_1 dx=-0.050 dz=-0.2", "push object_2 d=-0.005",
+               "suction object_1 dx=+0.200 dz=0.1", "push object_2 d=+0.050"]
+    assert compare.moves_back(actions) == (2, 1)  # -0.05 undoes part of +0.10; +0.20 goes past; object_2: no move back
+    assert compare.main([str(tmp_path / "a"), str(tmp_path / "b")]) == 2
+    assert capsys.readouterr().err.startswith("error: ")
+    for run, success in (("a", False), ("b", True)):
+        trials = tmp_path / run / "trials" / "slax-belief"
+        trials.mkdir(parents=True)
+        (trials / "08_0000.json").write_text(json.dumps({"success": success, "actions": actions}))
+    assert compare.main([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+    assert "| All | 1 | 0.00 % | 100.00 % | 1 | 0 | 2 / 2 | 1 / 1 |" in capsys.readouterr().out
