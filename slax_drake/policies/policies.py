@@ -22,7 +22,9 @@ the first-order model is wrong about the true shelf (:mod:`slax_drake.policies.t
 3. no shuttle: a candidate that moves its object back against the last executed action on it
    (:meth:`~slax_drake.policies.trial_memory.TrialMemory.undoes`) is not taken unless it reveals space no earlier
    arrangement revealed: it uncovers at least ``shuttle_reveal`` (m) of width along x that the object covered in
-   every arrangement observed so far (:meth:`~slax_drake.policies.trial_memory.TrialMemory.vacates_unseen`). The
+   every arrangement observed so far (:meth:`~slax_drake.policies.trial_memory.TrialMemory.vacates_unseen`;
+   ``shuttle_rule="sight"``: at least that width of shelf into which the camera would see deeper than in any
+   observed arrangement, judged on every seen object, :mod:`slax_drake.policies.sight`). The
    predicted distribution is no judge here: it assumes the empty shelf behind a moved object, so on a shelf where
    another object stands behind it every move back and forth "reveals" the same columns again;
 4. an action whose predicted support reduction is zero and that reveals no unseen space (the number of hidden
