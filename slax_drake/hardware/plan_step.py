@@ -300,6 +300,8 @@ class StepPlanner:
                 self.policy.reset(observation.scene_template)
             decision = self.policy.decide(observation)
             for rejected in record.get("rejected") or []:
+                if not isinstance(rejected, dict):
+                    raise PlanStepError(f"history step {k}: a rejected candidate must be a record, got {rejected!r}")
                 if decision.best is None or decision.best.describe() != rejected.get("action"):
                     raise _diverged(k, decision.best, rejected.get("action"))
                 self.policy.exclude(decision.best, str(rejected.get("reason")), bool(rejected.get("whole_group")))

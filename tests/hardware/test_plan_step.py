@@ -199,7 +199,9 @@ def test_a_history_that_does_not_replay_is_refused(tmp_path):
     cases = {"another policy": {**good, "policy": "dar"},
              "chooses": {**good, "frames": [{**record, "rejected": [], "action": other}]},
              "corrupt": {**good, "frames": [{**record, "depth": record["depth"][:-8] + "AAAAAAAA", "rejected": [],
-                                             "action": chosen}]}}
+                                             "action": chosen}]},
+             "not a record": {**good, "frames": ["junk"]},
+             "rejected not a record": {**good, "frames": [{**record, "rejected": ["junk"], "action": chosen}]}}
     for message, history in cases.items():
-        with pytest.raises(PlanStepError, match="policy 'dar'|replaying it chooses|corrupt"):
+        with pytest.raises(PlanStepError, match="policy 'dar'|replaying it chooses|corrupt|must be a record|expected a"):
             StepPlanner(STATION).replay(history)
