@@ -38,7 +38,8 @@ def followups(folder: Path, policy: str) -> collections.Counter:
                 continue
             counts["put back"] += 1
             name = action.split()[1]
-            later = [t for t, a in enumerate(actions, 1) if t > step and a.startswith("suction") and a.split()[1] == name]
+            later = [t for t, a in enumerate(actions, 1)
+                     if t > step and a.startswith("suction") and a.split()[1] == name]
             if not later:
                 continue
             counts["suctioned again"] += 1

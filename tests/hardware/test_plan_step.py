@@ -203,5 +203,6 @@ def test_a_history_that_does_not_replay_is_refused(tmp_path):
              "not a record": {**good, "frames": ["junk"]},
              "rejected not a record": {**good, "frames": [{**record, "rejected": ["junk"], "action": chosen}]}}
     for message, history in cases.items():
-        with pytest.raises(PlanStepError, match="policy 'dar'|replaying it chooses|corrupt|must be a record|expected a"):
+        expected = "policy 'dar'|replaying it chooses|corrupt|must be a record|expected a"
+        with pytest.raises(PlanStepError, match=expected):
             StepPlanner(STATION).replay(history)
