@@ -127,6 +127,7 @@ def test_round_trip_from_a_noisy_drake_frame_to_a_checked_trajectory(tmp_path, c
     assert main(["check-trajectory", str(tmp_path / "step.json")]) == 0
     assert "OK: no violation" in capsys.readouterr().out
     assert main(_args(tmp_path, "frame.npy", "step2.json", "--history", str(tmp_path / "step.json"))) == 0
+    assert "the policy's memory: 1 earlier step replayed in" in capsys.readouterr().out
     again = json.loads((tmp_path / "step2.json").read_text())["metadata"]["plan_step"]
     assert again["history"]["steps"] == 2
     # the same frame again: the first action moved nothing, so the replayed memory excludes it
