@@ -64,6 +64,8 @@ def main(argv=None) -> int:
         print("error: no trial in both folders", file=sys.stderr)
         return 2
     densities = sorted({int(k.split("_")[0]) for k in keys})
+    back_a = {k: moves_back(a[k].get("actions", [])) for k in keys}  # (moves back, undos) per trial
+    back_b = {k: moves_back(b[k].get("actions", [])) for k in keys}
     print(f"| objects | trials | {pa} | {pb} | won | lost | moves back ({pa} / {pb}) | undos ({pa} / {pb}) |")
     print("|---|---|---|---|---|---|---|---|")
     for n in densities + [None]:
@@ -72,8 +74,7 @@ def main(argv=None) -> int:
         sb = sum(bool(b[k]["success"]) for k in ks)
         won = sum(bool(b[k]["success"]) and not a[k]["success"] for k in ks)
         lost = sum(bool(a[k]["success"]) and not b[k]["success"] for k in ks)
-        ma = [moves_back(a[k].get("actions", [])) for k in ks]
-        mb = [moves_back(b[k].get("actions", [])) for k in ks]
+        ma, mb = [back_a[k] for k in ks], [back_b[k] for k in ks]
         print(f"| {'All' if n is None else n} | {len(ks)} | {100 * sa / len(ks):.2f} % | {100 * sb / len(ks):.2f} % "
               f"| {won} | {lost} | {sum(m[0] for m in ma)} / {sum(m[0] for m in mb)} "
               f"| {sum(m[1] for m in ma)} / {sum(m[1] for m in mb)} |")

@@ -29,6 +29,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from slax_drake.scene.model import box_yaw_difference
 from slax_drake.shelf.actions import Push
 
 
@@ -155,7 +156,7 @@ class Exclusions:
         """Two poses (name, x, y, yaw) of :func:`_pose_key` within the tolerances (a box turned by pi is the same)."""
         if math.hypot(a[1] - b[1], a[2] - b[2]) > self.position_tolerance:
             return False
-        return abs((a[3] - b[3] + math.pi / 2) % math.pi - math.pi / 2) <= self.yaw_tolerance
+        return abs(box_yaw_difference(a[3], b[3])) <= self.yaw_tolerance
 
     @property
     def records(self) -> tuple:

@@ -29,6 +29,7 @@ import dataclasses
 import enum
 import math
 
+from slax_drake.scene.model import box_yaw_difference
 from slax_drake.shelf.actions import apply_action
 
 
@@ -193,8 +194,7 @@ class TrialMemory:
             return False
         if a.shape == "cylinder":
             return True
-        dyaw = (float(a.yaw) - float(b.yaw) + math.pi / 2) % math.pi - math.pi / 2  # a box turned by pi is the same
-        return abs(dyaw) <= self.yaw_tolerance
+        return abs(box_yaw_difference(a.yaw, b.yaw)) <= self.yaw_tolerance
 
     def same_arrangement(self, a: tuple, b: tuple) -> bool:
         """Whether ``a`` and ``b`` show the same shelf. When they share names: every object seen in both stands in

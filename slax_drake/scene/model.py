@@ -133,6 +133,11 @@ def planar_pose(x: float, y: float, z: float, yaw: float) -> np.ndarray:
     return X
 
 
+def box_yaw_difference(yaw_a: float, yaw_b: float) -> float:
+    """``yaw_a - yaw_b`` (rad) in [-pi/2, pi/2): a box turned by pi stands the same."""
+    return (float(yaw_a) - float(yaw_b) + math.pi / 2) % math.pi - math.pi / 2
+
+
 def state_key(objects) -> tuple:
     """A hashable key of the objects' names and planar poses (x, y to 0.1 mm, yaw to 1e-4 rad): the state of a
     shelf as the first-order model sees it, used to cache distributions and to deduplicate search states."""
