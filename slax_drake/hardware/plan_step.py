@@ -302,8 +302,8 @@ class StepPlanner:
             for rejected in record.get("rejected") or []:
                 if not isinstance(rejected, dict):
                     raise PlanStepError(f"history step {k}: a rejected candidate must be a record, got {rejected!r}")
-                if decision.best is None or decision.best.describe() != rejected.get("action"):
-                    raise _diverged(k, decision.best, rejected.get("action"))
+                if decision.best is None or _describe(decision.best) != rejected.get("candidate"):
+                    raise _diverged(k, decision.best, rejected.get("candidate"))
                 self.policy.exclude(decision.best, str(rejected.get("reason")), bool(rejected.get("whole_group")))
                 decision = self.policy.decide(observation)
             if decision.best is None or _describe(decision.best) != record.get("action"):
@@ -382,6 +382,7 @@ class StepPlanner:
         share, :meth:`target_visibility`, at least v) plans nothing."""
         from slax_drake.hardware.check import check_trajectory
         from slax_drake.hardware.collision import CollisionWorld
+        from slax_drake.systems.planner import _describe
 
         self.check_joint_state(q)
         timings = {}
@@ -423,8 +424,8 @@ class StepPlanner:
             else:
                 why, early = motion.reason, motion.failure.early  # failed before the tool reached the object
                 kind, waypoint = motion.failure.kind.value, motion.failure.waypoint
-            rejected.append({"action": action.describe(), "reason": why, "kind": kind, "waypoint": waypoint,
-                             "whole_group": bool(early)})
+            rejected.append({"action": action.describe(), "candidate": _describe(action), "reason": why, "kind": kind,
+                             "waypoint": waypoint, "whole_group": bool(early)})
             self.policy.exclude(action, why, whole_group=early)
             decision = self.policy.decide(observation)
             reason = "no feasible motion"
@@ -514,7 +515,7 @@ class StepPlanner:
 def _diverged(step: int, chosen, recorded) -> PlanStepError:
     from slax_drake.systems.planner import _describe
 
-    chosen = None if chosen is None else _describe(chosen) if isinstance(recorded, dict) else chosen.describe()
+    chosen = None if chosen is None else _describe(chosen)
     return PlanStepError(f"history step {step}: replaying it chooses {chosen} "
                          f"where that step chose {recorded} (a history of another policy or code version, or a "
                          "decision cut short by the policy's time budget; plan without --history to start afresh)")

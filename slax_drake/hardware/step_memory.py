@@ -12,8 +12,9 @@ step must choose the action that step chose, or the step file is refused (anothe
 
 One step's record (JSON): ``depth`` and ``mask``, the frame at the policies' working resolution (float32 metres and
 one bit per pixel, zlib-compressed, base64), ``shape`` ``[rows, columns]``, ``joint_state`` (the nine planned
-joints), ``rejected`` (the candidates the planner or the checker refused, in order: ``action``, ``reason``,
-``whole_group``) and ``action`` (the one planned). About 70 kB per step.
+joints), ``rejected`` (the candidates the planner or the checker refused, in order: ``candidate``, the action as
+the step file's ``action`` describes one, with ``reason`` and ``whole_group``) and ``action`` (the one planned).
+About 70 kB per step.
 """
 
 from __future__ import annotations

@@ -203,6 +203,18 @@ def test_a_history_that_does_not_replay_is_refused(tmp_path):
                                              "action": chosen}]},
              "not a record": {**good, "frames": ["junk"]},
              "rejected not a record": {**good, "frames": [{**record, "rejected": ["junk"], "action": chosen}]}}
+    fresh = StepPlanner(STATION)  # a step whose planner rejects its first choice, as plan_step drives the policy
+    seen, _ = fresh.perceive(depth, mask)
+    fresh.policy.reset(seen.scene_template)
+    fresh.policy.exclude(fresh.policy.decide(seen).best, "planner: no IK solution")
+    second = _describe(fresh.policy.decide(seen).best)
+    rejecting = {"policy": "bluction-dar", "frames": [{**record, "action": second, "rejected": [
+        {"action": "(its words)", "candidate": chosen, "reason": "planner: no IK solution", "whole_group": False}]}]}
+    replayer = StepPlanner(STATION)
+    assert _describe(replayer.replay(rejecting)[1]) == second
+    assert [why for _, why in replayer.policy.exclusions] == ["planner: no IK solution"]
+    cases["rejected another"] = {**good, "frames": [{**record, "action": second, "rejected": [
+        {"candidate": other, "reason": "planner: no IK solution"}]}]}
     for message, history in cases.items():
         expected = "policy 'dar'|replaying it chooses|corrupt|must be a record|expected a"
         with pytest.raises(PlanStepError, match=expected):
