@@ -166,7 +166,7 @@ def test_an_action_that_moved_nothing_is_not_planned_again_in_the_next_step(tmp_
     second = StepPlanner(STATION).plan_step(depth, mask, q, history)
     assert second.action is not None and second.action != first.action
     record = second.trajectory.metadata["plan_step"]
-    assert len(record["history"]["frames"]) == 2 and record["timings_s"]["replay_s"] > 0
+    assert len(record["history"]["frames"]) == 2 and "replay_s" in record["timings_s"]
     planner = StepPlanner(STATION)
     planner.replay(history)
     assert [why for _, why in planner.policy.exclusions] == []  # the outcome is learned from the next frame
