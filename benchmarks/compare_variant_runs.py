@@ -40,13 +40,25 @@ def moves_back(actions) -> tuple[int, int]:
     return back, undo
 
 
+def read_json(path: Path):
+    try:
+        return json.loads(path.read_text())
+    except json.JSONDecodeError as e:
+        raise ValueError(f"{path}: not valid JSON ({e})") from None
+
+
 def load(spec: str) -> tuple[str, dict]:
     folder, _, policy = spec.partition(":")
     policy = policy or "slax-belief"
     files = sorted((Path(folder) / "trials" / policy).glob("*.json"))
     if not files:
         raise FileNotFoundError(f"{folder}: no trial files under trials/{policy}/")
-    return policy, {f.stem: json.loads(f.read_text()) for f in files}
+    trials = {f.stem: read_json(f) for f in files}
+    bad = next((f"{folder}/trials/{policy}/{k}.json" for k, t in trials.items()
+                if not isinstance(t, dict) or "success" not in t), None)
+    if bad is not None:
+        raise ValueError(f"{bad}: not a trial file (no 'success')")
+    return policy, trials
 
 
 def main(argv=None) -> int:
@@ -56,7 +68,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     try:
         (pa, a), (pb, b) = load(args.base), load(args.variant)
-    except (FileNotFoundError, json.JSONDecodeError) as e:
+    except (FileNotFoundError, ValueError) as e:  # json.JSONDecodeError is a ValueError
         print(f"error: {e}", file=sys.stderr)
         return 2
     keys = sorted(set(a) & set(b))

@@ -25,7 +25,12 @@ def followups(folder: Path, policy: str) -> collections.Counter:
     if not files:
         raise FileNotFoundError(f"{folder}: no trial files under trials/{policy}/")
     for path in files:
-        trial = json.loads(path.read_text())
+        try:
+            trial = json.loads(path.read_text())
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{path}: not valid JSON ({e})") from None
+        if not isinstance(trial, dict) or not isinstance(trial.get("actions", []), list):
+            raise ValueError(f"{path}: not a trial file")
         notes = {}
         for note in trial.get("notes", []):
             m = re.match(r"step (\d+): (.*)", note)
@@ -56,7 +61,7 @@ def main(argv=None) -> int:
     try:
         rows = [(spec, followups(Path(spec.partition(":")[0]), spec.partition(":")[2] or "slax-belief"))
                 for spec in args.folders]
-    except (FileNotFoundError, json.JSONDecodeError) as e:
+    except (FileNotFoundError, ValueError) as e:  # json.JSONDecodeError is a ValueError
         print(f"error: {e}", file=sys.stderr)
         return 2
     print("| folder | policy | trials | put back | same object suctioned again | ... put back again | ... failed "
