@@ -40,7 +40,7 @@ def parse_trials(text: str) -> list[tuple[int, int]]:
     return out
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--options", default="{}", help="JSON: constructor options added to the registry's")
     ap.add_argument("--trials", required=True, help="density:index or density:first-last, comma separated")
@@ -58,7 +58,7 @@ def main():
                     help="with --observation camera: the L515 noise model, seeded by the scene seed")
     ap.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
                     help="override one rule of the profile, as the benchmark's --tool-rule; repeatable")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     try:
         tool_rules = parse_tool_rules(args.tool_rule, args.profile)
     except UserError as e:
@@ -71,8 +71,20 @@ def main():
             print(f"error: --compare: no folder {compare}", file=sys.stderr)
             return 2
     flips = {"won": [], "lost": []}
-    options = json.loads(args.options)
+    try:
+        options = json.loads(args.options)
+        if not isinstance(options, dict):
+            raise ValueError("a JSON object of option names and values")
+    except ValueError as e:  # json.JSONDecodeError is a ValueError
+        print(f"error: --options: {e}", file=sys.stderr)
+        return 2
     scenario = load_scenario(args.config)
+    try:  # the options are checked once, before the first trial
+        make_policy(args.policy, scenario, horizon=1, profile=args.profile, policy_options=options,
+                    tool_overrides=tool_rules)
+    except (TypeError, ValueError) as e:
+        print(f"error: --options: {e}", file=sys.stderr)
+        return 2
     size = tuple(scenario.target.sizes[0])
     revealed = 0
     trials = parse_trials(args.trials)

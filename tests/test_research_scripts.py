@@ -95,3 +95,12 @@ def test_put_back_followups_counts_what_follows_a_put_back(tmp_path, capsys):
     assert c["at the next step"] == 1 and c["trials"] == 2
     assert script("put_back_followups").main([str(tmp_path / "nothing")]) == 2
     assert capsys.readouterr().err.startswith("error: ")
+
+
+@pytest.mark.parametrize("options", ['{"shuttle_rule": "far"}', "not json", "[1]"])
+def test_belief_variants_refuses_bad_options_before_any_trial(capsys, options):
+    assert script("belief_variants").main(["--options", options, "--trials", "4:0"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: --options: ")
