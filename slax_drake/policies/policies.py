@@ -108,8 +108,7 @@ class DistributionPolicy:
         self._exclusions = Exclusions()
         self._objects = ()
         self.memory.reset()
-        if self._view is not None:
-            self._view.reset()
+        self._view = None  # made again for the next trial's first frame (its camera)
 
     def decide(self, obs) -> Decision:
         self._history = history_min(obs.p1d, self._history)

@@ -90,10 +90,6 @@ class DeepestView:
         self.deepest: np.ndarray | None = None
         self.last_seen: dict = {}  # object name -> the object where it was last observed
 
-    def reset(self) -> None:
-        self.deepest = None
-        self.last_seen = {}
-
     def observe(self, objects) -> None:
         objects = tuple(objects)
         view = self.sight.of(objects)
