@@ -237,6 +237,7 @@ class BeliefSearch(Hindsight):
         self.stuck_select = o.stuck_select  # the rule when no plan looked at reveals anything (module docstring)
         self.blocked_rule = o.blocked_rule  # which placements a failed placement's box refuses (placement_allowed)
         self.blocked_risk = float(o.blocked_risk)  # blocked_rule="risk": the failure chance a blocked box adds
+        self.dead_end = o.dead_end  # what a plan ending where no move is left costs ("ignore", "model", ...)
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -983,6 +984,7 @@ class BeliefSearch(Hindsight):
         log["samples"] = self._n_worlds
         remaining = self.horizon - (self._step - 1) if self.horizon is not None else 10 ** 6
         counter = itertools.count()
+        self._root_objects = known  # the arrangement the plans start from (dead_end_cost)
         root = _Node(known, (), 0.0, np.ones(worlds.count, bool), 0.0, 0.0, -1)
         d0 = self.distances(worlds, known)
         root.alive = consistent & (d0 > 0)
@@ -1007,12 +1009,13 @@ class BeliefSearch(Hindsight):
             log["widened"] = True  # nothing revealed within max_depth: once more with a wider beam
             seen_nodes += self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.widen_beam)
         if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
-            best = max(seen_nodes, key=lambda k: (k.revealed / max(k.g, 1e-9), -k.value, -k.order))
+            best = self.best_by_ratio(seen_nodes, log)
         elif self.stuck_select == "progress" and log.get("widened"):
             # no plan reveals anything, even widened: the plan that ends nearest to revealing (least V - G)
-            best = min(seen_nodes, key=lambda k: (k.value - k.g, k.value, len(k.plan), k.order))
+            best = min(seen_nodes, key=lambda k: (k.value - k.g + self.dead_end_cost(k, log), k.value, len(k.plan),
+                                                  k.order))
         else:
-            best = min(seen_nodes, key=lambda k: (k.value, len(k.plan), k.order))
+            best = min(seen_nodes, key=lambda k: (k.value + self.dead_end_cost(k, log), len(k.plan), k.order))
         log["revealed"] = round(best.revealed, 4)
         log["value"] = round(best.value, 4)
         log["expected_cost"] = round(best.g, 4)  # G of the chosen plan
@@ -1028,6 +1031,46 @@ class BeliefSearch(Hindsight):
         rest = [k.plan[0] for k in ranked if k.plan[0] != first]
         rest += [a for a in cands if a != first and a not in rest]
         return Decision((first, *rest))
+
+    def plan_moves(self, node: _Node) -> list:
+        """The moves the search looks at from ``node``: :meth:`moves`, and with ``dead_end`` "corrections" only
+        those the corrections would leave after its plan (:meth:`screen` on :meth:`TrialMemory.after_plan`; a
+        shuttle is left only with ``shuttle_last_resort``), as the policy itself would screen them when it got
+        there."""
+        moves = self.moves(node.objects)
+        if moves and node.plan and self.dead_end == "corrections":
+            memory = self.memory.after_plan(self._root_objects, node.plan)
+            left = {None, "shuttle"} if self.shuttle_last_resort else {None}
+            moves = [m for m, (_, why) in zip(moves, self.screen(node.objects, [a for a, _, _ in moves], memory))
+                     if why in left]
+        return moves
+
+    def dead_end_cost(self, node: _Node, log: dict | None = None) -> float:
+        """``dead_end``: ``failure_cost`` times the share of worlds ``node`` leaves alive when the search could not
+        go on from its arrangement (:meth:`plan_moves` finds none), else 0. Counted in ``log["dead_ends"]``."""
+        if self.dead_end == "ignore" or not node.alive.any() or not self._n_worlds or self.plan_moves(node):
+            return 0.0
+        if log is not None:
+            log["dead_ends"] = log.get("dead_ends", 0) + 1
+        return self.failure_cost * float(node.alive.sum()) / self._n_worlds
+
+    def best_by_ratio(self, nodes: list, log: dict) -> _Node:
+        """The plan with the most revealed mass per expected cost, R / G (ties: the lesser V, then the earlier
+        plan); with ``dead_end``, R / (G + :meth:`dead_end_cost`), evaluated lazily: plans in order of R / G, until
+        the next one's R / G (an upper bound of its own ratio) falls below the best found."""
+        def key(k, extra=0.0):
+            return (k.revealed / max(k.g + extra, 1e-9), -k.value, -k.order)
+
+        if self.dead_end == "ignore":
+            return max(nodes, key=key)
+        best, best_key = None, None
+        for k in sorted(nodes, key=key, reverse=True):
+            if best is not None and key(k)[0] < best_key[0]:
+                break
+            k_key = key(k, self.dead_end_cost(k, log))
+            if best is None or k_key > best_key:
+                best, best_key = k, k_key
+        return best
 
     def beam_search(self, worlds, first_level: list, kept: dict, remaining: int, counter, log: dict, t0: float,
                     beam_width: int) -> list:
@@ -1063,7 +1106,7 @@ class BeliefSearch(Hindsight):
                 if i and time.process_time() - t0 > self.seconds:
                     log["capped"] = True  # the nodes looked at so far make the next level
                     break
-                nxt.extend(self.expansions(worlds, k, self.moves(k.objects), remaining, counter))
+                nxt.extend(self.expansions(worlds, k, self.plan_moves(k), remaining, counter))
             level = nxt
         return seen_nodes
 

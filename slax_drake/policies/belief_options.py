@@ -14,6 +14,7 @@ SELECT_RULES = ("ratio", "value")
 EVIDENCE_RULES = ("outcome", "none")
 STUCK_RULES = ("value", "progress")
 BLOCKED_RULES = ("box", "hidden", "risk")
+DEAD_END_RULES = ("ignore", "model", "corrections")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,6 +106,16 @@ class BeliefOptions:
     width of shelf into which the camera would see deeper than in any observed arrangement, judged on every seen
     object's footprint (:mod:`slax_drake.policies.sight`): the space behind an object moved far away was shown
     when it stood elsewhere, and the space behind another object it stood in front of never was."""
+    dead_end: str = "ignore"
+    """What a plan that ends where the search could not go on costs. "ignore": nothing. "model": a plan whose last
+    arrangement leaves no move at all (the action model allows none there) loses the worlds it has not revealed,
+    each at ``failure_cost``, in the rule that picks the plan (R / (G + failure_cost x the share of worlds left)
+    under ``select`` "ratio"; V plus the same otherwise). "corrections": the same where every move left there
+    would be screened out by the corrections as they would stand after the plan (excluded, back to an arrangement
+    observed or passed on the way, a shuttle; :meth:`TrialMemory.after_plan`). Without it a one-move plan that
+    reveals much and leaves the shelf locked (the object pushed behind a neighbour that now blocks every tool
+    path, or every object moved toward one wall) outranks plans that reveal a little less and keep the search
+    going."""
     shuttle_last_resort: bool = False
     """When the corrections screen out every feasible candidate and some only as shuttles (a move back against the
     object's last move that uncovers no new width), those shuttles are offered rather than stopping with no action
@@ -134,6 +145,8 @@ class BeliefOptions:
             raise ValueError("blocked_rule must be 'box', 'hidden' or 'risk'")
         if self.shuttle_rule not in ("width", "sight"):
             raise ValueError("shuttle_rule must be 'width' or 'sight'")
+        if self.dead_end not in DEAD_END_RULES:
+            raise ValueError("dead_end must be 'ignore', 'model' or 'corrections'")
         if not 0 <= self.blocked_risk <= 1:
             raise ValueError(f"blocked_risk must be in [0, 1] (got {self.blocked_risk!r})")
 

@@ -172,21 +172,23 @@ class DistributionPolicy:
             allowed = [a for a, why in screened if why == "shuttle"]
         return allowed
 
-    def screen(self, objects, feasible) -> list:
+    def screen(self, objects, feasible, memory: TrialMemory | None = None) -> list:
         """``(action, why)`` for each of the action model's ``feasible`` candidates on ``objects``: ``why`` None for
         a candidate the policy may take, else the first correction that screens it out: "excluded" (an exclusion
         of this trial: the motion planner rejected it or its group, or it failed when executed), "back to an
         observed arrangement" (correction 2) or "shuttle" (correction 3: it reverses its object's last move and
-        uncovers no new width)."""
+        uncovers no new width). ``memory``: the trial memory to judge by (default: this trial's; a search passes
+        the memory a plan would leave, :meth:`TrialMemory.after_plan`)."""
+        memory = self.memory if memory is None else memory
         allowed = set(id(a) for a in self._exclusions.allowed(feasible, objects))
         out = [(a, None if id(a) in allowed else "excluded") for a in feasible]
-        if self.corrected and self.memory.observed:
+        if self.corrected and memory.observed:
             open_ = [a for a, why in out if why is None]
-            back = {id(a) for a, seen in zip(open_, self.memory.leads_back(objects, open_)) if seen}
+            back = {id(a) for a, seen in zip(open_, memory.leads_back(objects, open_)) if seen}
             out = [(a, "back to an observed arrangement" if id(a) in back else why) for a, why in out]
-        if self.corrected and self.shuttle_reveal is not None and self.memory.moves:
-            out = [(a, "shuttle" if why is None and self.memory.undoes(objects, a)
-                    and not self.reveals_new(objects, a) else why) for a, why in out]
+        if self.corrected and self.shuttle_reveal is not None and memory.moves:
+            out = [(a, "shuttle" if why is None and memory.undoes(objects, a)
+                    and not self.reveals_new(objects, a, memory) else why) for a, why in out]
         return out
 
     def screened_counts(self, objects=None) -> dict:
@@ -212,14 +214,16 @@ class DistributionPolicy:
             return None
         return "uncovers new width" if self.reveals_new(objects, action) else "let through"
 
-    def reveals_new(self, objects, action) -> bool:
+    def reveals_new(self, objects, action, memory: TrialMemory | None = None) -> bool:
         """Whether ``action`` on ``objects`` reveals space no arrangement observed in this trial revealed (correction
         3), at least ``shuttle_reveal`` m of it: ``shuttle_rule`` "width", width (along x) that its object covered
-        in every observed arrangement; "sight", width of shelf the camera would see deeper into than in any
-        observed arrangement (:class:`~slax_drake.policies.sight.DeepestView`, every seen object's footprint)."""
+        in every observed arrangement (of ``memory``, default this trial's); "sight", width of shelf the camera
+        would see deeper into than in any observed arrangement (:class:`~slax_drake.policies.sight.DeepestView`,
+        every seen object's footprint; the frames observed, whatever ``memory``)."""
         if self.shuttle_rule == "sight" and self._view is not None:
             return self._view.newly_shown(apply_action(tuple(objects), action)) >= self.shuttle_reveal
-        return self.memory.vacates_unseen(objects, action) >= self.shuttle_reveal
+        memory = self.memory if memory is None else memory
+        return memory.vacates_unseen(objects, action) >= self.shuttle_reveal
 
     def unseen_space(self, obs, objects) -> int | None:
         """The number of hidden target placements with the seen objects at ``objects`` (the distribution model's

@@ -99,6 +99,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # when the corrections leave nothing but shuttles, a shuttle rather than no action (docs/research/tracking.md)
     "slax-belief-shuttle-last-resort": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, shuttle_last_resort=True), ours=True),
+    # a plan ending where no move would be left loses its unrevealed worlds (docs/research/physics.md)
+    "slax-belief-dead-end": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, dead_end="corrections"),
+                                        ours=True),
     # a move back passes the no-shuttle correction when it lets the camera see deeper than any observed arrangement
     "slax-belief-sight": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, shuttle_rule="sight"),
                                      ours=True),

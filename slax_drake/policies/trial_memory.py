@@ -125,6 +125,24 @@ class TrialMemory:
         right = max(0.0, always[1] - max(always[0], new[1]))
         return left + right
 
+    def after_plan(self, objects, plan) -> "TrialMemory":
+        """A new memory holding what this one would after ``plan`` (actions) executed from ``objects`` exactly as
+        the action model predicts: each arrangement along it observed, each action's displacement its object's last
+        move. For a search that looks at what the corrections would leave at a plan's end; this one is unchanged."""
+        out = TrialMemory(self.position_tolerance, self.yaw_tolerance)
+        out.observed, out.moves = list(self.observed), dict(self.moves)
+        state = tuple(objects)
+        for a in plan:
+            before = next((o for o in state if o.name == a.name), None)
+            state = apply_action(state, a)
+            if before is not None:
+                after = next(o for o in state if o.name == a.name)
+                d = (float(after.center[0] - before.center[0]), float(after.center[1] - before.center[1]))
+                if math.hypot(*d) > self.position_tolerance:
+                    out.moves[a.name] = d
+            out.observe(state)
+        return out
+
     # ---- arrangements -------------------------------------------------------------------------------------------
     def observe(self, objects) -> None:
         objects = tuple(objects)

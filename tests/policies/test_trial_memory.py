@@ -157,7 +157,7 @@ def test_no_shuttle_on_a_replayed_noisy_sequence(paper, name):
             assert back, "the literal form offers a move back"
         else:
             assert all(policy.reveals_new(obs1.known, a) for a in back)
-            policy.reveals_new = lambda objects, action: False  # then no move back is offered at all
+            policy.reveals_new = lambda objects, action, memory=None: False  # then no move back is offered at all
             assert not [a for a in policy.candidates(obs1.known) if memory.undoes(obs1.known, a)]
 
 
@@ -212,7 +212,7 @@ def test_screening_names_the_correction_and_the_last_resort_offers_only_shuttles
     policy.shuttle_last_resort = True  # something else is left: the correction holds
     assert set(policy.candidates(after)) == set(on)
     # nothing left but a shuttle and a move back to an observed arrangement: the shuttle alone is offered
-    monkeypatch.setattr(policy, "screen", lambda objects, cands: [(backs[0], "shuttle"),
+    monkeypatch.setattr(policy, "screen", lambda objects, cands, memory=None: [(backs[0], "shuttle"),
                                                                   (on[0], "back to an observed arrangement")])
     assert policy.candidates(after) == [backs[0]]
     policy.shuttle_last_resort = False
