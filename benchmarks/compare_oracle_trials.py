@@ -11,14 +11,11 @@ in both folders, is refused (one line, exit 2): an empty comparison would pass.
 """
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
-
-def load(folder: Path, policy: str) -> dict:
-    root = folder / "trials" / policy
-    return {p.stem: json.loads(p.read_text()) for p in sorted(root.glob("*.json"))} if root.is_dir() else {}
+from slax_drake.errors import UserError
+from slax_drake.evaluation.trial_records import read_trial_records
 
 
 def search_seconds(trial: dict) -> float:
@@ -35,8 +32,14 @@ def main(argv=None) -> int:
         if not (folder / "trials").is_dir():
             print(f"error: {folder} holds no trial files (not a slax-drake benchmark --out folder)", file=sys.stderr)
             return 2
-    for policy in args.policies.split(","):
-        if not set(load(args.old, policy)) & set(load(args.new, policy)):
+    try:  # per policy: (policy, old trials, new trials)
+        runs = [(policy, read_trial_records(args.old, policy, missing_ok=True),
+                 read_trial_records(args.new, policy, missing_ok=True)) for policy in args.policies.split(",")]
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    for policy, old, new in runs:
+        if not set(old) & set(new):
             print(f"error: no trial of {policy} in both {args.old} and {args.new}", file=sys.stderr)
             return 2
     failed = False
@@ -44,8 +47,7 @@ def main(argv=None) -> int:
           "infeasible old -> new | success old -> new | search CPU s old -> new | the same, trials cut in neither |")
     print("|---|---|---|---|---|---|---|---|---|")
     lines = []
-    for policy in args.policies.split(","):
-        old, new = load(args.old, policy), load(args.new, policy)
+    for policy, old, new in runs:
         both = sorted(set(old) & set(new))
         optimal = changed = 0
         for key in both:

@@ -11,9 +11,11 @@ matched by density and index, and a scene whose protocol seed differs between th
 
 import argparse
 import collections
-import json
 import sys
 from pathlib import Path
+
+from slax_drake.errors import UserError
+from slax_drake.evaluation.trial_records import read_trial_records
 
 DENSITIES = ("04", "06", "08", "10")
 
@@ -25,9 +27,7 @@ def fail(message: str) -> None:
 
 
 def load(folder: Path, policy: str) -> dict:
-    trials = {}
-    for path in sorted((folder / "physics_trials" / policy).glob("*.json")):
-        trials[path.stem] = json.loads(path.read_text())
+    trials = read_trial_records(folder, policy, kind="physics_trials", missing_ok=True)
     if not trials:
         fail(f"{folder} holds no trial files of {policy} (physics_trials/{policy}/*.json)")
     return trials
@@ -66,7 +66,11 @@ def main() -> int:
     parser.add_argument("--first", type=int, default=None, metavar="N",
                         help="only the first N scenes per density (e.g. those a run still in progress has finished)")
     args = parser.parse_args()
-    old, new = load(args.old, args.policy), load(args.new, args.policy)
+    try:
+        old, new = load(args.old, args.policy), load(args.new, args.policy)
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     common = sorted(k for k in set(old) & set(new) if args.first is None or int(k.split("_")[1]) < args.first)
     for key in common:
         if old[key]["seed"] != new[key]["seed"]:

@@ -13,9 +13,11 @@ files, or no trial in both, is refused (one line, exit 2): an empty comparison w
 """
 
 import argparse
-import json
 import sys
 from pathlib import Path
+
+from slax_drake.errors import UserError
+from slax_drake.evaluation.trial_records import read_trial_records
 
 TIMING_KEYS = frozenset({"trial_seconds", "decision_seconds", "seconds"})
 
@@ -25,7 +27,8 @@ def load(folder: Path, policies: list[str] | None) -> dict:
     out = {}
     for root in sorted((folder / "trials").iterdir()):
         if root.is_dir() and (policies is None or root.name in policies):
-            out.update({f"{root.name}/{p.stem}": json.loads(p.read_text()) for p in sorted(root.glob("*.json"))})
+            records = read_trial_records(folder, root.name)
+            out.update({f"{root.name}/{stem}": record for stem, record in records.items()})
     return out
 
 
@@ -85,7 +88,11 @@ def main(argv=None) -> int:
             print(f"error: {folder} holds no trial files (not a slax-drake benchmark --out folder)", file=sys.stderr)
             return 2
     policies = args.policies.split(",") if args.policies else None
-    old, new = load(args.old, policies), load(args.new, policies)
+    try:
+        old, new = load(args.old, policies), load(args.new, policies)
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     both = sorted(set(old) & set(new))
     if not both:
         print(f"error: no trial in both {args.old} and {args.new}", file=sys.stderr)

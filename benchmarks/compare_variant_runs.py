@@ -13,10 +13,11 @@ the sign opposite to the last such action on the same object; an undo is a move 
 from __future__ import annotations
 
 import argparse
-import json
 import re
 import sys
-from pathlib import Path
+
+from slax_drake.errors import UserError
+from slax_drake.evaluation.trial_records import read_trial_records
 
 DISPLACEMENT = re.compile(r"\b(?:d|dx)=([-+]?\d+\.\d+)")
 
@@ -40,24 +41,15 @@ def moves_back(actions) -> tuple[int, int]:
     return back, undo
 
 
-def read_json(path: Path):
-    try:
-        return json.loads(path.read_text())
-    except json.JSONDecodeError as e:
-        raise ValueError(f"{path}: not valid JSON ({e})") from None
-
-
 def load(spec: str) -> tuple[str, dict]:
     folder, _, policy = spec.partition(":")
     policy = policy or "slax-belief"
-    files = sorted((Path(folder) / "trials" / policy).glob("*.json"))
-    if not files:
-        raise FileNotFoundError(f"{folder}: no trial files under trials/{policy}/")
-    trials = {f.stem: read_json(f) for f in files}
-    bad = next((f"{folder}/trials/{policy}/{k}.json" for k, t in trials.items()
-                if not isinstance(t, dict) or "success" not in t), None)
+    trials = read_trial_records(folder, policy, missing_ok=True)
+    if not trials:
+        raise UserError(f"{folder}: no trial files under trials/{policy}/")
+    bad = next((f"{folder}/trials/{policy}/{k}.json" for k, t in trials.items() if "success" not in t), None)
     if bad is not None:
-        raise ValueError(f"{bad}: not a trial file (no 'success')")
+        raise UserError(f"{bad}: not a trial file (no 'success')")
     return policy, trials
 
 
@@ -68,7 +60,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     try:
         (pa, a), (pb, b) = load(args.base), load(args.variant)
-    except (FileNotFoundError, ValueError) as e:  # json.JSONDecodeError is a ValueError
+    except UserError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     keys = sorted(set(a) & set(b))

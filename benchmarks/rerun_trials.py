@@ -20,20 +20,22 @@ import time
 from pathlib import Path
 
 from slax_drake.config import load_scenario
+from slax_drake.errors import UserError
 from slax_drake.evaluation.table1 import run_benchmark_trial, scene_seed
+from slax_drake.evaluation.trial_records import read_trial_records
 from slax_drake.io import write_text_atomic
 
 
-def chosen_trials(folder: Path, policy: str, failed: bool, listed: str | None) -> list[tuple[int, int]]:
-    """(density, index) of the trials to rerun, in density then index order."""
+def chosen_trials(trials: dict, failed: bool, listed: str | None) -> list[tuple[int, int]]:
+    """(density, index) of the trials to rerun (``trials``: the folder's records of the policy), in density then
+    index order."""
     chosen = set()
     if listed:
         for part in listed.split(","):
             density, _, index = part.partition(":")
             chosen.add((int(density), int(index)))
     if failed:
-        for path in (folder / "trials" / policy).glob("*.json"):
-            trial = json.loads(path.read_text())
+        for trial in trials.values():
             if not trial["success"]:
                 chosen.add((int(trial["density"]), int(trial["index"])))
     return sorted(chosen)
@@ -57,8 +59,13 @@ def main() -> int:
     if settings.get("observation", "privileged") != "privileged" and not args.policy.startswith("oracle"):
         print("error: only privileged folders (or oracles, which read the true scene) are supported", file=sys.stderr)
         return 2
+    try:
+        folder_trials = read_trial_records(args.folder, args.policy)
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     scenario = load_scenario(args.config or settings["config"])
-    trials = chosen_trials(args.folder, args.policy, args.failed, args.trials)
+    trials = chosen_trials(folder_trials, args.failed, args.trials)
     if not trials:
         print("error: no trial chosen (use --failed or --trials)", file=sys.stderr)
         return 2
@@ -69,7 +76,7 @@ def main() -> int:
     print("|---|---|---|---|")
     reruns, revealed = [], 0
     for density, index in trials:
-        before = json.loads((args.folder / "trials" / args.policy / f"{density:02d}_{index:04d}.json").read_text())
+        before = folder_trials[f"{density:02d}_{index:04d}"]
         job = (scenario, args.policy, density, index, scene_seed(settings["seed"], density, index),
                settings.get("perception", "ground-truth"), rules, None, profile, args.oracle_seconds)
         t0 = time.perf_counter()

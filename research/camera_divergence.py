@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
-import json
 import re
 import sys
 from pathlib import Path
@@ -32,11 +31,13 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.config import load_scenario
+from slax_drake.errors import UserError
 from slax_drake.shelf.actions import Push, Suction
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.simulator import execute
 from slax_drake.scene.raycast import SceneRaycaster
 from slax_drake.evaluation.table1 import protocol_scene
+from slax_drake.evaluation.trial_records import read_trial_records
 
 _PUSH = re.compile(r"push (\S+) d=([-+\d.]+)$")
 _SUCTION = re.compile(r"suction (\S+) dx=([-+\d.]+) dz=([-+\d.]+)$")
@@ -133,22 +134,30 @@ def main():
     ap.add_argument("--config", default="sim_configs/table1.yaml")
     ap.add_argument("--profile", default="paper")
     args = ap.parse_args()
+    privileged_policy = args.privileged_policy or args.policy
+    try:
+        camera_trials = read_trial_records(args.camera, args.policy, missing_ok=True)
+        privileged_trials = read_trial_records(args.privileged, privileged_policy, missing_ok=True)
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        raise SystemExit(2)
     scenario = load_scenario(args.config)
     totals = {}
     for density in (int(d) for d in args.densities.split(",")):
-        model = make_policy(args.privileged_policy or args.policy, scenario, horizon=2 * density,
+        model = make_policy(privileged_policy, scenario, horizon=2 * density,
                             profile=args.profile).action_model  # the executor's model (a registry name)
         print(f"\n## {density} objects\n")
         print("| scene | camera | privileged | first differing step: camera / privileged | wasted camera / priv. "
               "| camera's wasted actions: blocker class |")
         print("|---|---|---|---|---|---|")
         classes = {"fail": collections.Counter(), "all": collections.Counter()}
-        for path in sorted(Path(args.camera, "trials", args.policy).glob(f"{density:02d}_*.json")):
-            ppath = Path(args.privileged, "trials", args.privileged_policy or args.policy, path.name)
-            if not ppath.exists():
+        for key in (k for k in camera_trials if k.startswith(f"{density:02d}_")):
+            if key not in privileged_trials:
                 continue
-            c, p = json.loads(path.read_text()), json.loads(ppath.read_text())
+            c, p = camera_trials[key], privileged_trials[key]
             if c["seed"] != p["seed"]:
+                path = Path(args.camera, "trials", args.policy, f"{key}.json")
+                ppath = Path(args.privileged, "trials", privileged_policy, f"{key}.json")
                 print(f"error: {path} and {ppath} are trials of different scenes (seeds {c['seed']}, {p['seed']})",
                       file=sys.stderr)
                 raise SystemExit(2)

@@ -13,12 +13,13 @@ variant's scenario changes are applied before the scenes are drawn again (its ru
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
 from slax_drake.config import load_scenario
+from slax_drake.errors import UserError
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
+from slax_drake.evaluation.trial_records import read_trial_records
 from slax_drake.shelf.actions import ActionModel, Push
 from slax_drake.shelf.tool import tool_config
 from slax_drake.shelf.visibility import TargetOcclusion
@@ -62,9 +63,12 @@ def main():
             raise SystemExit(2)
         scenario = scenario_with(scenario, VARIANTS[args.variant][3])
     densities = [int(v) for v in args.densities.split(",")]
-    folder = Path(args.folder) / "trials" / args.policy
-    for path in sorted(folder.glob("*.json")):
-        trial = json.loads(path.read_text())
+    try:
+        trials = read_trial_records(args.folder, args.policy, missing_ok=True)
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        raise SystemExit(2)
+    for trial in trials.values():
         if trial["success"] or trial["density"] not in densities:
             continue
         profile = trial.get("profile", "station")

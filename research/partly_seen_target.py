@@ -14,14 +14,11 @@ With ``--compare``: the scenes one folder reveals and the other does not, and th
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
-
-def load(folder: Path, policy: str) -> dict:
-    """Trial id (``DD_NNNN``) -> the trial file's content."""
-    return {f.stem: json.loads(f.read_text()) for f in sorted((folder / "trials" / policy).glob("*.json"))}
+from slax_drake.errors import UserError
+from slax_drake.evaluation.trial_records import read_trial_records
 
 
 def first_seen(trial: dict) -> int | None:
@@ -64,7 +61,11 @@ def main(argv=None) -> int:
         runs.append((args.compare, args.compare_policy or args.policy))
     loaded = []
     for folder, policy in runs:
-        trials = load(folder, policy)
+        try:
+            trials = read_trial_records(folder, policy, missing_ok=True)
+        except UserError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
         if not trials:
             print(f"error: no trial files in {folder / 'trials' / policy}", file=sys.stderr)
             return 2

@@ -13,24 +13,23 @@ from __future__ import annotations
 
 import argparse
 import collections
-import json
 import re
 import sys
 from pathlib import Path
 
+from slax_drake.errors import UserError
+from slax_drake.evaluation.trial_records import read_trial_records
+
 
 def followups(folder: Path, policy: str) -> collections.Counter:
     counts = collections.Counter()
-    files = sorted((folder / "trials" / policy).glob("*.json"))
-    if not files:
-        raise FileNotFoundError(f"{folder}: no trial files under trials/{policy}/")
-    for path in files:
-        try:
-            trial = json.loads(path.read_text())
-        except json.JSONDecodeError as e:
-            raise ValueError(f"{path}: not valid JSON ({e})") from None
-        if not isinstance(trial, dict) or not isinstance(trial.get("actions", []), list):
-            raise ValueError(f"{path}: not a trial file")
+    trials = read_trial_records(folder, policy, missing_ok=True)
+    if not trials:
+        raise UserError(f"{folder}: no trial files under trials/{policy}/")
+    for stem, trial in trials.items():
+        if not isinstance(trial.get("actions", []), list):
+            path = folder / "trials" / policy / f"{stem}.json"
+            raise UserError(f"{path}: not a trial file")
         notes = {}
         for note in trial.get("notes", []):
             m = re.match(r"step (\d+): (.*)", note)
@@ -61,7 +60,7 @@ def main(argv=None) -> int:
     try:
         rows = [(spec, followups(Path(spec.partition(":")[0]), spec.partition(":")[2] or "slax-belief"))
                 for spec in args.folders]
-    except (FileNotFoundError, ValueError) as e:  # json.JSONDecodeError is a ValueError
+    except UserError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     print("| folder | policy | trials | put back | same object suctioned again | ... put back again | ... failed "

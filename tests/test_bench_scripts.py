@@ -103,3 +103,20 @@ def test_compare_variant_runs_counts_moves_back_and_refuses_empty_folders(tmp_pa
         (trials / "08_0000.json").write_text(json.dumps({"success": success, "actions": actions}))
     assert compare.main([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
     assert "| All | 1 | 0.00 % | 100.00 % | 1 | 0 | 2 / 2 | 1 / 1 |" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name,options", [("compare_oracle_trials", ["--policies", "oracle-p"]),
+                                          ("compare_trial_outputs", []), ("compare_variant_runs", [])])
+def test_comparison_scripts_refuse_a_malformed_trial_file_with_one_line(tmp_path, capsys, name, options):
+    policy = "slax-belief" if name == "compare_variant_runs" else "oracle-p"
+    for run in ("old", "new"):
+        (tmp_path / run / "trials" / policy).mkdir(parents=True)
+        (tmp_path / run / "trials" / policy / "04_0000.json").write_text(
+            '{"success": true, "steps": 2, "cost": 2.0, "oracle_status": "optimal", "oracle_searches": []}')
+    bad = tmp_path / "new" / "trials" / policy / "04_0001.json"
+    bad.write_text("{cut short")
+    assert script(name).main([str(tmp_path / "old"), str(tmp_path / "new")] + options) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.strip().splitlines() == [captured.err.strip()]
+    assert captured.err.startswith(f"error: {bad}: not valid JSON")

@@ -97,6 +97,17 @@ def test_put_back_followups_counts_what_follows_a_put_back(tmp_path, capsys):
     assert capsys.readouterr().err.startswith("error: ")
 
 
+@pytest.mark.parametrize("name", ["put_back_followups", "partly_seen_target"])
+def test_a_malformed_trial_file_is_refused_with_one_line(tmp_path, capsys, name):
+    trials = tmp_path / "run" / "trials" / "slax-belief"
+    trials.mkdir(parents=True)
+    (trials / "10_0000.json").write_text('["not", "a", "record"]')
+    assert script(name).main([str(tmp_path / "run")]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err == f"error: {trials / '10_0000.json'}: not a trial record (a JSON object)\n"
+
+
 @pytest.mark.parametrize("options", ['{"shuttle_rule": "far"}', "not json", "[1]"])
 def test_belief_variants_refuses_bad_options_before_any_trial(capsys, options):
     assert script("belief_variants").main(["--options", options, "--trials", "4:0"]) == 2
