@@ -484,6 +484,21 @@ class ActionModel:
             guarded = ~self._suction_hidden_ok(ctx, i, lat, False)
             if drag:
                 ok &= self._drag_hidden_ok(ctx, i, lat, way_in=False)
+            elif (ok & guarded).any():
+                # a lifted guarded push-in stays at the lowest carry, where the guard senses what hides in its way:
+                # one whose way in passes over a known object would be carried higher (the planner refuses it,
+                # FailureKind.GUARDED_LIFTED), so only placements whose way in meets none of them are guarded moves
+                low = np.ones_like(ok)
+                for j in ctx.others(i):
+                    if j not in blocking:
+                        low &= self._pair(("in", False, ctx.ids[i], ctx.ids[j]), lambda: self._reachable_past(
+                            lat, fp, ctx.all_fps[j]))
+                if not (ok & ~(guarded & ~low)).any():
+                    rejected.append(refused(what, f"every placement of {obj.name} reaching into hidden space "
+                                                  f"passes over a known object on its way in (a guarded push-in "
+                                                  f"must stay at the lowest carry)", kind=RefusalKind.HIDDEN_SPACE))
+                    return
+                ok &= ~(guarded & ~low)
         elif t.rules.suction_hidden_rule != "none" and ok.any():
             ok &= self._suction_hidden_ok(ctx, i, lat, path_rule)
             if drag and ok.any():

@@ -152,3 +152,23 @@ def test_the_simulator_stops_a_guarded_placement_on_an_unseen_object_and_complet
     stopped, note = execute(Scene(shelf, camera, (wall, light, unseen), None), action, model)
     assert note == "guarded placement stopped on contact"
     assert stopped.objects[1].center[1] < action.dz and stopped.objects[2] == unseen
+
+
+def test_a_guarded_placement_whose_way_in_passes_over_a_known_object_is_not_offered(sim_scenario):
+    """The planner refuses a lifted guarded push-in carried higher than the lowest carry (over a known object on the
+    way in: it could pass over a lower unseen one and be lowered onto it); the action model offers none such, so the
+    shelf simulator and the Drake trial execute the same placements. Non-guarded placements may still pass over."""
+    wall, light = _hidden_scene()
+    low = _box("low", 0.20, -0.24, (0.06, 0.06, 0.03), mass=0.1)  # in front of the light box, low enough to pass
+    model = _model(sim_scenario, suction_hidden_rule="guarded")
+    without = model.enumerate((wall, light), pushes=False, only=("light",)).feasible
+    with_low = model.enumerate((wall, light, low), pushes=False, only=("light",)).feasible
+    half = light.size[0] / 2 + low.size[0] / 2
+
+    def crosses_low(s):  # the light box's way in at its placement's column overlaps the low box's x extent
+        return abs(light.center[0] + s.dx - low.center[0]) < half and s.dz > low.center[1]
+
+    assert any(s.guarded and crosses_low(s) for s in without)
+    assert with_low
+    assert not any(s.guarded and crosses_low(s) for s in with_low)
+    assert any(not s.guarded and crosses_low(s) for s in with_low)  # carried over it, placed in seen space
