@@ -1012,10 +1012,9 @@ class BeliefSearch(Hindsight):
             best = self.best_by_ratio(seen_nodes, log)
         elif self.stuck_select == "progress" and log.get("widened"):
             # no plan reveals anything, even widened: the plan that ends nearest to revealing (least V - G)
-            best = min(seen_nodes, key=lambda k: (k.value - k.g + self.dead_end_cost(k, log), k.value, len(k.plan),
-                                                  k.order))
+            best = self.least(seen_nodes, lambda k: (k.value - k.g, k.value, len(k.plan), k.order), log)
         else:
-            best = min(seen_nodes, key=lambda k: (k.value + self.dead_end_cost(k, log), len(k.plan), k.order))
+            best = self.least(seen_nodes, lambda k: (k.value, len(k.plan), k.order), log)
         log["revealed"] = round(best.revealed, 4)
         log["value"] = round(best.value, 4)
         log["expected_cost"] = round(best.g, 4)  # G of the chosen plan
@@ -1053,6 +1052,22 @@ class BeliefSearch(Hindsight):
         if log is not None:
             log["dead_ends"] = log.get("dead_ends", 0) + 1
         return self.failure_cost * float(node.alive.sum()) / self._n_worlds
+
+    def least(self, nodes: list, key, log: dict) -> _Node:
+        """The node of least ``key`` (a tuple), its first element plus :meth:`dead_end_cost` with ``dead_end``,
+        evaluated lazily: nodes in order of ``key``, until the next one's (a lower bound of its own) exceeds the best
+        found (each evaluation may enumerate and screen the moves of an arrangement not yet expanded)."""
+        if self.dead_end == "ignore":
+            return min(nodes, key=key)
+        best, best_key = None, None
+        for k in sorted(nodes, key=key):
+            k_key = key(k)
+            if best is not None and k_key[0] > best_key[0]:
+                break
+            k_key = (k_key[0] + self.dead_end_cost(k, log),) + k_key[1:]
+            if best is None or k_key < best_key:
+                best, best_key = k, k_key
+        return best
 
     def best_by_ratio(self, nodes: list, log: dict) -> _Node:
         """The plan with the most revealed mass per expected cost, R / G (ties: the lesser V, then the earlier
