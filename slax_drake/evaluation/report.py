@@ -120,6 +120,10 @@ def _seconds(v) -> str:
     return "-" if v is None else f"{v:.2f}"
 
 
+# the rules a physics run takes from its station file (``systems.trial.station_tool_rules``), not the command line
+STATION_RULES = frozenset({"max_suction_moment", "max_drag_pull", "max_drag_twist", "max_seal_angle_deg", "reach_map"})
+
+
 def _tool_rule_args(rules: dict) -> str:
     return "".join(f" --tool-rule {k}={v}" for k, v in sorted((rules or {}).items()))
 
@@ -153,6 +157,9 @@ def benchmark_command(folder: ResultFolder) -> str:
         parts.append("--densities " + ",".join(str(d) for d in densities))
     parts.append(f"--workers {meta.get('workers', 2)}")
     if folder.kind == "physics":
+        # the station file gives its cup's limits and reach map; any other rule came from the command line
+        parts.append(_tool_rule_args({k: v for k, v in (meta.get("tool_rules") or {}).items()
+                                      if k not in STATION_RULES}).strip())
         if meta.get("shelf_observation") == "camera":
             parts.append("--observation camera")
         if meta.get("sensor_noise"):

@@ -100,3 +100,12 @@ def test_the_command_and_heading_of_a_camera_run_name_its_segmentation_and_noise
     assert "--observation camera --segmentation depth --sensor-noise --policies" in benchmark_command(realistic)
     labels = load_folder(RESULTS / "slax_belief_camera100_1339de7")
     assert "--segmentation" not in benchmark_command(labels) and "--sensor-noise" not in benchmark_command(labels)
+
+
+def test_a_physics_runs_command_names_the_rules_given_on_the_command_line_not_the_stations():
+    from slax_drake.evaluation.report import benchmark_command
+
+    guarded = benchmark_command(load_folder(RESULTS / "physics_belief_household_guarded"))
+    assert "--tool-rule suction_hidden_rule=guarded" in guarded
+    assert "max_suction_moment" not in guarded and "reach_map" not in guarded  # the station file's limits
+    assert "--tool-rule" not in benchmark_command(load_folder(RESULTS / "physics_belief_household_ace0a2a"))
