@@ -41,7 +41,7 @@ def chosen_trials(trials: dict, failed: bool, listed: str | None) -> list[tuple[
     return sorted(chosen)
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", type=Path)
     ap.add_argument("--policy", required=True)
@@ -50,7 +50,7 @@ def main() -> int:
     ap.add_argument("--oracle-seconds", type=float, default=None, help="CPU s per oracle decision (default: the oracle's)")
     ap.add_argument("--config", default=None, help="the scenario (default: the folder's settings)")
     ap.add_argument("--json", type=Path, help="write the rerun trials here (atomically)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     settings_path = args.folder / "settings.json"
     if not settings_path.is_file() or not (args.folder / "trials" / args.policy).is_dir():
         print(f"error: {args.folder} has no settings.json or no trials of {args.policy}", file=sys.stderr)
@@ -65,9 +65,17 @@ def main() -> int:
         print(f"error: {e}", file=sys.stderr)
         return 2
     scenario = load_scenario(args.config or settings["config"])
-    trials = chosen_trials(folder_trials, args.failed, args.trials)
+    try:
+        trials = chosen_trials(folder_trials, args.failed, args.trials)
+    except ValueError:
+        print(f"error: --trials {args.trials!r}: density:index pairs, comma separated (e.g. 4:0,10:3)", file=sys.stderr)
+        return 2
     if not trials:
         print("error: no trial chosen (use --failed or --trials)", file=sys.stderr)
+        return 2
+    missing = [f"{density}:{index}" for density, index in trials if f"{density:02d}_{index:04d}" not in folder_trials]
+    if missing:
+        print(f"error: {args.folder} holds no trial of {args.policy} for {', '.join(missing)}", file=sys.stderr)
         return 2
     profile = settings.get("profile", "station")
     rules = settings.get("tool_rules") or {}

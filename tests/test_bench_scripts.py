@@ -120,3 +120,16 @@ def test_comparison_scripts_refuse_a_malformed_trial_file_with_one_line(tmp_path
     assert captured.out == ""
     assert captured.err.strip().splitlines() == [captured.err.strip()]
     assert captured.err.startswith(f"error: {bad}: not valid JSON")
+
+
+def test_rerun_trials_refuses_a_trial_the_folder_does_not_hold_before_any_rerun(tmp_path, capsys):
+    rerun = script("rerun_trials").main
+    (tmp_path / "trials" / "dar").mkdir(parents=True)
+    config = str(BENCHMARKS.parent / "sim_configs" / "table1.yaml")
+    (tmp_path / "settings.json").write_text(json.dumps({"config": config, "seed": 0}))
+    (tmp_path / "trials" / "dar" / "04_0000.json").write_text(
+        '{"success": false, "density": 4, "index": 0, "steps": 8, "reason": "horizon"}')
+    for argv, words in ((["--trials", "4:0,6:3"], "no trial of dar for 6:3"), (["--trials", "4-0"], "--trials")):
+        assert rerun([str(tmp_path), "--policy", "dar", *argv]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("error: ") and words in err[0]
