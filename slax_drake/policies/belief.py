@@ -985,6 +985,7 @@ class BeliefSearch(Hindsight):
         remaining = self.horizon - (self._step - 1) if self.horizon is not None else 10 ** 6
         counter = itertools.count()
         self._root_objects = known  # the arrangement the plans start from (dead_end_cost)
+        self._node_moves = {}  # id(node) -> (node, its plan_moves), this decision's (expansion and dead_end_cost)
         root = _Node(known, (), 0.0, np.ones(worlds.count, bool), 0.0, 0.0, -1)
         d0 = self.distances(worlds, known)
         root.alive = consistent & (d0 > 0)
@@ -1038,10 +1039,14 @@ class BeliefSearch(Hindsight):
         there."""
         moves = self.moves(node.objects)
         if moves and node.plan and self.dead_end == "corrections":
+            hit = self._node_moves.get(id(node))
+            if hit is not None:
+                return hit[1]
             memory = self.memory.after_plan(self._root_objects, node.plan)
             left = {None, "shuttle"} if self.shuttle_last_resort else {None}
             moves = [m for m, (_, why) in zip(moves, self.screen(node.objects, [a for a, _, _ in moves], memory))
                      if why in left]
+            self._node_moves[id(node)] = (node, moves)  # the node kept alive: its id stays its own
         return moves
 
     def dead_end_cost(self, node: _Node, log: dict | None = None) -> float:
