@@ -7,7 +7,8 @@ Each folder is a ``slax-drake benchmark --out`` folder (its ``trials/<policy>/<d
 one line per trial that differs, a count per policy, and exits 1 when a trial proven optimal in OLD has another
 outcome or step count in NEW, or when NEW has more trials cut by time than OLD (the bar for a change that should
 make the search faster without changing what it proves). A folder without trial files, or a policy with no trial
-in both folders, is refused (one line, exit 2): an empty comparison would pass.
+in both folders, is refused (one line, exit 2): an empty comparison would pass; so is a policy whose trials record
+no oracle search (not an oracle).
 """
 
 import argparse
@@ -41,6 +42,13 @@ def main(argv=None) -> int:
     for policy, old, new in runs:
         if not set(old) & set(new):
             print(f"error: no trial of {policy} in both {args.old} and {args.new}", file=sys.stderr)
+            return 2
+        unsearched = [key for key in sorted(set(old) & set(new)) if "oracle_status" not in old[key]
+                      or "oracle_status" not in new[key]]
+        if unsearched:
+            print(f"error: trial {unsearched[0]} of {policy} records no oracle search (no oracle_status): this "
+                  "script compares the oracles' searches; benchmarks/compare_variant_runs.py compares other policies",
+                  file=sys.stderr)
             return 2
     failed = False
     print("| policy | trials in both | proven optimal in old | of those changed | cut by time old -> new | "

@@ -34,6 +34,19 @@ def test_compare_oracle_trials_refuses_folders_without_common_trials(tmp_path, c
         assert len(err) == 1 and err[0].startswith("error: ")
 
 
+def test_compare_oracle_trials_refuses_a_policy_that_is_not_an_oracle(tmp_path, capsys):
+    """A non-oracle policy's trials have no ``oracle_status``: one line and exit 2, not a KeyError traceback."""
+    for run in ("old", "new"):
+        (tmp_path / run / "trials" / "dar").mkdir(parents=True)
+        (tmp_path / run / "trials" / "dar" / "04_0000.json").write_text('{"success": true, "steps": 2, "cost": 2.0}')
+    argv = [str(tmp_path / "old"), str(tmp_path / "new"), "--policies", "dar"]
+    assert script("compare_oracle_trials").main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: trial ") and "dar records no oracle search" in err[0]
+
+
 @pytest.mark.parametrize("argv,message", [
     (["--policies", "dar,nope"], "error: unknown policies ['nope']"),
     (["--profile", "nope"], "error: unknown profile 'nope'"),
