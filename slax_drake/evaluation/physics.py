@@ -39,6 +39,7 @@ import numpy as np
 
 from slax_drake.errors import PhysicsBenchmarkError
 from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
+from slax_drake.policies.protocol import Reversal
 
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
@@ -446,7 +447,7 @@ def undoes(actions: list[dict]) -> int:
     return sum(1 for _ in _undo_actions(actions))
 
 
-UNDO_RULES = ("uncovers new width", "let through", "not a move back by the estimate", "not recorded")
+UNDO_RULES = (*(str(r) for r in Reversal), "not a move back by the estimate", "not recorded")
 
 
 def undo_rules(actions: list[dict]) -> dict:

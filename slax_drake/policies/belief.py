@@ -134,7 +134,7 @@ from slax_drake.shelf.actions import Push, Suction, apply_action
 from slax_drake.policies.belief_options import DEFAULT_BELIEF_OPTIONS, BeliefOptions
 from slax_drake.policies.hindsight import Hindsight, Worlds
 from slax_drake.policies.oracle_search import maximal_pushes_only
-from slax_drake.policies.protocol import Decision
+from slax_drake.policies.protocol import Decision, Screened
 from slax_drake.scene.model import state_key
 
 
@@ -885,14 +885,14 @@ class BeliefSearch(Hindsight):
         return kids
 
     def screened_counts(self, objects=None) -> dict:
-        """The base policy's screening counts, plus "placement not allowed" for the suctions it lets through whose
-        placement overlaps a blocked region (:meth:`placement_allowed`)."""
+        """The base policy's screening counts, plus :attr:`Screened.PLACEMENT_NOT_ALLOWED` for the suctions it lets
+        through whose placement overlaps a blocked region (:meth:`placement_allowed`)."""
         counts = super().screened_counts(objects)
         objects = self._objects if objects is None else tuple(objects)
         blocked = sum(1 for a in super(Hindsight, self).candidates(objects, True, True)
                       if isinstance(a, Suction) and not self.placement_allowed(objects, a))
         if blocked:
-            counts["placement not allowed"] = blocked
+            counts[str(Screened.PLACEMENT_NOT_ALLOWED)] = blocked
         return counts
 
     def action_model_candidates(self, objects) -> list:
@@ -1043,7 +1043,7 @@ class BeliefSearch(Hindsight):
             if hit is not None:
                 return hit[1]
             memory = self.memory.after_plan(self._root_objects, node.plan)
-            left = {None, "shuttle"} if self.shuttle_last_resort else {None}
+            left = {None, Screened.SHUTTLE} if self.shuttle_last_resort else {None}
             moves = [m for m, (_, why) in zip(moves, self.screen(node.objects, [a for a, _, _ in moves], memory))
                      if why in left]
             self._node_moves[id(node)] = (node, moves)  # the node kept alive: its id stays its own

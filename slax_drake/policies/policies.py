@@ -48,7 +48,7 @@ import numpy as np
 
 from slax_drake.shelf.actions import ActionModel, Push, Suction, apply_action
 from slax_drake.shelf.distribution import DistributionModel, entropy, history_min, support
-from slax_drake.policies.protocol import Decision, Exclusions, read_only
+from slax_drake.policies.protocol import Decision, Exclusions, Reversal, Screened, read_only
 from slax_drake.policies.trial_memory import Miss, TrialMemory
 
 
@@ -169,50 +169,51 @@ class DistributionPolicy:
         screened = self.screen(objects, c.feasible)
         allowed = [a for a, why in screened if why is None]
         if not allowed and self.shuttle_last_resort:
-            allowed = [a for a, why in screened if why == "shuttle"]
+            allowed = [a for a, why in screened if why is Screened.SHUTTLE]
         return allowed
 
     def screen(self, objects, feasible, memory: TrialMemory | None = None) -> list:
         """``(action, why)`` for each of the action model's ``feasible`` candidates on ``objects``: ``why`` None for
-        a candidate the policy may take, else the first correction that screens it out: "excluded" (an exclusion
-        of this trial: the motion planner rejected it or its group, or it failed when executed), "back to an
-        observed arrangement" (correction 2) or "shuttle" (correction 3: it reverses its object's last move and
-        uncovers no new width). ``memory``: the trial memory to judge by (default: this trial's; a search passes
+        a candidate the policy may take, else the first correction that screens it out (:class:`Screened`):
+        EXCLUDED (an exclusion of this trial: the motion planner rejected it or its group, or it failed when
+        executed), BACK (correction 2) or SHUTTLE (correction 3: it reverses its object's last move and uncovers no
+        new width). ``memory``: the trial memory to judge by (default: this trial's; a search passes
         the memory a plan would leave, :meth:`TrialMemory.after_plan`)."""
         memory = self.memory if memory is None else memory
         allowed = set(id(a) for a in self._exclusions.allowed(feasible, objects))
-        out = [(a, None if id(a) in allowed else "excluded") for a in feasible]
+        out = [(a, None if id(a) in allowed else Screened.EXCLUDED) for a in feasible]
         if self.corrected and memory.observed:
             open_ = [a for a, why in out if why is None]
             back = {id(a) for a, seen in zip(open_, memory.leads_back(objects, open_)) if seen}
-            out = [(a, "back to an observed arrangement" if id(a) in back else why) for a, why in out]
+            out = [(a, Screened.BACK if id(a) in back else why) for a, why in out]
         if self.corrected and self.shuttle_reveal is not None and memory.moves:
-            out = [(a, "shuttle" if why is None and memory.undoes(objects, a)
+            out = [(a, Screened.SHUTTLE if why is None and memory.undoes(objects, a)
                     and not self.reveals_new(objects, a, memory) else why) for a, why in out]
         return out
 
     def screened_counts(self, objects=None) -> dict:
         """{why: count} over the action model's feasible candidates on ``objects`` (default: the objects of the last
         decision, as the policy saw them) that this policy screens out
-        (:meth:`screen`), for the record of a decision that found no action; the policies that screen more (safe
-        suctions, placement rules) add their own kinds."""
+        (:meth:`screen`), for the record of a decision that found no action (plain text keys, the :class:`Screened`
+        values); the policies that screen more (safe suctions, placement rules) add their own kinds."""
         import collections
 
         objects = self._objects if objects is None else tuple(objects)
         c = self._action_model.enumerate(objects, pushes=True, suctions=True)
-        return dict(collections.Counter(why for _, why in self.screen(objects, c.feasible) if why is not None))
+        return dict(collections.Counter(str(why) for _, why in self.screen(objects, c.feasible) if why is not None))
 
-    def reversal_rule(self, action, objects=None) -> str | None:
+    def reversal_rule(self, action, objects=None) -> Reversal | None:
         """How correction 3 judged ``action``, chosen on ``objects`` (default: those of the last decision), for the
         trial record: None when it does not move its object back against the last executed move on it (this trial's
-        memory, on the estimated poses) or the policy applies no correction (the literal variants); "uncovers new
-        width" when it does and passed the correction by uncovering at least ``shuttle_reveal`` m never seen;
-        "let through" when the correction screens it out as a shuttle and the policy took it all the same (the
-        last resort, or slax-belief's move that clears more of a partly seen target)."""
+        memory, on the estimated poses) or the policy applies no correction (the literal variants);
+        :attr:`Reversal.UNCOVERS_NEW_WIDTH` when it does and passed the correction by uncovering at least
+        ``shuttle_reveal`` m never seen; :attr:`Reversal.LET_THROUGH` when the correction screens it out as a shuttle
+        and the policy took it all the same (the last resort, or slax-belief's move that clears more of a partly
+        seen target)."""
         objects = self._objects if objects is None else tuple(objects)
         if not (self.corrected and self.shuttle_reveal is not None and self.memory.undoes(objects, action)):
             return None
-        return "uncovers new width" if self.reveals_new(objects, action) else "let through"
+        return Reversal.UNCOVERS_NEW_WIDTH if self.reveals_new(objects, action) else Reversal.LET_THROUGH
 
     def reveals_new(self, objects, action, memory: TrialMemory | None = None) -> bool:
         """Whether ``action`` on ``objects`` reveals space no arrangement observed in this trial revealed (correction

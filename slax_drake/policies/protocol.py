@@ -24,6 +24,7 @@ the table of :mod:`slax_drake.policies.registry`.
 from __future__ import annotations
 
 import dataclasses
+import enum
 import math
 from typing import Protocol, runtime_checkable
 
@@ -31,6 +32,25 @@ import numpy as np
 
 from slax_drake.scene.model import box_yaw_difference
 from slax_drake.shelf.actions import Push
+
+
+class Screened(enum.StrEnum):
+    """Why a policy screens out a candidate the action model finds feasible (``screen`` of the corrected
+    policies, counted per kind in the record of a decision that found no action). A ``StrEnum``: it compares equal
+    to its text and is written as its text in JSON records."""
+
+    EXCLUDED = "excluded"  # an exclusion of this trial: the planner rejected it or its group, or it failed
+    BACK = "back to an observed arrangement"  # correction 2
+    SHUTTLE = "shuttle"  # correction 3: it reverses its object's last move and uncovers no new width
+    PLACEMENT_NOT_ALLOWED = "placement not allowed"  # slax-hindsight/-belief: its placement overlaps a blocked box
+
+
+class Reversal(enum.StrEnum):
+    """How correction 3 judged an executed action that moves its object back against its last move (the trial
+    record's ``reversal_rule``; None when it is not such a move)."""
+
+    UNCOVERS_NEW_WIDTH = "uncovers new width"  # it passed the correction: it reveals space never seen
+    LET_THROUGH = "let through"  # screened out as a shuttle and taken all the same (a last resort or an exception)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -238,7 +238,8 @@ class PlannerSystem(LeafSystem):
                                 hold=True)
         entry["action"] = _describe(action)
         # how the no-shuttle correction judged it (None: not a move back; Policy.reversal_rule)
-        entry["action"]["reversal_rule"] = getattr(policy, "reversal_rule", lambda a: None)(action)
+        rule = getattr(policy, "reversal_rule", lambda a: None)(action)
+        entry["action"]["reversal_rule"] = None if rule is None else str(rule)
         self._last_action = action
         entry["motion"] = {"duration_s": round(motion.trajectory.duration, 3), "timings": motion.timings,
                            "max_deviation_m": round(motion.max_deviation, 5),

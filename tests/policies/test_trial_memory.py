@@ -5,6 +5,7 @@ executed action that moved nothing (with its reason) and never return to an arra
 import pytest
 
 from slax_drake.shelf.actions import apply_action
+from slax_drake.policies.protocol import Screened
 from slax_drake.policies.registry import POLICY_NAMES, make_policy
 from slax_drake.shelf.simulator import execute, observation_for, run_trial
 from slax_drake.policies.trial_memory import Miss, TrialMemory
@@ -203,17 +204,19 @@ def test_screening_names_the_correction_and_the_last_resort_offers_only_shuttles
     backs = [a for a in feasible if a.d > 0 and not policy.reveals_new(after, a)]
     on = [a for a in feasible if a not in backs]
     assert backs and on and any(a.d < 0 for a in on)
-    assert all(screened[a] == "shuttle" for a in backs) and all(screened[a] is None for a in on)
+    assert all(screened[a] is Screened.SHUTTLE for a in backs) and all(screened[a] is None for a in on)
     assert set(policy.candidates(after)) == set(on)
     policy._objects = after
     every = policy.action_model.enumerate(after, pushes=True, suctions=True).feasible  # suctions too
-    shuttles = [a for a, why in policy.screen(after, every) if why == "shuttle"]
-    assert set(backs) <= set(shuttles) and policy.screened_counts() == {"shuttle": len(shuttles)}
+    shuttles = [a for a, why in policy.screen(after, every) if why is Screened.SHUTTLE]
+    counts = policy.screened_counts()  # a record: plain text keys, as JSON and YAML writers need
+    assert set(backs) <= set(shuttles) and counts == {"shuttle": len(shuttles)}
+    assert all(type(k) is str for k in counts)
     policy.shuttle_last_resort = True  # something else is left: the correction holds
     assert set(policy.candidates(after)) == set(on)
     # nothing left but a shuttle and a move back to an observed arrangement: the shuttle alone is offered
-    monkeypatch.setattr(policy, "screen", lambda objects, cands, memory=None: [(backs[0], "shuttle"),
-                                                                  (on[0], "back to an observed arrangement")])
+    monkeypatch.setattr(policy, "screen", lambda objects, cands, memory=None: [(backs[0], Screened.SHUTTLE),
+                                                                  (on[0], Screened.BACK)])
     assert policy.candidates(after) == [backs[0]]
     policy.shuttle_last_resort = False
     assert policy.candidates(after) == []
