@@ -1010,12 +1010,15 @@ class BeliefSearch(Hindsight):
             log["widened"] = True  # nothing revealed within max_depth: once more with a wider beam
             seen_nodes += self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.widen_beam)
         if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
-            best = self.best_by_ratio(seen_nodes, log)
+            # the most revealed mass per expected cost, R / (G + dead end); ties: the lesser V, the earlier plan
+            best = self.least(seen_nodes, lambda k, extra: (-k.revealed / max(k.g + extra, 1e-9), k.value, k.order),
+                              log)
         elif self.stuck_select == "progress" and log.get("widened"):
             # no plan reveals anything, even widened: the plan that ends nearest to revealing (least V - G)
-            best = self.least(seen_nodes, lambda k: (k.value - k.g, k.value, len(k.plan), k.order), log)
+            best = self.least(seen_nodes, lambda k, extra: (k.value - k.g + extra, k.value, len(k.plan), k.order),
+                              log)
         else:
-            best = self.least(seen_nodes, lambda k: (k.value, len(k.plan), k.order), log)
+            best = self.least(seen_nodes, lambda k, extra: (k.value + extra, len(k.plan), k.order), log)
         log["revealed"] = round(best.revealed, 4)
         log["value"] = round(best.value, 4)
         log["expected_cost"] = round(best.g, 4)  # G of the chosen plan
@@ -1059,36 +1062,18 @@ class BeliefSearch(Hindsight):
         return self.failure_cost * float(node.alive.sum()) / self._n_worlds
 
     def least(self, nodes: list, key, log: dict) -> _Node:
-        """The node of least ``key`` (a tuple), its first element plus :meth:`dead_end_cost` with ``dead_end``,
-        evaluated lazily: nodes in order of ``key``, until the next one's (a lower bound of its own) exceeds the best
-        found (each evaluation may enumerate and screen the moves of an arrangement not yet expanded)."""
+        """The node of least ``key(node, extra)`` (a tuple whose first element does not decrease as ``extra``
+        grows), ``extra`` its :meth:`dead_end_cost` with ``dead_end``, else 0. Evaluated lazily: nodes in order of
+        ``key(node, 0)``, a lower bound of their own key, until the next one's exceeds the best found (each
+        evaluation may enumerate and screen the moves of an arrangement not yet expanded)."""
         if self.dead_end == "ignore":
-            return min(nodes, key=key)
+            return min(nodes, key=lambda k: key(k, 0.0))
         best, best_key = None, None
-        for k in sorted(nodes, key=key):
-            k_key = key(k)
-            if best is not None and k_key[0] > best_key[0]:
-                break
-            k_key = (k_key[0] + self.dead_end_cost(k, log),) + k_key[1:]
-            if best is None or k_key < best_key:
-                best, best_key = k, k_key
-        return best
-
-    def best_by_ratio(self, nodes: list, log: dict) -> _Node:
-        """The plan with the most revealed mass per expected cost, R / G (ties: the lesser V, then the earlier
-        plan); with ``dead_end``, R / (G + :meth:`dead_end_cost`), evaluated lazily: plans in order of R / G, until
-        the next one's R / G (an upper bound of its own ratio) falls below the best found."""
-        def key(k, extra=0.0):
-            return (k.revealed / max(k.g + extra, 1e-9), -k.value, -k.order)
-
-        if self.dead_end == "ignore":
-            return max(nodes, key=key)
-        best, best_key = None, None
-        for k in sorted(nodes, key=key, reverse=True):
-            if best is not None and key(k)[0] < best_key[0]:
+        for k in sorted(nodes, key=lambda k: key(k, 0.0)):
+            if best is not None and key(k, 0.0)[0] > best_key[0]:
                 break
             k_key = key(k, self.dead_end_cost(k, log))
-            if best is None or k_key > best_key:
+            if best is None or k_key < best_key:
                 best, best_key = k, k_key
         return best
 
