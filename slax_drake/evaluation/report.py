@@ -14,7 +14,8 @@ typed by hand. What a folder feeds is read from its files:
 
 Each table names the command, the rule profile and the observation mode it was made with, and every page the
 exact ``slax-drake report`` command that regenerates it. With ``readme`` the headline table (the first Table I
-folder's success rates) replaces the text between the README's ``<!-- results:begin -->`` and
+folder's success rates, with the rows of any later folder given that reran some of its policies on the same
+protocol) replaces the text between the README's ``<!-- results:begin -->`` and
 ``<!-- results:end -->`` markers, and the first physics folder's section (not a Table II run) the text between
 ``<!-- physics:begin -->`` and ``<!-- physics:end -->``.
 """
@@ -384,23 +385,48 @@ def table2_section(folder: ResultFolder) -> str:
     return "\n".join(lines) + "\n"
 
 
-def headline_table(folder: ResultFolder) -> str:
+def is_rerun_of(later: ResultFolder, first: ResultFolder) -> bool:
+    """Whether ``later`` is a Table I run of ``first``'s very protocol (its settings but the policy set, and its
+    scenes per density and densities) that reran some of its policies: its rows replace ``first``'s in the
+    headline."""
+    def protocol(f):
+        return ({k: v for k, v in f.settings.items() if k != "policies"}, f.meta.get("scenes_per_density"),
+                sorted(f.meta.get("densities") or []))
+
+    shared = set(later.summary["policies"]) & set(first.summary["policies"])
+    return (later is not first and later.kind == first.kind == "table1" and bool(first.settings)
+            and protocol(later) == protocol(first) and bool(shared))
+
+
+def headline_table(folder: ResultFolder, reruns: list[ResultFolder] = ()) -> str:
     """The README's headline: success % per density of every policy of a Table I folder, the paper's figure in
-    parentheses, naming the command, the profile and the observation mode."""
+    parentheses, naming the command, the profile and the observation mode. A policy that a later run of the same
+    protocol (``reruns``, :func:`is_rerun_of`; the last one holding it) ran again has that run's row, and the table
+    names that run's command too."""
     from slax_drake.evaluation.table1 import PAPER_TABLE1
 
-    table, meta = folder.summary, folder.meta
+    meta = folder.meta
+    source = {p: folder for p in folder.summary["policies"]}
+    for rerun in reruns:
+        source.update({p: rerun for p in rerun.summary["policies"]})
     lines = [f"Table I protocol in the shelf simulator, profile `{folder.profile}`, {_observation_words(folder)}, "
              f"{meta.get('scenes_per_density', '?')} scenes per density (success %, the paper's figure in parentheses):",
              "", "| policy | 4 objects | 6 objects | 8 objects | 10 objects | All |", "|---|---|---|---|---|---|"]
-    for p in _policy_order(table["policies"]):
+    for p in _policy_order(source):
         cells = []
         for i, key in enumerate(KEYS):
-            rate = (table["policies"][p].get(key) or {}).get("success_rate")
+            rate = (source[p].summary["policies"][p].get(key) or {}).get("success_rate")
             paper = f" ({PAPER_TABLE1[p][i]})" if p in PAPER_TABLE1 else ""
             cells.append(("-" if rate is None else f"{100 * rate:.0f}") + paper)
         lines.append(f"| {_display(p)} | " + " | ".join(cells) + " |")
-    lines += ["", f"Made with `{benchmark_command(folder)}`."]
+    used = [f for f in (folder, *reruns) if any(v is f for v in source.values())]
+    if len(used) == 1:
+        lines += ["", f"Made with `{benchmark_command(folder)}`."]
+    else:
+        lines += ["", "Made with:", ""]
+        for f in used:
+            rows = "; ".join(_display(p) for p in _policy_order(source) if source[p] is f)
+            lines += [f"- {rows}:", f"  `{benchmark_command(f)}`"]
     return "\n".join(lines) + "\n"
 
 
@@ -480,7 +506,8 @@ def write_report(folders: list[Path], docs: Path | None = None, readme: Path | N
             raise UserError(f"{readme}: no such file")
         if not {README_BEGIN, README_END} <= _markers(Path(readme)):
             raise UserError(f"{readme} has no {README_BEGIN} ... {README_END} section to replace")
-        headline = headline_table(first) + f"\nRegenerate with `{command}`.\n"
+        headline = headline_table(first, [f for f in loaded if is_rerun_of(f, first)]) + \
+            f"\nRegenerate with `{command}`.\n"
         drake = next((f for f in loaded if f.kind == "physics" and not f.is_table2), None)
         if drake is not None and {PHYSICS_BEGIN, PHYSICS_END} <= _markers(Path(readme), (PHYSICS_BEGIN, PHYSICS_END)):
             # the headline physics run (the first physics folder), its section one heading level down

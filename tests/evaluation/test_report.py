@@ -52,6 +52,23 @@ def test_report_replaces_only_the_readme_headline(tmp_path):
     assert f"slax-drake report {RESULTS / 'table1_paper'} --readme {readme}" in text
 
 
+def test_the_readme_headline_takes_the_rows_of_a_later_run_of_the_same_protocol(tmp_path):
+    """table1_paper_nonoracle reran table1_paper's non-oracle policies on the same protocol: the headline keeps the
+    oracles' rows of the first, takes the reran policies' rows of the later run and names both commands. A run of
+    another protocol (table1_station) replaces nothing."""
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{README_BEGIN}\n{README_END}\n")
+    folders = [RESULTS / n for n in ("table1_paper", "table1_station_nonoracle", "table1_paper_nonoracle")]
+    assert main(["report", *map(str, folders), "--readme", str(readme)]) == 0
+    text = readme.read_text()
+    assert "| Oracle-P+S | 100 (100) | 100 (100) | 98 (100) | 92 (100) | 98 (100) |" in text  # table1_paper's
+    assert "| slax-belief (ours) | 97 | 91 | 73 | 66 | 82 |" in text  # the rerun's (table1_paper: 100 | 94 | 88 | 71 | 88)
+    assert "| slax-belief (ours) | 100 |" not in text
+    assert "- Oracle-P; Oracle-P+S:\n  `slax-drake benchmark" in text and "--out " + str(folders[0]) + "`" in text
+    assert "slax-belief (ours):\n  `slax-drake benchmark" in text and "--out " + str(folders[2]) + "`" in text
+    assert str(folders[1]) + "`" not in text
+
+
 @pytest.mark.parametrize("setup, message", [
     ("empty", "holds neither table1.json nor physics.json"),
     ("no-markers", "has no <!-- results:begin --> ... <!-- results:end --> section"),
