@@ -318,18 +318,22 @@ class MotionPlanner:
             return [], float("nan")
 
     # -----------------------------------------------------------------------------------------------------
-    def _ik(self, world, wp: ToolWaypoint, guess, timings, min_distance=None):
+    def _ik(self, world, wp: ToolWaypoint, guess, timings, min_distance=None, tight: bool = False):
+        """IK of the waypoint's tool pose from ``guess`` (memoised): IK's default tolerances, or the hold
+        tolerances (``HOLD_POSITION_TOLERANCE``, ``HOLD_ANGLE_TOLERANCE``) while the cup holds an object or when
+        ``tight``; with ``min_distance``, the robot-environment distance constraint."""
         from pydrake.math import RigidTransform
 
         kinematic = min_distance is None and self.keep_kinematic_ik
         memo = self._kinematic_ik if kinematic else self._memo
-        key = ("ik", wp.frame, wp.X_SF.tobytes(), np.asarray(guess, float).tobytes(), wp.shaft, wp.suction,
+        tight = tight or wp.suction
+        key = ("ik", wp.frame, wp.X_SF.tobytes(), np.asarray(guess, float).tobytes(), wp.shaft, tight,
                min_distance, False if kinematic else world._ik_filter is not None)
         if key in memo:
             q = memo[key]
             return None if q is None else q.copy()
         t0 = time.perf_counter()
-        tol = {} if not wp.suction else dict(position_tolerance=HOLD_POSITION_TOLERANCE, angle_tolerance=HOLD_ANGLE_TOLERANCE)
+        tol = dict(position_tolerance=HOLD_POSITION_TOLERANCE, angle_tolerance=HOLD_ANGLE_TOLERANCE) if tight else {}
         q = solve_tool_pose(world, wp.frame, RigidTransform(wp.X_SF), guess, wp.shaft, min_distance=min_distance, **tol)
         timings["ik_s"] += time.perf_counter() - t0
         timings["ik_solves"] += 1
@@ -352,6 +356,12 @@ class MotionPlanner:
         timings["check_s"] += time.perf_counter() - t0
         return ok
 
+    def _tight_solution(self, world, wp: ToolWaypoint, q, timings):
+        """The waypoint's pose solved again from ``q`` with the hold tolerances (None when ``wp`` was solved with
+        them already, or IK finds none): whether the tool meets the environment at the exact pose, not at the
+        default tolerances' turn of the tube."""
+        return None if wp.suction else self._ik(world, wp, q, timings, tight=True)
+
     def _solve_waypoint(self, world, wp, guesses, name, timings):
         """IK for a waypoint from the guesses in turn; when every solution collides, solved again with a
         minimum-distance constraint from the colliding solutions (at most ``MAX_DISTANCE_RETRIES``) and the
@@ -366,7 +376,10 @@ class MotionPlanner:
                 return q
             colliding.append(q)
         if colliding:
-            _reject_if_the_tool_hits(world, wp, colliding[0])
+            q_tight = self._tight_solution(world, wp, colliding[0], timings)
+            if q_tight is not None and self._free(world, q_tight, timings):
+                return q_tight
+            _reject_if_the_tool_hits(world, wp, colliding[0], q_tight)
             world.ik_tool_contact(name, wp.contact)
             try:
                 for guess in colliding[:MAX_DISTANCE_RETRIES] + list(guesses[:1]):
@@ -424,7 +437,10 @@ class MotionPlanner:
             if len(found) >= MAX_FIRST_SOLUTIONS:
                 break
         if not found and colliding:
-            _reject_if_the_tool_hits(world, wp, colliding[0])
+            q_tight = self._tight_solution(world, wp, colliding[0], timings)
+            if q_tight is not None and self._free(world, q_tight, timings):
+                return [q_tight]
+            _reject_if_the_tool_hits(world, wp, colliding[0], q_tight)
             try:
                 found.append(self._solve_waypoint(world, wp, colliding[:1] + seeds[:1], name, timings))
             except _Reject:
@@ -622,10 +638,16 @@ def _reject_a_lifted_guarded_push_in(action, waypoints) -> None:
         raise _Reject(PlanningFailure(FailureKind.GUARDED_LIFTED, "push in", deviation=height))
 
 
-def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q) -> None:
+def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q, q_tight=None) -> None:
     """Raises _PoseReject when, at the waypoint's solution q, a body rigid with the tool meets the environment:
-    every other solution of that tool pose meets it too."""
+    every other solution of that tool pose meets it too. IK's default angle tolerance (0.01 rad) turns the tube's
+    far end up to about 3 mm about the tool frame, so a tube that passes that close to an object may meet it at
+    one solution and clear it at the exact pose: ``q_tight``, the pose solved again with the hold tolerances
+    (:meth:`MotionPlanner._tight_solution`; None when there is none), decides then: the pose is rejected only when
+    the tool meets the environment there too."""
     tool_hits = world.tool_environment_hits(q)
+    if tool_hits and q_tight is not None:
+        q, tool_hits = q_tight, world.tool_environment_hits(q_tight)
     if tool_hits:
         pairs = [(a, b) for a, b in world.collision_pairs(q) if a in tool_hits]
         raise _PoseReject(PlanningFailure(FailureKind.TOOL_COLLIDES, wp.label,

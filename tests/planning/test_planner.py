@@ -158,6 +158,37 @@ def test_unreachable_action_is_rejected_with_a_reason(setup):
     assert isinstance(result, Rejection) and result.reason
 
 
+@pytest.mark.parametrize("gap, plans", [(0.003, True), (0.001, False)])
+def test_a_tube_passing_a_tall_object_beyond_the_padding_plans_and_within_it_does_not(setup, gap, plans):
+    """A tall box stands ``gap`` from the tube's surface on its way in to push ``a`` toward -x. IK's default angle
+    tolerance (0.01 rad) turns the tube's far end by up to 3 mm, so at 3 mm the first IK solution of the insert
+    pose met the box and the planner rejected the pose ("the tool collides at its pose"; it did, before the pose
+    was solved again with the hold tolerances); 1 mm is within the collision checker's 2 mm padding at the exact
+    pose, and is still rejected."""
+    import dataclasses
+
+    from slax_drake.planning.world import PADDING
+    from slax_drake.scene.model import SceneObject, planar_pose
+
+    station, planner, scene, _ = setup
+    assert PADDING == pytest.approx(0.002)
+
+    def box(name, x, y, sx, sy, sz):
+        return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, 0.0))
+
+    a = box("a", -0.10, 0.12, 0.08, 0.08, 0.10)
+    tube_x = -0.10 + 0.04 + 0.015 + 0.004  # a's right face, a tube radius and the standoff (TUBE_STANDOFF)
+    c = box("c", tube_x + 0.015 + gap + 0.02, -0.15, 0.04, 0.04, 0.15)
+    world = dataclasses.replace(scene.with_objects((a, c)), target=None)
+    model = ActionModel(world.shelf, world.camera.position[:2], planner.tool)
+    push = next(p for p in model.enumerate(world.objects, suctions=False).feasible if p.name == "a" and p.d < 0)
+    result = planner.plan(push, world)
+    assert result.feasible is plans, getattr(result, "reason", None)
+    if not plans:
+        assert result.failure.kind is FailureKind.TOOL_COLLIDES and result.failure.waypoint == "insert"
+        assert "tool_shaft_link with c" in result.reason
+
+
 def test_planning_is_deterministic(setup, motions):
     _, _, scene, _ = setup
     motion = motions[1]["push"]
