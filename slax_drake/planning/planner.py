@@ -60,7 +60,7 @@ from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import DWELL, LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
 from slax_drake.planning.world import PlanningWorld, pairs_text
-from slax_drake.shelf.actions import Suction
+from slax_drake.shelf.actions import Push, Suction
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.model import Scene, state_key
 from slax_drake.station.plant import station_joint_limits
@@ -162,6 +162,7 @@ class MotionPlanner:
         # this station), kept across worlds when ``keep_kinematic_ik``
         self.keep_kinematic_ik = keep_kinematic_ik
         self._kinematic_ik = {}
+        self._tight = False  # the near-miss variant: every waypoint and midpoint solved with the hold tolerances
 
     def world(self, scene: Scene) -> PlanningWorld:
         """The planning world of the scene's objects as they stand (built once per object state)."""
@@ -208,6 +209,8 @@ class MotionPlanner:
                         break
             if motion is not None or not _may_differ(reasons[-1][1], MARGIN_DEPENDENT, MARGIN_DEPENDENT_KINDS):
                 break
+        if motion is None and isinstance(action, Push) and _near_miss(reasons[-1][1]):
+            motion = self._plan_tight(world, action, scene, q_start, timings, reasons)
         if motion is None:
             timings["total_s"] = time.perf_counter() - t_all
             # The leading variant's failures come first (their first is the Rejection's failure, which the
@@ -220,6 +223,25 @@ class MotionPlanner:
         timings["total_s"] = time.perf_counter() - t_all
         motion.timings = _rounded(timings)
         return motion
+
+    def _plan_tight(self, world, action, scene, q_start, timings, reasons):
+        """The near-miss variant of a push whose tool met an object on a straight segment: every
+        waypoint and midpoint solved with the hold tolerances and the straight segments kept within
+        ``CARRIED_DEVIATION_TOLERANCE`` (1 mm) of their lines, at the nominal approach margin. IK's default
+        tolerances let the tube's far end stray up to 3 mm and the segments 4 mm, so a tube whose lane passes 2-5 mm
+        from a taller neighbour met it in one solution and clears it in this one. The motion, or None with the
+        variant's failures put first in ``reasons`` (so that the report's leading variant stays the one it was)."""
+        self._tight, self._anchor_failed = True, set()
+        try:
+            waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool,
+                                         approach_margin=APPROACH_MARGINS[0])
+            return self._plan(world, action, waypoints, q_start, timings)
+        except _Reject as e:
+            world.allow_tool_contact(action.name, False)
+            reasons.insert(0, ("tool solved within the hold tolerances", e.failures))
+            return None
+        finally:
+            self._tight = False
 
     def reaches(self, scene: Scene, waypoint: ToolWaypoint) -> bool:
         """Whether the planner finds a collision-free IK solution for ``waypoint`` in ``scene`` from the
@@ -326,7 +348,7 @@ class MotionPlanner:
 
         kinematic = min_distance is None and self.keep_kinematic_ik
         memo = self._kinematic_ik if kinematic else self._memo
-        tight = tight or wp.suction
+        tight = tight or wp.suction or self._tight
         key = ("ik", wp.frame, wp.X_SF.tobytes(), np.asarray(guess, float).tobytes(), wp.shaft, tight,
                min_distance, False if kinematic else world._ik_filter is not None)
         if key in memo:
@@ -596,7 +618,8 @@ class MotionPlanner:
         for s in np.linspace(0.0, 1.0, n)[1:-1]:
             p = world.tool_pose_S(qa + s * (qb - qa), wp.frame).translation()
             dev = max(dev, _distance_to_segment(p, pa, pb))
-        if dev <= (min(self.deviation_tolerance, CARRIED_DEVIATION_TOLERANCE) if wp.carried else self.deviation_tolerance):
+        if dev <= (min(self.deviation_tolerance, CARRIED_DEVIATION_TOLERANCE) if wp.carried or self._tight
+                   else self.deviation_tolerance):
             return [], dev
         if depth >= MAX_REFINE_DEPTH:
             raise _Reject(PlanningFailure(FailureKind.LEAVES_STRAIGHT_SEGMENT, wp.label, deviation=dev))
@@ -614,6 +637,16 @@ class MotionPlanner:
         left, d1 = self._refine(world, qa, Xa, q_mid, X_mid, wp, timings, depth + 1)
         right, d2 = self._refine(world, q_mid, X_mid, qb, Xb, wp, timings, depth + 1)
         return left + [q_mid] + right, max(d1, d2)
+
+
+def _near_miss(failures) -> bool:
+    """Whether a variant failed because a body rigid with the tool met the environment on a segment (the failure
+    :meth:`MotionPlanner._plan_tight` may avoid; a pose the tool meets is decided within the hold tolerances
+    already, :func:`_reject_if_the_tool_hits`)."""
+    from slax_drake.planning.world import TOOL_RIGID_BODIES
+
+    first = failures[0]
+    return first.kind is FailureKind.SEGMENT_COLLIDES and any(f"{body} with" in first.hits for body in TOOL_RIGID_BODIES)
 
 
 def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) -> bool:

@@ -158,13 +158,15 @@ def test_unreachable_action_is_rejected_with_a_reason(setup):
     assert isinstance(result, Rejection) and result.reason
 
 
+@pytest.mark.parametrize("sign", [-1, +1])
 @pytest.mark.parametrize("gap, plans", [(0.003, True), (0.001, False)])
-def test_a_tube_passing_a_tall_object_beyond_the_padding_plans_and_within_it_does_not(setup, gap, plans):
-    """A tall box stands ``gap`` from the tube's surface on its way in to push ``a`` toward -x. IK's default angle
-    tolerance (0.01 rad) turns the tube's far end by up to 3 mm, so at 3 mm the first IK solution of the insert
-    pose met the box and the planner rejected the pose ("the tool collides at its pose"; it did, before the pose
-    was solved again with the hold tolerances); 1 mm is within the collision checker's 2 mm padding at the exact
-    pose, and is still rejected."""
+def test_a_tube_passing_a_tall_object_beyond_the_padding_plans_and_within_it_does_not(setup, sign, gap, plans):
+    """A tall box stands ``gap`` from the tube's surface on its way in to push ``a`` toward ``sign`` x. IK's
+    default tolerances let the tube's far end turn by up to 3 mm (0.01 rad) and the straight segments stray 4 mm,
+    so at 3 mm the planner rejected both pushes (-x: "insert: the tool collides at its pose"; +x: "segment to
+    insert collides") before a colliding pose was solved again within the hold tolerances and a push whose tool
+    met an object on a segment was planned once more with every waypoint that tight (``_plan_tight``); 1 mm is
+    within the collision checker's 2 mm padding at the exact pose, and is still rejected."""
     import dataclasses
 
     from slax_drake.planning.world import PADDING
@@ -177,16 +179,17 @@ def test_a_tube_passing_a_tall_object_beyond_the_padding_plans_and_within_it_doe
         return SceneObject(name, "box", (sx, sy, sz), planar_pose(x, y, sz / 2, 0.0))
 
     a = box("a", -0.10, 0.12, 0.08, 0.08, 0.10)
-    tube_x = -0.10 + 0.04 + 0.015 + 0.004  # a's right face, a tube radius and the standoff (TUBE_STANDOFF)
-    c = box("c", tube_x + 0.015 + gap + 0.02, -0.15, 0.04, 0.04, 0.15)
+    tube_x = -0.10 - sign * (0.04 + 0.015 + 0.004)  # a's face, a tube radius and the standoff (TUBE_STANDOFF)
+    c = box("c", tube_x - sign * (0.015 + gap + 0.02), -0.15, 0.04, 0.04, 0.15)
     world = dataclasses.replace(scene.with_objects((a, c)), target=None)
     model = ActionModel(world.shelf, world.camera.position[:2], planner.tool)
-    push = next(p for p in model.enumerate(world.objects, suctions=False).feasible if p.name == "a" and p.d < 0)
+    push = next(p for p in model.enumerate(world.objects, suctions=False).feasible
+                if p.name == "a" and np.sign(p.d) == sign)
     result = planner.plan(push, world)
     assert result.feasible is plans, getattr(result, "reason", None)
     if not plans:
-        assert result.failure.kind is FailureKind.TOOL_COLLIDES and result.failure.waypoint == "insert"
-        assert "tool_shaft_link with c" in result.reason
+        assert result.failure.kind in (FailureKind.TOOL_COLLIDES, FailureKind.SEGMENT_COLLIDES)
+        assert result.failure.waypoint == "insert" and "tool_shaft_link with c" in result.reason
 
 
 def test_planning_is_deterministic(setup, motions):
