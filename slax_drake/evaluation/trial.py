@@ -53,6 +53,9 @@ class TrialRecord:
 
 OBJECT_POSES_FILE = "object_poses.npz"
 POSE_PERIOD = 0.1  # s of simulated time between recorded object poses
+# The result of a trial whose simulation blew up (a non-finite pose: an unstable contact), followed by ": " and the
+# simulator's message; the trial's records up to then are kept, the objects' final poses are not known.
+DIVERGED = "simulation diverged"
 
 
 def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: bool = False) -> TrialRecord:
@@ -106,14 +109,23 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
 
     if record_poses:
         record()
+    diverged = None  # the simulator's message when the simulation blew up (a non-finite pose)
     while not planner_system.trial_state(context).done and context.get_time() < max_time:
         t_next = context.get_time() + 1.0
-        if record_poses:
-            t0 = context.get_time()
-            for k in range(1, round(1.0 / POSE_PERIOD)):
-                simulator.AdvanceTo(t0 + k * POSE_PERIOD)
-                record()
-        simulator.AdvanceTo(t_next)
+        try:
+            if record_poses:
+                t0 = context.get_time()
+                for k in range(1, round(1.0 / POSE_PERIOD)):
+                    simulator.AdvanceTo(t0 + k * POSE_PERIOD)
+                    record()
+            simulator.AdvanceTo(t_next)
+        except RuntimeError as e:
+            if "non-finite" not in str(e):
+                raise
+            diverged = str(e).splitlines()[0][:200]
+            if len(pose_times) > len(poses):  # a frame of the blown-up state, half recorded
+                pose_times.pop()
+            break
         if record_poses:
             record()
         if printer is not None:
@@ -128,11 +140,11 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
         if opts.html:
             html = meshcat.StaticHtml()
     sim_time = context.get_time()
-    result = state.result or "time limit"
+    result = f"{DIVERGED}: {diverged}" if diverged else (state.result or "time limit")
     plant_context = plant.GetMyContextFromRoot(context)
     X_SW = X_WS.inverse()
-    final = {}
-    for o, b in zip(scene.objects, bodies):
+    final = {}  # where each object ended; unknown (empty) after the simulation blew up
+    for o, b in zip(scene.objects if diverged is None else (), bodies):
         X = (X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.get_body(b))).GetAsMatrix4()
         final[o.name] = {"x": round(float(X[0, 3]), 5), "y": round(float(X[1, 3]), 5), "z": round(float(X[2, 3]), 5),
                          "yaw": round(math.atan2(X[1, 0], X[0, 0]), 5),
@@ -141,7 +153,7 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
                                         and -0.02 < X[2, 3] < scene.shelf.height)}
     if printer is not None:
         printer.update(state.log, snapshots)
-        printer.finish(final)
+        printer.finish(final if diverged is None else None)
     log = [_with_ground_truth(entry, snapshots) for entry in state.log]
     actions = []
     for entry in log:
@@ -171,6 +183,8 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
             a["lost_after"] = None
         elif after is not None and "lost" in after:
             a["lost_after"] = a["true_object"] in after["lost"]
+        elif a["true_object"] not in final:  # the simulation blew up during this action: not known
+            a["lost_after"] = None
         else:
             end = final[a["true_object"]]
             a["lost_after"] = not (end["upright"] and end["inside"])

@@ -131,17 +131,23 @@ def test_action_matches_within_2_cm_and_10_deg():
 
 
 def test_a_diverged_simulation_is_a_failed_trial_not_a_crash(tmp_path, monkeypatch):
-    """Drake raises on a non-finite pose when a contact blows up; the benchmark records that scene as a Drake
-    failure with the reason and goes on (one unstable scene stopped a 40-scene run)."""
+    """A Drake trial whose simulation blew up (a non-finite pose) ends "simulation diverged: ..." with its records
+    and no final poses (``run_trial``; tests/systems/test_trial.py); the benchmark records that scene as a Drake
+    failure with the reason, counts nothing lost, and goes on (one unstable scene stopped a 40-scene run)."""
     import slax_drake.evaluation.trial as trial
 
-    def blow_up(*args, **kwargs):
-        raise RuntimeError("SceneGraph encountered a non-finite value (e.g., NaN or infinity) on a pose input port.")
+    message = "simulation diverged: SceneGraph encountered a non-finite value (e.g., NaN or infinity)"
 
-    monkeypatch.setattr(trial, "run_trial", blow_up)
+    class Diverged:
+        data = {"success": False, "result": message, "steps": 0, "cost": 0.0, "visible_fraction": 0.0,
+                "sim_time_s": 3.0, "wall_s": 1.0, "real_time_factor": 3.0, "actions": [], "final_objects": {},
+                "initial_objects": {}, "steps_log": []}
+
+    monkeypatch.setattr(trial, "run_trial", lambda *args, **kwargs: Diverged())
     summary = run_physics_benchmark(CONFIG, out=tmp_path, **TINY)
     row = summary["trials"][0]
-    assert row["drake_success"] is False and row["drake_result"].startswith("simulation diverged: SceneGraph")
+    assert row["drake_success"] is False and row["drake_result"] == message
+    assert row["toppled"] == 0 and row["dropped"] == 0
     assert summary["policies"]["bluction-dar"]["2"]["drake_success_rate"] == 0.0
     saved = json.loads(trial_path(tmp_path, "bluction-dar", 2, 0).read_text())
     assert saved["drake"]["result"] == row["drake_result"]

@@ -24,6 +24,51 @@ def short_trial(tmp_path_factory):
     return record, out
 
 
+class _BlowsUpAt:
+    """A Simulator whose AdvanceTo past ``t_blow`` s raises what Drake raises when a contact blows up."""
+
+    def __init__(self, t_blow):
+        from pydrake.systems.analysis import Simulator
+
+        self.t_blow, self.simulator = t_blow, Simulator  # the real one, before the monkeypatch
+
+    def __call__(self, diagram):
+        real, t_blow = self.simulator(diagram), self.t_blow
+
+        class Wrapper:
+            def __getattr__(self, name):
+                return getattr(real, name)
+
+            def AdvanceTo(self, t):
+                if t > t_blow:
+                    real.AdvanceTo(t_blow)
+                    raise RuntimeError("SceneGraph encountered a non-finite value (e.g., NaN or infinity) on a "
+                                       "pose input port. It came from the input associated with source id 19.")
+                return real.AdvanceTo(t)
+
+        return Wrapper()
+
+
+@pytest.mark.slow
+def test_a_simulation_that_blows_up_ends_the_trial_and_keeps_its_records(monkeypatch, tmp_path, short_trial):
+    """Drake raises on a non-finite pose when a contact blows up. The trial ends "simulation diverged: ..." and
+    keeps what happened up to then (before, the error escaped run_trial: no trial.json, and the physics benchmark
+    recorded the scene with no action); the objects' final poses are not known. Here it blows up 3 s into the
+    short trial's first motion."""
+    import pydrake.systems.analysis as analysis
+
+    first = short_trial[0].data["steps_log"][0]["time"]
+    monkeypatch.setattr(analysis, "Simulator", _BlowsUpAt(first + 3.0))
+    record = run_trial(TrialOptions(**SHORT))
+    d = record.data
+    assert d["success"] is False and d["result"].startswith("simulation diverged: SceneGraph encountered")
+    assert d["steps"] == 1 and d["actions"][0]["object"] == short_trial[0].data["actions"][0]["object"]
+    assert d["actions"][0]["outcome"] is None and d["actions"][0]["lost_after"] is None
+    assert d["final_objects"] == {} and d["sim_time_s"] == pytest.approx(first + 3.0)
+    assert write_trial(record, tmp_path)[0] == tmp_path / "trial.json"
+    assert json.loads((tmp_path / "trial.json").read_text())["result"] == d["result"]
+
+
 @pytest.mark.slow
 def test_short_trial_reveals_the_target(short_trial):
     record, out = short_trial
