@@ -61,7 +61,8 @@ class PlanningFailure:
     ``carried``: the carried object's name (:attr:`FailureKind.CARRIED_COLLIDES`). ``deviation``: how far the tool
     leaves its segment (m; for :attr:`FailureKind.GUARDED_LIFTED` the carried object's height above the floor). ``margin``: the joint-limit margin (rad or m). ``seeds``: the number of IK seeds tried
     (:attr:`FailureKind.FIRST_OUT_OF_REACH`); ``collides``: whether those seeds' solutions all collided rather than
-    none existing.
+    none existing. ``tool``: whether a body rigid with the tool is among what collided
+    (:attr:`FailureKind.SEGMENT_COLLIDES`; the planner's near-miss variant reads it).
     """
 
     kind: FailureKind
@@ -72,6 +73,7 @@ class PlanningFailure:
     margin: float = 0.0
     seeds: int = 0
     collides: bool = False
+    tool: bool = False
 
     @property
     def segment(self) -> bool:

@@ -59,7 +59,7 @@ from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import DWELL, LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
-from slax_drake.planning.world import PlanningWorld, pairs_text
+from slax_drake.planning.world import TOOL_RIGID_BODIES, PlanningWorld, pairs_text
 from slax_drake.shelf.actions import Push, Suction
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.model import Scene, state_key
@@ -378,11 +378,17 @@ class MotionPlanner:
         timings["check_s"] += time.perf_counter() - t0
         return ok
 
-    def _tight_solution(self, world, wp: ToolWaypoint, q, timings):
-        """The waypoint's pose solved again from ``q`` with the hold tolerances (None when ``wp`` was solved with
-        them already, or IK finds none): whether the tool meets the environment at the exact pose, not at the
-        default tolerances' turn of the tube."""
-        return None if wp.suction else self._ik(world, wp, q, timings, tight=True)
+    def _tight_or_reject(self, world, wp: ToolWaypoint, q, timings):
+        """For a waypoint whose every solution collided, ``q`` the first: the pose solved again from ``q`` with
+        the hold tolerances (not for a waypoint solved with them already) when that solution is collision-free;
+        else raises _PoseReject when the tool meets the environment at it (or at ``q``, when IK finds none there),
+        :func:`_reject_if_the_tool_hits`; else None (the arm collides: the caller's distance-constrained
+        retries)."""
+        q_tight = None if wp.suction else self._ik(world, wp, q, timings, tight=True)
+        if q_tight is not None and self._free(world, q_tight, timings):
+            return q_tight
+        _reject_if_the_tool_hits(world, wp, q, q_tight)
+        return None
 
     def _solve_waypoint(self, world, wp, guesses, name, timings):
         """IK for a waypoint from the guesses in turn; when every solution collides, solved again with a
@@ -398,10 +404,9 @@ class MotionPlanner:
                 return q
             colliding.append(q)
         if colliding:
-            q_tight = self._tight_solution(world, wp, colliding[0], timings)
-            if q_tight is not None and self._free(world, q_tight, timings):
+            q_tight = self._tight_or_reject(world, wp, colliding[0], timings)
+            if q_tight is not None:
                 return q_tight
-            _reject_if_the_tool_hits(world, wp, colliding[0], q_tight)
             world.ik_tool_contact(name, wp.contact)
             try:
                 for guess in colliding[:MAX_DISTANCE_RETRIES] + list(guesses[:1]):
@@ -459,10 +464,9 @@ class MotionPlanner:
             if len(found) >= MAX_FIRST_SOLUTIONS:
                 break
         if not found and colliding:
-            q_tight = self._tight_solution(world, wp, colliding[0], timings)
-            if q_tight is not None and self._free(world, q_tight, timings):
+            q_tight = self._tight_or_reject(world, wp, colliding[0], timings)
+            if q_tight is not None:
                 return [q_tight]
-            _reject_if_the_tool_hits(world, wp, colliding[0], q_tight)
             try:
                 found.append(self._solve_waypoint(world, wp, colliding[:1] + seeds[:1], name, timings))
             except _Reject:
@@ -571,7 +575,9 @@ class MotionPlanner:
                         if hits is not None:
                             raise _Reject(PlanningFailure(FailureKind.CARRIED_COLLIDES, where, hits=hits, carried=name))
                     pairs = world.first_collision_on(qa, qb)
-                    raise _Reject(PlanningFailure(FailureKind.SEGMENT_COLLIDES, where, hits=pairs_text(pairs) if pairs else ""))
+                    raise _Reject(PlanningFailure(FailureKind.SEGMENT_COLLIDES, where,
+                                                  hits=pairs_text(pairs) if pairs else "",
+                                                  tool=any(a in TOOL_RIGID_BODIES for a, _ in pairs)))
                 segments.append((np.asarray(qa).copy(), np.asarray(qb).copy(), contact, carry))
         finally:
             world.drop()
@@ -642,11 +648,8 @@ class MotionPlanner:
 def _near_miss(failures) -> bool:
     """Whether a variant failed because a body rigid with the tool met the environment on a segment (the failure
     :meth:`MotionPlanner._plan_tight` may avoid; a pose the tool meets is decided within the hold tolerances
-    already, :func:`_reject_if_the_tool_hits`)."""
-    from slax_drake.planning.world import TOOL_RIGID_BODIES
-
-    first = failures[0]
-    return first.kind is FailureKind.SEGMENT_COLLIDES and any(f"{body} with" in first.hits for body in TOOL_RIGID_BODIES)
+    already, :meth:`MotionPlanner._tight_or_reject`)."""
+    return failures[0].kind is FailureKind.SEGMENT_COLLIDES and failures[0].tool
 
 
 def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) -> bool:
@@ -676,7 +679,7 @@ def _reject_if_the_tool_hits(world, wp: ToolWaypoint, q, q_tight=None) -> None:
     every other solution of that tool pose meets it too. IK's default angle tolerance (0.01 rad) turns the tube's
     far end up to about 3 mm about the tool frame, so a tube that passes that close to an object may meet it at
     one solution and clear it at the exact pose: ``q_tight``, the pose solved again with the hold tolerances
-    (:meth:`MotionPlanner._tight_solution`; None when there is none), decides then: the pose is rejected only when
+    (:meth:`MotionPlanner._tight_or_reject`; None when there is none), decides then: the pose is rejected only when
     the tool meets the environment there too."""
     tool_hits = world.tool_environment_hits(q)
     if tool_hits and q_tight is not None:
