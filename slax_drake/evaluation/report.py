@@ -347,9 +347,9 @@ def physics_section(folder: ResultFolder) -> str:
               "1 cm, judged from the true poses): the shuttles the no-shuttle rule forbids and the reversals it lets "
               "through because they uncover space no earlier arrangement uncovered; most carry the object past where it "
               "stood. Undo: a reversal that ends no farther from where the object stood before its previous move "
-              "than that move took it (put back, or past by no more: the shuttle of the issue that asked for the "
-              "rule) (\"-\": a run from before it was counted). Planning per executed action: every candidate motion planned for that decision, the "
-              "rejected ones included."]
+              "than that move took it (put back, or past by no more: the shuttle the no-shuttle rule is meant to stop) "
+              "(\"-\": a run from before it was counted). Planning per executed action: every candidate motion "
+              "planned for that decision, the rejected ones included."]
     # prose wrapped (a paragraph in Markdown), tables and commands as they are
     lines = [textwrap.fill(l, 116, break_long_words=False, break_on_hyphens=False)
              if len(l) > 116 and not l.startswith(("|", "slax-drake", "`")) else l for l in lines]
