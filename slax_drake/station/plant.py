@@ -34,7 +34,9 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import functools
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -94,19 +96,40 @@ def robot_directives(scenario: StationScenario) -> list:
 def scene_camera(scenario: StationScenario, scene: Scene | None) -> Camera:
     """The scene's camera, or the camera of the station's scene scenario when there is no scene; SceneMismatchError
     when the scene stands on another shelf than the station's."""
-    from slax_drake.config import load_scenario
-    from slax_drake.scene.sampling import shelf_of
-
-    config = load_scenario(scenario.scene_config)
+    shelf, camera = _scene_config_shelf_and_camera(*_file_key(scenario.scene_config))
     if scene is None:
-        return Camera.from_config(config.camera)
-    shelf = shelf_of(config)
+        return camera
     if scene.shelf != shelf:
         raise SceneMismatchError(
             f"the scene's shelf {scene.shelf} differs from the station's ({scenario.scene_config}: {shelf}); "
             "use the station file made for that shelf"
         )
     return scene.camera
+
+
+def _file_key(path) -> tuple[str, int]:
+    """(the path as given, its modification time in ns; -1 when it cannot be read): a cache key that changes with
+    the file."""
+    from slax_drake.config import REPO_ROOT
+
+    p = Path(path)
+    for candidate in (p, REPO_ROOT / p):
+        try:
+            return str(path), candidate.stat().st_mtime_ns
+        except OSError:
+            continue
+    return str(path), -1
+
+
+@functools.lru_cache(maxsize=8)
+def _scene_config_shelf_and_camera(path: str, mtime_ns: int):
+    """(Shelf, Camera) of the scene scenario at ``path`` (loaded once per modification: the planner builds a
+    planning world, and checks its scene against the station's shelf, for every object state it plans in)."""
+    from slax_drake.config import load_scenario
+    from slax_drake.scene.sampling import shelf_of
+
+    config = load_scenario(path)
+    return shelf_of(config), Camera.from_config(config.camera)
 
 
 def make_station_plant(scenario: StationScenario, scene: Scene | None = None,

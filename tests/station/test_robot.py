@@ -12,7 +12,7 @@ from slax_drake.scene.sampling import shelf_of
 from slax_drake.station import robot as robot_model
 from slax_drake.station.plant import controller_plant
 from slax_drake.station.scenario import DEFAULT_STATION, load_station_scenario
-from slax_drake.station.scene_world import shelf_sdf
+from slax_drake.station.scene_world import shelf_urdf
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -115,7 +115,7 @@ def test_every_actuator_has_effort_limit_and_pd_gains(plant):
 @pytest.mark.parametrize("name", ["sim", "physical"])
 def test_shipped_shelf_models_match_the_scenarios(name):
     shelf = shelf_of(load_scenario(REPO / "sim_configs" / f"{name}_shelf.yaml"))
-    assert (REPO / "models" / f"shelf_{name}.sdf").read_text() == shelf_sdf(shelf)
+    assert (REPO / "models" / f"shelf_{name}.urdf").read_text() == shelf_urdf(shelf)
 
 
 def test_models_load_by_package_url():
@@ -125,6 +125,6 @@ def test_models_load_by_package_url():
     plant = MultibodyPlant(0.001)
     parser = Parser(plant)
     robot_model.add_package(parser)
-    for url in ("fetch_bluction.urdf", "shelf_sim.sdf", "shelf_physical.sdf"):
+    for url in ("fetch_bluction.urdf", "shelf_sim.urdf", "shelf_physical.urdf"):
         parser.SetAutoRenaming(True)
         assert parser.AddModels(url=f"package://{robot_model.PACKAGE_NAME}/{url}")
