@@ -54,6 +54,7 @@ class PlanningWorld:
 
     def __init__(self, scenario: StationScenario, scene: Scene, include_target: bool = False,
                  padding: float = PADDING, edge_step: float = EDGE_STEP, self_padding: float = SELF_PADDING):
+        from pydrake.common import Parallelism
         from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
         from pydrake.planning import SceneGraphCollisionChecker
 
@@ -79,6 +80,7 @@ class PlanningWorld:
         self.checker = SceneGraphCollisionChecker(
             model=diagram, robot_model_instances=[robot], edge_step_size=edge_step,
             env_collision_padding=padding, self_collision_padding=self_padding,
+            implicit_context_parallelism=Parallelism(False),  # every query here is serial: one context is enough
         )
         self.self_padding = self_padding
         self.padding = padding
