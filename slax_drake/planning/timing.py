@@ -50,15 +50,29 @@ def time_segment(q0, q1, velocity, acceleration, jerk, dt: float = SAMPLE_PERIOD
     duration = traj.duration
     steps = int(np.ceil(duration / dt - 1e-9))
     t = np.arange(steps + 1) * dt
-    sv = np.empty((steps + 1, 3))
-    for k, tk in enumerate(t):
-        p, vel, acc = traj.at_time(min(tk, duration))
-        sv[k] = p[0], vel[0], acc[0]
+    sv = _sample_profile(traj, np.minimum(t, duration))
     q = q0 + sv[:, :1] * d
     v = sv[:, 1:2] * d
     a = sv[:, 2:3] * d
     q[-1], v[-1], a[-1] = q1, 0.0, 0.0
     return t, q, v, a
+
+
+def _sample_profile(traj, times) -> np.ndarray:
+    """(len(times), 3): the path parameter's position, velocity and acceleration at ``times`` (s, within the
+    duration) of Ruckig's one-dimensional trajectory ``traj``, evaluated from its seven constant-jerk phases at once
+    (what ``Trajectory.at_time`` does one time at a time, a thousand calls per second of motion). A profile with a
+    braking or accelerating pre-phase (none for a segment from rest) is sampled with ``at_time``."""
+    profile = traj.profiles[0][0]
+    if profile.brake.duration > 0.0 or profile.accel.duration > 0.0:
+        return np.array([[v[0] for v in traj.at_time(float(tk))] for tk in times])
+    starts = np.concatenate([[0.0], np.cumsum(profile.t)[:-1]])  # s, when each phase begins
+    phase = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(starts) - 1)
+    tau = times - starts[phase]
+    j, a0, v0, p0 = (np.asarray(x, float)[phase] for x in (profile.j, profile.a[:-1], profile.v[:-1], profile.p[:-1]))
+    return np.stack([p0 + tau * (v0 + tau * (a0 / 2.0 + tau * j / 6.0)),
+                     v0 + tau * (a0 + tau * j / 2.0),
+                     a0 + tau * j], axis=1)
 
 
 def time_waypoints(names, waypoints, velocity, acceleration, jerk, dt: float = SAMPLE_PERIOD) -> JointTrajectory:
