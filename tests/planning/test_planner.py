@@ -268,6 +268,26 @@ def test_timed_segment_stays_on_its_straight_line():
         assert np.all(np.abs(v) <= lim.velocity * (1 + 1e-9)) and np.all(np.abs(a) <= lim.acceleration * (1 + 1e-9))
 
 
+def test_a_segment_is_sampled_as_ruckigs_own_evaluation_gives_it():
+    """The samples evaluated from the profile's seven constant-jerk phases at once are Ruckig's ``at_time`` at
+    each sample time: position, velocity and acceleration, on profiles that reach the velocity limit, the
+    acceleration limit, both or neither."""
+    from ruckig import InputParameter, Ruckig, Trajectory
+
+    from slax_drake.planning.timing import _sample_profile
+
+    for v_max, a_max, j_max in ((0.8, 1.5, 5.0), (20.0, 1.5, 5.0), (0.3, 50.0, 500.0), (20.0, 50.0, 3.0)):
+        inp = InputParameter(1)
+        inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
+        inp.target_position, inp.target_velocity, inp.target_acceleration = [1.0], [0.0], [0.0]
+        inp.max_velocity, inp.max_acceleration, inp.max_jerk = [v_max], [a_max], [j_max]
+        traj = Trajectory(1)
+        Ruckig(1).calculate(inp, traj)
+        times = np.minimum(np.arange(int(np.ceil(traj.duration / 1e-3)) + 1) * 1e-3, traj.duration)
+        expected = np.array([[value[0] for value in traj.at_time(float(t))] for t in times])
+        np.testing.assert_allclose(_sample_profile(traj, times), expected, rtol=0.0, atol=1e-12)
+
+
 def test_a_segment_is_checked_once_per_checker_state(setup):
     """PlanningWorld.edge_free answers a segment checked before in the same checker state from memory, and checks
     again when the state differs (tool contact allowed, an object carried)."""
