@@ -153,7 +153,8 @@ def _run_scene(job) -> dict:
                   **({"reversal_rule": a["reversal_rule"]} if "reversal_rule" in a else {}), "predicted": a["predicted"],
                   "before": a.get("before"), "outcome": a["outcome"], "lost_after": a.get("lost_after"),
                   "matched": action_matches(a["predicted"], a["outcome"], a.get("before")),
-                  "planning_s": a.get("planning_s"), "rejected_before": len(a.get("rejected_before", [])),
+                  "planning_s": a.get("planning_s"), "planning_cpu_s": a.get("planning_cpu_s"),
+                  "rejected_before": len(a.get("rejected_before", [])),
                   "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
         record["mismatch"] = mismatch_kind(record, scenario.shelf.width, scenario.shelf.depth)
         actions.append(record)
@@ -341,6 +342,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],
             "drake_wall_s": d["wall_s"],
             "planning_s": [a["planning_s"] for a in d["actions"] if a.get("planning_s") is not None],
+            "planning_cpu_s": [a["planning_cpu_s"] for a in d["actions"] if a.get("planning_cpu_s") is not None],
             "reversals": reversals(d["actions"]),
             "undoes": undoes(d["actions"]),
             "undo_rules": undo_rules(d["actions"]),
@@ -374,6 +376,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "median_real_time_factor": _median([t["real_time_factor"] for t in sel
                                                     if t["real_time_factor"] is not None]),
                 **_planning_stats([s for t in sel for s in t["planning_s"]]),
+                **_planning_stats([s for t in sel for s in t.get("planning_cpu_s", [])], "planning_cpu"),
                 "reversals": sum(t["reversals"] for t in sel),
                 "trials_with_reversal": sum(1 for t in sel if t["reversals"]),
                 "trials_with_undo": sum(1 for t in sel if t.get("undoes")) if all("undoes" in t for t in sel) else None,
@@ -483,13 +486,29 @@ def _ending(result: str) -> str:
     return result.split(":")[0]
 
 
-def _planning_stats(seconds: list[float]) -> dict:
+def planning_cell(e: dict) -> str:
+    """"wall median / p90; CPU median / p90" (s) of a summary row's planning per executed action (the CPU part only
+    where it was recorded)."""
+    def secs(v):
+        return "-" if v is None else f"{v:.2f}"
+
+    cell = f"{secs(e.get('planning_median_s'))} / {secs(e.get('planning_p90_s'))}"
+    if e.get("planning_cpu_median_s") is not None:
+        cell += f"; CPU {secs(e['planning_cpu_median_s'])} / {secs(e.get('planning_cpu_p90_s'))}"
+    return cell
+
+
+def _planning_stats(seconds: list[float], name: str = "planning") -> dict:
     """Median and 90th percentile of the planning time per executed action (s): every candidate motion planned
-    for that decision, the rejected ones first included (IK, collision checks, RRT, Ruckig)."""
+    for that decision, the rejected ones first included (IK, collision checks, RRT, Ruckig). ``name``: "planning"
+    (wall clock, with the count of planned actions) or "planning_cpu" (the process's CPU time: what one core
+    spends, whatever else shares the machine; None in a run from before it was recorded)."""
     if not seconds:
-        return {"planned_actions": 0, "planning_median_s": None, "planning_p90_s": None}
-    return {"planned_actions": len(seconds), "planning_median_s": round(float(np.median(seconds)), 3),
-            "planning_p90_s": round(float(np.percentile(seconds, 90)), 3)}
+        out = {f"{name}_median_s": None, f"{name}_p90_s": None}
+    else:
+        out = {f"{name}_median_s": round(float(np.median(seconds)), 3),
+               f"{name}_p90_s": round(float(np.percentile(seconds, 90)), 3)}
+    return {"planned_actions": len(seconds), **out} if name == "planning" else out
 
 
 def markdown_table(summary: dict) -> str:
@@ -499,12 +518,9 @@ def markdown_table(summary: dict) -> str:
     def num(v):
         return "-" if v is None else f"{v:.1f}"
 
-    def secs(v):
-        return "-" if v is None else f"{v:.2f}"
-
     lines = ["| Policy | Objects | Scenes | Success (shelf sim) | Success (Drake) | Drake, nothing lost | Median steps (shelf sim) | "
              "Median steps (Drake) | Same outcome | Actions matching prediction | Toppled | Dropped | "
-             "Real-time factor | Planning per action, median / p90 (s) |",
+             "Real-time factor | Planning per action, median / p90 (s): wall; CPU |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for p, per in summary["policies"].items():
         for key, e in per.items():
@@ -515,7 +531,7 @@ def markdown_table(summary: dict) -> str:
                          f"{num(e['shelf_median_steps'])} | "
                          f"{num(e['drake_median_steps'])} | {pct(e['same_outcome_rate'])} | {match} | "
                          f"{e['toppled']} | {e['dropped']} | {num(e['median_real_time_factor'])} | "
-                         f"{secs(e.get('planning_median_s'))} / {secs(e.get('planning_p90_s'))} |")
+                         f"{planning_cell(e)} |")
     meta = summary.get("meta", {})
     lines += ["", f"{meta.get('scenes_per_density', '?')} scenes per density, protocol seed {meta.get('seed', '?')}, "
               f"the same scenes in both simulators: the shelf simulator "

@@ -117,10 +117,6 @@ def _count(n) -> str:
     return "-" if n is None else str(n)
 
 
-def _seconds(v) -> str:
-    return "-" if v is None else f"{v:.2f}"
-
-
 # the rules a physics run takes from its station file (``systems.trial.station_tool_rules``), not the command line
 STATION_RULES = frozenset({"max_suction_moment", "max_drag_pull", "max_drag_twist", "max_seal_angle_deg", "reach_map"})
 
@@ -312,7 +308,7 @@ def _drake_mode(folder: ResultFolder) -> tuple[str, str]:
 def physics_section(folder: ResultFolder) -> str:
     """Markdown of one physics-benchmark folder: profile, the two simulators' observation modes, the command and
     per policy and density the success in both simulators, the matched actions and Drake's endings."""
-    from slax_drake.evaluation.physics import mass_model_words
+    from slax_drake.evaluation.physics import mass_model_words, planning_cell
 
     meta = folder.meta
     rules = ", ".join(f"{k} = {v}" for k, v in (meta.get("tool_rules") or {}).items())
@@ -325,7 +321,8 @@ def physics_section(folder: ResultFolder) -> str:
              + (f"Rules beyond the profile: {rules}. " if rules else "") + "Made with:", "",
              "```bash", benchmark_command(folder), "```", "",
              "| policy | objects | scenes | shelf simulator | Drake | Drake, nothing lost | actions matching the "
-             "prediction | Drake endings | trials with a reversal / an undo | planning per action, median / p90 (s) |",
+             "prediction | Drake endings | trials with a reversal / an undo | planning per action, median / p90 (s): wall; "
+             "CPU |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for policy, per in folder.summary["policies"].items():
         for key in _density_keys(per):
@@ -336,8 +333,7 @@ def physics_section(folder: ResultFolder) -> str:
                          f"{_pct(e.get('drake_clean_success_rate'))} | {_pct(e['match_rate'])} "
                          f"({e['actions_matched']}/{e['actions_judged']}) | {endings} | "
                          f"{_count(e.get('trials_with_reversal'))} / {_count(e.get('trials_with_undo'))} | "
-                         f"{_seconds(e.get('planning_median_s'))} / "
-                         f"{_seconds(e.get('planning_p90_s'))} |")
+                         f"{planning_cell(e)} |")
     for policy, per in folder.summary["policies"].items():
         rules = per.get("all", {}).get("undo_rules")
         if rules and set(rules) != {"not recorded"}:
@@ -349,7 +345,9 @@ def physics_section(folder: ResultFolder) -> str:
               "stood. Undo: a reversal that ends no farther from where the object stood before its previous move "
               "than that move took it (put back, or past by no more: the shuttle the no-shuttle rule is meant to stop) "
               "(\"-\": a run from before it was counted). Planning per executed action: every candidate motion "
-              "planned for that decision, the rejected ones included."]
+              "planned for that decision, the rejected ones included; wall clock, and the planning process's CPU time (what "
+              "one core spends, whatever shares the machine; a run from before it was recorded shows the wall clock "
+              "only)."]
     # prose wrapped (a paragraph in Markdown), tables and commands as they are
     lines = [textwrap.fill(l, 116, break_long_words=False, break_on_hyphens=False)
              if len(l) > 116 and not l.startswith(("|", "slax-drake", "`")) else l for l in lines]

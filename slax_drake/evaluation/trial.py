@@ -164,6 +164,7 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
         # outcome: where the object ended before the next decision (or at the end)
         a["decision_s"] = entry["decision_s"]
         a["planning_s"] = entry["planning_s"]
+        a["planning_cpu_s"] = entry.get("planning_cpu_s")
         a["motion"] = entry["motion"]
         a["rejected_before"] = entry["rejected"]
         if a["type"] == "suction":  # a guarded placement: whether it stopped on contact, where (guard_record)

@@ -57,6 +57,9 @@ def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
     assert e["planned_actions"] == len(planned) == drake["steps"]
     if planned:
         assert planned[0] - 1e-3 <= e["planning_median_s"] <= e["planning_p90_s"] <= planned[-1] + 1e-3
+        cpu = sorted(a["planning_cpu_s"] for a in drake["actions"])
+        assert cpu[0] - 1e-3 <= e["planning_cpu_median_s"] <= e["planning_cpu_p90_s"] <= cpu[-1] + 1e-3
+        assert f"CPU {e['planning_cpu_median_s']:.2f} / {e['planning_cpu_p90_s']:.2f}" in md
     assert set(drake["final_objects"]) == {"object_0", "object_1"}
 
 
