@@ -41,7 +41,7 @@ def _frames(width: int):
             yield scene, Observation(depth, segments, target, camera, min_valid_fraction=0.0)
 
 
-@pytest.mark.parametrize("width,share", [(640, 0.99), (160, 0.97)])
+@pytest.mark.parametrize("width,share", [pytest.param(640, 0.99, marks=pytest.mark.slow), (160, 0.97)])  # full size: slow step
 def test_true_footprint_lies_inside_the_extent_range(width, share):
     checked, inside, misses = 0, 0, []
     for scene, obs in frames(width):

@@ -99,7 +99,7 @@ def test_depth_noise_system_is_deterministic_per_seed_and_time(sim_scenario):
     assert not np.array_equal(a, output(6, 0.1))
 
 
-@pytest.mark.parametrize("resolution", [(640, 480), (128, 96)])
+@pytest.mark.parametrize("resolution", [pytest.param((640, 480), marks=pytest.mark.slow), (128, 96)])  # full size: slow step
 def test_segmentation_and_estimator_tolerate_the_noise(sim_scenario, resolution):
     """With the L515 model on: depth-only segmentation (matched to the true instances; an object whose segment
     is merged with a neighbour or holds under 90 % of its returns is left out, and such splits stay rare) and the estimator keep every fully visible object's front face within 2 cm (median

@@ -109,7 +109,7 @@ def test_camera_trial_acts_on_true_objects(scenario, segmentation, noise):
     assert run().actions == result.actions  # deterministic (seeded noise)
 
 
-@pytest.mark.parametrize("policy", ["slax-belief", "bluction-dar"])
+@pytest.mark.parametrize("policy", [pytest.param("slax-belief", marks=pytest.mark.slow), "bluction-dar"])  # ours: slow step
 def test_camera_mode_policies_with_the_tracker_are_deterministic(scenario, policy):
     """Two rollouts of one camera trial (noisy frames, depth segmentation, the tracker on) take the same actions;
     one observer reused for a second trial starts its tracker afresh."""
