@@ -141,16 +141,8 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
             html = meshcat.StaticHtml()
     sim_time = context.get_time()
     result = f"{DIVERGED}: {diverged}" if diverged else (state.result or "time limit")
-    plant_context = plant.GetMyContextFromRoot(context)
-    X_SW = X_WS.inverse()
-    final = {}  # where each object ended; unknown (empty) after the simulation blew up
-    for o, b in zip(scene.objects if diverged is None else (), bodies):
-        X = (X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.get_body(b))).GetAsMatrix4()
-        final[o.name] = {"x": round(float(X[0, 3]), 5), "y": round(float(X[1, 3]), 5), "z": round(float(X[2, 3]), 5),
-                         "yaw": round(math.atan2(X[1, 0], X[0, 0]), 5),
-                         "upright": bool(abs(X[2, 2]) > math.cos(math.radians(20.0))),
-                         "inside": bool(abs(X[0, 3]) < scene.shelf.width / 2 and abs(X[1, 3]) < scene.shelf.depth / 2
-                                        and -0.02 < X[2, 3] < scene.shelf.height)}
+    # where each object ended; unknown (empty) after the simulation blew up
+    final = {} if diverged else _final_poses(plant, plant_context, X_WS, scene, bodies)
     if printer is not None:
         printer.update(state.log, snapshots)
         printer.finish(final if diverged is None else None)
@@ -217,6 +209,21 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
     }
     object_poses = (np.array(pose_times), np.array(poses, dtype=np.float32)) if record_poses else None
     return TrialRecord(data, trial.step_images, html, scene, object_poses)
+
+
+def _final_poses(plant, plant_context, X_WS, scene, bodies) -> dict:
+    """{name: x, y, z (m, shelf frame S), yaw (rad), upright (tilted under 20 deg), inside (on or over the shelf
+    bay)} of each of the scene's objects (``bodies``: their body indices, in scene order) at the plant's state."""
+    X_SW = X_WS.inverse()
+    final = {}
+    for o, b in zip(scene.objects, bodies):
+        X = (X_SW @ plant.EvalBodyPoseInWorld(plant_context, plant.get_body(b))).GetAsMatrix4()
+        final[o.name] = {"x": round(float(X[0, 3]), 5), "y": round(float(X[1, 3]), 5), "z": round(float(X[2, 3]), 5),
+                         "yaw": round(math.atan2(X[1, 0], X[0, 0]), 5),
+                         "upright": bool(abs(X[2, 2]) > math.cos(math.radians(20.0))),
+                         "inside": bool(abs(X[0, 3]) < scene.shelf.width / 2 and abs(X[1, 3]) < scene.shelf.depth / 2
+                                        and -0.02 < X[2, 3] < scene.shelf.height)}
+    return final
 
 
 def _with_ground_truth(entry: dict, snapshots) -> dict:
