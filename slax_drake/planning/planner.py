@@ -55,7 +55,7 @@ import numpy as np
 
 from slax_drake.planning.failures import RETURN, FailureKind, PlanningFailure, distinct, joined_message, lead_last
 from slax_drake.planning.free_path import free_path
-from slax_drake.planning.ik import LIMIT_MARGIN, solve_tool_pose
+from slax_drake.planning.ik import CONTINUOUS_JOINTS, LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import DWELL, LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
@@ -63,6 +63,7 @@ from slax_drake.planning.world import TOOL_RIGID_BODIES, PlanningWorld, pairs_te
 from slax_drake.shelf.actions import Push, Suction
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.model import Scene, state_key
+from slax_drake.station import robot as robot_model
 from slax_drake.station.plant import station_joint_limits
 from slax_drake.station.scenario import StationScenario, observation_positions
 
@@ -94,6 +95,20 @@ KINEMATIC_IK_CACHE_SIZE = 50_000  # kinematic IK solutions kept across planning 
 HOLD_POSITION_TOLERANCE = 1e-4  # m
 HOLD_ANGLE_TOLERANCE = 1e-3  # rad
 GUARD_HOLD = 0.2  # s, a guarded push-in stopped on contact holds the pose reached this long before it lowers
+# Indices in PLANNED_JOINTS of the continuous joints (upperarm, forearm and wrist roll): a whole turn of one leaves the
+# arm's pose unchanged, and IK may return any of those equivalent values
+_TURNING = np.array([robot_model.PLANNED_JOINTS.index(n) for n in CONTINUOUS_JOINTS])
+
+
+def nearest_turn(q, q_ref) -> np.ndarray:
+    """``q`` (planned joints, rad) with each continuous joint moved by whole turns to the value nearest to
+    ``q_ref``'s: the same pose of every link. An IK solution seeded far from the start (the seed library spans
+    half a turn either way, and each solve may turn a roll joint half a turn from its warm start) may otherwise put a
+    roll joint turns away from where the arm stands, and the free path to it must sweep those turns."""
+    q = np.array(q, float)
+    ref = np.asarray(q_ref, float)
+    q[_TURNING] -= 2.0 * np.pi * np.round((q[_TURNING] - ref[_TURNING]) / (2.0 * np.pi))
+    return q
 
 
 @dataclasses.dataclass
@@ -450,6 +465,7 @@ class MotionPlanner:
             q = self._ik(world, wp, guess, timings)
             if q is None:
                 continue
+            q = nearest_turn(q, q_start)
             if not self._free(world, q, timings):
                 colliding.append(q)
                 continue
@@ -513,6 +529,8 @@ class MotionPlanner:
             except _Reject:
                 raise first_error
             qs = back[::-1]
+            turns = nearest_turn(qs[0], q_start) - qs[0]  # whole turns of the roll joints: the same poses
+            qs = [q + turns for q in qs]
             self._anchor_failed.discard(k)
         # 3. Cartesian refinement of each straight tool segment.
         # (q, contact and suction of the segment arriving here, the waypoint or None for inserted points)

@@ -355,3 +355,61 @@ def test_kinematic_ik_kept_across_worlds_gives_the_same_motions(sim_scenario):
         else:
             assert fresh.reason == kept.reason
     assert solves["warm"] < solves["cold"]
+
+
+def test_a_roll_joint_turned_by_whole_turns_is_the_same_pose_nearest_the_reference():
+    from slax_drake.planning.planner import nearest_turn
+    from slax_drake.station.robot import PLANNED_JOINTS
+
+    q_ref = observation_positions(load_station_scenario())
+    q = q_ref + 0.3
+    turning = [PLANNED_JOINTS.index(n) for n in ("upperarm_roll_joint", "forearm_roll_joint", "wrist_roll_joint")]
+    q[turning] += np.array([2.0, -1.0, 3.0]) * 2.0 * np.pi
+    wrapped = nearest_turn(q, q_ref)
+    np.testing.assert_allclose(wrapped, q_ref + 0.3, atol=1e-12)  # only the roll joints moved, by whole turns
+
+
+# A decision of a Drake trial (Table I household scene 8:6, slax-belief, camera: the believed objects of its first
+# frame, shape, size, x, y, yaw in S) whose first IK solution put the forearm roll 8 rad (more than a turn) from
+# the start: the free path to it needed RRT-Connect (5 s) to sweep the arm through those turns.
+TURNED_FIRST_WAYPOINT = {
+    "track_1": ("box", (0.1375, 0.06, 0.1536), -0.0944, 0.22652, 0.0),
+    "track_2": ("box", (0.06, 0.0788, 0.108), 0.05393, -0.02893, 0.0),
+    "track_3": ("cylinder", (0.1184, 0.1184, 0.0622), 0.13125, 0.22247, 0.0),
+    "track_4": ("cylinder", (0.1974, 0.1974, 0.1509), -0.18762, -0.12618, 0.0),
+    "track_5": ("box", (0.1362, 0.1011, 0.0934), 0.16905, 0.01223, 1.1589),
+    "track_6": ("cylinder", (0.1222, 0.1222, 0.1698), -0.04233, -0.21653, 0.0),
+    "track_7": ("box", (0.1388, 0.0814, 0.087), 0.11844, -0.18915, 0.31765),
+}
+
+
+def test_the_first_waypoint_keeps_every_roll_joint_within_half_a_turn_of_the_start():
+    import dataclasses
+    import math
+
+    from slax_drake.config import load_scenario
+    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.scene.model import SceneObject
+    from slax_drake.station.robot import PLANNED_JOINTS
+    from slax_drake.systems.trial import station_tool_rules
+
+    station = load_station_scenario()
+    scenario = load_scenario("sim_configs/table1_household.yaml")
+    scene = sample_scene(scenario, 8, scene_seed(scenario.protocol.seed, 8, 6),
+                         target_size=tuple(scenario.target.sizes[0]))
+    objects = []
+    for name, (shape, size, x, y, yaw) in TURNED_FIRST_WAYPOINT.items():
+        X = np.eye(4)
+        X[:3, :3] = [[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0.0, 0.0, 1.0]]
+        X[:3, 3] = x, y, size[2] / 2.0
+        objects.append(SceneObject(name=name, shape=shape, size=size, X_SO=X))
+    believed = dataclasses.replace(scene, objects=tuple(objects))
+    tool = tool_config(scenario, "station", **station_tool_rules(station, None, "station"))
+    planner = MotionPlanner(station, tool)
+    action = Suction("track_7", np.array([0.13115289, -0.2278192, 0.06702485]), 0.1, -0.189153, yaw=0.31765)
+    motion = planner.plan(action, believed)
+    assert motion.feasible
+    t_first = motion.waypoint_times[0][1]
+    q_first = motion.trajectory.value(t_first)[0]
+    turning = [PLANNED_JOINTS.index(n) for n in ("upperarm_roll_joint", "forearm_roll_joint", "wrist_roll_joint")]
+    assert np.all(np.abs(q_first[turning] - planner.q_observation[turning]) <= np.pi + 1e-9)
