@@ -163,6 +163,8 @@ class MotionPlanner:
 
     def __init__(self, scenario: StationScenario, tool: ToolConfig = ToolConfig(),
                  deviation_tolerance: float = DEVIATION_TOLERANCE, keep_kinematic_ik: bool = True):
+        import pydrake.planning  # noqa: F401  (loaded once here, ~0.7 s, not in the first decision's planning)
+
         self.scenario = scenario
         self.tool = tool
         self.deviation_tolerance = deviation_tolerance
