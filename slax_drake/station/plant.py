@@ -34,12 +34,11 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-import functools
 import math
-from pathlib import Path
 
 import numpy as np
 
+from slax_drake.caches import IdentityMemo
 from slax_drake.errors import ConfigError
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Scene
@@ -96,7 +95,7 @@ def robot_directives(scenario: StationScenario) -> list:
 def scene_camera(scenario: StationScenario, scene: Scene | None) -> Camera:
     """The scene's camera, or the camera of the station's scene scenario when there is no scene; SceneMismatchError
     when the scene stands on another shelf than the station's."""
-    shelf, camera = _scene_config_shelf_and_camera(*_file_key(scenario.scene_config))
+    shelf, camera = _SCENE_CONFIGS(scenario)
     if scene is None:
         return camera
     if scene.shelf != shelf:
@@ -107,29 +106,17 @@ def scene_camera(scenario: StationScenario, scene: Scene | None) -> Camera:
     return scene.camera
 
 
-def _file_key(path) -> tuple[str, int]:
-    """(the path as given, its modification time in ns; -1 when it cannot be read): a cache key that changes with
-    the file."""
-    from slax_drake.config import REPO_ROOT
-
-    p = Path(path)
-    for candidate in (p, REPO_ROOT / p):
-        try:
-            return str(path), candidate.stat().st_mtime_ns
-        except OSError:
-            continue
-    return str(path), -1
-
-
-@functools.lru_cache(maxsize=8)
-def _scene_config_shelf_and_camera(path: str, mtime_ns: int):
-    """(Shelf, Camera) of the scene scenario at ``path`` (loaded once per modification: the planner builds a
+def _scene_config_shelf_and_camera(scenario: StationScenario):
+    """(Shelf, Camera) of the station's scene scenario, loaded once per station scenario (the planner builds a
     planning world, and checks its scene against the station's shelf, for every object state it plans in)."""
     from slax_drake.config import load_scenario
     from slax_drake.scene.sampling import shelf_of
 
-    config = load_scenario(path)
+    config = load_scenario(scenario.scene_config)
     return shelf_of(config), Camera.from_config(config.camera)
+
+
+_SCENE_CONFIGS = IdentityMemo(_scene_config_shelf_and_camera, limit=8)
 
 
 def make_station_plant(scenario: StationScenario, scene: Scene | None = None,
