@@ -375,6 +375,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "toppled": sum(t["toppled"] for t in sel), "dropped": sum(t["dropped"] for t in sel),
                 "median_real_time_factor": _median([t["real_time_factor"] for t in sel
                                                     if t["real_time_factor"] is not None]),
+                "planned_actions": sum(len(t["planning_s"]) for t in sel),
                 **_planning_stats([s for t in sel for s in t["planning_s"]]),
                 **_planning_stats([s for t in sel for s in t.get("planning_cpu_s", [])], "planning_cpu"),
                 "reversals": sum(t["reversals"] for t in sel),
@@ -499,16 +500,15 @@ def planning_cell(e: dict) -> str:
 
 
 def _planning_stats(seconds: list[float], name: str = "planning") -> dict:
-    """Median and 90th percentile of the planning time per executed action (s): every candidate motion planned
-    for that decision, the rejected ones first included (IK, collision checks, RRT, Ruckig). ``name``: "planning"
-    (wall clock, with the count of planned actions) or "planning_cpu" (the process's CPU time: what one core
-    spends, whatever else shares the machine; None in a run from before it was recorded)."""
+    """Median and 90th percentile of the planning time per executed action (s), as ``{name}_median_s`` and
+    ``{name}_p90_s`` (None without data): every candidate motion planned for that decision, the rejected ones first
+    included (IK, collision checks, RRT, Ruckig). ``name``: "planning" (wall clock) or "planning_cpu" (the
+    process's CPU time: what one core spends, whatever else shares the machine; None in a run from before it was
+    recorded)."""
     if not seconds:
-        out = {f"{name}_median_s": None, f"{name}_p90_s": None}
-    else:
-        out = {f"{name}_median_s": round(float(np.median(seconds)), 3),
-               f"{name}_p90_s": round(float(np.percentile(seconds, 90)), 3)}
-    return {"planned_actions": len(seconds), **out} if name == "planning" else out
+        return {f"{name}_median_s": None, f"{name}_p90_s": None}
+    return {f"{name}_median_s": round(float(np.median(seconds)), 3),
+            f"{name}_p90_s": round(float(np.percentile(seconds, 90)), 3)}
 
 
 def markdown_table(summary: dict) -> str:
