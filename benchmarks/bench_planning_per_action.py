@@ -14,6 +14,12 @@ no feasible motion. Run it on one core for the figures of record:
 
     taskset -c 0 python benchmarks/bench_planning_per_action.py --scenes 5 --objects 6 --json out.json
 
+``--observation camera`` decides as the physics benchmark's trials do: on the camera frame's hypotheses (the shelf
+simulator's camera mode: the render's labels, the tracker's names), and plans against those believed objects, as the
+PlannerSystem plans against its estimator's; the action is executed on the true object its hypothesis is. It is the
+workload of the physics report's planning figures (boxes as deep as the camera leaves them, suctions of estimated
+objects), without the physics.
+
 ``--no-keep-ik`` plans with ``MotionPlanner(keep_kinematic_ik=False)`` (IK kept within one planning world only).
 The script runs against older checkouts too (PYTHONPATH=that checkout): the option is then ignored.
 """
@@ -34,6 +40,8 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="the first scene seed")
     parser.add_argument("--steps", type=int, default=6, help="at most this many executed actions per scene")
     parser.add_argument("--policy", default="bluction-dar")
+    parser.add_argument("--observation", choices=("privileged", "camera"), default="privileged",
+                        help="what the policy decides on and the planner plans against (default: privileged)")
     parser.add_argument("--no-keep-ik", action="store_true")
     parser.add_argument("--json", default=None, help="write every decision's figures here")
     args = parser.parse_args(argv)
@@ -41,7 +49,7 @@ def main(argv=None) -> int:
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.policies.registry import make_policy
     from slax_drake.scene.sampling import sample_scene
-    from slax_drake.shelf.simulator import execute, observation_for
+    from slax_drake.shelf.simulator import CameraObserver, execute, observation_for, on_true_object
     from slax_drake.shelf.tool import tool_config
     from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.trial import station_tool_rules
@@ -61,15 +69,25 @@ def main(argv=None) -> int:
         policy = make_policy(args.policy, scenario, horizon=2 * args.objects, tool_overrides=rules,
                              profile="station")
         policy.reset(scene)
+        observer = None
+        if args.observation == "camera":
+            observer = CameraObserver(scene.shelf, scene.camera, tuple(scenario.target.sizes[0]), source="depth",
+                                      width=policy.observation_width, segmentation="labels")
+            observer.start()
         for step in range(args.steps):
-            obs = observation_for(policy, scene)
+            names = None
+            if observer is not None:
+                obs, names = observer.observe(scene)
+                planned_on = obs.scene_template.with_objects(obs.known)  # the PlannerSystem's believed scene
+            else:
+                obs, planned_on = observation_for(policy, scene), scene
             spent, cpu, rejected, kinds, motion = 0.0, 0.0, 0, [], None
             for _ in range(25):  # PlannerSystem's MAX_PLAN_ATTEMPTS
                 action = policy.decide(obs).best
                 if action is None:
                     break
                 t0, c0 = time.perf_counter(), time.process_time()
-                result = planner.plan(action, scene, q_start=planner.q_observation)
+                result = planner.plan(action, planned_on, q_start=planner.q_observation)
                 spent += time.perf_counter() - t0
                 cpu += time.process_time() - c0
                 if result.feasible:
@@ -86,6 +104,11 @@ def main(argv=None) -> int:
                 break
             per_action.append(spent)
             per_action_cpu.append(cpu)
+            if names is not None:  # camera: the hypothesis's true object is moved (a shelf segment moves nothing)
+                observer.executed(action)
+                if names.get(action.name) is None:
+                    continue
+                action = on_true_object(action, obs.known, scene, names[action.name])
             scene, _ = execute(scene, action, policy.action_model)
     v = np.array(per_action)
     ended = sum(1 for d in decisions if d["action"] is None and d["rejected"])
@@ -96,7 +119,8 @@ def main(argv=None) -> int:
                "cpu_p90_s": round(float(np.percentile(per_action_cpu, 90)), 3) if len(v) else None,
                "rejected_candidates": sum(d["rejected"] for d in decisions),
                "decisions_ending_no_feasible_motion": ended, "scenes": args.scenes, "objects": args.objects,
-               "seed": args.seed, "policy": args.policy, "keep_kinematic_ik": kept}
+               "seed": args.seed, "policy": args.policy, "observation": args.observation,
+               "keep_kinematic_ik": kept}
     print(json.dumps(summary))
     if args.json:
         with open(args.json, "w") as f:
