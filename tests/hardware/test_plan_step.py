@@ -150,6 +150,7 @@ def test_a_step_with_no_action_records_why(tmp_path):
     assert all(r["kind"] for r in record["refused"] + record["rejected"])
 
 
+@pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_an_action_that_moved_nothing_is_not_planned_again_in_the_next_step(tmp_path):
     """plan-step's policy remembers its search across calls (the frames of earlier steps are replayed): when the
     robot reports the same frame after the planned action (it moved nothing), the next step excludes that action
@@ -174,6 +175,7 @@ def test_an_action_that_moved_nothing_is_not_planned_again_in_the_next_step(tmp_
     assert any("moved nothing" in why for _, why in planner.policy.exclusions)
 
 
+@pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_a_history_that_does_not_replay_is_refused(tmp_path):
     """A history written by another policy, or whose frame is corrupt or chooses another action when replayed,
     is refused with one line (PlanStepError, exit code 2), not followed blindly."""

@@ -17,6 +17,7 @@ def tiny_dataset(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_train_then_evaluate_writes_models_metrics_and_pictures(tiny_dataset, tmp_path, capsys):
     out = tmp_path / "model"
     args = ["train", "--data", str(tiny_dataset), "--out", str(out), "--epochs", "2", "--channels", "4", "--levels", "3",

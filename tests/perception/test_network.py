@@ -200,6 +200,7 @@ def test_bad_weight_files_fail_with_one_clear_line(tmp_path):
     assert "\n" not in str(info.value) and str(truncated) in str(info.value)
 
 
+@pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_tiny_network_overfits_eight_samples(tiny_data):
     seed_everything(0)
     torch.set_num_threads(1)

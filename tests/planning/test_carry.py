@@ -36,6 +36,7 @@ def _contact(scene, sim_scenario, name):
     return model.suction_contact(obj)
 
 
+@pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_carried_object_that_would_hit_a_neighbour_is_rejected_with_a_reason(two_boxes, sim_scenario):
     scene, planner, a, b = two_boxes
     q = _contact(scene, sim_scenario, a.name)
@@ -51,6 +52,7 @@ def test_carried_object_that_would_hit_a_neighbour_is_rejected_with_a_reason(two
     assert any(seg[3] == "clear" for seg in motion.segments) and any(seg[3] == "resting" for seg in motion.segments)
 
 
+@pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_without_the_carried_check_the_colliding_action_would_pass(two_boxes, sim_scenario, monkeypatch):
     """The rejection above comes from the carried object alone: with the attachment disabled, the tool itself
     passes (the cup and tube stay above B)."""

@@ -326,6 +326,7 @@ def test_a_segment_is_checked_once_per_checker_state(setup):
     assert len(calls) == 3
 
 
+@pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_kinematic_ik_kept_across_worlds_gives_the_same_motions(sim_scenario):
     """IK solutions kept from an earlier world (the robot's kinematics alone) plan the same motions, bit for bit,
     as a planner that solves them afresh, and save the solves."""

@@ -53,6 +53,7 @@ def _station_policy(options):
     return policy, obs
 
 
+@pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_a_push_that_locks_the_shelf_is_chosen_without_the_option_and_not_with_it():
     """Table I scene 4:14 under the Drake station's rules (household masses, camera): the default's first move
     pushes one object 0.24 m right, behind a neighbour that then blocks every tool path: after it the action model
