@@ -25,6 +25,12 @@ POSITION_TOLERANCE = 5e-4  # m
 LIMIT_MARGIN = 0.01
 LIMIT_SOLVER_SLACK = 1e-4
 ANGLE_TOLERANCE = 0.01  # rad
+# SNOPT's major iterations per solve (Drake's default: 1000). A pose the arm cannot take, or one the distance
+# constraint makes infeasible, often ran to that limit (0.15 s a plain solve, up to 1.3 s with the distance
+# constraint, against 5-10 ms for a solve that converges); a solve that converges within this limit returns the
+# same solution as before (the iterations are the same up to it). Chosen by replaying Drake trial decisions and
+# checked against the planner's verdicts on Table I candidates (docs/research/reach-and-planning-speed.md).
+MAJOR_ITERATIONS_LIMIT = 200
 CONTINUOUS_JOINTS = ("upperarm_roll_joint", "forearm_roll_joint", "wrist_roll_joint")
 
 
@@ -48,7 +54,7 @@ def solve_tool_pose(world, frame: str, X_S_target, q_guess, shaft: float, min_di
     finds no solution. ``q_guess`` (9,) is the initial guess and the configuration the cost stays near."""
     from pydrake.math import RotationMatrix
     from pydrake.multibody.inverse_kinematics import InverseKinematics
-    from pydrake.solvers import Solve
+    from pydrake.solvers import SnoptSolver, SolverOptions, Solve
 
     plant, context = world.plant, world.plant_context
     q_start = np.asarray(q_guess, float).copy()
@@ -77,7 +83,9 @@ def solve_tool_pose(world, frame: str, X_S_target, q_guess, shaft: float, min_di
     q0 = np.clip(q0, np.where(limited, lower, -np.inf), np.where(limited, upper, np.inf))
     prog.AddQuadraticErrorCost(np.eye(len(q0)), q0, q)
     prog.SetInitialGuess(q, q0)
-    result = Solve(prog)
+    options = SolverOptions()
+    options.SetOption(SnoptSolver().solver_id(), "Major iterations limit", MAJOR_ITERATIONS_LIMIT)
+    result = Solve(prog, solver_options=options)
     for name in robot_model.HEAD_JOINTS + ("tool_shaft_joint",):
         plant.GetJointByName(name, world.robot).Unlock(context)
     if not result.is_success():
