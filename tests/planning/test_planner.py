@@ -326,6 +326,29 @@ def test_a_segment_is_checked_once_per_checker_state(setup):
     assert len(calls) == 3
 
 
+def test_the_coarse_edge_check_answers_as_checking_every_configuration(setup):
+    """PlanningWorld.edge_free_coarse checks its configurations far end first and stops at the first collision; on
+    random segments from the observation pose (free ones and blocked ones, self and environment) it answers as
+    checking every configuration ``step`` apart does, and _coarse_order visits each sample index once."""
+    from slax_drake.planning.world import _coarse_order
+
+    for n in range(1, 40):
+        order = _coarse_order(n)
+        assert sorted(order) == list(range(n + 1)) and order[0] == n and order[-1] == 0
+    station, _, scene, _ = setup
+    world = _world(station, scene)
+    q0 = observation_positions(station)
+    rng = np.random.default_rng(3)
+    answers = []
+    for _ in range(40):
+        q1 = q0 + rng.uniform(-1.2, 1.2, len(q0)) * np.array([0.2] + [1.0] * (len(q0) - 1))
+        n = max(1, int(np.ceil(float(np.max(np.abs(q1 - q0))) / 0.02)))
+        every = all(world.config_free(q0 + s * (q1 - q0)) for s in np.linspace(0.0, 1.0, n + 1))
+        assert world.edge_free_coarse(q0, q1, 0.02) == every
+        answers.append(every)
+    assert any(answers) and not all(answers)  # both kinds of segment were met
+
+
 @pytest.mark.slow  # several seconds; runs in CI's slow step
 def test_kinematic_ik_kept_across_worlds_gives_the_same_motions(sim_scenario):
     """IK solutions kept from an earlier world (the robot's kinematics alone) plan the same motions, bit for bit,
