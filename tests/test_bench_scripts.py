@@ -146,3 +146,25 @@ def test_rerun_trials_refuses_a_trial_the_folder_does_not_hold_before_any_rerun(
         assert rerun([str(tmp_path), "--policy", "dar", *argv]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("error: ") and words in err[0]
+
+
+def test_planning_per_action_table_pools_runs_and_counts_the_same_decisions(tmp_path, capsys):
+    """Rows pool their files; the medians and p90s are over executed actions; a later row counts the decisions
+    that chose the first row's action; a missing file is one line and exit 2."""
+    def run(name, objects, times, actions):
+        path = tmp_path / name
+        decisions = [{"scene_seed": 0, "step": k, "planning_s": t, "planning_cpu_s": t, "rejected": 1 if a is None else 0,
+                      "action": a} for k, (t, a) in enumerate(zip(times, actions))]
+        path.write_text(json.dumps({"summary": {"objects": objects}, "decisions": decisions}))
+        return str(path)
+
+    before = f"{run('b6.json', 6, [1.0, 3.0], ['push a', 'push b'])},{run('b8.json', 8, [2.0, 9.0], ['push c', None])}"
+    after = f"{run('a6.json', 6, [1.0, 1.0], ['push a', 'push x'])},{run('a8.json', 8, [2.0, 9.0], ['push c', None])}"
+    main = script("planning_per_action_table").main
+    assert main([f"before={before}", f"after={after}"]) == 0
+    rows = capsys.readouterr().out.strip().splitlines()
+    assert rows[2].startswith("| before | 3 | 2.000 s |") and rows[2].endswith("| 1 |  |")
+    assert rows[3].startswith("| after | 3 | 1.000 s |") and rows[3].endswith("| 1 | 3 of 4 |")
+    assert main([f"x={tmp_path / 'missing.json'}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: ")
