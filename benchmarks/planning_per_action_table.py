@@ -37,6 +37,10 @@ def _key(d):
     return d["objects"], d["scene_seed"], d["step"]
 
 
+def _stat(values, q: float) -> str:
+    return f"{np.percentile(values, q):.3f} s" if len(values) else "-"
+
+
 def table(rows) -> str:
     lines = ["| run | executed actions | wall median | wall p90 | CPU median | CPU p90 | rejected candidates | same decisions |",
              "|---|---|---|---|---|---|---|---|"]
@@ -47,9 +51,8 @@ def table(rows) -> str:
         cpu = np.array([d["planning_cpu_s"] for d in executed])
         same = "" if k == 0 else (f"{sum(1 for d in decisions if first.get(_key(d), object()) == d['action'])}"
                                   f" of {len(decisions)}")
-        stat = (lambda v, q: f"{np.percentile(v, q):.3f} s" if len(v) else "-")
-        lines.append(f"| {label} | {len(executed)} | {stat(wall, 50)} | {stat(wall, 90)} | {stat(cpu, 50)} | "
-                     f"{stat(cpu, 90)} | {sum(d['rejected'] for d in decisions)} | {same} |")
+        lines.append(f"| {label} | {len(executed)} | {_stat(wall, 50)} | {_stat(wall, 90)} | {_stat(cpu, 50)} | "
+                     f"{_stat(cpu, 90)} | {sum(d['rejected'] for d in decisions)} | {same} |")
     return "\n".join(lines)
 
 

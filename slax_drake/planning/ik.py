@@ -12,6 +12,8 @@ waypoints along a path give neighbouring configurations.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from slax_drake.station import robot as robot_model
@@ -34,6 +36,17 @@ MAJOR_ITERATIONS_LIMIT = 200
 CONTINUOUS_JOINTS = ("upperarm_roll_joint", "forearm_roll_joint", "wrist_roll_joint")
 
 
+@functools.cache
+def _solver_options():
+    """The SolverOptions of every IK solve (SNOPT's ``MAJOR_ITERATIONS_LIMIT``), made once: a planning decision
+    solves hundreds of poses."""
+    from pydrake.solvers import SnoptSolver, SolverOptions
+
+    options = SolverOptions()
+    options.SetOption(SnoptSolver().solver_id(), "Major iterations limit", MAJOR_ITERATIONS_LIMIT)
+    return options
+
+
 def margin_limits(plant, robot, margin: float):
     """(lower, upper) of the plant's positions shrunk by ``margin`` for the robot's limited joints (planned and
     head); +-inf elsewhere. The head is locked during IK and only needs its own value inside the range."""
@@ -54,7 +67,7 @@ def solve_tool_pose(world, frame: str, X_S_target, q_guess, shaft: float, min_di
     finds no solution. ``q_guess`` (9,) is the initial guess and the configuration the cost stays near."""
     from pydrake.math import RotationMatrix
     from pydrake.multibody.inverse_kinematics import InverseKinematics
-    from pydrake.solvers import SnoptSolver, SolverOptions, Solve
+    from pydrake.solvers import Solve
 
     plant, context = world.plant, world.plant_context
     q_start = np.asarray(q_guess, float).copy()
@@ -83,9 +96,7 @@ def solve_tool_pose(world, frame: str, X_S_target, q_guess, shaft: float, min_di
     q0 = np.clip(q0, np.where(limited, lower, -np.inf), np.where(limited, upper, np.inf))
     prog.AddQuadraticErrorCost(np.eye(len(q0)), q0, q)
     prog.SetInitialGuess(q, q0)
-    options = SolverOptions()
-    options.SetOption(SnoptSolver().solver_id(), "Major iterations limit", MAJOR_ITERATIONS_LIMIT)
-    result = Solve(prog, solver_options=options)
+    result = Solve(prog, solver_options=_solver_options())
     for name in robot_model.HEAD_JOINTS + ("tool_shaft_joint",):
         plant.GetJointByName(name, world.robot).Unlock(context)
     if not result.is_success():

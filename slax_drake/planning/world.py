@@ -25,6 +25,8 @@ Collision semantics (the same for IK and for the checker):
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from slax_drake.scene.model import Scene
@@ -308,21 +310,19 @@ def _body_index(i: int):
     return BodyIndex(i)
 
 
-def _coarse_order(n: int) -> list[int]:
+@functools.lru_cache(maxsize=256)
+def _coarse_order(n: int) -> tuple[int, ...]:
     """The sample indices 0..n of a segment cut into n intervals, in the order :meth:`PlanningWorld.edge_free_coarse`
     checks them: the far end n, the midpoints of ever shorter intervals, and the near end 0 last (a search's near
-    end is a node of its tree, free already); each index once."""
-    order, seen = [n], {0, n}
-    intervals = [(0, n)]
+    end is a node of its tree, free already); each index once (a midpoint lies strictly inside its interval, and
+    the intervals of one round do not overlap)."""
+    order, intervals = [n], [(0, n)]
     while intervals:
-        nxt = []
+        halves = []
         for a, b in intervals:
-            if b - a < 2:
-                continue
-            m = (a + b) // 2
-            if m not in seen:
-                seen.add(m)
+            if b - a >= 2:
+                m = (a + b) // 2
                 order.append(m)
-            nxt += [(a, m), (m, b)]
-        intervals = nxt
-    return order + [0]
+                halves += [(a, m), (m, b)]
+        intervals = halves
+    return tuple(order + [0])
