@@ -82,6 +82,10 @@ class StationScenario:
     # A guarded push-in (suction_hidden_rule=guarded) stops when the force resisting the push, estimated from the
     # joint efforts (slax_drake.systems.guard), exceeds this (N).
     guarded_stop_force: float = 5.0
+    # Whether this station's arm moves a carried object into space its camera cannot see as a guarded move (stops
+    # on the contact its joint efforts sense, slax_drake.systems.guard): when true, trials and plan-step on it plan
+    # with suction_hidden_rule=guarded (systems.trial.station_tool_rules), which a --tool-rule overrides.
+    guarded_placement: bool = False
 
 
 def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:

@@ -80,7 +80,9 @@ def station_tool_rules(station, overrides: dict | None = None, profile: str = "s
     """The rule overrides of ``profile`` a trial on ``station`` plans with: the station cup's limits
     (``suction.max_held_moment`` as ``max_suction_moment`` when finite, with the cup's pull,
     ``suction.vacuum_pressure`` x cup area, as ``max_drag_pull`` and its lip moment, that times ``cup_radius``, as
-    ``max_drag_twist``; ``suction.max_seal_angle_deg`` when under 90) and its reach map (``reach_map`` when given), then ``overrides`` on top; entries equal to the profile's values are left out."""
+    ``max_drag_twist``; ``suction.max_seal_angle_deg`` when under 90), its reach map (``reach_map`` when given) and, when the station
+    places by guarded moves (``guarded_placement``), ``suction_hidden_rule`` "guarded"; then ``overrides`` on top;
+    entries equal to the profile's values are left out."""
     from slax_drake.shelf.tool import without_defaults
 
     rules = {}
@@ -93,6 +95,8 @@ def station_tool_rules(station, overrides: dict | None = None, profile: str = "s
         rules["max_seal_angle_deg"] = float(station.suction.max_seal_angle_deg)
     if station.reach_map:
         rules["reach_map"] = station.reach_map
+    if station.guarded_placement:
+        rules["suction_hidden_rule"] = "guarded"
     rules.update(overrides or {})
     if not math.isfinite(rules.get("max_suction_moment", math.inf)):
         for name in ("max_drag_pull", "max_drag_twist"):  # nothing is dragged when every object is lifted

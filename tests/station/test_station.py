@@ -131,7 +131,8 @@ def test_bad_station_file(tmp_path):
 
 
 def test_the_station_cup_limits_are_planning_rules_that_overrides_replace():
-    """A trial plans with the station cup's limits unless a tool rule says otherwise; .inf / 90 lift them."""
+    """A trial plans with the station cup's limits, reach map and guarded placement unless a tool rule says
+    otherwise; .inf / 90 lift the limits."""
     import dataclasses
     import math
 
@@ -139,9 +140,13 @@ def test_the_station_cup_limits_are_planning_rules_that_overrides_replace():
 
     shipped = load_station_scenario(DEFAULT_STATION_PATH)
     # the station's reach map is one of its planning rules too
+    # and so is its guarded placement (the station profile's "placement" otherwise), which an override replaces
     assert station_tool_rules(shipped) == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0,
-                                           "reach_map": "models/reach/station_sim_shelf.json"}
-    station = dataclasses.replace(shipped, reach_map="")
+                                           "reach_map": "models/reach/station_sim_shelf.json",
+                                           "suction_hidden_rule": "guarded"}
+    assert "suction_hidden_rule" not in station_tool_rules(shipped, {"suction_hidden_rule": "placement"})
+    assert station_tool_rules(shipped, {"suction_hidden_rule": "path"})["suction_hidden_rule"] == "path"
+    station = dataclasses.replace(shipped, reach_map="", guarded_placement=False)
     assert station.suction.max_held_moment == pytest.approx(0.4)
     assert station.suction.max_seal_angle_deg == pytest.approx(10.0)
     assert station_tool_rules(station) == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0}

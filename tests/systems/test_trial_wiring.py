@@ -6,6 +6,7 @@ import pytest
 from slax_drake.systems.trial import TrialOptions, build_trial
 
 PLANNER_INPUTS = {"measured_state", "observation", "hypotheses", "occupancy_1d", "stop"}
+GUARD_INPUTS = {"measured_efforts"}  # the station's joint efforts, read by the guarded push-in (the stations' default)
 
 
 def _connections(diagram):
@@ -25,11 +26,11 @@ def trial():
 def test_planner_has_no_input_carrying_true_poses(trial):
     planner = trial.planner_system
     names = {planner.get_input_port(i).get_name() for i in range(planner.num_input_ports())}
-    assert names == PLANNER_INPUTS
+    assert names == PLANNER_INPUTS | GUARD_INPUTS
     assert not names & {"body_poses", "label_image", "plant_state", "query_object", "contact_results"}
     feeds = {(src, port) for src, port, dst, _ in _connections(trial.diagram) if dst == "planner"}
     assert feeds == {("station", "measured_state"), ("perception", "observation"), ("perception", "hypotheses"),
-                     ("perception", "occupancy_1d"), ("evaluator", "stop")}
+                     ("perception", "occupancy_1d"), ("evaluator", "stop"), ("station", "measured_efforts")}
 
 
 def test_ground_truth_reaches_only_the_evaluator_and_the_target_mask(trial):
@@ -76,14 +77,16 @@ def test_unknown_segmentation_is_refused():
         build_trial(TrialOptions(segmentation="colour"))
 
 
-def test_a_guarded_trial_feeds_the_planner_the_arm_s_efforts_and_nothing_of_the_hidden_objects():
-    """Under suction_hidden_rule=guarded the planner also reads the station's joint efforts (what a Fetch's
-    joint_states reports), and still no true pose or contact result."""
-    trial = build_trial(TrialOptions(objects=3, seed=7, tool_rules={"suction_hidden_rule": "guarded"}))
-    planner = trial.planner_system
-    names = {planner.get_input_port(i).get_name() for i in range(planner.num_input_ports())}
-    assert names == PLANNER_INPUTS | {"measured_efforts"}
+def test_a_guarded_trial_feeds_the_planner_the_arm_s_efforts_and_nothing_of_the_hidden_objects(trial):
+    """The shipped station places by guarded moves (guarded_placement), so a default trial plans under
+    suction_hidden_rule=guarded and its planner also reads the station's joint efforts (what a Fetch's joint_states
+    reports), and still no true pose or contact result; --tool-rule suction_hidden_rule=placement takes the guard
+    away again."""
+    assert trial.tool_rules["suction_hidden_rule"] == "guarded"
     feeds = {(src, port) for src, port, dst, _ in _connections(trial.diagram) if dst == "planner"}
     assert ("station", "measured_efforts") in feeds
     assert not {port for _, port in feeds} & {"body_poses", "contact_results", "plant_state", "query_object"}
-    assert trial.tool_rules["suction_hidden_rule"] == "guarded"
+    unguarded = build_trial(TrialOptions(objects=3, seed=7, tool_rules={"suction_hidden_rule": "placement"}))
+    planner = unguarded.planner_system
+    names = {planner.get_input_port(i).get_name() for i in range(planner.num_input_ports())}
+    assert names == PLANNER_INPUTS and "suction_hidden_rule" not in unguarded.tool_rules
