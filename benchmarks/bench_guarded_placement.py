@@ -50,7 +50,7 @@ def main():
     scenario = load_scenario("sim_configs/sim_shelf.yaml")
     station = load_station_scenario(args.station)
     rules = {k: v for k, v in station_tool_rules(station).items() if k != "reach_map"}
-    tool = tool_config(scenario, "station", suction_hidden_rule="guarded", **rules)
+    tool = tool_config(scenario, "station", **{**rules, "suction_hidden_rule": "guarded"})
     shelf, camera = shelf_of(scenario), Camera.from_config(scenario.camera)
     counts = {"stopped": 0, "completed": 0, "toppled": 0, "runs": 0}
     for mass in (float(m) for m in args.masses.split(",")):

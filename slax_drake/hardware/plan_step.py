@@ -28,8 +28,10 @@ scene). A candidate whose motion fails planning or the check is excluded and the
 
 Output ``step.json``: the trajectory document (``slax-drake check-trajectory step.json`` reads it; the believed
 scene is embedded for its collision check), with ``metadata.plan_step``: the chosen action, its hypothesis, the
-hypotheses, the check report, timings and the updated history. When no action is left it still writes the file,
-with no motion and the reason.
+hypotheses, the check report, timings and the updated history, and ``guarded_push_in``: for a guarded suction (a
+placement reaching into space the camera cannot see, on a station with ``guarded_placement``) the push-in's time
+window and stop force, which the arm's controller must run as a guarded move; None for any other action. When no
+action is left it still writes the file, with no motion and the reason.
 """
 
 from __future__ import annotations
@@ -419,6 +421,7 @@ class StepPlanner:
                     timings["planning_s"] = time.perf_counter() - t0
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
                                                               history, timings, visibility=visibility, frame=frame)
+                    traj.metadata["plan_step"]["guarded_push_in"] = self._guarded_push_in(action, motion, belief.known)
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings, visibility)
                 why, early, kind, waypoint = "check: " + report.summary().splitlines()[-1], False, "check", None
             else:
@@ -474,6 +477,24 @@ class StepPlanner:
         exported = export_trial(data, rate=None, source=source, scene=believed)
         exported.metadata["initial_positions"] = list(map(float, q))
         return exported
+
+    def _guarded_push_in(self, action, motion, known) -> dict | None:
+        """What the arm's controller must do for a guarded suction (None for any other action): the push-in
+        (``t_start_s`` to ``t_end_s``, s from the trajectory's start) runs as a guarded move that stops when the
+        force resisting the push, estimated from the joint efforts, exceeds ``stop_force_n`` over
+        ``expected_resistance_n`` (a drag's floor friction), then holds, releases and backs out the way it came
+        (:mod:`slax_drake.systems.guard`, ``MotionPlanner.guarded_stop``); the trajectory after the push-in is
+        what follows when nothing stops it."""
+        from slax_drake.systems.guard import push_in_forces, push_in_window
+
+        window = push_in_window(motion)
+        if window is None:
+            return None
+        obj = next((o for o in known if o.name == action.name), None)
+        stop, expected = push_in_forces(action, obj, self.policy.action_model, self.station.guarded_stop_force,
+                                        self.station.suction.lip_moment)
+        return {"t_start_s": round(window[0], 4), "t_end_s": round(window[1], 4), "stop_force_n": round(stop, 3),
+                "expected_resistance_n": round(expected, 3)}
 
     def _record(self, action, belief, observation, rejected, report, history, timings, reason=None,
                 visibility=None, frame=None) -> dict:

@@ -146,6 +146,37 @@ def push_in_window(motion) -> tuple[float, float] | None:
     return float(times[k - 1][1]), float(times[k][1])
 
 
+def lift_stop_force(threshold: float, lip_moment: float, held_moment: float, lever: float) -> float:
+    """The stop force (N) for a lifted object hanging ``held_moment`` (N m) off the cup: a force resisting the push
+    at the object's bottom, ``lever`` (m) below the cup, adds its moment to the weight's, and the seal peels when
+    they exceed the cup's ``lip_moment`` (N m); so ``threshold`` (N, the station's), or less, what the lip has left
+    over the lever, but not under ``MIN_STOP_FORCE`` (the effort estimate's noise)."""
+    if lever <= 0.0:
+        return float(threshold)
+    return min(float(threshold), max(MIN_STOP_FORCE, (lip_moment - held_moment) / lever))
+
+
+def push_in_forces(action, obj, action_model, threshold: float, lip_moment: float) -> tuple[float, float]:
+    """(stop force, expected resistance), N, of a guarded suction's push-in on ``obj`` (the believed object; None
+    when unknown): a drag meets its floor friction as the action model bounds it (its pull) and stops at
+    ``threshold`` over that; a lift meets nothing and stops at :func:`lift_stop_force` of the moment the object's
+    weight (the action model's mass) hangs off the cup, with the cup's height above the floor as the lever."""
+    if obj is None:
+        return float(threshold), 0.0
+    if action.drag:
+        return float(threshold), float(action_model.drag_limits(obj, action.q[2]).pull)
+    return lift_stop_force(threshold, lip_moment, held_moment(action_model, obj, action), float(action.q[2])), 0.0
+
+
+def held_moment(model, obj, action) -> float:
+    """N m: the moment ``obj``'s weight (the action model ``model``'s mass) hangs off the cup at ``action``'s
+    contact (its horizontal distance from the object's centre)."""
+    from slax_drake.shelf.actions import GRAVITY, object_mass
+
+    mass = object_mass(obj, model.tool.physics.object_density, model.tool.physics)
+    return mass * GRAVITY * float(np.hypot(float(obj.center[0]) - action.q[0], float(obj.center[1]) - action.q[1]))
+
+
 def planned_acceleration(trajectory, t: float) -> np.ndarray:
     """The planned joint accelerations at ``t`` (s from the trajectory's start; the nearest sample)."""
     k = int(np.clip(np.searchsorted(trajectory.times, t), 0, len(trajectory.times) - 1))
@@ -165,13 +196,9 @@ class Guard:
         self.lip_moment = float(scenario.suction.lip_moment)
 
     def stop_force(self, held_moment: float, lever: float) -> float:
-        """The stop force (N) for a lifted object hanging ``held_moment`` (N m) off the cup: a force resisting the
-        push at the object's bottom, ``lever`` (m) below the cup, adds its moment to the weight's, and the seal
-        peels when they exceed the cup's lip moment; so the station's ``threshold``, or less, what the lip has left
-        over the lever, but not under ``MIN_STOP_FORCE`` (the effort estimate's noise)."""
-        if lever <= 0.0:
-            return self.threshold
-        return min(self.threshold, max(MIN_STOP_FORCE, (self.lip_moment - held_moment) / lever))
+        """The stop force (N) for a lifted object hanging ``held_moment`` (N m) off the cup (:func:`lift_stop_force`
+        with the station's threshold and lip moment)."""
+        return lift_stop_force(self.threshold, self.lip_moment, held_moment, lever)
 
     def start(self, motion, cup_y_S, expected: float = 0.0, threshold: float | None = None) -> GuardRun | None:
         """A GuardRun for ``motion`` when it is a guarded suction, else None. ``cup_y_S(q)``: the cup's y (S, m) at

@@ -152,7 +152,7 @@ def run_guarded_motion(station_scenario, scene, believed, motion, planner, names
     action = motion.action
     if not action.drag:  # a lift: the stop force the cup's hold allows (the PlannerSystem's rule)
         from slax_drake.shelf.actions import ActionModel
-        from slax_drake.systems.planner import held_moment
+        from slax_drake.systems.guard import held_moment
 
         obj = next(o for o in believed.objects if o.name == action.name)
         model = ActionModel(believed.shelf, believed.camera.position, planner.tool)

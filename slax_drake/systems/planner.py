@@ -57,7 +57,7 @@ from slax_drake.shelf.distribution import support
 from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
-from slax_drake.systems.guard import guard_record
+from slax_drake.systems.guard import guard_record, push_in_forces
 
 MAX_PLAN_ATTEMPTS = 25
 
@@ -250,8 +250,10 @@ class PlannerSystem(LeafSystem):
         entry["predicted_objects"] = _predicted(belief.known, action)
         guard = None
         if self.guard is not None:
-            guard = self.guard.start(motion, self._cup_y(believed, motion), self._expected_resistance(action, belief.known),
-                                     self._stop_force(action, belief.known))
+            obj = next((o for o in belief.known if o.name == action.name), None)
+            stop, expected = push_in_forces(action, obj, self.policy.action_model, self.guard.threshold,
+                                            self.guard.lip_moment) if isinstance(action, Suction) else (None, 0.0)
+            guard = self.guard.start(motion, self._cup_y(believed, motion), expected, stop)
         if self.on_step is not None:
             self.on_step(entry, depth, labels, frame.target_mask, history, obs.p1d)
         return dataclasses.replace(
@@ -264,24 +266,6 @@ class PlannerSystem(LeafSystem):
         world = self.planner.world(believed)
         frame = motion.waypoints[0].frame if motion.waypoints else robot_model.CUP_TIP_FRAME
         return lambda q: float(world.tool_pose_S(q, frame).translation()[1])
-
-    def _expected_resistance(self, action, known) -> float:
-        """N the free push-in meets: a drag's floor friction as the action model bounds it (its pull), else 0."""
-        if not getattr(action, "drag", False):
-            return 0.0
-        obj = next((o for o in known if o.name == action.name), None)
-        return 0.0 if obj is None else float(self.policy.action_model.drag_limits(obj, action.q[2]).pull)
-
-    def _stop_force(self, action, known) -> float | None:
-        """The stop force (N) of a guarded lift: :meth:`~slax_drake.systems.guard.Guard.stop_force` of the moment
-        the believed object's weight hangs off the cup (the action model's mass) and the cup's height above the
-        floor (the lever of a push back at the object's bottom); None (the station's) for a drag."""
-        if not isinstance(action, Suction) or action.drag:
-            return None
-        obj = next((o for o in known if o.name == action.name), None)
-        if obj is None:
-            return None
-        return self.guard.stop_force(held_moment(self.policy.action_model, obj, action), float(action.q[2]))
 
     def _watch(self, context, state):
         """Every ``guard.period`` s while a guarded push-in plays: one joint-state sample to the contact monitor;
@@ -353,14 +337,6 @@ def stop_record(policy, known, rejected: list, stop_reason: str | None) -> dict:
     if screened is not None:  # why the policy took none of the feasible candidates, by correction
         out["screened"] = screened(tuple(known))
     return out
-
-
-def held_moment(model, obj, action) -> float:
-    """N m: the moment ``obj``'s weight (the action model's mass) hangs off the cup at ``action``'s contact."""
-    from slax_drake.shelf.actions import GRAVITY, object_mass
-
-    mass = object_mass(obj, model.tool.physics.object_density, model.tool.physics)
-    return mass * GRAVITY * float(np.hypot(float(obj.center[0]) - action.q[0], float(obj.center[1]) - action.q[1]))
 
 
 def _describe(action) -> dict:

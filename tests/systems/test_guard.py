@@ -65,3 +65,29 @@ def test_a_push_in_that_ends_shallower_than_it_starts_is_watched_along_minus_y()
     assert GuardRun(ContactMonitor(5.0), 1.0, 2.0, y_start=-0.2, y_end=0.15).direction == 1.0
     record = guard_record(run, stopped=True, cup_y=0.0)
     assert record["pushed_in_m"] == pytest.approx(0.10) and record["short_m"] == pytest.approx(0.05)
+
+
+def test_push_in_forces_lift_the_stop_force_by_the_held_moment_and_raise_a_drag_s_by_its_friction(sim_scenario):
+    """The PlannerSystem's guard and plan-step's guarded_push_in take their forces from push_in_forces: a lift's
+    stop force is lift_stop_force of the weight's moment about the contact, a drag keeps the station's force and
+    expects its floor friction (the action model's pull bound), an object not believed keeps the station's."""
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import SceneObject, planar_pose
+    from slax_drake.scene.sampling import shelf_of
+    from slax_drake.shelf.actions import GRAVITY, ActionModel, Suction, object_mass
+    from slax_drake.shelf.tool import tool_config
+    from slax_drake.systems.guard import held_moment, lift_stop_force, push_in_forces
+
+    model = ActionModel(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera).position,
+                        tool_config(sim_scenario, "station"))
+    box = SceneObject("object_0", "box", (0.10, 0.10, 0.20), planar_pose(0.05, -0.10, 0.10, 0.0), mass=0.8)
+    lift = Suction("object_0", (0.05, -0.15, 0.12), 0.0, 0.2, guarded=True)  # the contact 5 cm in front of the centre
+    mass = object_mass(box, model.tool.physics.object_density, model.tool.physics)
+    assert held_moment(model, box, lift) == pytest.approx(mass * GRAVITY * 0.05)
+    stop, expected = push_in_forces(lift, box, model, 5.0, 0.64)
+    assert expected == 0.0 and stop == pytest.approx(lift_stop_force(5.0, 0.64, mass * GRAVITY * 0.05, 0.12))
+    assert stop <= 5.0
+    drag = Suction("object_0", (0.05, -0.15, 0.12), 0.0, 0.2, drag=True, guarded=True)
+    stop, expected = push_in_forces(drag, box, model, 5.0, 0.64)
+    assert stop == 5.0 and expected == pytest.approx(model.drag_limits(box, 0.12).pull) and expected > 0.0
+    assert push_in_forces(lift, None, model, 5.0, 0.64) == (5.0, 0.0)

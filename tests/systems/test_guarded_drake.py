@@ -27,7 +27,7 @@ def planned(sim_scenario):
 
     station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
     rules = {k: v for k, v in station_tool_rules(station).items() if k != "reach_map"}
-    tool = tool_config(sim_scenario, "station", suction_hidden_rule="guarded", **rules)
+    tool = tool_config(sim_scenario, "station", **{**rules, "suction_hidden_rule": "guarded"})
     wall = _box("object_0", -0.12, -0.15, (0.30, 0.06, 0.30), 0.3)
     carried = _box("object_1", 0.20, -0.10, (0.08, 0.08, 0.10), 0.3)
     believed = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (wall, carried), None, 0)
