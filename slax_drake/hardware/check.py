@@ -24,7 +24,10 @@ motion of an :class:`~slax_drake.hardware.trajectory_file.ExportedTrajectory` (l
   motion starts at the trajectory's initial positions when the metadata gives them;
 - ``collision``: :meth:`~slax_drake.hardware.collision.CollisionWorld.check_motions` at every point and at
   quintic Hermite interpolated configurations every ``collision_step`` seconds in between, in the world of the
-  scene given (the objects moved only by the checker's own model of each push and suction).
+  scene given (the objects moved only by the checker's own model of each push and suction). A plan-step file's
+  guarded push-in (``metadata.plan_step.guarded_push_in``) is run by the controller as a guarded move: the first
+  collision with an object inside its window is where it stops, and the motion's collisions from then on are not
+  the robot's (:func:`_guarded_stop`); everything before it is checked as any motion.
 
 A file with no motion, or a margin that leaves no room, is refused (TrajectoryFileError, exit code 2). Time
 monotonicity is enforced when the file is read (a non-monotonic file is rejected as malformed).
@@ -107,6 +110,14 @@ class CheckReport:
             elif offset is not None and not math.isfinite(offset):
                 what += "; the file's objects_before do not name the scene's objects"
             lines.append(f"motion {k}: the tool {what}")
+        stop = self.checked.get("guarded_stop")
+        if stop:
+            t0, t1 = stop["window_s"]
+            lines.append(f"motion 0: a guarded push-in from {t0:.3f} to {t1:.3f} s (stops over "
+                         f"{stop['stop_force_n']} N)" + (
+                             f": it meets {stop['bodies']} at t = {stop['time_s']:.3f} s, where the guard stops it; "
+                             "the file's motion after that is not what runs and is not checked for collisions"
+                             if stop["time_s"] is not None else ": nothing in its way"))
         if self.checked.get("claimed_lost"):
             lines.append("the file calls lost: " + ", ".join(self.checked["claimed_lost"])
                          + " (checked anyway, at their last pose in the checked world)")
@@ -195,7 +206,36 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
         checked["structural_reasons"] = world.structural_reasons
         checked["collision_configurations"] = world.check_motions(traj, out, collision_step, Violation)
         checked["objects"] = world.report
+        guarded = (traj.metadata.get("plan_step") or {}).get("guarded_push_in")
+        if guarded:
+            carried = world.report["motions"][0].get("touched")
+            out[:] = _guarded_stop(out, guarded, traj.motions[0], set(world.objects) - {carried}, checked)
     return CheckReport(out, checked, dict(zip(names, low_margin.tolist())))
+
+
+def _guarded_stop(out: list, guarded: dict, motion, objects: set, checked: dict) -> list:
+    """The violations of a plan-step file whose motion 0 holds a guarded push-in (``guarded``: its window
+    ``t_start_s``..``t_end_s``, s from the motion's start): the controller runs that window as a guarded move, so a
+    collision with one of ``objects`` (the scene's objects but the carried one: not the shelf, not the robot itself,
+    not the carried object on the shelf) that first appears inside it is where the guard
+    stops the push, and the file's motion after it is not what runs (the stop motion is the controller's): collisions
+    of motion 0 from that time on are left out and the stop goes into ``checked["guarded_stop"]``. A collision
+    before the window, or one of the shelf or the robot with itself, stays a violation; a window outside the motion
+    is one ("world")."""
+    t0, t1 = float(guarded["t_start_s"]), float(guarded["t_end_s"])
+    if not 0.0 <= t0 < t1 <= motion.duration + 1e-6:
+        return out + [Violation("world", 0, t0, "guarded_push_in", t1, motion.duration,
+                                f"the guarded push-in's window {t0:.3f}-{t1:.3f} s lies outside the motion "
+                                f"(0-{motion.duration:.3f} s)")]
+    stops = [v for v in out if v.kind == "collision" and v.motion == 0 and t0 <= v.time <= t1
+             and set(v.what.split("/")) & objects]
+    first = min(stops, key=lambda v: v.time, default=None)
+    checked["guarded_stop"] = {"window_s": [t0, t1], "stop_force_n": guarded.get("stop_force_n"),
+                               "time_s": None if first is None else first.time,
+                               "bodies": None if first is None else first.what}
+    if first is None:
+        return out
+    return [v for v in out if not (v.kind == "collision" and v.motion == 0 and v.time >= first.time)]
 
 
 def check_margin(margin: float, limits: FetchLimits | None = None) -> None:

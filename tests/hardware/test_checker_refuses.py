@@ -337,3 +337,35 @@ def test_a_push_is_allowed_only_along_the_commanded_direction(scene):
     assert not [v for v in results[0.05].violations if v.what.endswith("/object_0")], results[0.05].summary()
     hits = [v for v in results[-0.05].violations if v.kind == "collision" and v.what.endswith("/object_0")]
     assert hits and results[-0.05].checked["objects"]["motions"][0]["pushed_m"] == 0.0, results[-0.05].summary()
+
+
+def test_a_guarded_window_excuses_only_what_follows_the_first_object_contact_inside_it():
+    """A plan-step file's guarded push-in (metadata.plan_step.guarded_push_in) cannot hide a collision: one before
+    the window, one with the shelf inside it, and a window outside the motion stay violations; only what follows the
+    first contact with an object inside the window is left out (the guard stops there)."""
+    from types import SimpleNamespace
+
+    from slax_drake.hardware.check import Violation, _guarded_stop
+
+    def hit(t, what, motion=0):
+        return Violation("collision", motion, t, what, 0.01, 0.0, f"{what} at {t}")
+
+    motion = SimpleNamespace(duration=10.0)
+    window = {"t_start_s": 4.0, "t_end_s": 8.0, "stop_force_n": 5.0}
+    before = hit(3.0, "object_0/object_2")
+    shelf = hit(4.5, "object_0/shelf_back")
+    first = hit(5.0, "object_0/object_2")
+    later = [hit(5.5, "object_0/object_2"), hit(9.0, "wrist_roll_link/object_3"), hit(6.0, "object_0/object_1", 1)]
+    limit = Violation("velocity", 0, 6.0, "shoulder_pan_joint", 2.0, 1.0, "too fast")
+    checked = {}
+    others = {"object_1", "object_2", "object_3"}  # the scene's objects but the carried object_0
+    kept = _guarded_stop([before, shelf, first, *later, limit], window, motion, others, checked)
+    assert kept == [before, shelf, later[2], limit]
+    assert checked["guarded_stop"]["time_s"] == 5.0 and checked["guarded_stop"]["bodies"] == "object_0/object_2"
+    # nothing met inside the window: every violation stays
+    checked = {}
+    assert _guarded_stop([before, shelf], window, motion, others, checked) == [before, shelf]
+    assert checked["guarded_stop"]["time_s"] is None
+    # a window the motion does not hold is itself a violation
+    kept = _guarded_stop([first], {"t_start_s": 9.0, "t_end_s": 12.0}, motion, others, {})
+    assert kept[:1] == [first] and kept[1].kind == "world" and "outside the motion" in kept[1].message

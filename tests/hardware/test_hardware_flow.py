@@ -96,8 +96,11 @@ def test_a_real_push_is_refused_when_the_world_or_the_file_changes(pushed_trial,
     assert "checked anyway" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("objects,seed", [(3, 7), (6, 1)])
-def test_plan_step_output_passes_against_the_true_scene(objects, seed, tmp_path, capsys):
+@pytest.mark.parametrize("objects,seed,guarded", [(3, 7, False), (6, 1, True)])
+def test_plan_step_output_passes_against_the_true_scene(objects, seed, guarded, tmp_path, capsys):
+    """A plan-step file checked against the scene the frame was rendered from (which holds objects the camera did
+    not see). Scene 6:1's step is a guarded placement whose push-in meets a hidden object: the check passes because
+    the guard stops it there, and says so."""
     sys.path.insert(0, str(Path(__file__).parent))
     from test_plan_step import _args, _frame
 
@@ -115,4 +118,8 @@ def test_plan_step_output_passes_against_the_true_scene(objects, seed, tmp_path,
     assert main(["check-trajectory", str(tmp_path / "step.json")]) == 0, capsys.readouterr().out
     assert main(["check-trajectory", str(tmp_path / "step.json"), "--scene", str(tmp_path / "true.json")]) == 0, \
         capsys.readouterr().out
-    assert "the tool may touch object_" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "the tool may touch object_" in out
+    assert (step["metadata"]["plan_step"]["guarded_push_in"] is not None) == guarded
+    if guarded:
+        assert "where the guard stops it" in out
