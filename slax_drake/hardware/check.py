@@ -24,10 +24,13 @@ motion of an :class:`~slax_drake.hardware.trajectory_file.ExportedTrajectory` (l
   motion starts at the trajectory's initial positions when the metadata gives them;
 - ``collision``: :meth:`~slax_drake.hardware.collision.CollisionWorld.check_motions` at every point and at
   quintic Hermite interpolated configurations every ``collision_step`` seconds in between, in the world of the
-  scene given (the objects moved only by the checker's own model of each push and suction). A plan-step file's
-  guarded push-in (``metadata.plan_step.guarded_push_in``) is run by the controller as a guarded move: the first
-  collision with an object inside its window is where it stops, and the motion's collisions from then on are not
-  the robot's (:func:`_guarded_stop`); everything before it is checked as any motion.
+  scene given (the objects moved only by the checker's own model of each push and suction). A guarded push-in
+  (a motion's ``action.guarded_push_in``: a plan-step file's, or a trial's guarded suction) is run by the
+  controller as a guarded move: the first collision with an object inside its window is where it stops, and the
+  motion's collisions from then on are not the robot's (:func:`_guarded_stop`); everything before it is checked
+  as any motion. A motion cut where a
+  trial's guard stopped it (``guarded_push_in.stopped_at_s`` at its end, inside the window) may end moving, and
+  the next motion may start up to ``GUARD_STOP_TOL`` from its end (the measured pose, not the commanded one).
 
 A file with no motion, or a margin that leaves no room, is refused (TrajectoryFileError, exit code 2). Time
 monotonicity is enforced when the file is read (a non-monotonic file is rejected as malformed).
@@ -50,6 +53,7 @@ LIMIT_REL_TOL = 1e-4  # relative: rounding, and quintic interpolation between re
 JERK_REL_TOL = 0.01
 JERK_ROUNDING = 2e-6  # rad/s^2: two accelerations rounded to 1e-6
 CONTINUITY_TOL = 1e-6  # rad or m
+GUARD_STOP_TOL = 0.01  # rad or m: where the motion after a guard's stop may start from the stopped motion's end
 REST_TOL = 1e-6  # rad/s and rad/s^2
 COLLISION_STEP = 0.005  # s
 POSITION_RESOLUTION = 1e-6  # rad or m: trial.json rounds positions to 1e-6; resampling (--rate) stays within it
@@ -110,14 +114,18 @@ class CheckReport:
             elif offset is not None and not math.isfinite(offset):
                 what += "; the file's objects_before do not name the scene's objects"
             lines.append(f"motion {k}: the tool {what}")
-        stop = self.checked.get("guarded_stop")
-        if stop:
+        for stop in self.checked.get("guarded_stops") or ():
             t0, t1 = stop["window_s"]
-            lines.append(f"motion 0: a guarded push-in from {t0:.3f} to {t1:.3f} s (stops over "
-                         f"{stop['stop_force_n']} N)" + (
-                             f": it meets {stop['bodies']} at t = {stop['time_s']:.3f} s, where the guard stops it; "
-                             "the file's motion after that is not what runs and is not checked for collisions"
-                             if stop["time_s"] is not None else ": nothing in its way"))
+            force = f" (stops over {stop['stop_force_n']} N)" if stop.get("stop_force_n") is not None else ""
+            line = f"motion {stop['motion']}: a guarded push-in from {t0:.3f} to {t1:.3f} s{force}"
+            if stop["time_s"] is not None:
+                line += (f": it meets {stop['bodies']} at t = {stop['time_s']:.3f} s, where the guard stops it; the "
+                         "motion's collisions after that are not the robot's and are not checked")
+            elif stop.get("stopped_at_s") is not None:
+                line += f": the trial's guard stopped it at t = {stop['stopped_at_s']:.3f} s (the motion ends there)"
+            else:
+                line += ": nothing in its way"
+            lines.append(line)
         if self.checked.get("claimed_lost"):
             lines.append("the file calls lost: " + ", ".join(self.checked["claimed_lost"])
                          + " (checked anyway, at their last pose in the checked world)")
@@ -182,6 +190,8 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
             _from_positions(out, m_index, t, q, lim)
             _fields_agree(out, m_index, t, q, v, a, lim)
         for label, idx in (("start", 0), ("end", -1)):
+            if label == "end" and _stopped_by_guard(m):  # a guard stops the push-in on contact, moving
+                continue
             moving = np.maximum(np.abs(v[idx]), np.abs(a[idx]))
             for j in np.flatnonzero(moving > REST_TOL):
                 out.append(Violation("discontinuity", m_index, float(t[idx]), names[j], float(moving[j]), REST_TOL,
@@ -189,9 +199,12 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
                                      f"a = {a[idx, j]:.6g} (the robot holds still between motions)"))
         if previous_end is not None:
             gap = np.abs(q[0] - previous_end)
-            for j in np.flatnonzero(gap > CONTINUITY_TOL):
+            # after a guard's stop the next motion starts where the arm stopped: the measured pose, off the
+            # commanded one by the tracking error
+            tol = GUARD_STOP_TOL if m_index > 0 and _stopped_by_guard(traj.motions[m_index - 1]) else CONTINUITY_TOL
+            for j in np.flatnonzero(gap > tol):
                 where = "the initial positions" if m_index == 0 else f"motion {m_index - 1}'s end"
-                out.append(Violation("discontinuity", m_index, 0.0, names[j], float(gap[j]), CONTINUITY_TOL,
+                out.append(Violation("discontinuity", m_index, 0.0, names[j], float(gap[j]), tol,
                                      f"{names[j]} starts {gap[j]:.6g} away from {where}"))
         previous_end = q[-1]
     checks = ["position", "velocity", "acceleration", "jerk", "continuity",
@@ -206,36 +219,47 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
         checked["structural_reasons"] = world.structural_reasons
         checked["collision_configurations"] = world.check_motions(traj, out, collision_step, Violation)
         checked["objects"] = world.report
-        guarded = (traj.metadata.get("plan_step") or {}).get("guarded_push_in")
-        if guarded:
-            carried = world.report["motions"][0].get("touched")
-            out[:] = _guarded_stop(out, guarded, traj.motions[0], set(world.objects) - {carried}, checked)
+        for m_index, m in enumerate(traj.motions):
+            guarded = (m.action or {}).get("guarded_push_in")
+            if guarded:
+                carried = world.report["motions"][m_index].get("touched")
+                out[:] = _guarded_stop(out, guarded, m_index, m, set(world.objects) - {carried}, checked)
     return CheckReport(out, checked, dict(zip(names, low_margin.tolist())))
 
 
-def _guarded_stop(out: list, guarded: dict, motion, objects: set, checked: dict) -> list:
-    """The violations of a plan-step file whose motion 0 holds a guarded push-in (``guarded``: its window
-    ``t_start_s``..``t_end_s``, s from the motion's start): the controller runs that window as a guarded move, so a
-    collision with one of ``objects`` (the scene's objects but the carried one: not the shelf, not the robot itself,
-    not the carried object on the shelf) that first appears inside it is where the guard
-    stops the push, and the file's motion after it is not what runs (the stop motion is the controller's): collisions
-    of motion 0 from that time on are left out and the stop goes into ``checked["guarded_stop"]``. A collision
-    before the window, or one of the shelf or the robot with itself, stays a violation; a window outside the motion
-    is one ("world")."""
+def _stopped_by_guard(motion) -> bool:
+    """Whether ``motion`` ends where a guard stopped its push-in: its action's ``guarded_push_in`` says it stopped
+    at the motion's end (``stopped_at_s``), inside its push-in window."""
+    g = (motion.action or {}).get("guarded_push_in") or {}
+    stop = g.get("stopped_at_s")
+    return stop is not None and abs(float(stop) - motion.duration) <= 1e-6 and \
+        float(g["t_start_s"]) <= float(stop) <= float(g["t_end_s"]) + 1e-6
+
+
+def _guarded_stop(out: list, guarded: dict, m_index: int, motion, objects: set, checked: dict) -> list:
+    """The violations once motion ``m_index`` holds a guarded push-in (``guarded``: its action's
+    ``guarded_push_in``, the window ``t_start_s``..``t_end_s``, s from the motion's start): the controller runs
+    that window as a guarded move, so a collision with one of ``objects`` (the scene's objects but the carried one:
+    not the shelf, not the robot itself, not the carried object on the shelf) that first appears inside it is where
+    the guard stops the push, and the motion's collisions from that time on are left out (a plan-step file's motion
+    goes on as planned after it, which is not what runs; the stop motion is the controller's). The stop goes into
+    ``checked["guarded_stops"]``. A collision before the window, or one of the shelf or the robot with itself,
+    stays a violation; a window outside the motion is one ("world")."""
     t0, t1 = float(guarded["t_start_s"]), float(guarded["t_end_s"])
-    if not 0.0 <= t0 < t1 <= motion.duration + 1e-6:
-        return out + [Violation("world", 0, t0, "guarded_push_in", t1, motion.duration,
+    stops = checked.setdefault("guarded_stops", [])
+    if not 0.0 <= t0 < t1 or t0 > motion.duration + 1e-6:
+        return out + [Violation("world", m_index, t0, "guarded_push_in", t1, motion.duration,
                                 f"the guarded push-in's window {t0:.3f}-{t1:.3f} s lies outside the motion "
                                 f"(0-{motion.duration:.3f} s)")]
-    stops = [v for v in out if v.kind == "collision" and v.motion == 0 and t0 <= v.time <= t1
-             and set(v.what.split("/")) & objects]
-    first = min(stops, key=lambda v: v.time, default=None)
-    checked["guarded_stop"] = {"window_s": [t0, t1], "stop_force_n": guarded.get("stop_force_n"),
-                               "time_s": None if first is None else first.time,
-                               "bodies": None if first is None else first.what}
+    met = [v for v in out if v.kind == "collision" and v.motion == m_index and t0 <= v.time <= t1
+           and set(v.what.split("/")) & objects]
+    first = min(met, key=lambda v: v.time, default=None)
+    stops.append({"motion": m_index, "window_s": [t0, t1], "stop_force_n": guarded.get("stop_force_n"),
+                  "stopped_at_s": guarded.get("stopped_at_s"),
+                  "time_s": None if first is None else first.time, "bodies": None if first is None else first.what})
     if first is None:
         return out
-    return [v for v in out if not (v.kind == "collision" and v.motion == 0 and v.time >= first.time)]
+    return [v for v in out if not (v.kind == "collision" and v.motion == m_index and v.time >= first.time)]
 
 
 def check_margin(margin: float, limits: FetchLimits | None = None) -> None:

@@ -8,6 +8,12 @@ motion's ``action`` carries ``estimate``, the hypothesis the planner acted on (s
 frame, from the decision's ``hypotheses``), and ``scene_object``, the scene object the trial associated the
 segment with; the checker matches the estimate to its own scene and checks the association.
 
+A guarded suction's motion carries ``guarded_push_in`` in its action (its push-in window, s from the motion's start,
+and the stop force); when the trial's guard stopped it on contact, the action is exported as two motions: the
+motion up to the stop (``guarded_push_in.stopped_at_s``; it ends moving, where the controller's guard stops it) and
+the stop motion the planner made from the measured pose (``guard_stop_motion``: hold, lower, release, back off, the
+way back), which starts at rest.
+
 Export cuts the record into motions: the samples from the motion's start to its end; when the start or the end
 (multiples of 1 ms) falls between two records, the point is added from the record before the start or after the
 end (the robot holds still there, so its position is exact, velocity and acceleration zero). With ``rate=None`` the points are the trial's own
@@ -114,48 +120,29 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
                      "use a lower rate")
     motions = []
     for entry, action in zip(starts, data["actions"]):
-        t0 = float(entry["time"])
-        duration = float(action["motion"]["duration_s"])
-        t1 = t0 + duration
-        inside = (times >= t0 - TIME_EPS) & (times <= t1 + TIME_EPS)
-        idx = np.flatnonzero(inside)
-        if len(idx) == 0:
-            raise TrialFileError(f"{source or 'trial'}: no record during the motion at {t0} s")
-        mt, mq, mv, ma = times[idx] - t0, q[idx], v[idx], a[idx]
-        if abs(mt[0]) > TIME_EPS:  # the start falls between records: the robot holds the previous record's pose
-            if idx[0] == 0:
-                raise TrialFileError(f"{source or 'trial'}: the record starts after the motion at {t0} s")
-            zero = np.zeros((1, len(names)))
-            mt, mq = np.append(0.0, mt), np.vstack([q[idx[0] - 1], mq])
-            mv, ma = np.vstack([zero, mv]), np.vstack([zero, ma])
-        if abs(mt[-1] - duration) > TIME_EPS:  # the end falls between records: the next record holds the end pose
-            nxt = idx[-1] + 1
-            if nxt >= len(times):
-                raise TrialFileError(f"{source or 'trial'}: the record ends before the motion at {t0} s does")
-            mt = np.append(mt, duration)
-            mq = np.vstack([mq, q[nxt]])
-            mv = np.vstack([mv, np.zeros(len(names))])
-            ma = np.vstack([ma, np.zeros(len(names))])
-        else:
-            mt[-1] = duration
-        mt[0] = 0.0
-        if rate is not None:
-            count = max(1, int(np.ceil(duration * rate - 1e-6)))  # samples k / rate < duration, then the end
-            new_t = np.append(np.arange(count) / rate, duration)
-            q_end = mq[-1].copy()
-            mq, mv, ma = resample(mt, mq, mv, ma, new_t)
-            mq[-1], mv[-1], ma[-1] = q_end, 0.0, 0.0  # the end pose exactly, at rest
-            mt = new_t
-        events = []
-        for on, off in action["motion"].get("suction_intervals") or []:
-            events += [(float(on), True), (float(off), False)]
         act = {k: action[k] for k in ("type", "object", "d", "dx", "dz", "yaw") if k in action}
         estimate = (entry.get("hypotheses") or {}).get(action.get("object"))
         if isinstance(estimate, dict):  # what the planner believed of the object it acts on
             act["estimate"] = {k: estimate[k] for k in ("shape", "size", "x", "y", "yaw") if k in estimate}
         if action.get("true_object") is not None:  # the simulator's association of the segment to a scene object
             act["scene_object"] = action["true_object"]
-        motions.append(Motion(t0, mt, mq, mv, ma, events, act, entry.get("poses_before"), list(entry.get("lost", []))))
+        for t0, duration, intervals, motion_act, after_stop in _segments(entry, action, act, source):
+            mt, mq, mv, ma = _cut(times, q, v, a, t0, duration, names, source, after_stop)
+            if rate is not None:
+                count = max(1, int(np.ceil(duration * rate - 1e-6)))  # samples k / rate < duration, then the end
+                new_t = np.append(np.arange(count) / rate, duration)
+                stopped = "stopped_at_s" in (motion_act.get("guarded_push_in") or {})
+                q_end = mq[-1].copy()
+                v_end, a_end = (mv[-1].copy(), ma[-1].copy()) if stopped else (0.0, 0.0)
+                mq, mv, ma = resample(mt, mq, mv, ma, new_t)
+                mq[-1], mv[-1], ma[-1] = q_end, v_end, a_end  # the end exactly: at rest, or where a guard stopped it
+                mt = new_t
+            events = []
+            for on, off in intervals:
+                events += [(float(on), True), (float(off), False)]
+            motions.append(Motion(t0, mt, mq, mv, ma, events, motion_act,
+                                  None if after_stop else entry.get("poses_before"),
+                                  [] if after_stop else list(entry.get("lost", []))))
     metadata = {
         "source": source, "config": data.get("config"), "station": data.get("station"),
         "objects": data.get("objects"), "seed": data.get("seed"), "policy": data.get("policy"),
@@ -166,3 +153,82 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
     if scene is not None:
         metadata["scene"] = scene_to_dict(scene)
     return ExportedTrajectory(motions, metadata)
+
+
+def guarded_window(action: dict) -> tuple[float, float] | None:
+    """(start, end), s from the motion's start, of a guarded suction's push-in from its recorded waypoint times
+    (the segment arriving at "push in"); None for any other action or a record without them."""
+    if action.get("type") != "suction" or not action.get("guarded"):
+        return None
+    labels = [(str(w[0]), float(w[1])) for w in (action.get("motion") or {}).get("waypoint_times") or []]
+    names = [label for label, _ in labels]
+    if "push in" not in names or names.index("push in") == 0:
+        return None
+    k = names.index("push in")
+    return labels[k - 1][1], labels[k][1]
+
+
+def _segments(entry: dict, action: dict, act: dict, source):
+    """[(start s on the trial clock, duration s, suction intervals from the start, the motion's action, whether it
+    is the stop motion after a guard stop)] of one action: its motion; for a guarded suction whose push-in the guard
+    stopped (``action["guard"]["stopped"]``), its motion up to the stop (ending where the guard stopped it, not at
+    rest; the action's ``guarded_push_in`` says so) and the stop motion planned from there (hold, lower, release,
+    back off, the way back; ``guard.stop_motion``). A guarded suction's action carries ``guarded_push_in``: its
+    push-in window, the stop force and, when stopped, ``stopped_at_s``."""
+    t0 = float(entry["time"])
+    motion = action["motion"]
+    duration = float(motion["duration_s"])
+    intervals = [(float(on), float(off)) for on, off in motion.get("suction_intervals") or []]
+    guard = action.get("guard") if isinstance(action.get("guard"), dict) else None
+    window = guarded_window(action)
+    if window is None:
+        return [(t0, duration, intervals, act, False)]
+    record = {"t_start_s": window[0], "t_end_s": window[1], "stop_force_n": (guard or {}).get("threshold_n")}
+    if not (guard and guard.get("stopped")):
+        return [(t0, duration, intervals, {**act, "guarded_push_in": record}, False)]
+    try:
+        t_stop = float(guard["stop_time"]) - t0
+        stop = guard["stop_motion"]
+        stop_duration = float(stop["duration_s"])
+        stop_intervals = [(float(on), float(off)) for on, off in stop.get("suction_intervals") or []]
+    except (KeyError, TypeError, ValueError) as e:
+        raise TrialFileError(f"{source or 'trial'}: a guard stop's record is malformed ({e})") from None
+    if not 0.0 < t_stop <= duration + TIME_EPS:
+        raise TrialFileError(f"{source or 'trial'}: a guard stopped a motion at {t_stop:.3f} s of its "
+                             f"{duration:.3f} s")
+    before = [(on, min(off, t_stop)) for on, off in intervals if on < t_stop]
+    return [(t0, t_stop, before, {**act, "guarded_push_in": {**record, "stopped_at_s": t_stop}}, False),
+            (t0 + t_stop, stop_duration, stop_intervals, {**act, "guard_stop_motion": True}, True)]
+
+
+def _cut(times, q, v, a, t0: float, duration: float, names, source, after_stop: bool):
+    """The records of [t0, t0 + duration] (module docstring) as (times from t0, q, v, a). A guard's stop motion
+    (``after_stop``) starts at rest where the record after the stop holds it (the trial's record at the stop
+    instant is the stopped motion's last)."""
+    t1 = t0 + duration
+    lo = t0 + TIME_EPS if after_stop else t0 - TIME_EPS
+    idx = np.flatnonzero((times >= lo) & (times <= t1 + TIME_EPS))
+    if len(idx) == 0:
+        raise TrialFileError(f"{source or 'trial'}: no record during the motion at {t0} s")
+    mt, mq, mv, ma = times[idx] - t0, q[idx], v[idx], a[idx]
+    zero = np.zeros((1, len(names)))
+    if after_stop:  # it holds still first: the stop pose, at rest
+        mt, mq = np.append(0.0, mt), np.vstack([mq[:1], mq])
+        mv, ma = np.vstack([zero, mv]), np.vstack([zero, ma])
+    elif abs(mt[0]) > TIME_EPS:  # the start falls between records: the robot holds the previous record's pose
+        if idx[0] == 0:
+            raise TrialFileError(f"{source or 'trial'}: the record starts after the motion at {t0} s")
+        mt, mq = np.append(0.0, mt), np.vstack([q[idx[0] - 1], mq])
+        mv, ma = np.vstack([zero, mv]), np.vstack([zero, ma])
+    if abs(mt[-1] - duration) > TIME_EPS:  # the end falls between records: the next record holds the end pose
+        nxt = idx[-1] + 1
+        if nxt >= len(times):
+            raise TrialFileError(f"{source or 'trial'}: the record ends before the motion at {t0} s does")
+        mt = np.append(mt, duration)
+        mq = np.vstack([mq, q[nxt]])
+        mv = np.vstack([mv, np.zeros(len(names))])
+        ma = np.vstack([ma, np.zeros(len(names))])
+    else:
+        mt[-1] = duration
+    mt[0] = 0.0
+    return mt, mq, mv, ma

@@ -397,6 +397,15 @@ def _check_action(action, what) -> None:
         raise _Bad(f"{what} is a push without its distance d")
     if "scene_object" in action and not isinstance(action["scene_object"], str):
         raise _Bad(f"{what}.scene_object must be a name")
+    guarded = action.get("guarded_push_in")
+    if guarded is not None:
+        if not isinstance(guarded, dict):
+            raise _Bad(f"{what}.guarded_push_in must be a mapping")
+        for key in ("t_start_s", "t_end_s"):
+            _number(_get(guarded, key, f"{what}.guarded_push_in"), f"{what}.guarded_push_in.{key}")
+        for key in ("stop_force_n", "stopped_at_s"):
+            if guarded.get(key) is not None:
+                _number(guarded[key], f"{what}.guarded_push_in.{key}")
     est = action.get("estimate")
     if est is not None:
         if not isinstance(est, dict) or est.get("shape") not in ("box", "cylinder"):

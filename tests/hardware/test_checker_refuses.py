@@ -340,7 +340,7 @@ def test_a_push_is_allowed_only_along_the_commanded_direction(scene):
 
 
 def test_a_guarded_window_excuses_only_what_follows_the_first_object_contact_inside_it():
-    """A plan-step file's guarded push-in (metadata.plan_step.guarded_push_in) cannot hide a collision: one before
+    """A guarded push-in (a motion's action.guarded_push_in) cannot hide a collision: one before
     the window, one with the shelf inside it, and a window outside the motion stay violations; only what follows the
     first contact with an object inside the window is left out (the guard stops there)."""
     from types import SimpleNamespace
@@ -359,13 +359,30 @@ def test_a_guarded_window_excuses_only_what_follows_the_first_object_contact_ins
     limit = Violation("velocity", 0, 6.0, "shoulder_pan_joint", 2.0, 1.0, "too fast")
     checked = {}
     others = {"object_1", "object_2", "object_3"}  # the scene's objects but the carried object_0
-    kept = _guarded_stop([before, shelf, first, *later, limit], window, motion, others, checked)
+    kept = _guarded_stop([before, shelf, first, *later, limit], window, 0, motion, others, checked)
     assert kept == [before, shelf, later[2], limit]
-    assert checked["guarded_stop"]["time_s"] == 5.0 and checked["guarded_stop"]["bodies"] == "object_0/object_2"
+    (stop,) = checked["guarded_stops"]
+    assert stop["time_s"] == 5.0 and stop["bodies"] == "object_0/object_2" and stop["motion"] == 0
     # nothing met inside the window: every violation stays
     checked = {}
-    assert _guarded_stop([before, shelf], window, motion, others, checked) == [before, shelf]
-    assert checked["guarded_stop"]["time_s"] is None
+    assert _guarded_stop([before, shelf], window, 0, motion, others, checked) == [before, shelf]
+    assert checked["guarded_stops"][0]["time_s"] is None
     # a window the motion does not hold is itself a violation
-    kept = _guarded_stop([first], {"t_start_s": 9.0, "t_end_s": 12.0}, motion, others, {})
+    kept = _guarded_stop([first], {"t_start_s": 11.0, "t_end_s": 12.0}, 0, motion, others, {})
     assert kept[:1] == [first] and kept[1].kind == "world" and "outside the motion" in kept[1].message
+
+
+def test_only_a_motion_that_a_guard_stopped_inside_its_window_may_end_moving():
+    from types import SimpleNamespace
+
+    from slax_drake.hardware.check import _stopped_by_guard
+
+    def motion(**guarded):
+        return SimpleNamespace(duration=5.0, action={"type": "suction", "object": "o", "guarded_push_in": {
+            "t_start_s": 4.0, "t_end_s": 8.0, **guarded}})
+
+    assert _stopped_by_guard(motion(stopped_at_s=5.0))
+    assert not _stopped_by_guard(motion())  # a guarded push-in that was not stopped ends at rest
+    assert not _stopped_by_guard(motion(stopped_at_s=4.5))  # the claimed stop is not where the motion ends
+    assert not _stopped_by_guard(motion(stopped_at_s=5.0, t_start_s=5.5))  # nor inside the window
+    assert not _stopped_by_guard(SimpleNamespace(duration=5.0, action={"type": "push", "object": "o", "d": 0.1}))

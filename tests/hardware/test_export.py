@@ -155,3 +155,35 @@ def test_cli_export_and_bad_input_exit_codes(trial, tmp_path, capsys):
     bad = _write_bad(tmp_path, "b.csv", "# something else\n")
     assert main(["check-trajectory", str(bad), "--no-collision"]) == 2
     assert main(["replay", str(bad)]) == 2
+
+
+def test_a_guard_stopped_suction_exports_as_its_motion_up_to_the_stop_and_the_stop_motion():
+    """A guarded suction whose push-in the trial's guard stopped: two motions, the first ending at the stop (its
+    action's guarded_push_in.stopped_at_s), the suction on until then; the stop motion after it, starting at the stop
+    on the trial clock. A guarded suction that completed keeps one motion with its window; a malformed stop record
+    is refused."""
+    import pytest
+
+    from slax_drake.errors import TrialFileError
+    from slax_drake.hardware.export import _segments, guarded_window
+
+    motion = {"duration_s": 12.0, "suction_intervals": [[3.0, 8.0]],
+              "waypoint_times": [["pre-approach", 2.0], ["seal", 3.0], ["pull", 4.0], ["push in", 8.0],
+                                 ["release", 8.0], ["retract", 12.0]]}
+    action = {"type": "suction", "object": "track_1", "guarded": True, "motion": motion,
+              "guard": {"guarded": True, "stopped": True, "threshold_n": 5.0, "stop_time": 15.0,
+                        "stop_motion": {"duration_s": 3.5, "suction_intervals": [[0.0, 0.3]]}}}
+    assert guarded_window(action) == (4.0, 8.0)
+    (t0, d0, on0, act0, stop0), (t1, d1, on1, act1, stop1) = _segments({"time": 10.0}, action, {"type": "suction"}, None)
+    assert (t0, d0, on0, stop0) == (10.0, 5.0, [(3.0, 5.0)], False)
+    assert act0["guarded_push_in"] == {"t_start_s": 4.0, "t_end_s": 8.0, "stop_force_n": 5.0, "stopped_at_s": 5.0}
+    assert (t1, d1, on1, stop1) == (15.0, 3.5, [(0.0, 0.3)], True) and act1["guard_stop_motion"]
+    completed = {**action, "guard": {"guarded": True, "stopped": False, "threshold_n": 5.0}}
+    ((_, d, _, act, _),) = _segments({"time": 10.0}, completed, {"type": "suction"}, None)
+    assert d == 12.0 and "stopped_at_s" not in act["guarded_push_in"]
+    plain = {**action, "guarded": False}
+    assert _segments({"time": 10.0}, plain, {"type": "suction"}, None)[0][3] == {"type": "suction"}
+    with pytest.raises(TrialFileError, match="guard stop's record is malformed"):
+        _segments({"time": 10.0}, {**action, "guard": {"stopped": True, "stop_time": 15.0}}, {}, "t.json")
+    with pytest.raises(TrialFileError, match="stopped a motion at"):
+        _segments({"time": 10.0}, {**action, "guard": {**action["guard"], "stop_time": 30.0}}, {}, "t.json")
