@@ -359,10 +359,13 @@ def run_plan_step(args: argparse.Namespace) -> int:
           "checked (limits, jerk, continuity, collisions with the believed scene)")
     guarded = result.trajectory.metadata["plan_step"].get("guarded_push_in")
     if guarded:
+        drag = (f" (a drag: over twice its {guarded['expected_resistance_n']:.1f} N of floor friction until the cup "
+                f"has pushed in {guarded['rebase_after_m'] * 100:.0f} cm, then over a new baseline)"
+                if guarded["expected_resistance_n"] > 0 else "")
         print(f"GUARDED: the push-in from {guarded['t_start_s']:.2f} to {guarded['t_end_s']:.2f} s places into space "
               f"the camera cannot see: run it as a guarded move that stops when the push meets more than "
-              f"{guarded['stop_force_n']:.1f} N (over {guarded['expected_resistance_n']:.1f} N of floor friction), "
-              "then releases and backs out (metadata.plan_step.guarded_push_in)")
+              f"{guarded['stop_force_n']:.1f} N{drag}, then releases and backs out "
+              "(metadata.plan_step.guarded_push_in)")
     steps = len(result.trajectory.metadata["plan_step"]["history"]["frames"]) - 1
     if steps:
         print(f"the policy's memory: {plural(steps, 'earlier step')} replayed in {t['replay_s']:.2f} s")

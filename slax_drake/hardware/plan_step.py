@@ -30,7 +30,8 @@ Output ``step.json``: the trajectory document (``slax-drake check-trajectory ste
 scene is embedded for its collision check), with ``metadata.plan_step``: the chosen action, its hypothesis, the
 hypotheses, the check report, timings and the updated history, and ``guarded_push_in``: for a guarded suction (a
 placement reaching into space the camera cannot see, on a station with ``guarded_placement``) the push-in's time
-window and stop force, which the arm's controller must run as a guarded move; None for any other action. When no
+window and stop force (also in the motion's ``action``, where the checker reads it), which the arm's controller
+must run as a guarded move; None for any other action. When no
 action is left it still writes the file, with no motion and the reason.
 """
 
@@ -415,13 +416,16 @@ class StepPlanner:
             motion = self.motion_planner.plan(action, believed, q_start=q)
             if motion.feasible:
                 traj = self._export(action, motion, belief, q, source)
+                guarded = self._guarded_push_in(action, motion, belief.known)
+                if guarded is not None:  # the checker reads it from the motion (hardware.check)
+                    traj.motions[0].action["guarded_push_in"] = dict(guarded)
                 world = world or CollisionWorld(self.station, believed)
                 report = check_trajectory(traj, world, collision_step=collision_step)
                 if report.ok:
                     timings["planning_s"] = time.perf_counter() - t0
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
                                                               history, timings, visibility=visibility, frame=frame)
-                    traj.metadata["plan_step"]["guarded_push_in"] = self._guarded_push_in(action, motion, belief.known)
+                    traj.metadata["plan_step"]["guarded_push_in"] = guarded
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings, visibility)
                 why, early, kind, waypoint = "check: " + report.summary().splitlines()[-1], False, "check", None
             else:
@@ -481,11 +485,12 @@ class StepPlanner:
     def _guarded_push_in(self, action, motion, known) -> dict | None:
         """What the arm's controller must do for a guarded suction (None for any other action): the push-in
         (``t_start_s`` to ``t_end_s``, s from the trajectory's start) runs as a guarded move that stops when the
-        force resisting the push, estimated from the joint efforts, exceeds ``stop_force_n`` over
-        ``expected_resistance_n`` (a drag's floor friction), then holds, releases and backs out the way it came
-        (:mod:`slax_drake.systems.guard`, ``MotionPlanner.guarded_stop``); the trajectory after the push-in is
-        what follows when nothing stops it."""
-        from slax_drake.systems.guard import push_in_forces, push_in_window
+        force resisting the push, estimated from the joint efforts, exceeds ``stop_force_n``; for a drag, first
+        over twice ``expected_resistance_n`` (its floor friction turning over) and, once the cup has pushed in
+        ``rebase_after_m``, over a baseline taken again there; then it holds, releases and backs out the way it
+        came (:mod:`slax_drake.systems.guard`, ``MotionPlanner.guarded_stop``). The trajectory after the push-in
+        is what follows when nothing stops it."""
+        from slax_drake.systems.guard import DRAG_REBASE_TRAVEL, push_in_forces, push_in_window
 
         window = push_in_window(motion)
         if window is None:
@@ -494,7 +499,8 @@ class StepPlanner:
         stop, expected = push_in_forces(action, obj, self.policy.action_model, self.station.guarded_stop_force,
                                         self.station.suction.lip_moment)
         return {"t_start_s": round(window[0], 4), "t_end_s": round(window[1], 4), "stop_force_n": round(stop, 3),
-                "expected_resistance_n": round(expected, 3)}
+                "expected_resistance_n": round(expected, 3),
+                "rebase_after_m": DRAG_REBASE_TRAVEL if expected > 0.0 else 0.0}
 
     def _record(self, action, belief, observation, rejected, report, history, timings, reason=None,
                 visibility=None, frame=None) -> dict:

@@ -13,8 +13,17 @@ the model does not know, the carried object's weight and any contact. At the fir
 starts it at rest) the monitor fits the payload as a weight m g at the cup (least squares of r on J^T z) and keeps
 what that leaves unexplained; at every later sample it removes the fitted weight at the present configuration and
 that remainder, and projects what is left on the push signature: the force resisting the push (N, positive when it
-pushes back against u, the push-in's direction: S +y, or -y for a push-in that ends shallower than it starts). It stops when that force exceeds ``threshold`` (N) plus ``expected`` (N; the friction a
-dragged object needs to slide, which the floor adds once it moves).
+pushes back against u, the push-in's direction: S +y, or -y for a push-in that ends shallower than it starts). It
+stops when that force exceeds ``threshold`` (N) plus ``expected`` (N; the friction a dragged object needs to
+slide, which the floor adds once it moves).
+
+A drag's push-in starts with the floor's friction still loaded the other way by the pull that brought the object
+out (or across): as the object starts sliding in, the friction turns over, up to twice the sliding friction, which
+the first sample's baseline cannot tell from a contact (in the Drake trials a 2.3 kg drag stopped 1-2 mm into its
+push-in at 19.6 N against 14.6 + 5 N, five times in a row). So a drag's push-in (``expected`` > 0) is watched
+against twice the friction bound until the cup has pushed in ``DRAG_REBASE_TRAVEL``; there, with the object
+sliding, the baseline is fitted again and the stop force alone counts from then on (the friction is in the
+baseline).
 
 Units: efforts in N (the torso) and N m (the rest), forces in N, positions m / rad, times s.
 """
@@ -29,6 +38,8 @@ GRAVITY = 9.81  # m/s^2
 # N: the least stop force the guard uses. On the sim station's free push-ins the estimate peaked at 0.3-0.8 N
 # (docs/research/guarded-placement.md); a stop force the cup's hold would put lower is raised to this.
 MIN_STOP_FORCE = 1.5
+# m: how far the cup pushes a dragged object in before the guard takes its baseline again (the object slides)
+DRAG_REBASE_TRAVEL = 0.01
 UP_W = np.array([0.0, 0.0, 1.0])
 
 
@@ -82,6 +93,11 @@ class EffortModel:
                                                          np.zeros(3), world, world)[:, self._iv]
         return J.T @ np.asarray(push_W, float), J.T @ UP_W
 
+    def cup_position(self, q) -> np.ndarray:
+        """The cup tip's position (3,) in world at q (m)."""
+        self._set(q)
+        return self._cup.CalcPoseInWorld(self.context).translation().copy()
+
 
 @dataclasses.dataclass(frozen=True)
 class ContactMonitor:
@@ -124,6 +140,9 @@ class GuardRun:
     t1: float
     y_start: float
     y_end: float
+    rebase_at: float = 0.0  # m of cup travel along the push before the baseline is taken again (a drag); 0: none
+    p_start: tuple | None = None  # the cup's position (world, m) at the first sample, while a rebase is due
+    friction: float = 0.0  # N, a drag's friction bound, the stop's margin until the rebase
 
     @property
     def direction(self) -> float:
@@ -210,23 +229,40 @@ class Guard:
         traj = motion.trajectory
         q0, _ = traj.value(window[0])
         q1, _ = traj.value(window[1])
-        return GuardRun(ContactMonitor(self.threshold if threshold is None else threshold, expected), window[0], window[1], float(cup_y_S(q0)),
-                        float(cup_y_S(q1)))
+        stop = self.threshold if threshold is None else threshold
+        drag = expected > 0.0  # the friction turns over at the start: twice the bound until the rebase
+        return GuardRun(ContactMonitor(stop, 2.0 * expected if drag else expected), window[0], window[1],
+                        float(cup_y_S(q0)), float(cup_y_S(q1)), rebase_at=DRAG_REBASE_TRAVEL if drag else 0.0,
+                        friction=float(expected))
 
     def observe(self, run: GuardRun, motion, t: float, q, v, efforts) -> GuardRun:
-        """``run`` after one joint-state sample at ``t`` (s from the motion's start) inside its window."""
+        """``run`` after one joint-state sample at ``t`` (s from the motion's start) inside its window; a drag's
+        baseline is fitted again once the cup has pushed in ``run.rebase_at`` (module docstring)."""
         a = planned_acceleration(motion.trajectory, t)
         residual = np.asarray(efforts, float) - self.model.effort(q, v, a)
-        push, weight = self.model.signatures(q, run.direction * self.push_W)
+        push_W = run.direction * self.push_W
+        push, weight = self.model.signatures(q, push_W)
+        if run.rebase_at > 0.0:
+            p = self.model.cup_position(q)
+            if run.p_start is None:
+                run = dataclasses.replace(run, p_start=tuple(float(x) for x in p))
+            elif float((p - np.asarray(run.p_start)) @ push_W) >= run.rebase_at:  # sliding: a new baseline
+                monitor = dataclasses.replace(run.monitor, expected=0.0, weight=None, offset=None)
+                return dataclasses.replace(run, rebase_at=0.0, p_start=None,
+                                           monitor=monitor.update(residual, push, weight))
         return dataclasses.replace(run, monitor=run.monitor.update(residual, push, weight))
 
 
 def guard_record(run: GuardRun, stopped: bool, cup_y: float | None = None) -> dict:
     """The trial record of a guarded push-in: whether it stopped on contact, how far the cup had pushed in then
     and how far short of the planned placement (m, along the push-in), the largest resisting force seen and the
-    threshold (N)."""
+    threshold (N; a drag's: ``friction_n``, its friction bound, and ``rebased``, whether the baseline was taken again
+    once it slid, after which the peak counts)."""
     out = {"guarded": True, "stopped": bool(stopped), "threshold_n": round(run.monitor.threshold + run.monitor.expected, 3),
            "peak_force_n": round(run.monitor.peak, 3)}
+    if run.friction > 0.0:
+        out["friction_n"] = round(run.friction, 3)
+        out["rebased"] = run.rebase_at == 0.0
     if stopped and cup_y is not None:
         out["pushed_in_m"] = round(abs(cup_y - run.y_start), 4)
         out["short_m"] = round(run.direction * (run.y_end - cup_y), 4)

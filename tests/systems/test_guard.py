@@ -91,3 +91,63 @@ def test_push_in_forces_lift_the_stop_force_by_the_held_moment_and_raise_a_drag_
     stop, expected = push_in_forces(drag, box, model, 5.0, 0.64)
     assert stop == 5.0 and expected == pytest.approx(model.drag_limits(box, 0.12).pull) and expected > 0.0
     assert push_in_forces(lift, None, model, 5.0, 0.64) == (5.0, 0.0)
+
+
+class _LineModel:
+    """A stand-in EffortModel: the cup at q[0] along world +y, efforts = the push signature times the force."""
+
+    push = np.eye(9)[1]
+    weight = np.eye(9)[2]
+
+    def effort(self, q, v, a):
+        return np.zeros(9)
+
+    def signatures(self, q, push_W):
+        return self.push, self.weight
+
+    def cup_position(self, q):
+        return np.array([0.0, float(q[0]), 0.0])
+
+
+def test_a_drag_s_push_in_bears_its_friction_turning_over_and_stops_on_contact_once_it_slides():
+    """A drag's push-in starts with the pull's friction loaded the other way: until the cup has pushed in
+    DRAG_REBASE_TRAVEL the guard stops only over twice the friction bound (plus the stop force); then it takes its
+    baseline again, sliding, and stops at the stop force over it."""
+    from types import SimpleNamespace
+
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.guard import DRAG_REBASE_TRAVEL, ContactMonitor, Guard, GuardRun, guard_record
+
+    guard = Guard(load_station_scenario("sim_configs/station_sim_shelf.yaml"), np.eye(3), threshold=5.0)
+    guard.model = _LineModel()
+    motion = SimpleNamespace(trajectory=SimpleNamespace(times=np.array([0.0, 10.0]), a=np.zeros((2, 9))))
+    friction = 10.0
+    run = GuardRun(ContactMonitor(5.0, 2.0 * friction), 0.0, 10.0, 0.0, 0.3, rebase_at=DRAG_REBASE_TRAVEL,
+                   friction=friction)
+
+    def sample(run, y, force):
+        return guard.observe(run, motion, 1.0, np.array([y] + [0.0] * 8), np.zeros(9), force * _LineModel.push)
+
+    # the friction turning over: 2 x 10 N from the baseline, the cup barely moving; no stop at 19.6 N
+    run = sample(run, 0.0, -9.8)  # the pull's friction still loaded the other way: the baseline
+    for y, f in [(0.0005, 0.0), (0.001, 5.0), (0.002, 9.8)]:
+        run = sample(run, y, f)
+        assert not run.monitor.stopped
+    assert run.monitor.peak == pytest.approx(19.6)
+    # sliding at 9.8 N past 1 cm: the baseline is taken again; the friction is in it
+    run = sample(run, DRAG_REBASE_TRAVEL + 0.001, 9.8)
+    assert run.rebase_at == 0.0 and run.monitor.expected == 0.0 and run.monitor.force == 0.0
+    run = sample(run, 0.05, 9.8 + 4.0)
+    assert not run.monitor.stopped
+    run = sample(run, 0.06, 9.8 + 6.0)  # a hidden object: 6 N more than sliding
+    assert run.monitor.stopped
+    record = guard_record(run, stopped=True)
+    assert record["rebased"] and record["friction_n"] == 10.0 and record["threshold_n"] == 5.0
+    # blocked before it slides: stops once past twice the friction and the stop force
+    run = GuardRun(ContactMonitor(5.0, 2.0 * friction), 0.0, 10.0, 0.0, 0.3, rebase_at=DRAG_REBASE_TRAVEL,
+                   friction=friction)
+    run = sample(sample(run, 0.0, 0.0), 0.0, 0.0)
+    run = sample(run, 0.0, 24.0)
+    assert not run.monitor.stopped
+    run = sample(run, 0.0, 26.0)
+    assert run.monitor.stopped and not guard_record(run, stopped=True)["rebased"]
