@@ -156,6 +156,9 @@ def _run_scene(job) -> dict:
                   "planning_s": a.get("planning_s"), "planning_cpu_s": a.get("planning_cpu_s"),
                   "rejected_before": len(a.get("rejected_before", [])),
                   "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
+        if isinstance(a.get("guard"), dict):  # a guarded placement: whether it stopped on contact, where
+            record["guard"] = {k: a["guard"][k] for k in ("stopped", "pushed_in_m", "short_m", "peak_force_n",
+                                                          "threshold_n", "rebased") if k in a["guard"]}
         record["mismatch"] = mismatch_kind(record, scenario.shelf.width, scenario.shelf.depth)
         actions.append(record)
     final = d["final_objects"]
@@ -352,6 +355,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             # a file written before mismatches were classified counts its mismatches as "unclassified"
             "mismatches": dict(collections.Counter(a["mismatch"] or "unclassified" for a in d["actions"]
                                                    if a["matched"] is False)),
+            "guarded": [sum(1 for a in d["actions"] if "guard" in a),
+                        sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped"))],
         })
     for p in policies:
         per = {}
@@ -366,6 +371,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "drake_clean_success_rate": round(sum(t["drake_clean_success"] for t in sel) / len(sel), 4)
                 if sel else None,
                 "drake_endings": dict(sorted(collections.Counter(_ending(t["drake_result"]) for t in sel).items())),
+                # guarded placements executed, and how many of them the guard stopped on contact
+                "guarded_placements": [sum(t.get("guarded", [0, 0])[0] for t in sel),
+                                       sum(t.get("guarded", [0, 0])[1] for t in sel)],
                 "shelf_median_steps": _median([t["shelf_steps"] for t in sel if t["shelf_success"]]),
                 "drake_median_steps": _median([t["drake_steps"] for t in sel if t["drake_success"]]),
                 "same_outcome_rate": round(sum(t["shelf_success"] == t["drake_success"] for t in sel) / len(sel), 4)
@@ -556,6 +564,10 @@ def markdown_table(summary: dict) -> str:
         endings = per.get("all", {}).get("drake_endings")
         if endings:
             lines += ["", f"{p}, Drake trial endings: " + ", ".join(f"{k} {v}" for k, v in endings.items()) + "."]
+        guarded = per.get("all", {}).get("guarded_placements")
+        if guarded and guarded[0]:
+            lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "
+                          f"stopped on contact {guarded[1]}.")
     lines += ["", "Physics fidelity per action kind (actions matching the first-order prediction) and the mismatches by "
               "kind (dropped: lost out of the bay; toppled: lost inside it; seal never formed: a suction that left its "
               f"object within {100 * SEAL_MOVE:.0f} cm and {math.degrees(SEAL_TURN):.0f} deg of where it stood; slid: "
