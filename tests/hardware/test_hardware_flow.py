@@ -30,8 +30,8 @@ def trials(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def pushed_trial(tmp_path_factory):
-    """The default scene with the drag grasp off, so that its first action is a blade push (with the drag grasp the
-    default trial drags the same object)."""
+    """The default scene with the drag grasp off, so that its first action is a blade push whatever the policy would
+    prefer with it (it has dragged the same object before)."""
     folder = tmp_path_factory.mktemp("trial_push")
     assert main(["trial", "--tool-rule", "drag_grasp=false", "--out", str(folder)]) == 0
     return folder
