@@ -108,6 +108,8 @@ class CheckReport:
             what = (f"may touch {touched}" + (f" (pushed {entry['pushed_m'] * 1000:.0f} mm)" if "pushed_m" in entry
                                               else " (carried)" if entry.get("carried") else "")) if touched \
                 else f"touches nothing ({entry.get('association')})"
+            for name, m in (entry.get("guarded_met") or {}).items():  # pushed ahead of a guarded placement
+                what += f"; it pushed {name} {m['pushed_m'] * 1000:.0f} mm ahead from t = {m['time_s']:.3f} s"
             offset = entry.get("objects_before_offset_m")
             if offset is not None and math.isfinite(offset) and offset > OBJECTS_BEFORE_NOTE:
                 what += f"; the file's objects_before lie up to {offset * 1000:.0f} mm from the checked world"

@@ -37,7 +37,16 @@ The object an action may touch (``touched`` below) rests on geometry:
   robot's other links, the shelf's walls and top and the other objects must stay clear of it (it may slide on the
   support surface); when the suction goes off, the object stands on the shelf at the released x, y and yaw.
   A pushed object's own contacts with the shelf and the other objects are not checked (pushing it against them
-  is the action model's business).
+  is the action model's business);
+- a guarded suction a trial's guard stopped (``action.guarded_push_in`` with ``stopped_at_s``: the motion ends
+  at the stop): while it is carried, up to the push-in window's end, the carried object may push the objects it
+  meets ahead of it along S's y, each by no more than the carried object advanced since the previous checked
+  configuration plus ``PUSH_STEP_SLACK``, to the smallest shift that clears it (a guard stops only once the push
+  meets more than its stop force, so a light object slides ahead first; and a guard's stop leaves the objects
+  touching, which the cup's seal presses against each other again when the same object is taken next); the
+  objects it met are reported (``guarded_met``). A
+  plan-step file's guarded push-in has no stop: its first contact is where the guard stops it
+  (:func:`slax_drake.hardware.check._guarded_stop`).
 
 Self-collision: bodies joined by a joint are not checked (Drake's default); the model's primitive link shapes also
 overlap structurally at some joints: pairs that penetrate at the station's observation configuration (never a
@@ -389,6 +398,12 @@ class _Suction:
             self.intervals.append((on, motion.duration))
         self.X_TO = None
         self.carried = False
+        guarded = (motion.action or {}).get("guarded_push_in") or {}
+        # a trial's stopped guarded push-in: the window in which the carried object pushes what it meets
+        self.window = ((float(guarded["t_start_s"]), float(guarded["t_end_s"]))
+                       if guarded.get("stopped_at_s") is not None else None)
+        self.previous_y = None
+        self.met = {}  # name -> (first contact time s, shift m along the push)
 
     def resolve(self, t):
         w = self.w
@@ -399,6 +414,8 @@ class _Suction:
         if inside and self.X_TO is not None:
             w.set_pose(self.name, w.tool_pose() @ self.X_TO)
             self.carried = True
+            if self.window is not None and t <= self.window[1]:
+                self._push_met(t)
         elif self.X_TO is not None:
             self._release()
         pens = w._penetrations()
@@ -411,6 +428,45 @@ class _Suction:
                 a, b, n = b, a, -n  # the carried object first: "object_3 penetrates object_0"
             keep.append((a, b, depth, n))
         return keep
+
+    def _push_met(self, t: float) -> None:
+        """Inside a stopped guarded push-in's window: every object the carried one penetrates is moved along S's
+        y, the way the carried object advanced since the previous sample, by at most that advance plus
+        ``PUSH_STEP_SLACK``, to the smallest shift that clears it (module docstring); one it cannot clear stays
+        (a collision)."""
+        w = self.w
+        y = float((w.X_WS.inverse() @ w.pose(self.name)).translation()[1])
+        advance = 0.0 if self.previous_y is None else y - self.previous_y
+        self.previous_y = y
+        if abs(advance) <= 0.0:
+            return
+        sign = math.copysign(1.0, advance)
+        met = set()
+        for a, b, _, _ in w._penetrations():
+            pair = {w.object_of_geometry.get(a), w.object_of_geometry.get(b)}
+            if self.name in pair:
+                met |= pair
+        for other in sorted(met - {None, self.name}):
+            x0, y0, yaw = w.poses[other]
+            reach = abs(advance) + PUSH_STEP_SLACK
+            w.set_planar(other, x0, y0 + sign * reach, yaw)
+            if self._meets(other):
+                w.set_planar(other, x0, y0, yaw)
+                continue
+            lo, hi = 0.0, reach
+            for _ in range(PUSH_BISECTIONS):
+                mid = 0.5 * (lo + hi)
+                w.set_planar(other, x0, y0 + sign * mid, yaw)
+                lo, hi = (mid, hi) if self._meets(other) else (lo, mid)
+            w.set_planar(other, x0, y0 + sign * hi, yaw)
+            first, shift = self.met.get(other, (float(t), 0.0))
+            self.met[other] = (first, shift + hi)
+
+    def _meets(self, other: str) -> bool:
+        """Whether the carried object penetrates ``other`` (beyond the world's tolerance)."""
+        w = self.w
+        return any({w.object_of_geometry.get(a), w.object_of_geometry.get(b)} == {self.name, other}
+                   for a, b, _, _ in w._penetrations())
 
     def _filter(self, carried: bool) -> None:
         """While carried, the object's contacts with the shelf's walls and top and with the other objects count
@@ -445,3 +501,6 @@ class _Suction:
         if self.X_TO is not None:
             self._release()
         entry["carried"] = self.carried
+        if self.met:
+            entry["guarded_met"] = {name: {"time_s": round(t, 4), "pushed_m": round(shift, 5)}
+                                    for name, (t, shift) in self.met.items()}
