@@ -121,6 +121,18 @@ def _count(n) -> str:
 STATION_RULES = frozenset({"max_suction_moment", "max_drag_pull", "max_drag_twist", "max_seal_angle_deg", "reach_map"})
 
 
+def _physics_rule_args(rules: dict) -> dict:
+    """The --tool-rule values a physics run with these recorded rules needs now: the station files give their cup's
+    limits, reach map and guarded placement (``guarded_placement``: suction_hidden_rule=guarded), so a run recorded
+    without that rule (before the stations set it, or with it taken away) needs suction_hidden_rule=placement."""
+    args = {k: v for k, v in rules.items() if k not in STATION_RULES}
+    if args.get("suction_hidden_rule") == "guarded":
+        del args["suction_hidden_rule"]
+    elif "suction_hidden_rule" not in args:
+        args["suction_hidden_rule"] = "placement"
+    return args
+
+
 def _tool_rule_args(rules: dict) -> str:
     return "".join(f" --tool-rule {k}={v}" for k, v in sorted((rules or {}).items()))
 
@@ -155,8 +167,7 @@ def benchmark_command(folder: ResultFolder) -> str:
     parts.append(f"--workers {meta.get('workers', 2)}")
     if folder.kind == "physics":
         # the station file gives its cup's limits and reach map; any other rule came from the command line
-        parts.append(_tool_rule_args({k: v for k, v in (meta.get("tool_rules") or {}).items()
-                                      if k not in STATION_RULES}).strip())
+        parts.append(_tool_rule_args(_physics_rule_args(meta.get("tool_rules") or {})).strip())
         if meta.get("shelf_observation") == "camera":
             parts.append("--observation camera")
         if meta.get("sensor_noise"):
