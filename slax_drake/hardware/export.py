@@ -158,14 +158,11 @@ def export_trial(data: dict, rate: float | None = None, source: str | None = Non
 def guarded_window(action: dict) -> tuple[float, float] | None:
     """(start, end), s from the motion's start, of a guarded suction's push-in from its recorded waypoint times
     (the segment arriving at "push in"); None for any other action or a record without them."""
+    from slax_drake.systems.guard import push_in_of
+
     if action.get("type") != "suction" or not action.get("guarded"):
         return None
-    labels = [(str(w[0]), float(w[1])) for w in (action.get("motion") or {}).get("waypoint_times") or []]
-    names = [label for label, _ in labels]
-    if "push in" not in names or names.index("push in") == 0:
-        return None
-    k = names.index("push in")
-    return labels[k - 1][1], labels[k][1]
+    return push_in_of((action.get("motion") or {}).get("waypoint_times") or [])
 
 
 def _segments(entry: dict, action: dict, act: dict, source):

@@ -154,15 +154,19 @@ class GuardRun:
 def push_in_window(motion) -> tuple[float, float] | None:
     """(start, end) in s from the motion's start of a guarded suction's push-in (the segment arriving at "push in"),
     or None when the motion's action is not a guarded suction."""
-    action = motion.action
-    if not getattr(action, "guarded", False):
+    if not getattr(motion.action, "guarded", False):
         return None
-    times = motion.waypoint_times
-    labels = [label for label, _ in times]
-    if "push in" not in labels:
+    return push_in_of(motion.waypoint_times)
+
+
+def push_in_of(waypoint_times) -> tuple[float, float] | None:
+    """(start, end) in s of the segment arriving at "push in" in ``waypoint_times`` ([(label, time s)], as a
+    PlannedMotion or a trial's action record holds them); None when there is none."""
+    labels = [str(label) for label, _ in waypoint_times]
+    if "push in" not in labels or labels.index("push in") == 0:
         return None
     k = labels.index("push in")
-    return float(times[k - 1][1]), float(times[k][1])
+    return float(waypoint_times[k - 1][1]), float(waypoint_times[k][1])
 
 
 def lift_stop_force(threshold: float, lip_moment: float, held_moment: float, lever: float) -> float:
