@@ -325,6 +325,21 @@ class CollisionWorld:
             self.set_planar(name, float(p["x"]), float(p["y"]), float(p["yaw"]))
 
 
+def _clear_shift(place, blocked, lo: float, reach: float) -> float | None:
+    """The smallest shift in (lo, reach] (m, to ``PUSH_BISECTIONS`` halvings) at which ``blocked()`` is false after
+    ``place(shift)``, left placed there; None when even ``reach`` is blocked (left placed at ``reach``)."""
+    place(reach)
+    if blocked():
+        return None
+    hi = reach
+    for _ in range(PUSH_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        place(mid)
+        lo, hi = (mid, hi) if blocked() else (lo, mid)
+    place(hi)
+    return hi
+
+
 class _Push:
     """The tool pushing the touched object along sign(d) x_S (module docstring)."""
 
@@ -358,8 +373,8 @@ class _Push:
         self.previous = x
         if advance > 0.0 and self._touching():
             reach = min(self.shift + advance + PUSH_STEP_SLACK, self.limit)
-            self._place(reach)
-            if self._touching():
+            cleared = _clear_shift(self._place, self._touching, self.shift, reach)
+            if cleared is None:
                 if reach >= self.limit and not self.reported:
                     self.reported = True
                     self.out.append(self.violation(
@@ -368,13 +383,7 @@ class _Push:
                         f"at t = {t:.4f} s"))
                 self._place(self.shift)
             else:
-                lo, hi = self.shift, reach
-                for _ in range(PUSH_BISECTIONS):
-                    mid = 0.5 * (lo + hi)
-                    self._place(mid)
-                    lo, hi = (mid, hi) if self._touching() else (lo, mid)
-                self.shift = hi
-                self._place(hi)
+                self.shift = cleared
         return w._penetrations()
 
     def finish(self, entry):
@@ -448,19 +457,16 @@ class _Suction:
                 met |= pair
         for other in sorted(met - {None, self.name}):
             x0, y0, yaw = w.poses[other]
-            reach = abs(advance) + PUSH_STEP_SLACK
-            w.set_planar(other, x0, y0 + sign * reach, yaw)
-            if self._meets(other):
-                w.set_planar(other, x0, y0, yaw)
+
+            def place(shift, other=other, x0=x0, y0=y0, yaw=yaw):
+                w.set_planar(other, x0, y0 + sign * shift, yaw)
+
+            cleared = _clear_shift(place, lambda other=other: self._meets(other), 0.0, abs(advance) + PUSH_STEP_SLACK)
+            if cleared is None:
+                place(0.0)
                 continue
-            lo, hi = 0.0, reach
-            for _ in range(PUSH_BISECTIONS):
-                mid = 0.5 * (lo + hi)
-                w.set_planar(other, x0, y0 + sign * mid, yaw)
-                lo, hi = (mid, hi) if self._meets(other) else (lo, mid)
-            w.set_planar(other, x0, y0 + sign * hi, yaw)
             first, shift = self.met.get(other, (float(t), 0.0))
-            self.met[other] = (first, shift + hi)
+            self.met[other] = (first, shift + cleared)
 
     def _meets(self, other: str) -> bool:
         """Whether the carried object penetrates ``other`` (beyond the world's tolerance)."""
