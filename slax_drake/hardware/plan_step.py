@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.errors import PlanStepError
+from slax_drake.perception.observation import resample_nearest
 
 WORKING_WIDTH = 160
 MAX_CANDIDATES = 25
@@ -171,16 +172,6 @@ def read_history(path: str | Path | None) -> dict | None:
         raise PlanStepError(f"{path}: no history (expected a step.json written by plan-step, or "
                             "{\"policy\": ..., \"steps\": k, \"history\": [...]})")
     return doc
-
-
-def resample_nearest(image: np.ndarray, width: int, height: int) -> np.ndarray:
-    """``image`` (H, W) at (height, width) by the nearest pixel centre (no mixing across depth edges)."""
-    h, w = image.shape
-    if (w, h) == (width, height):
-        return image
-    rows = np.clip(np.rint((np.arange(height) + 0.5) * h / height - 0.5), 0, h - 1).astype(int)
-    cols = np.clip(np.rint((np.arange(width) + 0.5) * w / width - 0.5), 0, w - 1).astype(int)
-    return image[np.ix_(rows, cols)]
 
 
 class StepPlanner:

@@ -35,7 +35,7 @@ from pydrake.systems.sensors import ImageDepth32F, ImageLabel16I
 
 from slax_drake.errors import ImageSizeError
 from slax_drake.perception.estimator import estimate_objects
-from slax_drake.perception.observation import Observation, occluder_segmentation
+from slax_drake.perception.observation import Observation, occluder_segmentation, resample_nearest
 from slax_drake.perception.segmentation import segment_depth
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.model import Shelf
@@ -141,12 +141,7 @@ class PerceptionSystem(LeafSystem):
 
     # caches ----------------------------------------------------------------------------------------------
     def _resampled(self, image: np.ndarray) -> np.ndarray:
-        h, w = image.shape
-        if (w, h) == (self._width, self._height):
-            return image
-        rows = np.clip(np.rint((np.arange(self._height) + 0.5) * h / self._height - 0.5), 0, h - 1).astype(int)
-        cols = np.clip(np.rint((np.arange(self._width) + 0.5) * w / self._width - 0.5), 0, w - 1).astype(int)
-        return image[np.ix_(rows, cols)]
+        return resample_nearest(image, self._width, self._height)
 
     def _depth(self, context) -> np.ndarray:
         image = self._depth_port.Eval(context)

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from slax_drake.cli import main
-from slax_drake.hardware.plan_step import read_history, resample_nearest
+from slax_drake.hardware.plan_step import read_history
+from slax_drake.perception.observation import resample_nearest
 
 STATION = "sim_configs/station_sim_shelf.yaml"
 
