@@ -48,6 +48,10 @@ def register(subparsers) -> None:
     p.add_argument("--sensor-noise", action="store_true",
                    help="with --observation camera (or --physics): the L515 depth-noise model on every frame (seeded by the "
                    "scene)")
+    p.add_argument("--full-resolution", action="store_true",
+                   help="with --observation camera: ray-cast each frame at the camera's own resolution and resample "
+                   "it to the policy's as the Drake station does (the physics benchmark's shelf simulator always "
+                   "does); default: ray-cast at the policy's resolution")
     p.add_argument("--out", default="results/table1", help="output folder (default: results/table1)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--physics", action="store_true",
@@ -112,9 +116,10 @@ def run(args: argparse.Namespace) -> int:
 
     camera = None
     if args.observation in (None, "camera"):
-        camera = CameraMode(segmentation=args.segmentation or "labels", sensor_noise=args.sensor_noise)
-    elif args.segmentation is not None or args.sensor_noise:
-        raise UserError("--segmentation and --sensor-noise apply to --observation camera only")
+        camera = CameraMode(segmentation=args.segmentation or "labels", sensor_noise=args.sensor_noise,
+                            full_resolution=args.full_resolution)
+    elif args.segmentation is not None or args.sensor_noise or args.full_resolution:
+        raise UserError("--segmentation, --sensor-noise and --full-resolution apply to --observation camera only")
 
     table = run_benchmark(scenario, policies, n, seed, args.out, workers=args.workers, backend=args.backend,
                           perception=args.perception, densities=densities, progress=not args.no_progress,
@@ -142,14 +147,17 @@ def _run_physics(args: argparse.Namespace, policies: list[str], n: int, seed: in
         raise UserError("--physics runs ground-truth distributions only: leave out --perception")
     if args.oracle_seconds is not None:
         raise UserError("--oracle-seconds applies to the shelf simulator's oracles only")
+    if args.full_resolution:
+        raise UserError("--full-resolution applies to the shelf simulator's Table I only (the physics benchmark's "
+                        "shelf simulator always renders at the camera's resolution, as its Drake trials do)")
     if args.segmentation is not None:
         raise UserError("--segmentation applies to the shelf simulator only (the physics benchmark's Drake trials "
                         "segment by the render's labels; --sensor-noise adds the L515 model to their camera)")
     shelf_camera = None
-    if args.observation == "camera":  # the shelf simulator beside sees the same kind of frames as the Drake trials
+    if args.observation == "camera":  # the shelf simulator beside sees the frames the Drake trials see
         from slax_drake.evaluation.table1 import CameraMode
 
-        shelf_camera = CameraMode(segmentation="labels", sensor_noise=bool(args.sensor_noise))
+        shelf_camera = CameraMode(segmentation="labels", sensor_noise=bool(args.sensor_noise), full_resolution=True)
     summary = run_physics_benchmark(args.config, policies, n, seed=seed, out=args.out, workers=args.workers,
                                     densities=densities, station=args.station, sleep=args.sleep,
                                     progress=not args.no_progress, tool_rules=tool_rules, backend=args.backend,

@@ -138,7 +138,8 @@ def _run_scene(job) -> dict:
     if shelf_camera is not None:
         observer = CameraObserver(scene.shelf, scene.camera, opts.target_size, source="depth",
                                   width=policy.observation_width, segmentation=shelf_camera.segmentation,
-                                  noise_seed=seed if shelf_camera.sensor_noise else None)
+                                  noise_seed=seed if shelf_camera.sensor_noise else None,
+                                  full_resolution=shelf_camera.full_resolution)
     shelf = run_shelf_trial(scene, policy, opts.horizon, threshold=scenario.target.visibility_threshold,
                             suction_cost=scenario.protocol.suction_cost, density=density, observer=observer).to_dict()
     t0 = time.perf_counter()
@@ -291,6 +292,8 @@ def run_physics_benchmark(config: str, policies, scenes_per_density: int, seed: 
                        "seed": seed, "densities": densities, "sleep": sleep, "sensor_noise": sensor_noise,
                        "workers": workers, "backend": backend, "mass_model": scenario.physics.mass_model,
                        "shelf_observation": "privileged" if shelf_camera is None else "camera",
+                       **({"shelf_full_resolution": True} if shelf_camera is not None and shelf_camera.full_resolution
+                          else {}),
                        "profile": profile, "tool_rules": tool_rules, "scenes_kept": len(all_jobs) - len(jobs), "scenes_run": len(jobs),
                        "wall_seconds_this_run": round(elapsed, 1), "match_distance_m": MATCH_DISTANCE,
                        "match_yaw_deg": math.degrees(MATCH_YAW)}
@@ -545,7 +548,9 @@ def markdown_table(summary: dict) -> str:
               f"the same scenes in both simulators: the shelf simulator "
               + ("with the objects seen as they are and ground-truth distributions (privileged)"
                  if meta.get("shelf_observation", "privileged") == "privileged" else
-                 "with what its rendered camera sees (camera mode, the render's labels, the same noise model)")
+                 "with what its rendered camera sees (camera mode, the render's labels, the same noise model"
+                 + ("; its frames rendered at the camera's resolution and resampled as the station's"
+                    if meta.get("shelf_full_resolution") else "") + ")")
               + f", the Drake trials with what their camera sees "
               f"({drake_observation(bool(meta.get('sensor_noise')))}). "
               f"Steps over successful trials. "

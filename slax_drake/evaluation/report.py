@@ -154,6 +154,8 @@ def benchmark_command(folder: ResultFolder) -> str:
             parts.append(f"--segmentation {camera['segmentation']}")
         if camera.get("sensor_noise"):
             parts.append("--sensor-noise")
+        if camera.get("full_resolution"):
+            parts.append("--full-resolution")
         perception = meta.get("perception") or settings.get("perception") or "ground-truth"
         if perception != "ground-truth":
             parts.append(f"--perception {perception}")
@@ -190,7 +192,9 @@ def _observation_words(folder: ResultFolder) -> str:
     if observation == "camera":
         segmentation = camera.get("segmentation", "labels")
         observation += (" (depth-only segmentation" if segmentation == "depth" else " (the render's labels")
-        observation += ", L515 depth noise)" if camera.get("sensor_noise") else ")"
+        observation += ", L515 depth noise" if camera.get("sensor_noise") else ""
+        observation += (", frames rendered at the camera's resolution and resampled as the station's)"
+                        if camera.get("full_resolution") else ")")
     return f"{observation} observation, {meta.get('perception') or 'ground-truth'} distributions"
 
 
@@ -326,8 +330,10 @@ def physics_section(folder: ResultFolder) -> str:
     mode, seen = _drake_mode(folder)
     lines = [f"### `{folder.path.name}`: profile `{folder.profile}`, {mode}", "",
              f"{seen}; the shelf simulator beside them "
-             + ("in camera mode (the same labels and noise model)" if meta.get("shelf_observation") == "camera"
-                else "privileged") + ". "
+             + (("in camera mode (the same labels and noise model"
+                 + ("; its frames rendered at the camera's resolution and resampled as the station's"
+                    if meta.get("shelf_full_resolution") else "") + ")")
+                if meta.get("shelf_observation") == "camera" else "privileged") + ". "
              f"Object masses: {mass_model_words(meta.get('mass_model'))}. "
              + (f"Rules beyond the profile: {rules}. " if rules else "") + "Made with:", "",
              "```bash", benchmark_command(folder), "```", "",

@@ -89,7 +89,9 @@ def protocol_settings(scenario, config: str, seed: int, perception: str, tool_ru
     ``oracle_seconds``: the oracles' time limit per decision (None: the Oracle's default)."""
     settings = {
         "observation": "privileged" if camera is None else "camera",
-        "camera": None if camera is None else dataclasses.asdict(camera),
+        # full_resolution is recorded only when set, so that the settings of earlier runs still compare equal
+        "camera": None if camera is None else {k: v for k, v in dataclasses.asdict(camera).items()
+                                               if k != "full_resolution" or v},
         "config": str(config),
         "scenario_sha256": scenario_digest(scenario),
         "seed": int(seed),

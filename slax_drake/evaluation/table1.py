@@ -39,10 +39,13 @@ PAPER_TABLE1_STEPS = {  # median steps (IQR low, high) for 4/6/8/10/All (paper T
 class CameraMode:
     """``--observation camera``: the non-oracle policies see rendered frames (slax_drake.shelf.simulator.
     CameraObserver): ``segmentation`` "labels" (the render's object labels, idealised) or "depth"
-    (segment_depth); ``sensor_noise``: the L515 model, seeded by the scene seed."""
+    (segment_depth); ``sensor_noise``: the L515 model, seeded by the scene seed; ``full_resolution``: frames
+    ray-cast at the camera's own resolution and resampled to the working one, as the Drake station makes them
+    (the physics benchmark's shelf simulator; CameraObserver)."""
 
     segmentation: str = "labels"
     sensor_noise: bool = False
+    full_resolution: bool = False
 
 
 def trial_oracle_status(searches: list[dict]) -> str:
@@ -106,7 +109,8 @@ def run_benchmark_trial(job) -> dict:
         observer = CameraObserver(scene.shelf, scene.camera, size,
                                   source="network" if perception == "learned" else "depth",
                                   width=policy.observation_width, segmentation=camera.segmentation,
-                                  noise_seed=seed if camera.sensor_noise else None)
+                                  noise_seed=seed if camera.sensor_noise else None,
+                                  full_resolution=camera.full_resolution)
     t0 = time.perf_counter()
     result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                        suction_cost=scenario.protocol.suction_cost, density=density, observer=observer).to_dict()

@@ -69,6 +69,13 @@ class CameraObserver:
     hypotheses and P_t from the frame (:class:`~slax_drake.perception.belief.ObservedBelief` with the ``source``
     distribution: ``"depth"`` or ``"network"``, the latter at the network's resolution).
 
+    ``full_resolution``: the scene is ray-cast at the camera's own resolution (the L515's 640 x 480; the noise
+    model applied there) and resampled to the working one by
+    :func:`~slax_drake.perception.observation.resample_nearest`, as the Drake station's camera and PerceptionSystem
+    make their frames, so that both simulators' policies decide on the same pixels; False (default): ray-cast at
+    the working resolution, every pixel at its own centre. The two differ by 1/8 px at 640 -> 160, which is enough
+    to change slax-belief's first decision in 37 of the physics benchmark's 80 scenes (docs/research/physics.md).
+
     :meth:`observe` also returns what only the simulator knows: which true object each hypothesis is (label
     segmentation: segment id = object index + 1; depth segmentation: the object most of the segment's pixels
     show), so that an action on a hypothesis is executed on that object.
@@ -79,7 +86,8 @@ class CameraObserver:
     :meth:`start` begins a new trial. False: ``segment_<id>`` names, nothing carried between frames."""
 
     def __init__(self, shelf, camera, target_size, source: str = "depth", width: int = 160,
-                 segmentation: str = "labels", noise_seed: int | None = None, tracking: bool = True):
+                 segmentation: str = "labels", noise_seed: int | None = None, tracking: bool = True,
+                 full_resolution: bool = False):
         from slax_drake.perception.belief import background_depth, make_source
 
         if segmentation not in SEGMENTATIONS:
@@ -91,6 +99,7 @@ class CameraObserver:
         else:
             w, h = width, max(1, int(round(camera.height * width / camera.width)))
         self.camera = camera.with_resolution(w, h)
+        self.render_camera = camera if full_resolution else self.camera  # the camera the scene is ray-cast with
         self.segmentation = segmentation
         self.noise_seed = noise_seed
         self.background = background_depth(shelf, self.camera)
@@ -116,11 +125,15 @@ class CameraObserver:
         from slax_drake.perception.observation import Observation as Frame
         from slax_drake.perception.observation import occluder_segmentation
 
-        depth, labels = SceneRaycaster(scene, include_target=True).render(self.camera)
+        from slax_drake.perception.observation import resample_nearest
+
+        depth, labels = SceneRaycaster(scene, include_target=True).render(self.render_camera)
         if self.noise_seed is not None:
             from slax_drake.perception.sensor_noise import l515_depth_noise
 
-            depth = l515_depth_noise(depth, self.camera, self.noise_seed, self.steps)
+            depth = l515_depth_noise(depth, self.render_camera, self.noise_seed, self.steps)
+        depth = resample_nearest(depth, self.camera.width, self.camera.height)
+        labels = resample_nearest(labels, self.camera.width, self.camera.height)
         self.steps += 1
         n = len(scene.objects)
         target = labels == n + 1

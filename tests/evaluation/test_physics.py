@@ -272,14 +272,17 @@ def test_summary_counts_match_per_action_kind_and_mismatch_kinds():
 def test_the_shelf_simulator_beside_can_see_through_its_camera_and_the_report_names_the_masses(tmp_path):
     from slax_drake.evaluation.table1 import CameraMode
 
-    summary = run_physics_benchmark(CONFIG, out=tmp_path, **{**TINY, "shelf_camera": CameraMode()})
-    assert summary["meta"]["shelf_observation"] == "camera"
+    # as the CLI makes it: the shelf simulator's frames rendered at the camera's resolution, as the station's
+    summary = run_physics_benchmark(CONFIG, out=tmp_path, **{**TINY, "shelf_camera": CameraMode(full_resolution=True)})
+    assert summary["meta"]["shelf_observation"] == "camera" and summary["meta"]["shelf_full_resolution"] is True
     assert summary["meta"]["mass_model"] == "density"
     settings = json.loads((tmp_path / "physics_settings.json").read_text())
     assert settings["observation"] == "camera" and settings["camera"] == {"segmentation": "labels",
-                                                                          "sensor_noise": False}
+                                                                          "sensor_noise": False,
+                                                                          "full_resolution": True}
     text = (tmp_path / "physics.md").read_text()
     assert "with what its rendered camera sees" in text and "Object masses: objects.density x volume" in text
+    assert "resampled as the station's" in text
 
 
 def _moved(x0, y0, x1, y1):

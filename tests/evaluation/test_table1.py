@@ -82,6 +82,26 @@ def test_camera_observation_is_recorded_oracles_stay_privileged_and_modes_do_not
     assert "--observation camera only" in capsys.readouterr().err
 
 
+def test_full_resolution_frames_are_recorded_refused_in_a_working_resolution_folder_and_named_in_the_command(
+        sim_scenario, tmp_path, capsys):
+    from slax_drake.errors import SettingsMismatchError
+    from slax_drake.evaluation.report import benchmark_command, load_folder
+    from slax_drake.evaluation.table1 import CameraMode
+
+    run_benchmark(sim_scenario, ["bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False,
+                  camera=CameraMode(full_resolution=True))
+    settings = json.loads((tmp_path / "settings.json").read_text())
+    assert settings["camera"] == {"segmentation": "labels", "sensor_noise": False, "full_resolution": True}
+    with pytest.raises(SettingsMismatchError, match="camera observation"):
+        run_benchmark(sim_scenario, ["bluction-dar"], 1, 0, tmp_path, densities=[4], progress=False,
+                      camera=CameraMode())
+    assert "--full-resolution" in benchmark_command(load_folder(tmp_path))
+    for args in (["--observation", "privileged", "--full-resolution"], ["--physics", "--full-resolution"]):
+        assert main(["benchmark", "--policies", "dar", *args, "--out", str(tmp_path / "x")]) == 2
+        assert "--full-resolution" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+
+
 def test_a_record_from_before_observation_modes_counts_as_privileged(sim_scenario, tmp_path):
     run_benchmark(sim_scenario, ["dar"], 1, 0, tmp_path, densities=[4], progress=False)
     path = tmp_path / "settings.json"

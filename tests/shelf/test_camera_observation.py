@@ -147,3 +147,35 @@ def test_a_prediction_where_a_moved_object_hides_another_moved_one_does_not_fail
     assert not (predicted.segmentation == belief.segment_id(hidden.name)).any()  # covered by the moved front one
     assert (predicted.segmentation == belief.segment_id(front.name)).any()
     assert np.isfinite(belief.predict(objects)).all()
+
+
+def test_full_resolution_frames_are_the_station_cameras_resampled(scenario):
+    """CameraObserver(full_resolution=True) sees what the Drake station's PerceptionSystem makes of its camera's
+    640 x 480 frame (the same resampling function), which differs from a frame ray-cast at 160 px at edges."""
+    from slax_drake.perception.observation import resample_nearest
+
+    scene = sample_scene(scenario, 8, 2, target_size=SIZE)
+    full = CameraObserver(scene.shelf, scene.camera, SIZE, width=160, full_resolution=True)
+    working = CameraObserver(scene.shelf, scene.camera, SIZE, width=160)
+    assert full.camera == working.camera and full.render_camera == scene.camera
+    obs_full, names_full = full.observe(scene)
+    obs_working, _ = working.observe(scene)
+    depth, labels = SceneRaycaster(scene, include_target=True).render(scene.camera)
+    np.testing.assert_array_equal(obs_full.depth, resample_nearest(depth, 160, 120))
+    n = len(scene.objects)
+    small = resample_nearest(labels, 160, 120)
+    assert (obs_full.labels[small == n + 1] == 0).all()  # the target's pixels are no occluder's
+    differ = np.abs(obs_full.depth - obs_working.depth) > 0.01
+    assert 0 < differ.mean() < 0.05  # at silhouettes only
+    assert set(names_full.values()) <= {o.name for o in scene.objects}
+
+
+def test_resample_nearest_takes_the_pixel_below_right_of_an_even_scale_centre():
+    from slax_drake.perception.observation import resample_nearest
+
+    image = np.arange(480 * 640).reshape(480, 640)
+    small = resample_nearest(image, 160, 120)
+    rows, cols = np.divmod(small, 640)
+    assert (rows == 4 * np.arange(120)[:, None] + 2).all() and (cols == 4 * np.arange(160)[None, :] + 2).all()
+    odd = resample_nearest(np.arange(360 * 480).reshape(360, 480), 160, 120)  # 3x: the centre pixel exactly
+    assert (np.divmod(odd, 480)[0] == 3 * np.arange(120)[:, None] + 1).all()
