@@ -115,3 +115,18 @@ def test_belief_variants_refuses_bad_options_before_any_trial(capsys, options):
     assert captured.out == ""
     err = captured.err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error: --options: ")
+
+
+def test_frame_sampling_refuses_a_folder_that_is_no_physics_run_and_reads_first_actions(tmp_path, capsys):
+    module = script("frame_sampling")
+    assert module.main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: ") and "no physics benchmark folder" in err[0]
+    (tmp_path / "physics_settings.json").write_text(json.dumps({"config": "sim_configs/table1.yaml", "seed": 0}))
+    assert module.main([str(tmp_path)]) == 2
+    assert "no slax-belief trials" in capsys.readouterr().err
+    assert module.kind_and_amount("push object_2 d=-0.145") == ("push", -0.145)
+    assert module.kind_and_amount("suction object_1 dx=+0.200 dz=+0.092 yaw=-16deg") == ("suction", 0.2)
+    push = {"type": "push", "d": -0.1449999, "rejected_before": 0}
+    assert module.drake_first({"drake": {"actions": [push]}}) == ("push", -0.145)
+    assert module.drake_first({"drake": {"actions": [{**push, "rejected_before": 1}]}}) is None
