@@ -352,6 +352,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "reversals": reversals(d["actions"]),
             "undoes": undoes(d["actions"]),
             "undo_rules": undo_rules(d["actions"]),
+            "commanded_undoes": commanded_undoes(d["actions"]),
+            "commanded_undo_rules": undo_rules(d["actions"], commanded=True),
             "judged_by_kind": {kind: [sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"]),
                                       sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"] is not None)]
                                for kind in ACTION_KINDS},
@@ -394,6 +396,11 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "trials_with_undo": sum(1 for t in sel if t.get("undoes")) if all("undoes" in t for t in sel) else None,
                 "undo_rules": dict(sum((collections.Counter(t.get("undo_rules", {})) for t in sel),
                                        collections.Counter())),
+                # the undos along an axis the action commands (not its object's drift): the shuttles proper
+                "undoes_commanded": sum(t["commanded_undoes"] for t in sel),
+                "trials_with_commanded_undo": sum(1 for t in sel if t["commanded_undoes"]),
+                "commanded_undo_rules": dict(sum((collections.Counter(t["commanded_undo_rules"]) for t in sel),
+                                                 collections.Counter())),
                 "match_by_action": _match_by_action(sel),
                 "mismatch_kinds": _mismatch_counts(sel),
             }
@@ -449,18 +456,42 @@ def undoes(actions: list[dict]) -> int:
     return sum(1 for _ in _undo_actions(actions))
 
 
+def commanded_axes(action: dict) -> set[int]:
+    """The axes of S (0: x, 1: y) along which ``action`` (a record) moves its object by command: a push along x by
+    ``d``; a suction (lifted or dragged) along x by ``dx`` and along y by ``dz``, each when over
+    :data:`REVERSAL_MIN`. A displacement along another axis is the object's drift (it slid or turned)."""
+    if action.get("type") == "push":
+        return {0}
+    return {k for k, name in ((0, "dx"), (1, "dz")) if abs(action.get(name) or 0.0) > REVERSAL_MIN}
+
+
+def _commanded_undo_actions(actions: list[dict]):
+    """The undos of :func:`undoes` that reverse their object's previous move along an axis the action commands
+    (:func:`commanded_axes`), in order: a shuttle the policy chose, not a push along x that let its object drift
+    back 1-2 cm in y."""
+    for a, previous, move, axes in _reversed_axes(actions):
+        along = [k for k in axes if k in commanded_axes(a)]
+        if any(abs(previous[k] + move[k]) <= abs(previous[k]) + REVERSAL_MIN for k in along):
+            yield a
+
+
+def commanded_undoes(actions: list[dict]) -> int:
+    """How many of :func:`undoes` reverse the previous move along an axis the action commands."""
+    return sum(1 for _ in _commanded_undo_actions(actions))
+
+
 UNDO_RULES = (*(str(r) for r in Reversal), "not a move back by the estimate", "not recorded")
 
 
-def undo_rules(actions: list[dict]) -> dict:
+def undo_rules(actions: list[dict], commanded: bool = False) -> dict:
     """{how the policy's no-shuttle correction judged it: count} over the undos of :func:`undoes`, from each
     action's ``reversal_rule`` (:meth:`slax_drake.policies.policies.Policy.reversal_rule`): "uncovers new width"
     (it passed the correction by uncovering space never seen), "let through" (the correction screened it out and
     an exception took it), "not a move back by the estimate" (on the poses the policy estimated it did not reverse
     its object's last move: a tracking or estimation miss, or no correction applied) or "not recorded" (a record
-    from before the field)."""
+    from before the field). ``commanded``: over :func:`commanded_undoes` only."""
     counts = collections.Counter()
-    for a in _undo_actions(actions):
+    for a in (_commanded_undo_actions if commanded else _undo_actions)(actions):
         rule = a["reversal_rule"] if "reversal_rule" in a else "not recorded"
         counts[rule or "not a move back by the estimate"] += 1
     return {k: counts[k] for k in UNDO_RULES if counts[k]}

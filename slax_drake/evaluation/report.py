@@ -356,6 +356,14 @@ def physics_section(folder: ResultFolder) -> str:
         if rules and set(rules) != {"not recorded"}:
             lines += ["", f"{policy}, the undos by how its no-shuttle correction judged them (the action's "
                       "`reversal_rule`): " + ", ".join(f"{k} {v}" for k, v in rules.items()) + "."]
+            e = per["all"]
+            if "undoes_commanded" in e:
+                commanded = e["commanded_undo_rules"]
+                lines[-1] += (f" Along an axis the action commands (a push moves its object along x, a suction along "
+                              f"x by dx and y by dz; the rest is drift): {_count(e['undoes_commanded'])} in "
+                              f"{_count(e['trials_with_commanded_undo'])} trials"
+                              + (" (" + ", ".join(f"{k} {v}" for k, v in commanded.items()) + ")" if commanded else "")
+                              + ".")
     lines += ["", "Reversal: an executed move of an object back along x or y against its previous move (both over "
               "1 cm, judged from the true poses): the shuttles the no-shuttle rule forbids and the reversals it lets "
               "through because they uncover space no earlier arrangement uncovered; most carry the object past where it "

@@ -317,6 +317,22 @@ def test_undoes_count_the_reversals_that_put_an_object_back_or_just_past():
     assert reversals(relocation) == 1 and undoes(relocation) == 0
 
 
+def test_an_undo_along_an_axis_the_action_does_not_command_is_drift_not_a_commanded_undo():
+    from slax_drake.evaluation.physics import commanded_axes, commanded_undoes, undo_rules, undoes
+
+    assert commanded_axes({"type": "push", "d": 0.05}) == {0}
+    assert commanded_axes({"type": "suction", "dx": 0.0, "dz": -0.2}) == {1}
+    assert commanded_axes({"type": "suction", "dx": 0.15, "dz": 0.05}) == {0, 1}
+    # a suction pulls the object 5 cm out (y -0.05); a push along x then lets it drift 2 cm back in y (Table I 4:4)
+    pulled = {**_moved(0.0, 0.0, -0.15, 0.05), "type": "suction", "dx": -0.15, "dz": 0.05}
+    drift = {**_moved(-0.15, 0.05, -0.37, 0.027), "type": "push", "d": -0.22, "reversal_rule": None}
+    assert undoes([pulled, drift]) == 1 and commanded_undoes([pulled, drift]) == 0
+    assert undo_rules([pulled, drift], commanded=True) == {}
+    # the same object pushed back along x, the axis the push commands: a commanded undo
+    back = {**_moved(-0.15, 0.05, -0.02, 0.05), "type": "push", "d": 0.13, "reversal_rule": "let through"}
+    assert commanded_undoes([pulled, back]) == 1 and undo_rules([pulled, back], commanded=True) == {"let through": 1}
+
+
 def test_undo_rules_say_how_the_policys_correction_judged_each_undo():
     from slax_drake.evaluation.physics import undo_rules
 
