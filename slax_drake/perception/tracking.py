@@ -17,7 +17,10 @@ Per frame (:meth:`ObjectTracker.update`), with the action executed since the las
    distance to its commanded path; pairs further apart than ``gate`` (m) do not match. The pairs are chosen by
    least total cost (one-to-one). Then a hypothesis left unmatched whose footprint overlaps an unmatched,
    unmoved track's (same shape) by more than ``overlap_share`` of the smaller one is that object (its estimate changed between
-   frames: another yaw fitted, a face seen anew).
+   frames: another yaw fitted, a face seen anew). Last, when nothing matched the moved track, a hypothesis left
+   unmatched (same shape) that overlaps its footprint swept along the commanded path by more than ``overlap_share``
+   is that object: physics turned it or moved it deeper than the gate allows (a push that slid; Table I 10:15 in
+   Drake, where the pushed box came out 5.5 cm from its path, turned 9 deg, and was named anew).
 3. Update. A matched track takes the hypothesis's estimate and name; its uncertainty (m) is the frame's. An
    unmatched hypothesis starts a new track. An unmatched track is hidden: it keeps its last estimate, flagged
    ``remembered``, and its uncertainty grows to cover the commanded path when the action moved it. A hidden
@@ -66,6 +69,14 @@ def _to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     n = float(ab @ ab)
     t = 0.0 if n <= 1e-18 else min(1.0, max(0.0, float((p - a) @ ab) / n))
     return float(np.linalg.norm(p - (a + t * ab)))
+
+
+def _swept(o: SceneObject, displacement: np.ndarray):
+    """The footprint of ``o`` swept along ``displacement`` (dx, dy) m: a shapely polygon in S."""
+    from shapely import affinity
+
+    poly = Footprint.of(o).polygon()
+    return poly.union(affinity.translate(poly, float(displacement[0]), float(displacement[1]))).convex_hull
 
 
 def commanded_displacement(action, obj: SceneObject) -> tuple[float, float]:
@@ -147,6 +158,24 @@ class ObjectTracker:
             if best is not None:
                 out_names[i] = names[best]
                 free.remove(best)
+        # a third pass, for the moved track when nothing matched it on its path: physics may have turned it or
+        # carried it deeper or shallower than the gate allows (a push that slid); an unmatched hypothesis of its
+        # shape whose footprint overlaps the footprint swept along the commanded path (by more than
+        # ``overlap_share`` of the smaller) is that object
+        for n in path:
+            if n in out_names:
+                continue
+            swept = _swept(self.tracks[n].object, path[n][1] - path[n][0])
+            best, share = None, self.overlap_share
+            for i, o in enumerate(objs):
+                if out_names[i] is not None or o.shape != self.tracks[n].object.shape:
+                    continue
+                poly = Footprint.of(o).polygon()
+                common = poly.intersection(swept).area / max(1e-12, min(poly.area, swept.area))
+                if common > share:
+                    best, share = i, common
+            if best is not None:
+                out_names[best] = n
         seen = set()
         for i, o in enumerate(objs):
             name = out_names[i]
