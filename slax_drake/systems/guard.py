@@ -12,7 +12,10 @@ force along the push direction u (J^T u) and of a unit upward force (J^T z), in 
 the model does not know, the carried object's weight and any contact. At the first sample of the push-in (the arm
 starts it at rest) the monitor fits the payload as a weight m g at the cup (least squares of r on J^T z) and keeps
 what that leaves unexplained; at every later sample it removes the fitted weight at the present configuration and
-that remainder, and projects what is left on the push signature: the force resisting the push (N, positive when it
+that remainder, and the fitted payload's inertia (its mass times the cup's acceleration from the planned joint
+accelerations: a carried object speeding up with the push-in resists like a contact; on the free push-ins of
+``benchmarks/bench_guarded_placement.py`` a 0.6 kg box's peak went 0.7 -> 0.3 N and 1.1 -> 0.8 N with it), and
+projects what is left on the push signature: the force resisting the push (N, positive when it
 pushes back against u, the push-in's direction: S +y, or -y for a push-in that ends shallower than it starts). It
 stops when that force exceeds ``threshold`` (N) plus ``expected`` (N; the friction a dragged object needs to
 slide, which the floor adds once it moves).
@@ -93,6 +96,19 @@ class EffortModel:
                                                          np.zeros(3), world, world)[:, self._iv]
         return J.T @ np.asarray(push_W, float), J.T @ UP_W
 
+    def payload_signature(self, q, v, a) -> np.ndarray:
+        """J^T a_cup (9,): the efforts that give a 1 kg payload at the cup tip the cup's acceleration a_cup (world,
+        m/s^2) when the arm moves at positions q, velocities v and accelerations a (a_cup = J a + J-dot v)."""
+        from pydrake.multibody.tree import JacobianWrtVariable
+
+        self._set(q, v)
+        world = self.plant.world_frame()
+        J = self.plant.CalcJacobianTranslationalVelocity(self.context, JacobianWrtVariable.kV, self._cup,
+                                                         np.zeros(3), world, world)[:, self._iv]
+        bias = self.plant.CalcBiasTranslationalAcceleration(self.context, JacobianWrtVariable.kV, self._cup,
+                                                            np.zeros(3), world, world)
+        return J.T @ (J @ np.asarray(a, float) + np.asarray(bias).ravel())
+
     def cup_position(self, q) -> np.ndarray:
         """The cup tip's position (3,) in world at q (m)."""
         self._set(q)
@@ -114,17 +130,22 @@ class ContactMonitor:
     def stopped(self) -> bool:
         return self.weight is not None and self.force > self.threshold + self.expected
 
-    def update(self, residual, push_signature, weight_signature) -> "ContactMonitor":
+    def update(self, residual, push_signature, weight_signature, payload_signature=None) -> "ContactMonitor":
         """The monitor after one sample: ``residual`` (measured minus model efforts), the signatures of a 1 N
-        force resisting the push and of a 1 N weight at the cup, at the sample's configuration."""
+        force resisting the push and of a 1 N weight at the cup, at the sample's configuration; and
+        ``payload_signature`` (None: not known), the efforts that accelerate a 1 kg payload with the cup
+        (:meth:`EffortModel.payload_signature`): the fitted payload's inertia, m a along the push as the push-in
+        speeds up, is not taken for a contact."""
         r = np.asarray(residual, float)
         s = np.asarray(push_signature, float)
         w = np.asarray(weight_signature, float)
+        p = np.zeros_like(r) if payload_signature is None else np.asarray(payload_signature, float)
         if self.weight is None:
             ww = float(w @ w)
             weight = float(w @ r) / ww if ww > 0 else 0.0
-            return dataclasses.replace(self, weight=weight, offset=tuple(r - weight * w), force=0.0, peak=0.0)
-        left = r - self.weight * w - np.asarray(self.offset)
+            offset = r - weight * w - max(weight, 0.0) / GRAVITY * p
+            return dataclasses.replace(self, weight=weight, offset=tuple(offset), force=0.0, peak=0.0)
+        left = r - self.weight * w - max(self.weight, 0.0) / GRAVITY * p - np.asarray(self.offset)
         ss = float(s @ s)
         force = float(s @ left) / ss if ss > 0 else 0.0
         return dataclasses.replace(self, force=force, peak=max(self.peak, force))
@@ -246,6 +267,7 @@ class Guard:
         residual = np.asarray(efforts, float) - self.model.effort(q, v, a)
         push_W = run.direction * self.push_W
         push, weight = self.model.signatures(q, push_W)
+        payload = self.model.payload_signature(q, v, a)
         if run.rebase_at > 0.0:
             p = self.model.cup_position(q)
             if run.p_start is None:
@@ -253,8 +275,8 @@ class Guard:
             elif float((p - np.asarray(run.p_start)) @ push_W) >= run.rebase_at:  # sliding: a new baseline
                 monitor = dataclasses.replace(run.monitor, expected=0.0, weight=None, offset=None)
                 return dataclasses.replace(run, rebase_at=0.0, p_start=None,
-                                           monitor=monitor.update(residual, push, weight))
-        return dataclasses.replace(run, monitor=run.monitor.update(residual, push, weight))
+                                           monitor=monitor.update(residual, push, weight, payload))
+        return dataclasses.replace(run, monitor=run.monitor.update(residual, push, weight, payload))
 
 
 def guard_record(run: GuardRun, stopped: bool, cup_y: float | None = None) -> dict:

@@ -45,6 +45,26 @@ def test_a_force_along_the_push_does_not_stop_it_and_the_expected_drag_raises_th
     assert _run(ContactMonitor(threshold=5.0, expected=8.0), sliding)[1] is None
 
 
+def test_the_carried_payload_s_inertia_is_no_contact():
+    """A 1 kg payload (9.81 N fitted at rest) accelerating with the cup: its m a shows in the residual along the
+    push; with the payload signature (efforts per kg of cup acceleration) the monitor takes it out, and a contact
+    on top still stops the push."""
+    accel = np.concatenate([np.zeros(5), np.full(20, 3.0), np.zeros(25)])  # m/s^2 along the push, samples 5-24
+    payload = [accel[k] * PUSH[k] for k in range(50)]  # J^T a_cup, the cup accelerating along u
+    residuals = [9.81 * WEIGHT[k] + 1.0 * payload[k] for k in range(50)]  # 1 kg x 3 m/s^2 = 3 N along the push
+    assert _run(ContactMonitor(threshold=2.0), residuals)[1] == 5  # read as a 3 N contact without the signature
+    monitor = ContactMonitor(threshold=2.0)
+    for k in range(50):
+        monitor = monitor.update(residuals[k], PUSH[k], WEIGHT[k], payload[k])
+        assert not monitor.stopped
+    assert monitor.peak < 1e-6
+    contact = [residuals[k] + (2.5 if k >= 30 else 0.0) * PUSH[k] for k in range(50)]
+    monitor = ContactMonitor(threshold=2.0)
+    for k in range(31):
+        monitor = monitor.update(contact[k], PUSH[k], WEIGHT[k], payload[k])
+    assert monitor.stopped and monitor.force == pytest.approx(2.5)
+
+
 def test_the_stop_force_of_a_lift_is_what_the_cup_s_lip_has_left_over_the_lever():
     from slax_drake.station.scenario import load_station_scenario
     from slax_drake.systems.guard import MIN_STOP_FORCE, Guard
@@ -107,6 +127,9 @@ class _LineModel:
 
     def cup_position(self, q):
         return np.array([0.0, float(q[0]), 0.0])
+
+    def payload_signature(self, q, v, a):
+        return np.zeros(9)
 
 
 def test_a_drag_s_push_in_bears_its_friction_turning_over_and_stops_on_contact_once_it_slides():
