@@ -442,9 +442,13 @@ def reversals(actions: list[dict]) -> int:
     return sum(1 for _ in _reversed_axes(actions))
 
 
-def _undo_actions(actions: list[dict]):
-    """The actions of :func:`undoes`, in order."""
+def _undo_actions(actions: list[dict], commanded: bool = False):
+    """The actions of :func:`undoes`, in order; ``commanded``: only those that undo along an axis the action
+    commands (:func:`commanded_axes`): a shuttle the policy chose, not a push along x that let its object drift back
+    1-2 cm in y."""
     for a, previous, move, axes in _reversed_axes(actions):
+        if commanded:
+            axes = [k for k in axes if k in commanded_axes(a)]
         if any(abs(previous[k] + move[k]) <= abs(previous[k]) + REVERSAL_MIN for k in axes):
             yield a
 
@@ -465,19 +469,9 @@ def commanded_axes(action: dict) -> set[int]:
     return {k for k, name in ((0, "dx"), (1, "dz")) if abs(action.get(name) or 0.0) > REVERSAL_MIN}
 
 
-def _commanded_undo_actions(actions: list[dict]):
-    """The undos of :func:`undoes` that reverse their object's previous move along an axis the action commands
-    (:func:`commanded_axes`), in order: a shuttle the policy chose, not a push along x that let its object drift
-    back 1-2 cm in y."""
-    for a, previous, move, axes in _reversed_axes(actions):
-        along = [k for k in axes if k in commanded_axes(a)]
-        if any(abs(previous[k] + move[k]) <= abs(previous[k]) + REVERSAL_MIN for k in along):
-            yield a
-
-
 def commanded_undoes(actions: list[dict]) -> int:
     """How many of :func:`undoes` reverse the previous move along an axis the action commands."""
-    return sum(1 for _ in _commanded_undo_actions(actions))
+    return sum(1 for _ in _undo_actions(actions, commanded=True))
 
 
 UNDO_RULES = (*(str(r) for r in Reversal), "not a move back by the estimate", "not recorded")
@@ -491,7 +485,7 @@ def undo_rules(actions: list[dict], commanded: bool = False) -> dict:
     its object's last move: a tracking or estimation miss, or no correction applied) or "not recorded" (a record
     from before the field). ``commanded``: over :func:`commanded_undoes` only."""
     counts = collections.Counter()
-    for a in (_commanded_undo_actions if commanded else _undo_actions)(actions):
+    for a in _undo_actions(actions, commanded):
         rule = a["reversal_rule"] if "reversal_rule" in a else "not recorded"
         counts[rule or "not a move back by the estimate"] += 1
     return {k: counts[k] for k in UNDO_RULES if counts[k]}

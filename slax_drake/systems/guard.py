@@ -85,20 +85,11 @@ class EffortModel:
         af[self._iv] = a
         return self.plant.CalcInverseDynamics(self.context, af, forces)[self._iv]
 
-    def signatures(self, q, push_W) -> tuple[np.ndarray, np.ndarray]:
-        """(J^T u, J^T z) at q: the efforts (9,) that balance a 1 N force on the cup tip pushing back against the
-        unit push direction ``push_W`` (world), and a 1 N weight hanging at the cup tip."""
-        from pydrake.multibody.tree import JacobianWrtVariable
-
-        self._set(q)
-        world = self.plant.world_frame()
-        J = self.plant.CalcJacobianTranslationalVelocity(self.context, JacobianWrtVariable.kV, self._cup,
-                                                         np.zeros(3), world, world)[:, self._iv]
-        return J.T @ np.asarray(push_W, float), J.T @ UP_W
-
-    def payload_signature(self, q, v, a) -> np.ndarray:
-        """J^T a_cup (9,): the efforts that give a 1 kg payload at the cup tip the cup's acceleration a_cup (world,
-        m/s^2) when the arm moves at positions q, velocities v and accelerations a (a_cup = J a + J-dot v)."""
+    def signatures(self, q, push_W, v, a) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """At q (one Jacobian): (J^T u, J^T z, J^T a_cup): the efforts (9,) that balance a 1 N force on the cup tip
+        pushing back against the unit push direction ``push_W`` (world), a 1 N weight hanging at the cup tip, and
+        that give a 1 kg payload at the cup tip the cup's acceleration a_cup = J a + J-dot v (world, m/s^2) when
+        the arm moves at velocities v and accelerations a."""
         from pydrake.multibody.tree import JacobianWrtVariable
 
         self._set(q, v)
@@ -107,7 +98,8 @@ class EffortModel:
                                                          np.zeros(3), world, world)[:, self._iv]
         bias = self.plant.CalcBiasTranslationalAcceleration(self.context, JacobianWrtVariable.kV, self._cup,
                                                             np.zeros(3), world, world)
-        return J.T @ (J @ np.asarray(a, float) + np.asarray(bias).ravel())
+        accel = J @ np.asarray(a, float) + np.asarray(bias).ravel()
+        return J.T @ np.asarray(push_W, float), J.T @ UP_W, J.T @ accel
 
     def cup_position(self, q) -> np.ndarray:
         """The cup tip's position (3,) in world at q (m)."""
@@ -134,7 +126,7 @@ class ContactMonitor:
         """The monitor after one sample: ``residual`` (measured minus model efforts), the signatures of a 1 N
         force resisting the push and of a 1 N weight at the cup, at the sample's configuration; and
         ``payload_signature`` (None: not known), the efforts that accelerate a 1 kg payload with the cup
-        (:meth:`EffortModel.payload_signature`): the fitted payload's inertia, m a along the push as the push-in
+        (the third of :meth:`EffortModel.signatures`): the fitted payload's inertia, m a along the push as the push-in
         speeds up, is not taken for a contact."""
         r = np.asarray(residual, float)
         s = np.asarray(push_signature, float)
@@ -266,8 +258,7 @@ class Guard:
         a = planned_acceleration(motion.trajectory, t)
         residual = np.asarray(efforts, float) - self.model.effort(q, v, a)
         push_W = run.direction * self.push_W
-        push, weight = self.model.signatures(q, push_W)
-        payload = self.model.payload_signature(q, v, a)
+        push, weight, payload = self.model.signatures(q, push_W, v, a)
         if run.rebase_at > 0.0:
             p = self.model.cup_position(q)
             if run.p_start is None:

@@ -122,14 +122,11 @@ class _LineModel:
     def effort(self, q, v, a):
         return np.zeros(9)
 
-    def signatures(self, q, push_W):
-        return self.push, self.weight
+    def signatures(self, q, push_W, v, a):
+        return self.push, self.weight, np.zeros(9)
 
     def cup_position(self, q):
         return np.array([0.0, float(q[0]), 0.0])
-
-    def payload_signature(self, q, v, a):
-        return np.zeros(9)
 
 
 def test_a_drag_s_push_in_bears_its_friction_turning_over_and_stops_on_contact_once_it_slides():
