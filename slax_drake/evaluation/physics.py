@@ -97,7 +97,7 @@ MISMATCH_KINDS = ("dropped", "toppled", "seal never formed", "slid", "turned")
 def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str | None:
     """Why an executed action did not match its prediction (None when it matched or has no outcome), the first
     of: "dropped" (the object was lost at the next decision, its centre out of the bay), "toppled" (lost, inside
-    the bay: tilted over 20 deg), "seal never formed" (a suction whose object moved less than ``SEAL_MOVE`` and
+    the bay: tilted over 20 deg), "put back" (a lift weighed too heavy at the cup and undone), "seal never formed" (a suction whose object moved less than ``SEAL_MOVE`` and
     turned less than ``SEAL_TURN`` from where it stood), "slid" (its planar position more than ``MATCH_DISTANCE``
     from the prediction), "turned" (its position within it, its yaw more than ``MATCH_YAW`` off). ``action``: a
     physics record's action (``matched``, ``outcome``, ``before``, ``lost_after``, ``type``)."""
@@ -107,6 +107,8 @@ def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str |
     if action.get("lost_after"):
         inside = abs(out["x"]) < shelf_width / 2 and abs(out["y"]) < shelf_depth / 2
         return "toppled" if inside else "dropped"
+    if (action.get("weighed") or {}).get("put_back"):
+        return "put back"  # weighed at the lift, over the moment limit: lowered where it stood and released
     if action["type"] == "suction" and before is not None:
         moved = math.hypot(out["x"] - before["x"], out["y"] - before["y"])
         if moved < SEAL_MOVE and abs(math.remainder(out["yaw"] - before["yaw"], 2.0 * math.pi)) < SEAL_TURN:
@@ -157,6 +159,8 @@ def _run_scene(job) -> dict:
                   "planning_s": a.get("planning_s"), "planning_cpu_s": a.get("planning_cpu_s"),
                   "rejected_before": len(a.get("rejected_before", [])),
                   "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
+        if isinstance(a.get("weighed"), dict):  # a lift weighed at the cup: its moment, whether it was put back
+            record["weighed"] = {k: a["weighed"][k] for k in ("weight_n", "moment_nm", "limit_nm", "put_back")}
         if isinstance(a.get("guard"), dict):  # a guarded placement: whether it stopped on contact, where
             record["guard"] = {k: a["guard"][k] for k in ("stopped", "pushed_in_m", "short_m", "peak_force_n",
                                                           "threshold_n", "rebased") if k in a["guard"]}
@@ -363,6 +367,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "guarded": [sum(1 for a in d["actions"] if "guard" in a),
                         sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped"))],
         })
+        if any("weighed" in a for a in d["actions"]):  # lifts weighed at the cup, and how many were put back
+            summary["trials"][-1]["weighed"] = [sum(1 for a in d["actions"] if "weighed" in a),
+                                                sum(1 for a in d["actions"] if (a.get("weighed") or {}).get("put_back"))]
     for p in policies:
         per = {}
         for key in [str(n) for n in densities] + ["all"]:
@@ -379,6 +386,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 # guarded placements executed, and how many of them the guard stopped on contact
                 "guarded_placements": [sum(t.get("guarded", [0, 0])[0] for t in sel),
                                        sum(t.get("guarded", [0, 0])[1] for t in sel)],
+                **({"weighed_lifts": [sum(t["weighed"][0] for t in sel if "weighed" in t),
+                                      sum(t["weighed"][1] for t in sel if "weighed" in t)]}
+                   if any("weighed" in t for t in sel) else {}),
                 "shelf_median_steps": _median([t["shelf_steps"] for t in sel if t["shelf_success"]]),
                 "drake_median_steps": _median([t["drake_steps"] for t in sel if t["drake_success"]]),
                 "same_outcome_rate": round(sum(t["shelf_success"] == t["drake_success"] for t in sel) / len(sel), 4)
@@ -598,6 +608,10 @@ def markdown_table(summary: dict) -> str:
         if guarded and guarded[0]:
             lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "
                           f"stopped on contact {guarded[1]}.")
+        weighed = per.get("all", {}).get("weighed_lifts")
+        if weighed and weighed[0]:
+            lines[-1] += (f" Lifts weighed at the cup: {weighed[0]}, put back as too heavy (their moment over the "
+                          f"limit they were planned under) {weighed[1]}.")
     lines += ["", "Physics fidelity per action kind (actions matching the first-order prediction) and the mismatches by "
               "kind (dropped: lost out of the bay; toppled: lost inside it; seal never formed: a suction that left its "
               f"object within {100 * SEAL_MOVE:.0f} cm and {math.degrees(SEAL_TURN):.0f} deg of where it stood; slid: "

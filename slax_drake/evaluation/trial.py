@@ -161,6 +161,8 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
         a["rejected_before"] = entry["rejected"]
         if a["type"] == "suction":  # a guarded placement: whether it stopped on contact, where (guard_record)
             a["guard"] = entry.get("guarded")
+            if "weighed" in entry:  # a lift weighed by the cup, and whether it was put back (too heavy)
+                a["weighed"] = entry["weighed"]
         a["predicted"] = pred
         segment = entry.get("segment_of", {}).get(a["object"], a["object"])  # the tracked object's segment
         a["true_object"] = entry.get("segments", {}).get(segment)  # the object the hypothesis was

@@ -6,6 +6,7 @@ trial) shows where the object went::
     step 3/12: push track_2 -0.100 m, planned in 0.4 s after 1 rejected candidate, executed, object_4 moved as predicted
     step 4/12: suction track_1 by +0.050 m to y = -0.190 m, planned in 1.2 s, executed, object_1 ended 3.4 cm from the prediction
     step 5/12: suction track_3 by -0.100 m to y = +0.150 m, planned in 0.9 s, guarded, stopped on contact after 0.212 m, executed, object_2 ended 6.1 cm from the prediction
+    step 6/12: suction track_4 by -0.050 m to y = -0.220 m, planned in 0.7 s, weighed 7.8 N hanging 0.37 N m off the cup, not hanging free: put back
     done after 4 actions: target revealed (96% of it visible)
 
 What a line says is what the trial knows at that moment: the policy's action on a camera segment, the planner's
@@ -97,6 +98,11 @@ class DecisionPrinter:
 
         entry, snap = self.open
         self.open = None
+        weighed = entry.get("weighed")
+        if weighed and weighed.get("put_back"):  # weighed at the lift: undone, and nothing more to judge
+            self._write(f"weighed {weighed['weight_n']:.1f} N hanging {weighed['moment_nm']:.2f} N m off the cup, "
+                        f"{weighed['why']}: put back\n")
+            return
         guard = entry.get("guarded")
         if guard:
             self._write("guarded, " + (f"stopped on contact after {guard.get('pushed_in_m', 0.0):.3f} m, "

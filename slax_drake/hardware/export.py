@@ -12,7 +12,9 @@ A guarded suction's motion carries ``guarded_push_in`` in its action (its push-i
 and the stop force); when the trial's guard stopped it on contact, the action is exported as two motions: the
 motion up to the stop (``guarded_push_in.stopped_at_s``; it ends moving, where the controller's guard stops it) and
 the stop motion the planner made from the measured pose (``guard_stop_motion``: hold, lower, release, back off, the
-way back), which starts at rest.
+way back), which starts at rest. A lift the trial weighed and put back (too heavy, not hanging free, or nothing
+held) is exported likewise: the motion up to the weighing (``put_back_at_s``; at rest at the lift) and the put-back
+motion (``put_back_motion``: its own motion played backward, lowered, released where it was sealed, the way back).
 
 Export cuts the record into motions: the samples from the motion's start to its end; when the start or the end
 (multiples of 1 ms) falls between two records, the point is added from the record before the start or after the
@@ -171,11 +173,20 @@ def _segments(entry: dict, action: dict, act: dict, source):
     stopped (``action["guard"]["stopped"]``), its motion up to the stop (ending where the guard stopped it, not at
     rest; the action's ``guarded_push_in`` says so) and the stop motion planned from there (hold, lower, release,
     back off, the way back; ``guard.stop_motion``). A guarded suction's action carries ``guarded_push_in``: its
-    push-in window, the stop force and, when stopped, ``stopped_at_s``."""
+    push-in window, the stop force and, when stopped, ``stopped_at_s``. A lift weighed and put back
+    (``action["weighed"]["put_back"]``): its motion up to the weighing (at rest at the lift; its action carries
+    ``put_back_at_s``) and the put-back motion (its own motion played backward: lowered, released, the way back;
+    ``put_back_motion``)."""
     t0 = float(entry["time"])
     motion = action["motion"]
     duration = float(motion["duration_s"])
     intervals = [(float(on), float(off)) for on, off in motion.get("suction_intervals") or []]
+    weighed = action.get("weighed") if isinstance(action.get("weighed"), dict) else None
+    if weighed and weighed.get("put_back"):  # weighed at the lift and put back: the motion up to there, then back
+        t_back, back_duration, back_intervals, before = _replaced(
+            weighed, "put_back_time", "put_back_motion", t0, duration, intervals, "a put-back lift", source)
+        return [(t0, t_back, before, {**act, "put_back_at_s": t_back}, False),
+                (t0 + t_back, back_duration, back_intervals, {**act, "put_back_motion": True}, True)]
     guard = action.get("guard") if isinstance(action.get("guard"), dict) else None
     window = guarded_window(action)
     if window is None:
@@ -183,19 +194,28 @@ def _segments(entry: dict, action: dict, act: dict, source):
     record = {"t_start_s": window[0], "t_end_s": window[1], "stop_force_n": (guard or {}).get("threshold_n")}
     if not (guard and guard.get("stopped")):
         return [(t0, duration, intervals, {**act, "guarded_push_in": record}, False)]
-    try:
-        t_stop = float(guard["stop_time"]) - t0
-        stop = guard["stop_motion"]
-        stop_duration = float(stop["duration_s"])
-        stop_intervals = [(float(on), float(off)) for on, off in stop.get("suction_intervals") or []]
-    except (KeyError, TypeError, ValueError) as e:
-        raise TrialFileError(f"{source or 'trial'}: a guard stop's record is malformed ({e})") from None
-    if not 0.0 < t_stop <= duration + TIME_EPS:
-        raise TrialFileError(f"{source or 'trial'}: a guard stopped a motion at {t_stop:.3f} s of its "
-                             f"{duration:.3f} s")
-    before = [(on, min(off, t_stop)) for on, off in intervals if on < t_stop]
+    t_stop, stop_duration, stop_intervals, before = _replaced(
+        guard, "stop_time", "stop_motion", t0, duration, intervals, "a guard stop", source)
     return [(t0, t_stop, before, {**act, "guarded_push_in": {**record, "stopped_at_s": t_stop}}, False),
             (t0 + t_stop, stop_duration, stop_intervals, {**act, "guard_stop_motion": True}, True)]
+
+
+def _replaced(record: dict, time_key: str, motion_key: str, t0: float, duration: float, intervals, what: str,
+              source):
+    """(when, s from the motion's start; the replacing motion's duration, s; its suction intervals; the motion's own
+    intervals cut there) of a motion that ``record`` (a guard stop's or a put-back's) says was replaced at
+    ``record[time_key]`` (trial clock) by ``record[motion_key]``; TrialFileError (naming ``what``) when malformed."""
+    try:
+        t_cut = float(record[time_key]) - t0
+        motion = record[motion_key]
+        after = float(motion["duration_s"])
+        after_intervals = [(float(on), float(off)) for on, off in motion.get("suction_intervals") or []]
+    except (KeyError, TypeError, ValueError) as e:
+        raise TrialFileError(f"{source or 'trial'}: {what}'s record is malformed ({e})") from None
+    if not 0.0 < t_cut <= duration + TIME_EPS:
+        raise TrialFileError(f"{source or 'trial'}: {what} replaced a motion at {t_cut:.3f} s of its "
+                             f"{duration:.3f} s")
+    return t_cut, after, after_intervals, [(on, min(off, t_cut)) for on, off in intervals if on < t_cut]
 
 
 def _cut(times, q, v, a, t0: float, duration: float, names, source, after_stop: bool):

@@ -48,13 +48,14 @@ PREFIX = "track_"  # the stable names: track_1, track_2, ... in order of first s
 class Track:
     """One tracked object: its stable ``name``, the last estimate ``object`` (a SceneObject named ``name``),
     ``uncertainty`` (m, the radius within which its position is known), ``hidden`` (not seen in the last frame),
-    ``frames`` seen so far."""
+    ``frames`` seen so far, ``mass`` (kg) once the arm weighed it (:meth:`ObjectTracker.weighed`; None before)."""
 
     name: str
     object: SceneObject
     uncertainty: float = 0.0
     hidden: bool = False
     frames: int = 1
+    mass: float | None = None
 
 
 def _front(o: SceneObject) -> np.ndarray:
@@ -185,7 +186,7 @@ class ObjectTracker:
                 self.tracks[name] = Track(name, o, 0.0, False, 0)
                 out_names[i] = name
             t = self.tracks[name]
-            t.object = dataclasses.replace(o, name=name, remembered=False)
+            t.object = dataclasses.replace(o, name=name, remembered=False, mass=o.mass if t.mass is None else t.mass)
             t.uncertainty = _uncertainty_of(items[i])
             t.hidden = False
             t.frames += 1
@@ -204,11 +205,21 @@ class ObjectTracker:
         self.frames += 1
         out = []
         for h, name in zip(items, out_names):
+            mass = self.tracks[name].mass
             if hasattr(h, "object"):
-                out.append(dataclasses.replace(h, object=dataclasses.replace(h.object, name=name)))
+                o = h.object
+                out.append(dataclasses.replace(h, object=dataclasses.replace(o, name=name, mass=o.mass if mass is None
+                                                                             else mass)))
             else:
-                out.append(dataclasses.replace(h, name=name))
+                out.append(dataclasses.replace(h, name=name, mass=h.mass if mass is None else mass))
         return out
+
+    def weighed(self, name: str, mass: float) -> None:
+        """The arm weighed track ``name``: from the next frame on its hypotheses carry ``mass`` (kg), which the
+        action model reckons its held moment and drag with instead of its class's median."""
+        t = self.tracks[name]
+        t.mass = float(mass)
+        t.object = dataclasses.replace(t.object, mass=t.mass)
 
     def _drop_contradicted(self, frame, template) -> None:
         from slax_drake.scene.raycast import SceneRaycaster
@@ -240,7 +251,8 @@ class ObjectTracker:
             tracks.append({"name": n, "shape": o.shape, "size": [float(v) for v in o.size],
                            "x": float(o.center[0]), "y": float(o.center[1]), "z": float(o.center[2]),
                            "yaw": float(o.yaw),
-                           "uncertainty": t.uncertainty, "hidden": t.hidden, "frames": t.frames})
+                           "uncertainty": t.uncertainty, "hidden": t.hidden, "frames": t.frames,
+                           **({"mass": t.mass} if t.mass is not None else {})})
         return {"next_id": self.next_id, "frames": self.frames, "tracks": tracks,
                 "gate": self.gate, "see_through": self.see_through, "overlap_share": self.overlap_share}
 
@@ -255,9 +267,10 @@ class ObjectTracker:
         for t in doc.get("tracks", []):
             size = tuple(float(v) for v in t["size"])
             X = planar_pose(float(t["x"]), float(t["y"]), float(t.get("z", size[2] / 2)), float(t["yaw"]))
-            o = SceneObject(t["name"], t["shape"], size, X, remembered=bool(t["hidden"]))
+            mass = None if t.get("mass") is None else float(t["mass"])
+            o = SceneObject(t["name"], t["shape"], size, X, remembered=bool(t["hidden"]), mass=mass)
             tracker.tracks[t["name"]] = Track(t["name"], o, float(t["uncertainty"]), bool(t["hidden"]),
-                                              int(t["frames"]))
+                                              int(t["frames"]), mass)
         return tracker
 
 

@@ -270,6 +270,25 @@ class MotionPlanner:
             return False
         return True
 
+    @staticmethod
+    def put_back(motion: PlannedMotion, t_from: float) -> PlannedMotion:
+        """A lifted suction undone from ``t_from`` (s from the motion's start, the cup holding its object lifted,
+        at rest): the motion played backward to its start (its own checked path), the object lowered to where it
+        was sealed, released there (suction off on arriving at the seal, which the forward motion dwells at), and
+        the cup backed off, retracted and returned the way it came. A new motion from t = 0."""
+        traj = motion.trajectory
+        k = int(np.clip(np.searchsorted(traj.times, t_from - 1e-9), 0, len(traj.times) - 1))
+        t_end = float(traj.times[k])
+        back = JointTrajectory(traj.names, t_end - traj.times[k::-1], traj.q[k::-1].copy(), -traj.v[k::-1],
+                               traj.a[k::-1].copy())
+        at = dict(motion.waypoint_times)
+        t_release = t_end - (at["seal"] + DWELL)
+        labels = [("lower", t_release), ("release", t_release), ("back off", t_end - at["approach"]),
+                  ("retract", t_end - at["pre-approach"]), ("return", t_end)]
+        return PlannedMotion(motion.action, back, [(0.0, round(t_release, 6))],
+                             [(label, round(float(t), 6)) for label, t in labels], motion.max_deviation,
+                             {"total_s": 0.0}, [], list(motion.waypoints))
+
     def guarded_stop(self, motion: PlannedMotion, q_stop, scene: Scene, hold: float = GUARD_HOLD) -> PlannedMotion:
         """The rest of a guarded suction stopped on contact during its push-in at the measured joint positions
         ``q_stop`` (9,), as a new motion from there (t = 0): hold still ``hold`` s with the cup on, lower the

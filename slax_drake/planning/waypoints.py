@@ -72,6 +72,8 @@ SWEEP_STEP = 0.005  # m between footprints of the carried object's sweep when lo
 # OUT_MARGIN (the action model's): the carried object's back this far in front of the opening (m)
 RELEASE_BACKOFF = 0.02  # m
 DWELL = 0.3  # s at rest after sealing and after releasing
+WEIGH_DWELL = 0.3  # s at rest at a lifted suction's lift, where the arm weighs what the cup holds (the arm settles in
+# about 0.2 s after the lift on the sim station: slax_drake.systems.guard.weigh_time)
 
 
 def push_rotation() -> np.ndarray:
@@ -183,7 +185,7 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
             ToolWaypoint("pre-approach", f, _pose(R, (cx - back * ax, y_pre, cz)), s),
             ToolWaypoint("approach", f, _pose(R, (cx - CUP_STANDOFF * ax, cy - CUP_STANDOFF * ay, cz)), s),
             ToolWaypoint("seal", f, _pose(R, (px, py, cz)), s, contact=True, suction=True, dwell=DWELL),
-            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift_out)), s, carried="resting", **on),
+            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift_out)), s, carried="resting", dwell=WEIGH_DWELL, **on),
             ToolWaypoint("pull out", f, _pose(R_across, (px, y_far, cz + lift_out)), s, carried="clear", **on),
             ToolWaypoint("translate", f, _pose(R_across, (x2, y_far, cz + lift_in)), s, carried="clear", **on),
             ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz + lift_in)), s, carried="clear", **on),

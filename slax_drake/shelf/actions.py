@@ -204,6 +204,15 @@ def object_mass(obj: SceneObject, density: float, physics=None) -> float:
     return scene_mass.object_mass(obj, density, physics)
 
 
+def weighed_mass(weight_n: float, moment_nm: float, lever: float) -> float:
+    """The mass (kg) to reckon an object with once the cup has weighed it (``weight_n`` N hanging ``moment_nm`` N m
+    off the cup): the action model reckons a held moment as mass x g x ``lever`` (m: the horizontal distance from
+    the contact to the object's centre as believed), so at least the mass that makes that the weighed moment, and
+    never less than the weighed weight's."""
+    mass = max(weight_n, 0.0) / GRAVITY
+    return max(mass, moment_nm / (GRAVITY * lever)) if lever > 0.0 else mass
+
+
 def apply_action(objects: tuple[SceneObject, ...], action) -> tuple[SceneObject, ...]:
     """The objects after the action, exactly as the model says (no feasibility check)."""
     out = []
@@ -692,7 +701,7 @@ class ActionModel:
             turned = f" (the tool turns {abs(math.degrees(yaw)):.0f} deg)" if yaw else ""
             return SuctionLattice.refused(f"{obj.name}'s camera-facing side is turned {angle:.0f} deg from the "
                                           f"tube{turned} > {t.rules.max_seal_angle_deg:.0f} deg", RefusalKind.SEAL_ANGLE)
-        moment = mass * GRAVITY * math.hypot(float(obj.center[0]) - cx, float(obj.center[1]) - cy)
+        moment = self.held_moment(obj, (cx, cy))
         drag, drag_across = False, True
         if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
             lifted = f"{obj.name}'s weight hangs {moment:.2f} N m off the cup > {t.rules.max_suction_moment:.2f} N m"
@@ -758,6 +767,14 @@ class ActionModel:
         return SuctionLattice(refusal=None, lattice_empty=False, a_all=a_all, b_all=b_all, xs=xs,
                               y_placed=fp.y + b_all * res, steps=steps, shifted_cols=shifted_cols, inside=inside,
                               base=base, name=obj.name, res=res, **common)
+
+    def held_moment(self, obj: SceneObject, contact_xy) -> float:
+        """N m: the moment ``obj``'s weight (:func:`object_mass`: its recorded mass, else its class's median)
+        hangs off a cup sealed at ``contact_xy`` (S, m): the weight times the horizontal distance from the contact to
+        the object's centre."""
+        mass = object_mass(obj, self.tool.physics.object_density, self.tool.physics)
+        return mass * GRAVITY * math.hypot(float(obj.center[0]) - float(contact_xy[0]),
+                                           float(obj.center[1]) - float(contact_xy[1]))
 
     def drag_limits(self, obj: SceneObject, seal_z: float) -> "DragLimits":
         """The limits of dragging ``obj`` on the shelf floor (the ``drag_grasp`` rule), the cup sealing on its

@@ -23,8 +23,9 @@ import time
 import numpy as np
 
 from slax_drake.shelf.actions import (
-    BLADE_CONTACT_CLEARANCE, ActionModel, Push, Suction, apply_action,
+    BLADE_CONTACT_CLEARANCE, GRAVITY, ActionModel, Push, Suction, apply_action, object_mass, weighed_mass,
 )
+from slax_drake.shelf.rules import RULES
 from slax_drake.scene.footprint import Footprint, clear_of
 from slax_drake.scene.model import Scene
 from slax_drake.scene.raycast import SceneRaycaster
@@ -120,6 +121,18 @@ class CameraObserver:
         """The action (named by a hypothesis of the last frame) executed since the last frame."""
         self._executed = action
 
+    def weighed(self, action, hypotheses, true_object, model: ActionModel) -> None:
+        """The lift ``action`` (named by a hypothesis among ``hypotheses``) was weighed on ``true_object`` and put
+        back: its track carries, from the next frame on, the mass that explains the true held moment at the
+        hypothesis's lever (:func:`~slax_drake.shelf.actions.weighed_mass`), as the Drake trial's planner records
+        what its arm weighed."""
+        if self.tracker is None:
+            return
+        hyp = next(o for o in hypotheses if o.name == action.name)
+        weight = object_mass(true_object, model.tool.physics.object_density, model.tool.physics) * GRAVITY
+        lever = math.hypot(float(hyp.center[0]) - action.q[0], float(hyp.center[1]) - action.q[1])
+        self.tracker.weighed(action.name, weighed_mass(weight, model.held_moment(true_object, action.q[:2]), lever))
+
     def observe(self, scene: Scene) -> tuple[PolicyObservation, dict]:
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.observation import Observation as Frame
@@ -187,8 +200,13 @@ def observation_for(policy, scene: Scene, observer: CameraObserver | None = None
     return observe(scene, policy.distribution, policy.observation_width)
 
 
+WEIGHED_PUT_BACK = "weighed at the lift and put back"  # the note that opens a lift undone as too heavy
+
+
 def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
-    """Applies ``action`` to the true scene; returns the new scene and a note ("" when it went as planned)."""
+    """Applies ``action`` to the true scene; returns the new scene and a note ("" when it went as planned). A lifted
+    suction whose true object hangs more off the cup than the action model's ``max_suction_moment`` (its true mass:
+    what the arm weighs at the lift) is put back where it stood (note ``WEIGHED_PUT_BACK``)."""
     t = model.tool
     shelf = scene.shelf
     names = [o.name for o in scene.objects]
@@ -252,6 +270,12 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         return _execute_drag(scene, i, action, model, clear_at)
 
     if isinstance(action, Suction):
+        moment = model.held_moment(obj, action.q[:2])
+        if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
+            # the arm weighs what it lifted (as the Drake trial's planner does from its joint efforts) and puts back
+            # an object that hangs more off the cup than the lift was planned for
+            return scene, (f"{WEIGHED_PUT_BACK}: {obj.name} hangs {moment:.2f} N m off the cup > "
+                           f"{t.rules.max_suction_moment:.2f} N m")
         y_out = -shelf.depth / 2 - ey - t.grid.cell
         n_out = max(1, int(math.ceil((fp.y - y_out) / t.grid.cell)))
         ys = np.linspace(fp.y, y_out, n_out + 1)[1:]
@@ -383,8 +407,12 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
                 notes.append(f"step {len(actions)}: {action.name} is no object (a segment of the shelf)")
                 pushes, suctions = (pushes + 1, suctions) if isinstance(action, Push) else (pushes, suctions + 1)
                 continue
+            chosen = action
             action = on_true_object(action, observation.known, scene, true_name)
         scene, note = execute(scene, action, policy.action_model)
+        if names is not None and note.startswith(WEIGHED_PUT_BACK):  # the arm weighed it: the tracker knows its mass
+            observer.weighed(chosen, observation.known, next(o for o in scene.objects if o.name == action.name),
+                             policy.action_model)
         actions.append(action.describe())
         if note:
             notes.append(f"step {len(actions)}: {note}")

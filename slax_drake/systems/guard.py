@@ -44,6 +44,7 @@ MIN_STOP_FORCE = 1.5
 # m: how far the cup pushes a dragged object in before the guard takes its baseline again (the object slides)
 DRAG_REBASE_TRAVEL = 0.01
 UP_W = np.array([0.0, 0.0, 1.0])
+WEIGH_EARLY = 0.02  # s: a lifted object is weighed this long before the rest at its lift ends (two 10 ms samples)
 
 
 class EffortModel:
@@ -101,10 +102,92 @@ class EffortModel:
         accel = J @ np.asarray(a, float) + np.asarray(bias).ravel()
         return J.T @ np.asarray(push_W, float), J.T @ UP_W, J.T @ accel
 
+    def payload(self, q, residual) -> "Payload":
+        """The load the cup carries at rest at q, from ``residual`` (9: the measured efforts less :meth:`effort` of
+        the free arm at rest): the wrench w = (torque, force) the arm applies at the cup tip, world frame, fitted by
+        least squares to residual = J^T w (J the cup tip's spatial Jacobian, 6 x 9: the arm's seven joints and the
+        torso over-determine it); a hanging payload's weight is its upward force and the moment its centre hangs
+        off the cup is its horizontal torque."""
+        from pydrake.multibody.tree import JacobianWrtVariable
+
+        self._set(q)
+        world = self.plant.world_frame()
+        J = self.plant.CalcJacobianSpatialVelocity(self.context, JacobianWrtVariable.kV, self._cup, np.zeros(3),
+                                                   world, world)[:, self._iv]
+        w, *_ = np.linalg.lstsq(J.T, np.asarray(residual, float), rcond=None)
+        return Payload(weight_n=float(w[5]), moment_nm=float(np.hypot(w[0], w[1])))
+
     def cup_position(self, q) -> np.ndarray:
         """The cup tip's position (3,) in world at q (m)."""
         self._set(q)
         return self._cup.CalcPoseInWorld(self.context).translation().copy()
+
+
+@dataclasses.dataclass(frozen=True)
+class Payload:
+    """What the cup holds, weighed at rest (:meth:`EffortModel.payload`): its weight (N) and the moment (N m) its
+    weight hangs off the cup, the load that peels the seal's lip."""
+
+    weight_n: float
+    moment_nm: float
+
+    def mass_at(self, lever: float) -> float:
+        """The mass (kg) to reckon the weighed object with at the believed ``lever`` (m;
+        :func:`slax_drake.shelf.actions.weighed_mass`)."""
+        from slax_drake.shelf.actions import weighed_mass
+
+        return weighed_mass(self.weight_n, self.moment_nm, lever)
+
+
+# N: a lifted suction whose cup weighs less than this holds nothing (its seal let go at the lift); the lightest
+# household goods of the mass model weigh more than 0.5 N
+MIN_HELD_WEIGHT = 0.3
+# A weighed object hangs free when its weight's lever (moment / weight) is at least this share of the least lever
+# the camera allows it (its centre no nearer the cup than the observed part of it puts it); a shorter lever means
+# the floor carries part of it, its seal peeling (a cylinder of 0.69 N m held 0.37 N m at 0.71 of its radius in the
+# Drake trial 6:13 and fell off the cup during the carry; freely hanging objects read 0.99-1.56 of their lever)
+FREE_HANG_SHARE = 0.8
+
+
+def weigh_verdict(payload: Payload, limit: float, least_lever: float) -> str | None:
+    """Why a lifted object weighed ``payload`` must be put back rather than carried, or None: "nothing held"
+    (under ``MIN_HELD_WEIGHT``), "too heavy" (its moment over ``limit``, N m: what the lift was planned under),
+    "not hanging free" (its lever under ``FREE_HANG_SHARE`` of ``least_lever``, m; 0: not judged)."""
+    if payload.weight_n < MIN_HELD_WEIGHT:
+        return "nothing held"
+    if payload.moment_nm > limit:
+        return "too heavy"
+    if least_lever > 0.0 and payload.moment_nm / payload.weight_n < FREE_HANG_SHARE * least_lever:
+        return "not hanging free"
+    return None
+
+
+def least_lever(hypothesis, contact_xy) -> float:
+    """m: the shortest horizontal distance from the cup's contact (S) to the centre of the object a hypothesis may
+    be, as far as the camera tells: a cylinder's fitted centre; a box's centre with its depth cut to the part the
+    camera measured (:class:`~slax_drake.perception.estimator.Uncertainty` ``depth``), its front face kept; 0 when
+    unknown."""
+    obj = getattr(hypothesis, "object", hypothesis)
+    lever = float(np.hypot(obj.center[0] - contact_xy[0], obj.center[1] - contact_xy[1]))
+    uncertainty = getattr(hypothesis, "uncertainty", None)
+    if obj.shape == "cylinder":
+        return lever
+    extent = abs(obj.size[1] * np.cos(obj.yaw)) + abs(obj.size[0] * np.sin(obj.yaw))  # along S y, the view's axis
+    if uncertainty is None or extent <= 0.0:
+        return 0.0
+    return lever * min(1.0, max(0.0, float(uncertainty.depth[0])) / float(extent))
+
+
+def weigh_time(motion) -> float | None:
+    """s from the motion's start at which a lifted suction's object is weighed: at the end of the rest at the lift
+    (``WEIGH_DWELL`` after the "lift" waypoint is reached, less one ``WEIGH_EARLY``: the arm and its load have
+    settled, the carry has not begun); None for a drag, a push or a motion without a lift."""
+    from slax_drake.planning.waypoints import WEIGH_DWELL
+
+    if getattr(motion.action, "drag", True):
+        return None
+    t_lift = dict(motion.waypoint_times).get("lift")
+    return None if t_lift is None else t_lift + WEIGH_DWELL - WEIGH_EARLY
 
 
 @dataclasses.dataclass(frozen=True)
@@ -207,10 +290,7 @@ def push_in_forces(action, obj, action_model, threshold: float, lip_moment: floa
 def held_moment(model, obj, action) -> float:
     """N m: the moment ``obj``'s weight (the action model ``model``'s mass) hangs off the cup at ``action``'s
     contact (its horizontal distance from the object's centre)."""
-    from slax_drake.shelf.actions import GRAVITY, object_mass
-
-    mass = object_mass(obj, model.tool.physics.object_density, model.tool.physics)
-    return mass * GRAVITY * float(np.hypot(float(obj.center[0]) - action.q[0], float(obj.center[1]) - action.q[1]))
+    return model.held_moment(obj, action.q[:2])
 
 
 def planned_acceleration(trajectory, t: float) -> np.ndarray:
@@ -235,6 +315,12 @@ class Guard:
         """The stop force (N) for a lifted object hanging ``held_moment`` (N m) off the cup (:func:`lift_stop_force`
         with the station's threshold and lip moment)."""
         return lift_stop_force(self.threshold, self.lip_moment, held_moment, lever)
+
+    def weigh(self, t: float, motion, q, v, efforts) -> Payload:
+        """The payload the cup holds at ``t`` (s from the motion's start; the arm at rest at the lift), from one
+        joint-state sample: the measured efforts less the free arm's at (q, v, the planned accelerations)."""
+        a = planned_acceleration(motion.trajectory, t)
+        return self.model.payload(q, np.asarray(efforts, float) - self.model.effort(q, v, a))
 
     def start(self, motion, cup_y_S, expected: float = 0.0, threshold: float | None = None) -> GuardRun | None:
         """A GuardRun for ``motion`` when it is a guarded suction, else None. ``cup_y_S(q)``: the cup's y (S, m) at

@@ -52,12 +52,12 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from slax_drake.perception.belief import ObservedBelief
 from slax_drake.planning.planner import MotionPlanner
-from slax_drake.shelf.actions import Push, Suction
+from slax_drake.shelf.actions import GRAVITY, Push, Suction
 from slax_drake.shelf.distribution import support
 from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
-from slax_drake.systems.guard import guard_record, push_in_forces
+from slax_drake.systems.guard import guard_record, least_lever, push_in_forces, weigh_time, weigh_verdict
 
 MAX_PLAN_ATTEMPTS = 25
 
@@ -76,6 +76,8 @@ class TrialState:
     result: str | None = None  # None while running
     cost: float = 0.0  # pushes 1, suctions ``suction_cost``
     guard: object = None  # GuardRun of the running guarded push-in (slax_drake.systems.guard), None otherwise
+    weigh_at: float | None = None  # s from the motion's start at which its lifted object is weighed; None: not
+    least_lever: float = 0.0  # m, the lifted object's least lever as the camera allows it (guard.least_lever)
     believed: object = None  # the believed Scene the running motion was planned in
 
     def __deepcopy__(self, memo):
@@ -258,7 +260,53 @@ class PlannerSystem(LeafSystem):
             self.on_step(entry, depth, labels, frame.target_mask, history, obs.p1d)
         return dataclasses.replace(
             s, motion=motion, t_start=now, steps=s.steps + 1, log=s.log + (entry,), motions=s.motions + ((now, motion),),
-            cost=s.cost + (1.0 if isinstance(action, Push) else self.suction_cost), guard=guard, believed=believed)
+            cost=s.cost + (1.0 if isinstance(action, Push) else self.suction_cost), guard=guard, believed=believed,
+            weigh_at=weigh_time(motion) if self.guard is not None else None,
+            least_lever=next((least_lever(h, action.q[:2]) for h in belief.hypotheses
+                              if getattr(h, "object", h).name == action.name), 0.0) if isinstance(action, Suction)
+            else 0.0)
+
+    # weighing a lifted object ----------------------------------------------------------------------------
+    def _weigh(self, context, state, s: TrialState, t: float):
+        """The lifted object weighed at the lift (one joint-state sample, :meth:`Guard.weigh`) and judged
+        (:func:`~slax_drake.systems.guard.weigh_verdict`): when the cup holds nothing, when the moment it hangs off
+        the cup exceeds the limit the action was planned under (the action model's ``max_suction_moment``), or when
+        it does not hang free (the floor carries part of it: its seal is peeling), the lift is undone from here
+        (:meth:`MotionPlanner.put_back`). An object too heavy or not hanging free is reckoned from now on with the
+        mass its weighing implies (:meth:`Payload.mass_at`; not hanging free: at least the limit's at the believed
+        lever), recorded on its track (:meth:`ObjectTracker.weighed`), so that the action model refuses to lift it
+        again. The record goes into the action's log entry as ``weighed``."""
+        n = len(self._q_obs)
+        x = self._measured.Eval(context)
+        payload = self.guard.weigh(t, s.motion, x[:n], x[n:], self._efforts.Eval(context))
+        limit = float(self.policy.action_model.tool.rules.max_suction_moment)
+        action = s.motion.action
+        obj = next((o for o in s.believed.objects if o.name == action.name), None) if s.believed else None
+        lever = 0.0 if obj is None else float(np.hypot(obj.center[0] - action.q[0], obj.center[1] - action.q[1]))
+        why = weigh_verdict(payload, limit, s.least_lever)
+        record = {"weight_n": round(payload.weight_n, 3), "moment_nm": round(payload.moment_nm, 4),
+                  "lever_m": round(payload.moment_nm / payload.weight_n, 4) if payload.weight_n > 0 else None,
+                  "believed_lever_m": round(lever, 4), "least_lever_m": round(s.least_lever, 4), "limit_nm": limit,
+                  "put_back": why is not None}
+        if why is None:
+            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
+                s, weigh_at=None, log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
+            return
+        record["why"] = why
+        if why != "nothing held":  # the cup cannot lift it free: reckoned at least at the limit from now on
+            mass = payload.mass_at(lever)
+            if why == "not hanging free" and lever > 0.0:
+                mass = max(mass, 1.01 * limit / (GRAVITY * lever))
+            record["mass_kg"] = round(mass, 4)
+            self.tracker.weighed(action.name, record["mass_kg"])
+        back = self.planner.put_back(s.motion, t)
+        now = context.get_time()
+        record["put_back_time"] = round(now, 4)
+        record["put_back_motion"] = {"duration_s": round(back.trajectory.duration, 3),
+                                     "waypoint_times": back.waypoint_times, "suction_intervals": back.suction_intervals}
+        state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
+            s, motion=back, t_start=now, guard=None, weigh_at=None, motions=s.motions + ((now, back),),
+            log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
 
     # the guarded push-in ---------------------------------------------------------------------------------
     def _cup_y(self, believed, motion):
@@ -268,10 +316,16 @@ class PlannerSystem(LeafSystem):
         return lambda q: float(world.tool_pose_S(q, frame).translation()[1])
 
     def _watch(self, context, state):
-        """Every ``guard.period`` s while a guarded push-in plays: one joint-state sample to the contact monitor;
-        on contact, the motion is replaced by the planner's stop motion from the measured positions (hold,
-        lower, release, back off, the planned way back). The record goes into the action's log entry."""
+        """Every ``guard.period`` s: at a lifted suction's lift, the object weighed (:meth:`_weigh`); while a
+        guarded push-in plays, one joint-state sample to the contact monitor; on contact, the motion is replaced by
+        the planner's stop motion from the measured positions (hold, lower, release, back off, the planned way
+        back). The records go into the action's log entry."""
         s = self._plan_state(context)
+        if s.motion is not None and s.weigh_at is not None:  # a lift comes before its push-in
+            t = context.get_time() - s.t_start
+            if t >= s.weigh_at:
+                self._weigh(context, state, s, t)
+            return
         run = s.guard
         if run is None or s.motion is None:
             return

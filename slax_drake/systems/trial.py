@@ -170,7 +170,9 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
 
     camera = perception.camera
     guard = None
-    if guarded:  # guarded push-ins stop on contact, sensed from the arm's joint efforts
+    # guarded push-ins stop on contact, and lifted objects are weighed, sensed from the arm's joint efforts
+    weighed = math.isfinite(policy.action_model.tool.rules.max_suction_moment)
+    if guarded or weighed:
         from slax_drake.systems.guard import Guard
 
         guard = Guard(station, X_WS.rotation().matrix(), station.guarded_stop_force)

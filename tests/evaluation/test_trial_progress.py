@@ -126,3 +126,13 @@ def test_a_guarded_placement_says_whether_it_stopped_on_contact():
     printer.update((done, {"step": 1, "time": 20.0, "final": True, "result": "horizon"}),
                    (_snap(0.5, 0.05), _snap(20.0, -0.05)))
     assert "planned in 0.4 s, guarded, completed, executed" in out.getvalue()
+
+
+def test_a_lift_weighed_and_put_back_says_so():
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    lift = {**_decision(0, 0.5), "weighed": {"weight_n": 7.81, "moment_nm": 0.3735, "put_back": True,
+                                             "why": "not hanging free"}}
+    printer.update((lift, _decision(1, 20.0)), (_snap(0.5, 0.05), _snap(20.0, 0.05)))
+    assert out.getvalue().splitlines()[0].endswith(
+        "planned in 0.4 s, weighed 7.8 N hanging 0.37 N m off the cup, not hanging free: put back")

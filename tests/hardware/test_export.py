@@ -185,5 +185,25 @@ def test_a_guard_stopped_suction_exports_as_its_motion_up_to_the_stop_and_the_st
     assert _segments({"time": 10.0}, plain, {"type": "suction"}, None)[0][3] == {"type": "suction"}
     with pytest.raises(TrialFileError, match="guard stop's record is malformed"):
         _segments({"time": 10.0}, {**action, "guard": {"stopped": True, "stop_time": 15.0}}, {}, "t.json")
-    with pytest.raises(TrialFileError, match="stopped a motion at"):
+    with pytest.raises(TrialFileError, match="a guard stop replaced a motion at 20.000 s of its 12.000 s"):
         _segments({"time": 10.0}, {**action, "guard": {**action["guard"], "stop_time": 30.0}}, {}, "t.json")
+
+
+def test_a_lift_put_back_exports_as_its_motion_up_to_the_weighing_and_the_put_back():
+    from slax_drake.errors import TrialFileError
+    from slax_drake.hardware.export import _segments
+
+    motion = {"duration_s": 12.0, "suction_intervals": [[2.5, 8.0]],
+              "waypoint_times": [["pre-approach", 2.0], ["approach", 2.5], ["seal", 3.0], ["lift", 3.6]]}
+    weighed = {"weight_n": 7.8, "moment_nm": 0.37, "put_back": True, "why": "not hanging free",
+               "put_back_time": 13.88, "put_back_motion": {"duration_s": 3.88, "suction_intervals": [[0.0, 0.58]]}}
+    action = {"type": "suction", "object": "track_1", "grip": "lift", "motion": motion, "weighed": weighed}
+    (t0, d0, on0, act0, after0), (t1, d1, on1, act1, after1) = _segments({"time": 10.0}, action, {"type": "suction"},
+                                                                         None)
+    assert (t0, on0, after0) == (10.0, [(2.5, d0)], False) and d0 == pytest.approx(3.88)
+    assert act0["put_back_at_s"] == pytest.approx(3.88)
+    assert (t1, d1, on1, after1) == (13.88, 3.88, [(0.0, 0.58)], True) and act1["put_back_motion"]
+    carried = {**action, "weighed": {"weight_n": 2.0, "moment_nm": 0.1, "put_back": False}}
+    assert len(_segments({"time": 10.0}, carried, {"type": "suction"}, None)) == 1
+    with pytest.raises(TrialFileError, match="put-back lift's record is malformed"):
+        _segments({"time": 10.0}, {**action, "weighed": {"put_back": True}}, {}, "t.json")

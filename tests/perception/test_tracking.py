@@ -107,3 +107,17 @@ def test_an_estimate_that_changed_its_yaw_keeps_the_name():
     t.update(frame(box("a", 0.0, 0.08, sx=0.16, sy=0.14, yaw=1.36), box("b", -0.2, -0.1)))
     (o, b) = t.update(frame(box("a", 0.02, 0.175, sx=0.12, sy=0.06), box("b", -0.2, -0.1)))
     assert (o.name, b.name) == ("track_1", "track_2") and not t.hidden()
+
+
+def test_a_weighed_object_carries_its_mass_in_every_later_frame_hidden_or_seen_and_across_processes():
+    t = ObjectTracker()
+    t.update(frame(box("a", -0.15, -0.1), box("b", 0.1, -0.1)))
+    t.weighed("track_2", 1.25)
+    lift = Suction("track_2", (0.1, -0.14, 0.06), 0.0, -0.1)  # put back: it stands where it stood
+    second = t.update(frame(box("a", -0.15, -0.1), box("b", 0.1, -0.1)), lift)
+    assert {o.name: o.mass for o in second} == {"track_1": None, "track_2": 1.25}
+    t.update(frame(box("a", -0.15, -0.1)))  # track_2 hidden: remembered with its mass
+    assert [(o.name, o.mass) for o in t.hidden()] == [("track_2", 1.25)]
+    again = ObjectTracker.from_dict(t.to_dict())
+    seen = again.update(frame(box("b", 0.1, -0.1), box("a", -0.15, -0.1)))
+    assert {o.name: o.mass for o in seen} == {"track_1": None, "track_2": 1.25}

@@ -80,8 +80,9 @@ def test_unknown_segmentation_is_refused():
 def test_a_guarded_trial_feeds_the_planner_the_arm_s_efforts_and_nothing_of_the_hidden_objects(trial):
     """The shipped station places by guarded moves (guarded_placement), so a default trial plans under
     suction_hidden_rule=guarded and its planner also reads the station's joint efforts (what a Fetch's joint_states
-    reports), and still no true pose or contact result; --tool-rule suction_hidden_rule=placement takes the guard
-    away again."""
+    reports), and still no true pose or contact result; with --tool-rule suction_hidden_rule=placement it still reads
+    them to weigh what the cup lifts (the station's cup limit, max_suction_moment), and with the paper's weightless
+    rules too (max_suction_moment=inf) it reads none."""
     assert trial.tool_rules["suction_hidden_rule"] == "guarded"
     feeds = {(src, port) for src, port, dst, _ in _connections(trial.diagram) if dst == "planner"}
     assert ("station", "measured_efforts") in feeds
@@ -89,4 +90,9 @@ def test_a_guarded_trial_feeds_the_planner_the_arm_s_efforts_and_nothing_of_the_
     unguarded = build_trial(TrialOptions(objects=3, seed=7, tool_rules={"suction_hidden_rule": "placement"}))
     planner = unguarded.planner_system
     names = {planner.get_input_port(i).get_name() for i in range(planner.num_input_ports())}
-    assert names == PLANNER_INPUTS and "suction_hidden_rule" not in unguarded.tool_rules
+    assert names == PLANNER_INPUTS | {"measured_efforts"} and "suction_hidden_rule" not in unguarded.tool_rules
+    weightless = build_trial(TrialOptions(objects=3, seed=7, tool_rules={"suction_hidden_rule": "placement",
+                                                                         "max_suction_moment": float("inf")}))
+    planner = weightless.planner_system
+    names = {planner.get_input_port(i).get_name() for i in range(planner.num_input_ports())}
+    assert names == PLANNER_INPUTS
