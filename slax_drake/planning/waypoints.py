@@ -73,7 +73,8 @@ SWEEP_STEP = 0.005  # m between footprints of the carried object's sweep when lo
 RELEASE_BACKOFF = 0.02  # m
 DWELL = 0.3  # s at rest after sealing and after releasing
 WEIGH_DWELL = 0.3  # s at rest at a lifted suction's lift, where the arm weighs what the cup holds (the arm settles in
-# about 0.2 s after the lift on the sim station: slax_drake.systems.guard.weigh_time)
+# about 0.2 s after the lift on the sim station: slax_drake.systems.guard.weigh_time); a lift higher than LIFT (over
+# a tall object on the way) rests at LIFT first ("weigh"), so that an object the cup cannot hold falls from 1 cm
 
 
 def push_rotation() -> np.ndarray:
@@ -181,11 +182,16 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
                 ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
                 ToolWaypoint("retract", f, _pose(R, (x_off, y_pre, cz)), s, contact=True),
             ]
+        # the arm weighs the object resting LIFT up (a "weigh" waypoint below a higher lift), before lifting it higher
+        weigh = ([ToolWaypoint("weigh", f, _pose(R, (px, py, cz + LIFT)), s, carried="resting", dwell=WEIGH_DWELL, **on)]
+                 if lift_out > LIFT + 1e-9 else [])
         return [
             ToolWaypoint("pre-approach", f, _pose(R, (cx - back * ax, y_pre, cz)), s),
             ToolWaypoint("approach", f, _pose(R, (cx - CUP_STANDOFF * ax, cy - CUP_STANDOFF * ay, cz)), s),
             ToolWaypoint("seal", f, _pose(R, (px, py, cz)), s, contact=True, suction=True, dwell=DWELL),
-            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift_out)), s, carried="resting", dwell=WEIGH_DWELL, **on),
+            *weigh,
+            ToolWaypoint("lift", f, _pose(R, (px, py, cz + lift_out)), s, carried="resting",
+                         dwell=0.0 if weigh else WEIGH_DWELL, **on),
             ToolWaypoint("pull out", f, _pose(R_across, (px, y_far, cz + lift_out)), s, carried="clear", **on),
             ToolWaypoint("translate", f, _pose(R_across, (x2, y_far, cz + lift_in)), s, carried="clear", **on),
             ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz + lift_in)), s, carried="clear", **on),

@@ -180,14 +180,16 @@ def least_lever(hypothesis, contact_xy) -> float:
 
 def weigh_time(motion) -> float | None:
     """s from the motion's start at which a lifted suction's object is weighed: at the end of the rest at the lift
-    (``WEIGH_DWELL`` after the "lift" waypoint is reached, less one ``WEIGH_EARLY``: the arm and its load have
-    settled, the carry has not begun); None for a drag, a push or a motion without a lift."""
+    (``WEIGH_DWELL`` after the "weigh" waypoint, or the "lift" waypoint of a lift no higher than ``LIFT``, is
+    reached, less one ``WEIGH_EARLY``: the arm and its load have settled, the carry has not begun); None for a drag,
+    a push or a motion without a lift."""
     from slax_drake.planning.waypoints import WEIGH_DWELL
 
     if getattr(motion.action, "drag", True):
         return None
-    t_lift = dict(motion.waypoint_times).get("lift")
-    return None if t_lift is None else t_lift + WEIGH_DWELL - WEIGH_EARLY
+    at = dict(motion.waypoint_times)
+    t_rest = at.get("weigh", at.get("lift"))
+    return None if t_rest is None else t_rest + WEIGH_DWELL - WEIGH_EARLY
 
 
 @dataclasses.dataclass(frozen=True)

@@ -275,7 +275,8 @@ class PlannerSystem(LeafSystem):
         (:meth:`MotionPlanner.put_back`). An object too heavy or not hanging free is reckoned from now on with the
         mass its weighing implies (:meth:`Payload.mass_at`; not hanging free: at least the limit's at the believed
         lever), recorded on its track (:meth:`ObjectTracker.weighed`), so that the action model refuses to lift it
-        again. The record goes into the action's log entry as ``weighed``."""
+        again; when the cup held nothing, its suctions are excluded while it stands there (``policy.exclude``, the
+        whole group: the seal let go at that face). The record goes into the action's log entry as ``weighed``."""
         n = len(self._q_obs)
         x = self._measured.Eval(context)
         payload = self.guard.weigh(t, s.motion, x[:n], x[n:], self._efforts.Eval(context))
@@ -293,7 +294,9 @@ class PlannerSystem(LeafSystem):
                 s, weigh_at=None, log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
             return
         record["why"] = why
-        if why != "nothing held":  # the cup cannot lift it free: reckoned at least at the limit from now on
+        if why == "nothing held":  # the cup does not hold it there: none of its suctions, while it stands there
+            self.policy.exclude(action, "weighed at the lift: the cup held nothing (its seal let go)", whole_group=True)
+        else:  # the cup cannot lift it free: reckoned at least at the limit from now on
             mass = payload.mass_at(lever)
             if why == "not hanging free" and lever > 0.0:
                 mass = max(mass, 1.01 * limit / (GRAVITY * lever))

@@ -135,3 +135,20 @@ def test_the_way_out_is_lifted_only_as_high_as_it_needs(two_boxes):
                                                              behind.objects, behind.shelf)}
     assert z["pull out"] - z["seal"] == pytest.approx(b.size[2] + LIFT_CLEARANCE)
     assert z["push in"] - z["seal"] == pytest.approx(LIFT)
+
+
+def test_a_lift_over_a_tall_object_rests_one_lift_up_to_be_weighed_before_it_rises(sim_scenario):
+    """The arm weighs what the cup holds 1 cm up (the "weigh" waypoint's rest), before a high lift: an object the
+    cup cannot hold falls from there, not from over its neighbour."""
+    from slax_drake.planning.waypoints import WEIGH_DWELL
+
+    a = _box("object_0", -0.20, 0.05, (0.08, 0.08, 0.12))  # behind a low box: its way out crosses it
+    b = _box("object_1", -0.20, -0.15, (0.10, 0.10, 0.04))
+    shelf = shelf_of(sim_scenario)
+    wps = action_waypoints(Suction(a.name, (-0.2, 0.01, 0.1), 0.2, 0.05), (a, b), shelf)
+    labels = [w.label for w in wps]
+    assert labels[2:5] == ["seal", "weigh", "lift"]
+    z = {w.label: w.position[2] for w in wps}
+    assert z["weigh"] - z["seal"] == pytest.approx(LIFT) and z["lift"] - z["seal"] == pytest.approx(0.04 + LIFT_CLEARANCE)
+    dwell = {w.label: w.dwell for w in wps}
+    assert dwell["weigh"] == WEIGH_DWELL and dwell["lift"] == 0.0

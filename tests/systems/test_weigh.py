@@ -78,6 +78,8 @@ TIMES = [("pre-approach", 0.5), ("approach", 0.8), ("seal", 1.2), ("lift", 2.0),
 
 def test_a_lift_is_weighed_at_the_end_of_its_rest_at_the_lift_and_nothing_else_is_weighed():
     assert weigh_time(_motion(LIFT, TIMES)) == pytest.approx(2.0 + WEIGH_DWELL - WEIGH_EARLY)
+    higher = TIMES[:3] + [("weigh", 1.8)] + TIMES[3:]  # lifted over a tall object: weighed 1 cm up first
+    assert weigh_time(_motion(LIFT, higher)) == pytest.approx(1.8 + WEIGH_DWELL - WEIGH_EARLY)
     assert weigh_time(_motion(dataclasses.replace(LIFT, drag=True), TIMES)) is None
     assert weigh_time(_motion(Push("object_0", (0.0, -0.2, 0.04), 0.1), TIMES)) is None
 
