@@ -154,6 +154,7 @@ def _run_scene(job) -> dict:
         record = {"type": a["type"], "object": a["object"], **params,
                   **({"grip": a["grip"]} if "grip" in a else {}),
                   **({"reversal_rule": a["reversal_rule"]} if "reversal_rule" in a else {}), "predicted": a["predicted"],
+                  "true_object": a.get("true_object"),  # the scene object the hypothesis was (the referee's)
                   "before": a.get("before"), "outcome": a["outcome"], "lost_after": a.get("lost_after"),
                   "matched": action_matches(a["predicted"], a["outcome"], a.get("before")),
                   "planning_s": a.get("planning_s"), "planning_cpu_s": a.get("planning_cpu_s"),
