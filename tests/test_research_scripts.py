@@ -130,3 +130,16 @@ def test_frame_sampling_refuses_a_folder_that_is_no_physics_run_and_reads_first_
     push = {"type": "push", "d": -0.1449999, "rejected_before": 0}
     assert module.drake_first({"drake": {"actions": [push]}}) == ("push", -0.145)
     assert module.drake_first({"drake": {"actions": [{**push, "rejected_before": 1}]}}) is None
+
+
+def test_lost_lifts_refuses_a_folder_that_is_no_physics_run(tmp_path, capsys):
+    lost_lifts = script("lost_lifts")
+    assert lost_lifts.main([str(tmp_path)]) == 2
+    assert "is no physics benchmark folder" in capsys.readouterr().err
+
+
+def test_lost_lifts_bands_a_lift_by_its_true_held_moment():
+    lost_lifts = script("lost_lifts")
+    assert lost_lifts.band(0.3, 0.4, 0.64).startswith("within the limit")
+    assert lost_lifts.band(0.5, 0.4, 0.64).startswith("over the limit, under the lip")
+    assert lost_lifts.band(0.7, 0.4, 0.64).startswith("over the lip")
