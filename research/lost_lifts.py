@@ -33,6 +33,7 @@ from slax_drake.scene.sampling import shelf_of
 from slax_drake.shelf.actions import GRAVITY, ActionModel
 from slax_drake.shelf.tool import tool_config
 from slax_drake.station.scenario import load_station_scenario, station_for
+from slax_drake.systems.guard import MIN_HELD_WEIGHT
 
 
 def true_object(scene, action: dict):
@@ -124,6 +125,16 @@ def main(argv=None) -> int:
             c["weighed"] += 1
             c[f"put back: {w['why']}" if w.get("put_back") else "carried"] += 1
             c["lost after being carried"] += r["lost"] and not w.get("put_back")
+    reads = [r["weighed"]["weight_n"] / (r["mass"] * GRAVITY) for r in rows
+             if r["weighed"] is not None and r["weighed"]["weight_n"] >= MIN_HELD_WEIGHT]
+    if reads:
+        within = sum(abs(x - 1.0) <= 0.01 for x in reads)
+        under = sorted(x for x in reads if x < 0.99)
+        over = sorted(x for x in reads if x > 1.01)
+        print(f"The weighing read {len(reads)} held loads: the true weight to within 1 % in {within}; "
+              f"less in {len(under)}" + (f" ({under[0] * 100:.0f}-{under[-1] * 100:.0f} %: the floor carried part)"
+                                         if under else "")
+              + f"; more in {len(over)}" + (f" (up to {over[-1] * 100:.0f} %)" if over else "") + ".\n")
     verdicts = sorted({k for c in counts.values() for k in c if k.startswith("put back")})
     weighed = any(c["weighed"] for c in counts.values())
     head = ["true held moment", "lifts", "lost"] + (["carried", *verdicts, "lost after being carried"] if weighed else [])
