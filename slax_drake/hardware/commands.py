@@ -366,6 +366,12 @@ def run_plan_step(args: argparse.Namespace) -> int:
               f"the camera cannot see: run it as a guarded move that stops when the push meets more than "
               f"{guarded['stop_force_n']:.1f} N{drag}, then releases and backs out "
               "(metadata.plan_step.guarded_push_in)")
+    weigh = result.trajectory.metadata["plan_step"].get("weigh")
+    if weigh:
+        print(f"WEIGH: at {weigh['t_s']:.2f} s the cup holds its object 1 cm up: weigh it from the joint efforts and "
+              f"play the motion back to its start (suction off at the seal) when it weighs under "
+              f"{weigh['min_weight_n']:.1f} N, hangs over {weigh['limit_nm']:.2f} N m off the cup or its lever is under "
+              f"{weigh['free_hang_share'] * weigh['least_lever_m'] * 100:.1f} cm (metadata.plan_step.weigh)")
     steps = len(result.trajectory.metadata["plan_step"]["history"]["frames"]) - 1
     if steps:
         print(f"the policy's memory: {plural(steps, 'earlier step')} replayed in {t['replay_s']:.2f} s")

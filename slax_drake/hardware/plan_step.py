@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import time
 from pathlib import Path
 
@@ -410,6 +411,7 @@ class StepPlanner:
                 guarded = self._guarded_push_in(action, motion, belief.known)
                 if guarded is not None:  # the checker reads it from the motion (hardware.check)
                     traj.motions[0].action["guarded_push_in"] = dict(guarded)
+                weigh = self._weigh_at_lift(action, motion, belief)
                 world = world or CollisionWorld(self.station, believed)
                 report = check_trajectory(traj, world, collision_step=collision_step)
                 if report.ok:
@@ -417,6 +419,7 @@ class StepPlanner:
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
                                                               history, timings, visibility=visibility, frame=frame)
                     traj.metadata["plan_step"]["guarded_push_in"] = guarded
+                    traj.metadata["plan_step"]["weigh"] = weigh
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings, visibility)
                 why, early, kind, waypoint = "check: " + report.summary().splitlines()[-1], False, "check", None
             else:
@@ -492,6 +495,26 @@ class StepPlanner:
         return {"t_start_s": round(window[0], 4), "t_end_s": round(window[1], 4), "stop_force_n": round(stop, 3),
                 "expected_resistance_n": round(expected, 3),
                 "rebase_after_m": DRAG_REBASE_TRAVEL if expected > 0.0 else 0.0}
+
+    def _weigh_at_lift(self, action, motion, belief) -> dict | None:
+        """What the arm's controller must do at a lifted suction's lift (None for any other action): at ``t_s`` (s
+        from the trajectory's start; the arm at rest with its object 1 cm up) weigh the load the cup holds from the
+        joint efforts (weight and held moment, :meth:`slax_drake.systems.guard.EffortModel.payload`) and, when the
+        verdict says so (:func:`~slax_drake.systems.guard.weigh_verdict`: under ``min_weight_n`` nothing is held;
+        over ``limit_nm``; a lever under ``free_hang_share`` of ``least_lever_m``), play the trajectory backward from
+        there to its start, switching the suction off where it came on back at the seal (what
+        ``MotionPlanner.put_back`` makes in a Drake trial). The trajectory after ``t_s`` is what follows when the
+        object hangs as planned."""
+        from slax_drake.systems.guard import FREE_HANG_SHARE, MIN_HELD_WEIGHT, least_lever, weigh_time
+
+        t = weigh_time(motion)
+        limit = float(self.policy.action_model.tool.rules.max_suction_moment)
+        if t is None or not math.isfinite(limit):
+            return None
+        hyp = next((h for h in belief.hypotheses if h.object.name == action.name), None)
+        return {"t_s": round(t, 4), "limit_nm": limit, "min_weight_n": MIN_HELD_WEIGHT,
+                "least_lever_m": round(least_lever(hyp, action.q[:2]), 4) if hyp is not None else 0.0,
+                "free_hang_share": FREE_HANG_SHARE}
 
     def _record(self, action, belief, observation, rejected, report, history, timings, reason=None,
                 visibility=None, frame=None) -> dict:

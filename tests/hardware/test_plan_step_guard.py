@@ -46,3 +46,28 @@ def test_a_guarded_suction_s_push_in_window_and_stop_force_go_into_the_step_file
     assert y[1] - y[0] > 0.1
     plain = dataclasses.replace(motion, action=dataclasses.replace(action, guarded=False))
     assert step._guarded_push_in(plain.action, plain, believed.objects) is None
+
+
+def test_a_lifted_suction_s_weighing_goes_into_the_step_file(sim_scenario):
+    """A lift's weighing (when, against which limit, weight and least lever) for the controller; none for a drag."""
+    from types import SimpleNamespace
+
+    from slax_drake.hardware.plan_step import StepPlanner
+    from slax_drake.systems.guard import FREE_HANG_SHARE, MIN_HELD_WEIGHT, weigh_time
+
+    step = StepPlanner("sim_configs/station_sim_shelf.yaml", policy="slax-belief")
+    carried = _box("object_1", 0.20, -0.10, (0.08, 0.08, 0.10), 0.3)
+    believed = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (carried,), None, 0)
+    model = step.policy.action_model
+    action = next(a for a in model.enumerate(believed.objects, pushes=False, only=("object_1",)).feasible
+                  if a.grip == "lift")
+    motion = step.motion_planner.plan(action, believed)
+    assert motion.feasible, motion.reason
+    seen = SimpleNamespace(object=carried, uncertainty=SimpleNamespace(depth=(0.04, 0.2)))
+    record = step._weigh_at_lift(action, motion, SimpleNamespace(hypotheses=[seen]))
+    assert record["t_s"] == round(weigh_time(motion), 4) and 0.0 < record["t_s"] < motion.trajectory.duration
+    assert record["limit_nm"] == model.tool.rules.max_suction_moment == 0.4
+    assert record["min_weight_n"] == MIN_HELD_WEIGHT and record["free_hang_share"] == FREE_HANG_SHARE
+    assert record["least_lever_m"] == pytest.approx(0.5 * (carried.center[1] - action.q[1]), abs=2e-3)
+    drag = dataclasses.replace(motion, action=dataclasses.replace(action, drag=True))
+    assert step._weigh_at_lift(drag.action, drag, SimpleNamespace(hypotheses=[seen])) is None
