@@ -91,13 +91,13 @@ def judge_action(action: dict, shelf_width: float, shelf_depth: float) -> tuple:
 
 SEAL_MOVE = 0.01  # m: a suctioned object that moved less than this (and turned < SEAL_TURN) was never sealed
 SEAL_TURN = math.radians(5.0)  # rad
-MISMATCH_KINDS = ("dropped", "toppled", "seal never formed", "slid", "turned")
+MISMATCH_KINDS = ("dropped", "toppled", "put back", "seal never formed", "slid", "turned")
 
 
 def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str | None:
     """Why an executed action did not match its prediction (None when it matched or has no outcome), the first
     of: "dropped" (the object was lost at the next decision, its centre out of the bay), "toppled" (lost, inside
-    the bay: tilted over 20 deg), "put back" (a lift weighed too heavy at the cup and undone), "seal never formed" (a suction whose object moved less than ``SEAL_MOVE`` and
+    the bay: tilted over 20 deg), "put back" (a lift the arm weighed at the cup and undid: too heavy, not hanging free or nothing held), "seal never formed" (a suction whose object moved less than ``SEAL_MOVE`` and
     turned less than ``SEAL_TURN`` from where it stood), "slid" (its planar position more than ``MATCH_DISTANCE``
     from the prediction), "turned" (its position within it, its yaw more than ``MATCH_YAW`` off). ``action``: a
     physics record's action (``matched``, ``outcome``, ``before``, ``lost_after``, ``type``)."""
@@ -108,7 +108,7 @@ def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str |
         inside = abs(out["x"]) < shelf_width / 2 and abs(out["y"]) < shelf_depth / 2
         return "toppled" if inside else "dropped"
     if (action.get("weighed") or {}).get("put_back"):
-        return "put back"  # weighed at the lift, over the moment limit: lowered where it stood and released
+        return "put back"  # weighed at the lift and undone: lowered where it stood and released
     if action["type"] == "suction" and before is not None:
         moved = math.hypot(out["x"] - before["x"], out["y"] - before["y"])
         if moved < SEAL_MOVE and abs(math.remainder(out["yaw"] - before["yaw"], 2.0 * math.pi)) < SEAL_TURN:
@@ -371,6 +371,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
         if any("weighed" in a for a in d["actions"]):  # lifts weighed at the cup, and how many were put back
             summary["trials"][-1]["weighed"] = [sum(1 for a in d["actions"] if "weighed" in a),
                                                 sum(1 for a in d["actions"] if (a.get("weighed") or {}).get("put_back"))]
+            summary["trials"][-1]["put_back_why"] = dict(collections.Counter(
+                a["weighed"]["why"] for a in d["actions"] if (a.get("weighed") or {}).get("put_back")))
     for p in policies:
         per = {}
         for key in [str(n) for n in densities] + ["all"]:
@@ -388,7 +390,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "guarded_placements": [sum(t.get("guarded", [0, 0])[0] for t in sel),
                                        sum(t.get("guarded", [0, 0])[1] for t in sel)],
                 **({"weighed_lifts": [sum(t["weighed"][0] for t in sel if "weighed" in t),
-                                      sum(t["weighed"][1] for t in sel if "weighed" in t)]}
+                                      sum(t["weighed"][1] for t in sel if "weighed" in t)],
+                    "put_back_why": dict(sorted(sum((collections.Counter(t.get("put_back_why", {})) for t in sel),
+                                                    collections.Counter()).items()))}
                    if any("weighed" in t for t in sel) else {}),
                 "shelf_median_steps": _median([t["shelf_steps"] for t in sel if t["shelf_success"]]),
                 "drake_median_steps": _median([t["drake_steps"] for t in sel if t["drake_success"]]),
@@ -611,10 +615,12 @@ def markdown_table(summary: dict) -> str:
                           f"stopped on contact {guarded[1]}.")
         weighed = per.get("all", {}).get("weighed_lifts")
         if weighed and weighed[0]:
-            lines[-1] += (f" Lifts weighed at the cup: {weighed[0]}, put back as too heavy (their moment over the "
-                          f"limit they were planned under) {weighed[1]}.")
+            why = per["all"].get("put_back_why") or {}
+            lines[-1] += (f" Lifts weighed at the cup: {weighed[0]}, put back {weighed[1]}"
+                          + (" (" + ", ".join(f"{k} {v}" for k, v in why.items()) + ")" if why else "") + ".")
     lines += ["", "Physics fidelity per action kind (actions matching the first-order prediction) and the mismatches by "
-              "kind (dropped: lost out of the bay; toppled: lost inside it; seal never formed: a suction that left its "
+              "kind (dropped: lost out of the bay; toppled: lost inside it; put back: a lift the arm weighed and "
+              "undid; seal never formed: a suction that left its "
               f"object within {100 * SEAL_MOVE:.0f} cm and {math.degrees(SEAL_TURN):.0f} deg of where it stood; slid: "
               f"more than {100 * MATCH_DISTANCE:.0f} cm from the prediction; turned: within it, yaw off):", "",
               "| Policy | Objects | Pushes matching | Suctions matching (lifted) | Drags matching | " + " | ".join(

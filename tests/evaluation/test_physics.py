@@ -262,10 +262,10 @@ def test_summary_counts_match_per_action_kind_and_mismatch_kinds():
     assert e["match_by_action"] == {"push": {"matched": 2, "judged": 4, "match_rate": 0.5},
                                     "suction": {"matched": 1, "judged": 2, "match_rate": 0.5},
                                     "drag": {"matched": 1, "judged": 2, "match_rate": 0.5}}
-    assert e["mismatch_kinds"] == {"dropped": 0, "toppled": 0, "seal never formed": 1, "slid": 1, "turned": 1,
-                                   "unclassified": 1}
+    assert e["mismatch_kinds"] == {"dropped": 0, "toppled": 0, "put back": 0, "seal never formed": 1, "slid": 1,
+                                   "turned": 1, "unclassified": 1}
     md = markdown_table({"policies": {"p": {"all": {**e, "trials": 2}}}, "meta": {}})
-    assert "| p | All | 50 % (2/4) | 50 % (1/2) | 50 % (1/2) | 0 | 0 | 1 | 1 | 1 | 1 |" in md
+    assert "| p | All | 50 % (2/4) | 50 % (1/2) | 50 % (1/2) | 0 | 0 | 0 | 1 | 1 | 1 | 1 |" in md
 
 
 @pytest.mark.slow
@@ -345,3 +345,28 @@ def test_undo_rules_say_how_the_policys_correction_judged_each_undo():
     assert undo_rules([shuttle[0], _moved(-0.05, -0.1, 0.05, -0.1)]) == {"not recorded": 1}
     # a relocation is no undo: nothing to judge
     assert undo_rules([_moved(0.0, -0.1, 0.11, -0.1), {**_moved(0.11, -0.1, -0.24, -0.1), "reversal_rule": None}]) == {}
+
+
+def test_the_summary_counts_the_lifts_weighed_and_put_back_and_why():
+    from slax_drake.evaluation.physics import markdown_table, summarise
+
+    before = {"x": 0.0, "y": -0.2, "yaw": 0.0}
+
+    def lift(weighed, moved=0.1):
+        return {"type": "suction", "grip": "lift", "planning_s": 0.1, "lost_after": False, "before": before,
+                "predicted": {"x": 0.1, "y": -0.2, "yaw": 0.0}, "outcome": {"x": moved, "y": -0.2, "yaw": 0.0},
+                "weighed": weighed}
+
+    drake = {"success": True, "result": "revealed", "steps": 3, "toppled": [], "dropped": [],
+             "real_time_factor": 1.0, "wall_s": 1.0,
+             "actions": [lift({"put_back": False}), lift({"put_back": True, "why": "too heavy"}, 0.0),
+                         lift({"put_back": True, "why": "not hanging free"}, 0.0)]}
+    results = [{"policy": "p", "density": 4, "index": 0, "seed": 0, "shelf": {"success": True, "steps": 2},
+                "drake": drake}]
+    summary = summarise(results, ["p"], [4])
+    assert summary["trials"][0]["weighed"] == [3, 2]
+    e = summary["policies"]["p"]["all"]
+    assert e["weighed_lifts"] == [3, 2] and e["put_back_why"] == {"not hanging free": 1, "too heavy": 1}
+    assert e["mismatch_kinds"]["put back"] == 2
+    md = markdown_table(summary)
+    assert "Lifts weighed at the cup: 3, put back 2 (not hanging free 1, too heavy 1)." in md
