@@ -25,6 +25,7 @@ import sys
 from pathlib import Path
 
 from slax_drake.config import load_scenario
+from slax_drake.evaluation.physics import put_back_why
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.mass import median_mass
@@ -123,7 +124,7 @@ def main(argv=None) -> int:
         w = r["weighed"]
         if w is not None:
             c["weighed"] += 1
-            c[f"put back: {w['why']}" if w.get("put_back") else "carried"] += 1
+            c[f"put back: {put_back_why(w)}" if w.get("put_back") else "carried"] += 1
             c["lost after being carried"] += r["lost"] and not w.get("put_back")
     reads = [r["weighed"]["weight_n"] / (r["mass"] * GRAVITY) for r in rows
              if r["weighed"] is not None and r["weighed"]["weight_n"] >= MIN_HELD_WEIGHT]
@@ -154,7 +155,7 @@ def main(argv=None) -> int:
             moment = "" if r["lever"] is None else f"{r['mass'] * GRAVITY * r['lever']:.2f}"
             w = r["weighed"]
             said = "" if w is None else (f"{w['weight_n']:.1f} N, {w['moment_nm']:.2f} N m"
-                                         + (f", put back: {w['why']}" if w.get("put_back") else ", carried"))
+                                         + (f", put back: {put_back_why(w)}" if w.get("put_back") else ", carried"))
             print(f"| {r['trial']} | {r['step']} | {r['object']}{' (nearest)' if r['guessed'] else ''} | {r['shape']} "
                   f"| {r['mass']:.2f} | {r['median']:.2f} | {moment} | {said} |")
     return 0

@@ -94,6 +94,20 @@ SEAL_TURN = math.radians(5.0)  # rad
 MISMATCH_KINDS = ("dropped", "toppled", "put back", "seal never formed", "slid", "turned")
 
 
+def put_back_why(weighed: dict) -> str:
+    """Why a weighed lift was put back (:func:`slax_drake.systems.guard.weigh_verdict`): its record's ``why``; a
+    record that kept only the weight, the moment and the limit (a run of bda367b) gets the
+    verdict those values give in the verdict's order (nothing held, too heavy), else "not hanging free", the only
+    verdict left."""
+    from slax_drake.systems.guard import MIN_HELD_WEIGHT
+
+    if "why" in weighed:
+        return weighed["why"]
+    if weighed["weight_n"] < MIN_HELD_WEIGHT:
+        return "nothing held"
+    return "too heavy" if weighed["moment_nm"] > weighed["limit_nm"] else "not hanging free"
+
+
 def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str | None:
     """Why an executed action did not match its prediction (None when it matched or has no outcome), the first
     of: "dropped" (the object was lost at the next decision, its centre out of the bay), "toppled" (lost, inside
@@ -161,7 +175,9 @@ def _run_scene(job) -> dict:
                   "rejected_before": len(a.get("rejected_before", [])),
                   "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
         if isinstance(a.get("weighed"), dict):  # a lift weighed at the cup: its moment, whether it was put back
-            record["weighed"] = {k: a["weighed"][k] for k in ("weight_n", "moment_nm", "limit_nm", "put_back")}
+            record["weighed"] = {k: a["weighed"][k] for k in ("weight_n", "moment_nm", "lever_m", "least_lever_m",
+                                                               "limit_nm", "put_back", "why", "mass_kg")
+                                 if k in a["weighed"]}
         if isinstance(a.get("guard"), dict):  # a guarded placement: whether it stopped on contact, where
             record["guard"] = {k: a["guard"][k] for k in ("stopped", "pushed_in_m", "short_m", "peak_force_n",
                                                           "threshold_n", "rebased") if k in a["guard"]}
@@ -372,7 +388,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             summary["trials"][-1]["weighed"] = [sum(1 for a in d["actions"] if "weighed" in a),
                                                 sum(1 for a in d["actions"] if (a.get("weighed") or {}).get("put_back"))]
             summary["trials"][-1]["put_back_why"] = dict(collections.Counter(
-                a["weighed"]["why"] for a in d["actions"] if (a.get("weighed") or {}).get("put_back")))
+                put_back_why(a["weighed"]) for a in d["actions"] if (a.get("weighed") or {}).get("put_back")))
     for p in policies:
         per = {}
         for key in [str(n) for n in densities] + ["all"]:

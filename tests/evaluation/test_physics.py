@@ -370,3 +370,12 @@ def test_the_summary_counts_the_lifts_weighed_and_put_back_and_why():
     assert e["mismatch_kinds"]["put back"] == 2
     md = markdown_table(summary)
     assert "Lifts weighed at the cup: 3, put back 2 (not hanging free 1, too heavy 1)." in md
+
+
+def test_why_a_lift_was_put_back_is_read_from_the_values_of_a_record_that_kept_no_reason():
+    from slax_drake.evaluation.physics import put_back_why
+
+    assert put_back_why({"why": "too heavy", "weight_n": 0.0, "moment_nm": 0.0, "limit_nm": 0.4}) == "too heavy"
+    assert put_back_why({"weight_n": 0.01, "moment_nm": 0.0, "limit_nm": 0.4}) == "nothing held"
+    assert put_back_why({"weight_n": 6.0, "moment_nm": 0.45, "limit_nm": 0.4}) == "too heavy"
+    assert put_back_why({"weight_n": 7.8, "moment_nm": 0.37, "limit_nm": 0.4}) == "not hanging free"
