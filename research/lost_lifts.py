@@ -133,8 +133,7 @@ def main(argv=None) -> int:
         under = sorted(x for x in reads if x < 0.99)
         over = sorted(x for x in reads if x > 1.01)
         print(f"The weighing read {len(reads)} held loads: the true weight to within 1 % in {within}; "
-              f"less in {len(under)}" + (f" ({under[0] * 100:.0f}-{under[-1] * 100:.0f} %: the floor carried part)"
-                                         if under else "")
+              f"less in {len(under)}" + (f" ({under[0] * 100:.0f}-{under[-1] * 100:.0f} % of it)" if under else "")
               + f"; more in {len(over)}" + (f" (up to {over[-1] * 100:.0f} %)" if over else "") + ".\n")
     verdicts = sorted({k for c in counts.values() for k in c if k.startswith("put back")})
     weighed = any(c["weighed"] for c in counts.values())
