@@ -99,13 +99,13 @@ def put_back_why(weighed: dict) -> str:
     record that kept only the weight, the moment and the limit (a run of bda367b) gets the
     verdict those values give in the verdict's order (nothing held, too heavy), else "not hanging free", the only
     verdict left."""
-    from slax_drake.systems.guard import MIN_HELD_WEIGHT
+    from slax_drake.systems.guard import MIN_HELD_WEIGHT, PutBack
 
     if "why" in weighed:
         return weighed["why"]
     if weighed["weight_n"] < MIN_HELD_WEIGHT:
-        return "nothing held"
-    return "too heavy" if weighed["moment_nm"] > weighed["limit_nm"] else "not hanging free"
+        return PutBack.NOTHING_HELD.value
+    return (PutBack.TOO_HEAVY if weighed["moment_nm"] > weighed["limit_nm"] else PutBack.NOT_HANGING_FREE).value
 
 
 def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str | None:

@@ -203,6 +203,16 @@ def observation_for(policy, scene: Scene, observer: CameraObserver | None = None
 WEIGHED_PUT_BACK = "weighed at the lift and put back"  # the note that opens a lift undone as too heavy
 
 
+def lift_over_limit(obj, action, model: ActionModel) -> float | None:
+    """The moment (N m) the true object ``obj`` hangs off the cup when ``action`` is a lift (not a drag) and that
+    moment exceeds the action model's ``max_suction_moment`` (what the arm weighs at the lift and puts back), else
+    None."""
+    if not isinstance(action, Suction) or action.drag:
+        return None
+    moment = model.held_moment(obj, action.q[:2])
+    return moment if RULES["max_suction_moment"].refuses(model.tool.rules.max_suction_moment, moment) else None
+
+
 def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
     """Applies ``action`` to the true scene; returns the new scene and a note ("" when it went as planned). A lifted
     suction whose true object hangs more off the cup than the action model's ``max_suction_moment`` (its true mass:
@@ -270,8 +280,8 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         return _execute_drag(scene, i, action, model, clear_at)
 
     if isinstance(action, Suction):
-        moment = model.held_moment(obj, action.q[:2])
-        if RULES["max_suction_moment"].refuses(t.rules.max_suction_moment, moment):
+        moment = lift_over_limit(obj, action, model)
+        if moment is not None:
             # the arm weighs what it lifted (as the Drake trial's planner does from its joint efforts) and puts back
             # an object that hangs more off the cup than the lift was planned for
             return scene, (f"{WEIGHED_PUT_BACK}: {obj.name} hangs {moment:.2f} N m off the cup > "
@@ -409,10 +419,11 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
                 continue
             chosen = action
             action = on_true_object(action, observation.known, scene, true_name)
+        true_object = next((o for o in scene.objects if o.name == action.name), None)
+        if names is not None and true_object is not None and lift_over_limit(true_object, action,
+                                                                              policy.action_model) is not None:
+            observer.weighed(chosen, observation.known, true_object, policy.action_model)  # its track takes the mass
         scene, note = execute(scene, action, policy.action_model)
-        if names is not None and note.startswith(WEIGHED_PUT_BACK):  # the arm weighed it: the tracker knows its mass
-            observer.weighed(chosen, observation.known, next(o for o in scene.objects if o.name == action.name),
-                             policy.action_model)
         actions.append(action.describe())
         if note:
             notes.append(f"step {len(actions)}: {note}")

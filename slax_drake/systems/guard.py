@@ -34,6 +34,7 @@ Units: efforts in N (the torso) and N m (the rest), forces in N, positions m / r
 from __future__ import annotations
 
 import dataclasses
+import enum
 
 import numpy as np
 
@@ -149,16 +150,24 @@ MIN_HELD_WEIGHT = 0.3
 FREE_HANG_SHARE = 0.8
 
 
-def weigh_verdict(payload: Payload, limit: float, least_lever: float) -> str | None:
-    """Why a lifted object weighed ``payload`` must be put back rather than carried, or None: "nothing held"
-    (under ``MIN_HELD_WEIGHT``), "too heavy" (its moment over ``limit``, N m: what the lift was planned under),
-    "not hanging free" (its lever under ``FREE_HANG_SHARE`` of ``least_lever``, m; 0: not judged)."""
+class PutBack(str, enum.Enum):
+    """Why a weighed lift is put back (:func:`weigh_verdict`); the value is the trial record's ``why``."""
+
+    NOTHING_HELD = "nothing held"  # under MIN_HELD_WEIGHT: the seal let go
+    TOO_HEAVY = "too heavy"  # its moment over the limit the lift was planned under
+    NOT_HANGING_FREE = "not hanging free"  # its lever under FREE_HANG_SHARE of the least lever: the floor carries part
+
+
+def weigh_verdict(payload: Payload, limit: float, least_lever: float) -> PutBack | None:
+    """Why a lifted object weighed ``payload`` must be put back rather than carried (:class:`PutBack`), or None:
+    nothing held (under ``MIN_HELD_WEIGHT``), too heavy (its moment over ``limit``, N m: what the lift was planned
+    under), not hanging free (its lever under ``FREE_HANG_SHARE`` of ``least_lever``, m; 0: not judged)."""
     if payload.weight_n < MIN_HELD_WEIGHT:
-        return "nothing held"
+        return PutBack.NOTHING_HELD
     if payload.moment_nm > limit:
-        return "too heavy"
+        return PutBack.TOO_HEAVY
     if least_lever > 0.0 and payload.moment_nm / payload.weight_n < FREE_HANG_SHARE * least_lever:
-        return "not hanging free"
+        return PutBack.NOT_HANGING_FREE
     return None
 
 

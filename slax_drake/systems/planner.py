@@ -57,7 +57,7 @@ from slax_drake.shelf.distribution import support
 from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
-from slax_drake.systems.guard import guard_record, least_lever, push_in_forces, weigh_time, weigh_verdict
+from slax_drake.systems.guard import PutBack, guard_record, least_lever, push_in_forces, weigh_time, weigh_verdict
 
 MAX_PLAN_ATTEMPTS = 25
 
@@ -293,12 +293,12 @@ class PlannerSystem(LeafSystem):
             state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
                 s, weigh_at=None, log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
             return
-        record["why"] = why
-        if why == "nothing held":  # the cup does not hold it there: none of its suctions, while it stands there
+        record["why"] = why.value
+        if why is PutBack.NOTHING_HELD:  # the cup does not hold it there: none of its suctions, while it stands there
             self.policy.exclude(action, "weighed at the lift: the cup held nothing (its seal let go)", whole_group=True)
         else:  # the cup cannot lift it free: reckoned at least at the limit from now on
             mass = payload.mass_at(lever)
-            if why == "not hanging free" and lever > 0.0:
+            if why is PutBack.NOT_HANGING_FREE and lever > 0.0:
                 mass = max(mass, 1.01 * limit / (GRAVITY * lever))
             record["mass_kg"] = round(mass, 4)
             self.tracker.weighed(action.name, record["mass_kg"])
