@@ -9,7 +9,11 @@ registry row each.
 
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
-        [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...]
+        [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
+
+``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
+last arrangement the policy saw, how many of them each correction screened out and the action model's refusals by
+kind, summed at the end (what ends the trials: the rules, or the corrections on the moves the rules leave).
 
 ``--compare``: a `slax-drake benchmark` results folder run with the same protocol seed; each trial also prints
 the folder's outcome of ``--compare-policy`` for the same trial, and the flips (won: revealed here, not there;
@@ -17,6 +21,7 @@ lost: the reverse) are counted at the end.
 """
 
 import argparse
+import collections
 import json
 import sys
 import time
@@ -58,6 +63,9 @@ def main(argv=None):
                     help="with --observation camera: the L515 noise model, seeded by the scene seed")
     ap.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
                     help="override one rule of the profile, as the benchmark's --tool-rule; repeatable")
+    ap.add_argument("--stuck", action="store_true",
+                    help="per trial ending with no feasible action: the feasible candidates left, the corrections' "
+                         "screening and the action model's refusals by kind")
     args = ap.parse_args(argv)
     try:
         tool_rules = parse_tool_rules(args.tool_rule, args.profile)
@@ -87,6 +95,7 @@ def main(argv=None):
         return 2
     size = tuple(scenario.target.sizes[0])
     revealed = 0
+    stuck = {"endings": 0, "feasible": 0, "screened": collections.Counter(), "refused": collections.Counter()}
     trials = parse_trials(args.trials)
     for density, index in trials:
         seed = scene_seed(args.seed, density, index)
@@ -98,6 +107,7 @@ def main(argv=None):
         if args.observation == "camera":
             observer = CameraObserver(scene.shelf, scene.camera, size, width=policy.observation_width,
                                       segmentation=args.segmentation, noise_seed=seed if args.sensor_noise else None)
+        seen = watch_last_arrangement(policy)
         t0 = time.process_time()
         result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                            suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
@@ -107,14 +117,49 @@ def main(argv=None):
               f"visible={result.visible_fraction:.2f} cpu_s={time.process_time() - t0:.1f} "
               f"longest_decision_s={longest:.2f}" + earlier_outcome(compare, density, index, result.success, flips),
               flush=True)
+        if args.stuck and result.reason == "no feasible action":
+            print("   ", stuck_ending(policy, seen["known"], result.screened or {}, stuck), flush=True)
         if args.log:
             for action, log in zip(result.actions, policy.decision_log):
                 print("   ", action, {k: log.get(k) for k in ("revealed", "value", "widened", "plan")})
     print(f"revealed {revealed} / {len(trials)} ({args.policy}, options {options})")
+    if args.stuck and stuck["endings"]:
+        n = stuck["endings"]
+        print(f"{n} trials ended with no feasible action; at their last arrangement, per trial: "
+              f"{stuck['feasible'] / n:.1f} feasible candidates, screened out "
+              f"{ {k: round(v / n, 1) for k, v in stuck['screened'].most_common()} }, refused by the action model "
+              f"{ {k: round(v / n, 1) for k, v in stuck['refused'].most_common()} }")
     if compare is not None:
         print(f"flips against {compare}: won {len(flips['won'])} ({' '.join(flips['won'])}), lost "
               f"{len(flips['lost'])} ({' '.join(flips['lost'])})")
     return 0
+
+
+def watch_last_arrangement(policy) -> dict:
+    """Wraps ``policy.decide`` to keep the objects of the last observation it decided on (``["known"]``)."""
+    seen = {"known": ()}
+    decide = policy.decide
+
+    def watched(obs):
+        seen["known"] = tuple(obs.known)
+        return decide(obs)
+
+    policy.decide = watched
+    return seen
+
+
+def stuck_ending(policy, known, screened: dict, totals: dict) -> str:
+    """One line on a trial that ended with no feasible action on the objects ``known``: the action model's feasible
+    candidates there, ``screened`` (the trial record's counts per correction) and the refusals by kind; added to
+    ``totals``."""
+    found = policy.action_model.enumerate(tuple(known))
+    refused = collections.Counter(r.kind.value if r.kind is not None else "other" for r in found.rejected)
+    totals["endings"] += 1
+    totals["feasible"] += len(found.feasible)
+    totals["screened"].update(screened)
+    totals["refused"].update(refused)
+    return (f"no feasible action: {len(found.feasible)} feasible, screened out {screened}, refused "
+            f"{dict(refused.most_common())}")
 
 
 def earlier_outcome(folder, density: int, index: int, success: bool, flips: dict) -> str:

@@ -63,6 +63,13 @@ that changes nothing. "progress" takes the plan whose end is nearest to revealin
 distances, lost and failed worlds, the suctions' risk), whatever it costs, ties by V; the rest of that plan stays
 in the next decision's beam; every other decision is unchanged.
 
+``stuck_undo`` (variant ``slax-belief-stuck-undo``): when no plan of either search reveals anything, the moves the
+corrections screened out only as a return to an observed arrangement or as a shuttle start plans of a widened search
+too (:meth:`undo_plans`), and the best of those plans is taken when one reveals part of the belief. Under the Drake
+station's rules a first move that revealed nothing often leaves only moves back (an object pushed across its
+neighbour's tool lane), and the worlds an arrangement revealed are gone from the belief, so a move back whose plan
+reveals what the belief still holds is no cycle.
+
 ``blocked_rule`` (what a failed placement's box refuses; ``slax-belief-v4`` sets "risk"). A placement put back or
 stopped short marks its placement box blocked (:meth:`note_outcome`); "box" (the default) refuses every later
 placement, of any object, that overlaps such a box, for the rest of the trial. But what stopped it stands somewhere
@@ -238,6 +245,7 @@ class BeliefSearch(Hindsight):
         self.blocked_rule = o.blocked_rule  # which placements a failed placement's box refuses (placement_allowed)
         self.blocked_risk = float(o.blocked_risk)  # blocked_rule="risk": the failure chance a blocked box adds
         self.dead_end = o.dead_end  # what a plan ending where no move is left costs ("ignore", "model", ...)
+        self.stuck_undo = o.stuck_undo  # stuck: moves back screened by the corrections start plans too (undo_plans)
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -1009,6 +1017,11 @@ class BeliefSearch(Hindsight):
         if self.widen_beam > self.beam and not log["capped"] and not any(k.revealed > 0 for k in seen_nodes):
             log["widened"] = True  # nothing revealed within max_depth: once more with a wider beam
             seen_nodes += self.beam_search(worlds, first_level, kept, remaining, counter, log, t0, self.widen_beam)
+        if self.stuck_undo and not log["capped"] and not any(k.revealed > 0 for k in seen_nodes):
+            undo = self.undo_plans(worlds, root, cands, remaining, counter, log, t0)
+            if undo:
+                seen_nodes = undo
+                first_level = [k for k in undo if len(k.plan) == 1]
         if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
             # the most revealed mass per expected cost, R / (G + dead end); ties: the lesser V, the earlier plan
             best = self.least(seen_nodes, lambda k, extra: (-k.revealed / max(k.g + extra, 1e-9), k.value, k.order),
@@ -1034,6 +1047,26 @@ class BeliefSearch(Hindsight):
         rest = [k.plan[0] for k in ranked if k.plan[0] != first]
         rest += [a for a in cands if a != first and a not in rest]
         return Decision((first, *rest))
+
+    def undo_plans(self, worlds, root: _Node, cands: list, remaining: int, counter, log: dict, t0: float) -> list:
+        """``stuck_undo``: every plan looked at (a widened beam) from the feasible moves the corrections screened out
+        only as a return to an observed arrangement or as a shuttle (a failed action's exclusion and a blocked
+        placement still apply), when one of them reveals part of the belief; else []. ``log["undo"]``: how many
+        such first moves were looked at."""
+        from slax_drake.policies.protocol import Screened
+
+        taken = set(cands)
+        moves = [m for m in self.moves(root.objects) if m[0] not in taken]
+        if not moves:
+            return []
+        why = dict(self.screen(root.objects, [a for a, _, _ in moves]))
+        moves = [m for m in moves if why.get(m[0]) in (Screened.BACK, Screened.SHUTTLE)]
+        if not moves:
+            return []
+        log["undo"] = len(moves)
+        first_level = self.expansions(worlds, root, moves, remaining, counter)
+        nodes = self.beam_search(worlds, first_level, {}, remaining, counter, log, t0, self.widen_beam)
+        return nodes if any(k.revealed > 0 for k in nodes) else []
 
     def plan_moves(self, node: _Node) -> list:
         """The moves the search looks at from ``node``: :meth:`moves`, and with ``dead_end`` "corrections" only

@@ -116,6 +116,15 @@ class BeliefOptions:
     reveals much and leaves the shelf locked (the object pushed behind a neighbour that now blocks every tool
     path, or every object moved toward one wall) outranks plans that reveal a little less and keep the search
     going."""
+    stuck_undo: bool = False
+    """When no plan from the moves the corrections allow reveals anything, even widened: the moves screened out only
+    as a return to an observed arrangement or as a shuttle are looked at as first moves too, and a plan starting
+    with one is taken when it reveals part of the belief (:meth:`BeliefSearch.undo_plans`; ``decision_log``
+    records ``undo``). The corrections keep a policy from moving objects back and forth between arrangements that
+    reveal nothing new; a move back whose plan goes on to reveal worlds the belief still holds is not such a cycle
+    (the worlds an earlier arrangement revealed are gone from the belief), and without it a first move that revealed
+    nothing and blocked the others (an object pushed across the lane of its neighbour's tool) ends the trial with
+    no action left."""
     shuttle_last_resort: bool = False
     """When the corrections screen out every feasible candidate and some only as shuttles (a move back against the
     object's last move that uncovers no new width), those shuttles are offered rather than stopping with no action

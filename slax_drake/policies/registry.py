@@ -102,6 +102,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # a plan ending where no move would be left loses its unrevealed worlds (docs/research/physics.md)
     "slax-belief-dead-end": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, dead_end="corrections"),
                                         ours=True),
+    # stuck (no plan reveals anything): moves back the corrections screen out may start a plan that reveals
+    "slax-belief-stuck-undo": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, stuck_undo=True),
+                                          ours=True),
     # a move back passes the no-shuttle correction when it lets the camera see deeper than any observed arrangement
     "slax-belief-sight": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, shuttle_rule="sight"),
                                      ours=True),
