@@ -105,6 +105,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # stuck (no plan reveals anything): moves back the corrections screen out may start a plan that reveals
     "slax-belief-stuck-undo": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, stuck_undo=True),
                                           ours=True),
+    # both: stuck moves back may start a plan, and a plan ending where no move would be left loses its worlds
+    "slax-belief-stuck-undo-dead-end": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, stuck_undo=True, dead_end="corrections"), ours=True),
     # a move back passes the no-shuttle correction when it lets the camera see deeper than any observed arrangement
     "slax-belief-sight": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, shuttle_rule="sight"),
                                      ours=True),

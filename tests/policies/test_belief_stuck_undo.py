@@ -21,6 +21,8 @@ def test_stuck_undo_is_off_by_default_and_on_in_its_variant():
     scenario = load_scenario("sim_configs/table1.yaml")
     assert make_policy("slax-belief", scenario, horizon=8).stuck_undo is False
     assert make_policy("slax-belief-stuck-undo", scenario, horizon=8).stuck_undo is True
+    both = make_policy("slax-belief-stuck-undo-dead-end", scenario, horizon=8)
+    assert both.stuck_undo is True and both.dead_end == "corrections"
 
 
 def _trial(options: dict):
