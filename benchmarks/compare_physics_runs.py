@@ -3,14 +3,19 @@ per density, Drake's trial endings, its success (and with nothing lost), the act
 prediction, and the candidate motions the planner refused before each executed action. Made for the question
 "what did a code change do to 'no feasible motion'?" on the same scenes (never typed by hand).
 
-    python benchmarks/compare_physics_runs.py results/phys_cam results/phys_s8 [--policy bluction-dar] [--first N]
+    python benchmarks/compare_physics_runs.py results/phys_cam results/phys_s8 [--policy bluction-dar]
+        [--new-policy slax-belief-stuck-undo] [--first N]
 
-OLD and NEW are result folders with ``physics_trials/POLICY/DD_NNNN.json`` (their trial files); the scenes are
-matched by density and index, and a scene whose protocol seed differs between the runs stops the comparison.
+OLD and NEW are result folders with ``physics_trials/POLICY/DD_NNNN.json`` (their trial files) or, where those
+were not kept (the folders under ``docs/results``), their ``physics.json`` (its per-trial rows: endings and
+successes, no per-action columns); the scenes are matched by density and index, and a scene whose protocol seed
+differs between the runs stops the comparison. ``--new-policy``: NEW's policy when it is another (a variant against
+the default). The scenes whose outcome (revealed with nothing lost) differs are listed at the end.
 """
 
 import argparse
 import collections
+import json
 import sys
 from pathlib import Path
 
@@ -27,25 +32,46 @@ def fail(message: str) -> None:
 
 
 def load(folder: Path, policy: str) -> dict:
+    """{"DD_NNNN": trial record} of ``policy`` in ``folder``: its trial files, else the rows of its physics.json in
+    their shape (``drake["actions"]`` None: the rows keep no actions)."""
     trials = read_trial_records(folder, policy, kind="physics_trials", missing_ok=True)
-    if not trials:
-        fail(f"{folder} holds no trial files of {policy} (physics_trials/{policy}/*.json)")
-    return trials
+    if trials:
+        return trials
+    summary_file = folder / "physics.json"
+    if not summary_file.is_file():
+        fail(f"{folder} holds no trial files of {policy} (physics_trials/{policy}/*.json) and no physics.json")
+    try:
+        rows = json.loads(summary_file.read_bytes())["trials"]
+        out = {f"{int(r['density']):02d}_{int(r['index']):04d}": {
+            "seed": r["seed"], "shelf": {"success": bool(r["shelf_success"])},
+            "drake": {"result": r["drake_result"], "success": bool(r["drake_success"]), "toppled": r["toppled"],
+                      "dropped": r["dropped"], "actions": None}} for r in rows if r.get("policy") == policy}
+    except (ValueError, KeyError, TypeError) as e:
+        fail(f"{summary_file}: not a physics benchmark summary ({type(e).__name__}: {e})")
+    if not out:
+        fail(f"{summary_file} holds no trials of {policy}")
+    return out
+
+
+def clean(trial: dict) -> bool:
+    """Revealed in Drake with nothing toppled or dropped."""
+    d = trial["drake"]
+    return bool(d["success"] and not (d["toppled"] or d["dropped"]))
 
 
 def summary(trials: list[dict]) -> dict:
-    endings = collections.Counter(t["drake"]["result"] for t in trials)
-    actions = [a for t in trials for a in t["drake"]["actions"]]
+    endings = collections.Counter(t["drake"]["result"].split(":")[0] for t in trials)  # "simulation diverged: ..."
+    kept = all(t["drake"]["actions"] is not None for t in trials)  # physics.json rows keep no actions
+    actions = [a for t in trials for a in t["drake"]["actions"]] if kept else None
     lost = sum(bool(t["drake"]["toppled"] or t["drake"]["dropped"]) for t in trials)
     return {
         "scenes": len(trials),
         "success": sum(t["drake"]["success"] for t in trials),
-        "nothing_lost": sum(t["drake"]["success"] and not (t["drake"]["toppled"] or t["drake"]["dropped"])
-                            for t in trials),
+        "nothing_lost": sum(clean(t) for t in trials),
         "lost_any": lost,
-        "matched": sum(bool(a.get("matched")) for a in actions),
-        "actions": len(actions),
-        "refused_before": sum(a.get("rejected_before", 0) for a in actions),
+        "matched": sum(bool(a.get("matched")) for a in actions) if kept else None,
+        "actions": len(actions) if kept else None,
+        "refused_before": sum(a.get("rejected_before", 0) for a in actions) if kept else "-",
         "endings": endings,
         "shelf_success": sum(t["shelf"]["success"] for t in trials),
     }
@@ -53,21 +79,24 @@ def summary(trials: list[dict]) -> dict:
 
 def row(label: str, density: str, s: dict) -> str:
     endings = ", ".join(f"{k} {v}" for k, v in sorted(s["endings"].items()))
-    match = f"{100 * s['matched'] / s['actions']:.0f} % ({s['matched']}/{s['actions']})" if s["actions"] else "-"
+    match = (f"{100 * s['matched'] / s['actions']:.0f} % ({s['matched']}/{s['actions']})" if s["actions"]
+             else "-")
     return (f"| {label} | {density} | {s['scenes']} | {s['shelf_success']} | {s['success']} | {s['nothing_lost']} | "
             f"{match} | {s['refused_before']} | {endings} |")
 
 
-def main() -> int:
+def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("old", type=Path)
     parser.add_argument("new", type=Path)
     parser.add_argument("--policy", default="bluction-dar")
+    parser.add_argument("--new-policy", default=None, help="NEW's policy, when it is not --policy")
     parser.add_argument("--first", type=int, default=None, metavar="N",
                         help="only the first N scenes per density (e.g. those a run still in progress has finished)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     try:
-        old, new = load(args.old, args.policy), load(args.new, args.policy)
+        new_policy = args.new_policy or args.policy
+        old, new = load(args.old, args.policy), load(args.new, new_policy)
     except UserError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -75,10 +104,12 @@ def main() -> int:
     for key in common:
         if old[key]["seed"] != new[key]["seed"]:
             fail(f"scene {key} has seed {old[key]['seed']} in {args.old} and {new[key]['seed']} in {args.new}")
-    print(f"{args.policy}, the {len(common)} scenes both runs hold; counts of scenes (shelf simulator and Drake "
+    policies = args.policy if new_policy == args.policy else f"{args.policy} (old) against {new_policy} (new)"
+    print(f"{policies}, the {len(common)} scenes both runs hold; counts of scenes (shelf simulator and Drake "
           f"successes), actions matching the first-order prediction, candidate motions the planner refused before "
           f"the executed actions, and Drake's endings. Made by `python benchmarks/compare_physics_runs.py "
           f"{args.old} {args.new} --policy {args.policy}"
+          + (f" --new-policy {new_policy}" if new_policy != args.policy else "")
           + (f" --first {args.first}" if args.first is not None else "") + "`.\n")
     print("| run | objects | scenes | shelf sim. successes | Drake successes | nothing lost | actions matching | "
           "motions refused before an action | Drake endings |")
@@ -90,6 +121,10 @@ def main() -> int:
         for label, run in (("old", old), ("new", new)):
             print(row(f"{label} ({Path(getattr(args, label)).name})", density.lstrip("0"),
                       summary([run[k] for k in keys])))
+    won = [k for k in common if clean(new[k]) and not clean(old[k])]
+    lost = [k for k in common if clean(old[k]) and not clean(new[k])]
+    print(f"\nRevealed with nothing lost in new, not in old: {len(won)} ({', '.join(won) or 'none'}); in old, not in "
+          f"new: {len(lost)} ({', '.join(lost) or 'none'}).")
     return 0
 
 

@@ -168,3 +168,33 @@ def test_planning_per_action_table_pools_runs_and_counts_the_same_decisions(tmp_
     assert main([f"x={tmp_path / 'missing.json'}"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error: ")
+
+
+def _physics_row(density, index, policy, revealed, toppled=0, shelf=True):
+    return {"density": density, "index": index, "policy": policy, "seed": 100 * density + index,
+            "drake_result": "revealed" if revealed else "no feasible action", "drake_success": revealed,
+            "toppled": toppled, "dropped": 0, "shelf_success": shelf}
+
+
+def test_compare_physics_runs_reads_summaries_and_lists_the_scenes_whose_outcome_changed(tmp_path, capsys):
+    """The docs folders keep only physics.json: its rows are compared (another policy's on the new side), and a
+    scene revealed with an object lost counts as not clean."""
+    old, new = tmp_path / "old", tmp_path / "new"
+    old.mkdir(), new.mkdir()
+    (old / "physics.json").write_text(json.dumps({"trials": [
+        _physics_row(4, 0, "slax-belief", True), _physics_row(4, 1, "slax-belief", False),
+        _physics_row(6, 0, "slax-belief", True, toppled=1)]}))
+    (new / "physics.json").write_text(json.dumps({"trials": [
+        _physics_row(4, 0, "v", False), _physics_row(4, 1, "v", True), _physics_row(6, 0, "v", True),
+        _physics_row(4, 0, "slax-belief", True)]}))
+    main = script("compare_physics_runs").main
+    assert main([str(old), str(new), "--policy", "slax-belief", "--new-policy", "v"]) == 0
+    out = capsys.readouterr().out
+    assert "slax-belief (old) against v (new), the 3 scenes both runs hold" in out
+    assert "in new, not in old: 2 (04_0001, 06_0000); in old, not in new: 1 (04_0000)." in out
+    assert "| new (new) | all | 3 | 3 | 2 | 2 | - | - | no feasible action 1, revealed 2 |" in out
+    with pytest.raises(SystemExit) as exit_info:
+        main([str(old), str(tmp_path / "typo"), "--policy", "slax-belief"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no physics.json" in err[0]
