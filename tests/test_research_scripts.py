@@ -143,3 +143,32 @@ def test_lost_lifts_bands_a_lift_by_its_true_held_moment():
     assert lost_lifts.band(0.3, 0.4, 0.64).startswith("within the limit")
     assert lost_lifts.band(0.5, 0.4, 0.64).startswith("over the limit, under the lip")
     assert lost_lifts.band(0.7, 0.4, 0.64).startswith("over the lip")
+
+
+def _physics_record(shelf_actions, drake_actions, shelf_success=True, drake_success=False):
+    return {"shelf": {"actions": shelf_actions, "success": shelf_success, "reason": "revealed"},
+            "drake": {"actions": drake_actions, "success": drake_success, "toppled": 0, "dropped": 0,
+                      "result": "no feasible action"}}
+
+
+def test_drake_divergence_finds_the_first_step_off_the_shelf_path_and_its_cause():
+    module = script("drake_divergence")
+    push = {"type": "push", "true_object": "object_2", "d": -0.0851, "rejected_before": 0, "matched": True}
+    lift = {"type": "suction", "true_object": "object_4", "dx": 0.40, "dz": -0.19, "rejected_before": 0,
+            "matched": True}
+    shelf = ["push object_2 d=-0.085", "suction object_4 dx=+0.400 dz=-0.206 yaw=+4deg"]
+    assert module.divergence(_physics_record(shelf, [push, lift])) == (2, "same actions")
+    assert module.divergence(_physics_record(shelf, [push])) == (1, "Drake stopped (no feasible action)")
+    other = {**lift, "dx": 0.10}
+    assert module.divergence(_physics_record(shelf, [push, other])) == (1, "same predicted state, other decision")
+    assert module.divergence(_physics_record(shelf, [{**push, "mismatch": "slid", "matched": False}, other])) == (
+        1, "last action off prediction (slid)")
+    assert module.divergence(_physics_record(shelf, [{**push, "true_object": "object_0", "rejected_before": 1}])) == (
+        0, "planner refused")
+    assert module.divergence(_physics_record(shelf, [{**push, "d": -0.03}])) == (0, "first decision differs")
+
+
+def test_drake_divergence_refuses_a_folder_without_trial_files(tmp_path, capsys):
+    assert script("drake_divergence").main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: {tmp_path}")
