@@ -11,7 +11,8 @@ the suction's placement depth within 3 cm. The first step where they do not is t
 read from the Drake record at that step:
 
 - "planner refused": the motion planner rejected one or more candidates before the executed action (the policy
-  decided again without them; the shelf simulator has no motion planner);
+  decided again without them; the shelf simulator has no motion planner), with the refusals' kinds and waypoints
+  where the run recorded them (``rejected``, since the physics records keep them);
 - "last action off prediction (KIND)": the Drake action before it ended off the first-order prediction (slid,
   turned, put back, ...), so the two simulators decide on different shelves;
 - "first decision differs": step 0 with no rejection: the two frames of the same scene led to another choice;
@@ -76,7 +77,8 @@ def divergence(record: dict) -> tuple[int, str]:
     if common == len(shelf):
         return common, f"shelf stopped ({record['shelf']['reason']})"
     if drake[common].get("rejected_before", 0):
-        return common, "planner refused"
+        kinds = sorted({f"{r.get('kind')} at {r.get('waypoint')}" for r in drake[common].get("rejected", [])})
+        return common, "planner refused" + (f" ({'; '.join(kinds)})" if kinds else "")
     if common and not drake[common - 1].get("matched"):
         return common, f"last action off prediction ({drake[common - 1].get('mismatch')})"
     return common, "first decision differs" if common == 0 else "same predicted state, other decision"
@@ -108,7 +110,9 @@ def main(argv=None) -> int:
           f"{args.policy}`.\n")
     counts = collections.Counter()
     for key, record in records.items():
-        cause = found[key][1].split(" (")[0] if "stopped" in found[key][1] else found[key][1]
+        cause = found[key][1]
+        if cause.startswith(("Drake stopped", "shelf stopped", "planner refused")):
+            cause = cause.split(" (")[0]  # counted by kind; the scene list below keeps the detail
         counts[(bool(record["shelf"]["success"]), clean(record), cause)] += 1
     print("| shelf simulator | Drake (nothing lost) | cause at the divergence | scenes |")
     print("|---|---|---|---|")

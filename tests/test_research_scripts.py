@@ -165,6 +165,9 @@ def test_drake_divergence_finds_the_first_step_off_the_shelf_path_and_its_cause(
         1, "last action off prediction (slid)")
     assert module.divergence(_physics_record(shelf, [{**push, "true_object": "object_0", "rejected_before": 1}])) == (
         0, "planner refused")
+    refused = {**push, "true_object": "object_0", "rejected_before": 1,
+               "rejected": [{"action": "push track_3 d=-0.085", "kind": "tool collides", "waypoint": "insert"}]}
+    assert module.divergence(_physics_record(shelf, [refused])) == (0, "planner refused (tool collides at insert)")
     assert module.divergence(_physics_record(shelf, [{**push, "d": -0.03}])) == (0, "first decision differs")
 
 

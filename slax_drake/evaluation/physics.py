@@ -173,6 +173,9 @@ def _run_scene(job) -> dict:
                   "matched": action_matches(a["predicted"], a["outcome"], a.get("before")),
                   "planning_s": a.get("planning_s"), "planning_cpu_s": a.get("planning_cpu_s"),
                   "rejected_before": len(a.get("rejected_before", [])),
+                  # the candidates the motion planner refused before this action: what, why (FailureKind), where
+                  "rejected": [{k: r.get(k) for k in ("action", "kind", "waypoint")}
+                               for r in a.get("rejected_before", [])],
                   "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
         if isinstance(a.get("weighed"), dict):  # a lift weighed at the cup: its moment, whether it was put back
             record["weighed"] = {k: a["weighed"][k] for k in ("weight_n", "moment_nm", "lever_m", "least_lever_m",

@@ -50,6 +50,7 @@ def test_tiny_benchmark_writes_the_files_with_the_schema(tiny):
     for a in drake["actions"]:
         assert a["matched"] == action_matches(a["predicted"], a["outcome"], a["before"])
         assert a["planning_s"] > 0.0 and a["rejected_before"] >= 0
+        assert len(a["rejected"]) == a["rejected_before"]  # each refusal with its kind and waypoint
         assert set(a["motion_timings"]) == {"ik_s", "check_s", "timing_s"}
         assert "reversal_rule" in a  # kept from the trial's record, for undo_rules
     assert sum(e["undo_rules"].values()) == row["undoes"]
