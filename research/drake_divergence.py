@@ -22,7 +22,8 @@ read from the Drake record at that step:
   ...); "same actions": no divergence.
 
 Counted per (shelf outcome, Drake outcome with nothing lost); the scenes the shelf simulator revealed and Drake did
-not are listed with their cause.
+not are listed with their cause; and, where the records keep them, the motion planner's refusals of the whole run
+by kind and waypoint.
 """
 
 from __future__ import annotations
@@ -122,6 +123,15 @@ def main(argv=None) -> int:
     print(f"\nRevealed by the shelf simulator, not by Drake with nothing lost: {len(lost)}.\n")
     for key, (step, cause) in lost:
         print(f"- {key}: step {step}, {cause}")
+    refusals = collections.Counter((r.get("kind"), r.get("waypoint")) for record in records.values()
+                                   for a in record["drake"]["actions"] for r in a.get("rejected", []))
+    if refusals:  # runs since the records keep them
+        print(f"\nThe motion planner's refusals before the executed actions, by kind and waypoint "
+              f"({sum(refusals.values())} in all):\n")
+        print("| kind | waypoint | refusals |")
+        print("|---|---|---|")
+        for (kind, waypoint), n in refusals.most_common():
+            print(f"| {kind} | {waypoint} | {n} |")
     return 0
 
 

@@ -175,3 +175,17 @@ def test_drake_divergence_refuses_a_folder_without_trial_files(tmp_path, capsys)
     assert script("drake_divergence").main([str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"error: {tmp_path}")
+
+
+def test_drake_divergence_tallies_the_planners_refusals(tmp_path, capsys):
+    folder = tmp_path / "physics_trials" / "slax-belief"
+    folder.mkdir(parents=True)
+    refused = {"type": "push", "true_object": "object_0", "d": 0.1, "rejected_before": 2, "matched": True,
+               "rejected": [{"action": "a", "kind": "tool collides", "waypoint": "insert"},
+                            {"action": "b", "kind": "tool collides", "waypoint": "insert"}]}
+    record = _physics_record(["push object_2 d=-0.085"], [refused])
+    (folder / "04_0000.json").write_text(json.dumps({**record, "seed": 1}))
+    assert script("drake_divergence").main([str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "- 04_0000: step 0, planner refused (tool collides at insert)" in out
+    assert "| tool collides | insert | 2 |" in out
