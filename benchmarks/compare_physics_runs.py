@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from slax_drake.errors import UserError
+from slax_drake.evaluation.physics import clean_success
 from slax_drake.evaluation.trial_records import read_trial_records
 
 DENSITIES = ("04", "06", "08", "10")
@@ -53,11 +54,6 @@ def load(folder: Path, policy: str) -> dict:
     return out
 
 
-def clean(trial: dict) -> bool:
-    """Revealed in Drake with nothing toppled or dropped."""
-    d = trial["drake"]
-    return bool(d["success"] and not (d["toppled"] or d["dropped"]))
-
 
 def summary(trials: list[dict]) -> dict:
     endings = collections.Counter(t["drake"]["result"].split(":")[0] for t in trials)  # "simulation diverged: ..."
@@ -67,7 +63,7 @@ def summary(trials: list[dict]) -> dict:
     return {
         "scenes": len(trials),
         "success": sum(t["drake"]["success"] for t in trials),
-        "nothing_lost": sum(clean(t) for t in trials),
+        "nothing_lost": sum(clean_success(t["drake"]) for t in trials),
         "lost_any": lost,
         "matched": sum(bool(a.get("matched")) for a in actions) if kept else None,
         "actions": len(actions) if kept else None,
@@ -121,8 +117,8 @@ def main(argv=None) -> int:
         for label, run in (("old", old), ("new", new)):
             print(row(f"{label} ({Path(getattr(args, label)).name})", density.lstrip("0"),
                       summary([run[k] for k in keys])))
-    won = [k for k in common if clean(new[k]) and not clean(old[k])]
-    lost = [k for k in common if clean(old[k]) and not clean(new[k])]
+    won = [k for k in common if clean_success(new[k]["drake"]) and not clean_success(old[k]["drake"])]
+    lost = [k for k in common if clean_success(old[k]["drake"]) and not clean_success(new[k]["drake"])]
     print(f"\nRevealed with nothing lost in new, not in old: {len(won)} ({', '.join(won) or 'none'}); in old, not in "
           f"new: {len(lost)} ({', '.join(lost) or 'none'}).")
     return 0

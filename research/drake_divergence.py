@@ -30,11 +30,13 @@ from __future__ import annotations
 
 import argparse
 import collections
+import enum
 import re
 import sys
 from pathlib import Path
 
 from slax_drake.errors import UserError
+from slax_drake.evaluation.physics import clean_success
 from slax_drake.evaluation.trial_records import read_trial_records
 
 DX_TOLERANCE_M = 0.011  # 1 cm along x, and the rounding of the shelf record's 3 decimals
@@ -63,32 +65,53 @@ def same_step(a: tuple, b: tuple) -> bool:
             and abs(a[3] - b[3]) <= DZ_TOLERANCE_M)
 
 
-def divergence(record: dict) -> tuple[int, str]:
-    """(the first step where the Drake trial of ``record`` leaves the shelf trial's path, its cause); the step is
-    the length of the common path when one path is a prefix of the other."""
+class Cause(enum.StrEnum):
+    """Why the Drake trial leaves the shelf trial's path at the divergence (module docstring)."""
+
+    SAME = "same actions"
+    DRAKE_STOPPED = "Drake stopped"
+    SHELF_STOPPED = "shelf stopped"
+    PLANNER_REFUSED = "planner refused"
+    OFF_PREDICTION = "last action off prediction"
+    FIRST_DECISION = "first decision differs"
+    OTHER_DECISION = "same predicted state, other decision"
+
+
+# the causes counted with their detail in the table (the others by kind; the scene list keeps the detail)
+COUNTED_WITH_DETAIL = (Cause.OFF_PREDICTION,)
+
+
+def find_divergence(record: dict) -> tuple[int, Cause, str]:
+    """(the first step where the Drake trial of ``record`` leaves the shelf trial's path, its cause, the cause's
+    detail or ""): the step is the length of the common path when one path is a prefix of the other; the detail
+    is the ending of the path that stopped, the refusals' kinds and waypoints, or the last action's mismatch."""
     shelf = [shelf_step(s) for s in record["shelf"]["actions"]]
     drake = record["drake"]["actions"]
     common = 0
     while common < min(len(shelf), len(drake)) and same_step(shelf[common], drake_step(drake[common])):
         common += 1
     if common == len(shelf) == len(drake):
-        return common, "same actions"
+        return common, Cause.SAME, ""
     if common == len(drake):
-        return common, f"Drake stopped ({record['drake']['result'].split(':')[0]})"
+        return common, Cause.DRAKE_STOPPED, record["drake"]["result"].split(":")[0]
     if common == len(shelf):
-        return common, f"shelf stopped ({record['shelf']['reason']})"
+        return common, Cause.SHELF_STOPPED, record["shelf"]["reason"]
     if drake[common].get("rejected_before", 0):
         kinds = sorted({f"{r.get('kind')} at {r.get('waypoint')}" for r in drake[common].get("rejected", [])})
-        return common, "planner refused" + (f" ({'; '.join(kinds)})" if kinds else "")
+        return common, Cause.PLANNER_REFUSED, "; ".join(kinds)
     if common and not drake[common - 1].get("matched"):
-        return common, f"last action off prediction ({drake[common - 1].get('mismatch')})"
-    return common, "first decision differs" if common == 0 else "same predicted state, other decision"
+        return common, Cause.OFF_PREDICTION, str(drake[common - 1].get("mismatch"))
+    return common, Cause.FIRST_DECISION if common == 0 else Cause.OTHER_DECISION, ""
 
 
-def clean(record: dict) -> bool:
-    """Revealed in Drake with nothing toppled or dropped."""
-    d = record["drake"]
-    return bool(d["success"] and not (d["toppled"] or d["dropped"]))
+def described(cause: Cause, detail: str) -> str:
+    return f"{cause} ({detail})" if detail else str(cause)
+
+
+def divergence(record: dict) -> tuple[int, str]:
+    """:func:`find_divergence` with its cause described ("Drake stopped (no feasible action)")."""
+    step, cause, detail = find_divergence(record)
+    return step, described(cause, detail)
 
 
 def main(argv=None) -> int:
@@ -98,7 +121,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         records = read_trial_records(args.physics, args.policy, kind="physics_trials")
-        found = {key: divergence(r) for key, r in records.items()}
+        found = {key: find_divergence(r) for key, r in records.items()}
     except (UserError, KeyError, TypeError, ValueError) as e:
         message = e if isinstance(e, UserError) else f"a trial record lacks what a physics trial holds ({e!r})"
         print(f"error: {args.physics}: {message}", file=sys.stderr)
@@ -111,18 +134,17 @@ def main(argv=None) -> int:
           f"{args.policy}`.\n")
     counts = collections.Counter()
     for key, record in records.items():
-        cause = found[key][1]
-        if cause.startswith(("Drake stopped", "shelf stopped", "planner refused")):
-            cause = cause.split(" (")[0]  # counted by kind; the scene list below keeps the detail
-        counts[(bool(record["shelf"]["success"]), clean(record), cause)] += 1
+        _, kind, detail = found[key]
+        cause = described(kind, detail) if kind in COUNTED_WITH_DETAIL else str(kind)
+        counts[(bool(record["shelf"]["success"]), clean_success(record["drake"]), cause)] += 1
     print("| shelf simulator | Drake (nothing lost) | cause at the divergence | scenes |")
     print("|---|---|---|---|")
     for (shelf, drake, cause), n in sorted(counts.items(), key=lambda kv: (not kv[0][0], kv[0][1], -kv[1])):
         print(f"| {'revealed' if shelf else 'not'} | {'revealed' if drake else 'not'} | {cause} | {n} |")
-    lost = [(key, found[key]) for key, r in records.items() if r["shelf"]["success"] and not clean(r)]
+    lost = [(key, found[key]) for key, r in records.items() if r["shelf"]["success"] and not clean_success(r["drake"])]
     print(f"\nRevealed by the shelf simulator, not by Drake with nothing lost: {len(lost)}.\n")
-    for key, (step, cause) in lost:
-        print(f"- {key}: step {step}, {cause}")
+    for key, (step, cause, detail) in lost:
+        print(f"- {key}: step {step}, {described(cause, detail)}")
     refusals = collections.Counter((r.get("kind"), r.get("waypoint")) for record in records.values()
                                    for a in record["drake"]["actions"] for r in a.get("rejected", []))
     if refusals:  # runs since the records keep them

@@ -353,6 +353,12 @@ def _median(values):
     return float(np.median(values)) if values else None
 
 
+def clean_success(drake: dict) -> bool:
+    """Whether a physics record's Drake part revealed the target with nothing toppled or dropped (``toppled`` and
+    ``dropped``: the lists of object names a trial record keeps, or the counts of a summary row)."""
+    return bool(drake["success"] and not drake["toppled"] and not drake["dropped"])
+
+
 def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.inf)) -> dict:
     """Per policy and density key ("4", ..., "all"): shelf and Drake success rate and median steps (over
     successful trials), the fraction of Drake actions whose outcome matched the prediction (judged again from the
@@ -366,7 +372,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "policy": r["policy"], "density": r["density"], "index": r["index"], "seed": r["seed"],
             "shelf_success": r["shelf"]["success"], "shelf_steps": r["shelf"]["steps"],
             "drake_success": d["success"], "drake_result": d["result"], "drake_steps": d["steps"],
-            "drake_clean_success": d["success"] and not d["toppled"] and not d["dropped"],
+            "drake_clean_success": clean_success(d),
             "matched_actions": sum(1 for a in d["actions"] if a["matched"]),
             "actions_with_outcome": sum(1 for a in d["actions"] if a["matched"] is not None),
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],

@@ -1053,8 +1053,6 @@ class BeliefSearch(Hindsight):
         only as a return to an observed arrangement or as a shuttle (a failed action's exclusion and a blocked
         placement still apply), when one of them reveals part of the belief; else []. ``log["undo"]``: how many
         such first moves were looked at."""
-        from slax_drake.policies.protocol import Screened
-
         taken = set(cands)
         moves = [m for m in self.moves(root.objects) if m[0] not in taken]
         if not moves:
