@@ -10,10 +10,15 @@ registry row each.
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
+        [--known-target]
 
 ``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
 last arrangement the policy saw, how many of them each correction screened out and the action model's refusals by
 kind, summed at the end (what ends the trials: the rules, or the corrections on the moves the rules leave).
+
+``--known-target``: the policy is told where the target stands (its belief is the true placement alone, on its
+lattice): what its search reaches when the belief is not the limit (the oracles know the whole scene; this knows only
+the target). A diagnostic, never a policy: it reads the scene's hidden state.
 
 ``--compare``: a `slax-drake benchmark` results folder run with the same protocol seed; each trial also prints
 the folder's outcome of ``--compare-policy`` for the same trial, and the flips (won: revealed here, not there;
@@ -26,6 +31,8 @@ import json
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
@@ -66,6 +73,9 @@ def main(argv=None):
     ap.add_argument("--stuck", action="store_true",
                     help="per trial ending with no feasible action: the feasible candidates left, the corrections' "
                          "screening and the action model's refusals by kind")
+    ap.add_argument("--known-target", action="store_true",
+                    help="tell the policy where the target stands (its belief is the true placement alone): the "
+                         "search's own ceiling, a diagnostic")
     args = ap.parse_args(argv)
     try:
         tool_rules = parse_tool_rules(args.tool_rule, args.profile)
@@ -108,6 +118,8 @@ def main(argv=None):
             observer = CameraObserver(scene.shelf, scene.camera, size, width=policy.observation_width,
                                       segmentation=args.segmentation, noise_seed=seed if args.sensor_noise else None)
         seen = watch_last_arrangement(policy)
+        if args.known_target:
+            tell_target(policy, scene)
         t0 = time.process_time()
         result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                            suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
@@ -133,6 +145,23 @@ def main(argv=None):
         print(f"flips against {compare}: won {len(flips['won'])} ({' '.join(flips['won'])}), lost "
               f"{len(flips['lost'])} ({' '.join(flips['lost'])})")
     return 0
+
+
+def tell_target(policy, scene) -> None:
+    """``--known-target``: wraps ``policy.placements`` (slax-belief's belief of where the target may stand) to
+    return the scene's true target placement alone, rounded to the policy's lattice (the wrapped method still runs:
+    it keeps the policy's bookkeeping of consistent placements)."""
+    if not hasattr(policy, "placements"):
+        raise SystemExit(f"error: --known-target: {policy.name} keeps no belief of placements")
+    step = policy.grid_step
+    truth = np.round(np.array([[scene.target.X_ST[0, 3], scene.target.X_ST[1, 3]]]) / step) * step
+    placements = policy.placements
+
+    def told(obs):
+        placements(obs)
+        return truth.copy()
+
+    policy.placements = told
 
 
 def watch_last_arrangement(policy) -> dict:
