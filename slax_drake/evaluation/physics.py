@@ -390,6 +390,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             # a file written before mismatches were classified counts its mismatches as "unclassified"
             "mismatches": dict(collections.Counter(a["mismatch"] or "unclassified" for a in d["actions"]
                                                    if a["matched"] is False)),
+            # an ending with no action executed: how many candidates the motion planner refused at that decision
+            # (None: the trial ended otherwise, or its record predates end_rejected)
+            "end_refused": len(d["end_rejected"]) if "end_rejected" in d else None,
             "guarded": [sum(1 for a in d["actions"] if "guard" in a),
                         sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped"))],
         })
@@ -411,6 +414,12 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "drake_clean_success_rate": round(sum(t["drake_clean_success"] for t in sel) / len(sel), 4)
                 if sel else None,
                 "drake_endings": dict(sorted(collections.Counter(_ending(t["drake_result"]) for t in sel).items())),
+                # "no feasible motion" endings where the planner refused one candidate: the only one the action model
+                # and the policy's corrections had left (None where the records do not say)
+                "no_motion_one_left": (sum(1 for t in sel if _ending(t["drake_result"]) == "no feasible motion"
+                                           and t.get("end_refused") == 1)
+                                       if all(t.get("end_refused") is not None for t in sel
+                                              if _ending(t["drake_result"]) == "no feasible motion") else None),
                 # guarded placements executed, and how many of them the guard stopped on contact
                 "guarded_placements": [sum(t.get("guarded", [0, 0])[0] for t in sel),
                                        sum(t.get("guarded", [0, 0])[1] for t in sel)],
@@ -634,6 +643,12 @@ def markdown_table(summary: dict) -> str:
         endings = per.get("all", {}).get("drake_endings")
         if endings:
             lines += ["", f"{p}, Drake trial endings: " + ", ".join(f"{k} {v}" for k, v in endings.items()) + "."]
+            one_left = per["all"].get("no_motion_one_left")
+            if endings.get("no feasible motion") and one_left is not None:
+                lines[-1] += (f" Of the {endings['no feasible motion']} trials ending \"no feasible motion\", {one_left} "
+                              f"ended when the motion planner refused the one candidate the action model and the "
+                              f"policy's corrections had left (the trial would have stopped at the next decision "
+                              f"had the action model refused it too).")
         guarded = per.get("all", {}).get("guarded_placements")
         if guarded and guarded[0]:
             lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "

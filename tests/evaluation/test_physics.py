@@ -380,3 +380,29 @@ def test_why_a_lift_was_put_back_is_read_from_the_values_of_a_record_that_kept_n
     assert put_back_why({"weight_n": 0.01, "moment_nm": 0.0, "limit_nm": 0.4}) == "nothing held"
     assert put_back_why({"weight_n": 6.0, "moment_nm": 0.45, "limit_nm": 0.4}) == "too heavy"
     assert put_back_why({"weight_n": 7.8, "moment_nm": 0.37, "limit_nm": 0.4}) == "not hanging free"
+
+
+def test_the_report_says_how_many_no_feasible_motion_endings_refused_the_last_candidate_left():
+    from slax_drake.evaluation.physics import markdown_table, summarise
+
+    def trial(i, result, refused=None):
+        drake = {"success": False, "result": result, "steps": 1, "toppled": [], "dropped": [],
+                 "real_time_factor": 1.0, "wall_s": 1.0, "actions": []}
+        if refused is not None:
+            drake["end_rejected"] = [{"kind": "no IK solution", "waypoint": "pull out"}] * refused
+        return {"policy": "p", "density": 4, "index": i, "seed": i, "shelf": {"success": False, "steps": 1},
+                "drake": drake}
+
+    results = [trial(0, "no feasible motion", 1), trial(1, "no feasible motion", 3), trial(2, "no feasible motion", 1),
+               trial(3, "no feasible action", 0), trial(4, "horizon")]
+    summary = summarise(results, ["p"], [4])
+    assert [t["end_refused"] for t in summary["trials"]] == [1, 3, 1, 0, None]
+    e = summary["policies"]["p"]["all"]
+    assert e["no_motion_one_left"] == 2
+    assert ("Of the 3 trials ending \"no feasible motion\", 2 ended when the motion planner refused the one "
+            "candidate") in markdown_table(summary)
+    # records from before end_rejected: the count is unknown, not 0
+    old = [trial(0, "no feasible motion"), trial(1, "horizon")]
+    e = summarise(old, ["p"], [4])["policies"]["p"]["all"]
+    assert e["no_motion_one_left"] is None
+    assert "ended when the motion planner refused" not in markdown_table(summarise(old, ["p"], [4]))
