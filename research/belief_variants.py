@@ -10,7 +10,7 @@ registry row each.
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
-        [--known-target]
+        [--known-target] [--see-hidden] [--no-shuttle-rule]
 
 ``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
 last arrangement the policy saw, how many of them each correction screened out and the action model's refusals by
@@ -18,7 +18,9 @@ kind, summed at the end (what ends the trials: the rules, or the corrections on 
 
 ``--known-target``: the policy is told where the target stands (its belief is the true placement alone, on its
 lattice): what its search reaches when the belief is not the limit (the oracles know the whole scene; this knows only
-the target). A diagnostic, never a policy: it reads the scene's hidden state.
+the target). A diagnostic, never a policy: it reads the scene's hidden state. ``--see-hidden`` (privileged only):
+its observation also lists the objects the camera cannot see, where they stand. ``--no-shuttle-rule``: the
+no-shuttle correction off (the policy's ``shuttle_reveal`` None), to measure what that rule costs.
 
 ``--compare``: a `slax-drake benchmark` results folder run with the same protocol seed; each trial also prints
 the folder's outcome of ``--compare-policy`` for the same trial, and the flips (won: revealed here, not there;
@@ -27,6 +29,8 @@ lost: the reverse) are counted at the end.
 
 import argparse
 import collections
+import contextlib
+import dataclasses
 import json
 import sys
 import time
@@ -76,7 +80,14 @@ def main(argv=None):
     ap.add_argument("--known-target", action="store_true",
                     help="tell the policy where the target stands (its belief is the true placement alone): the "
                          "search's own ceiling, a diagnostic")
+    ap.add_argument("--see-hidden", action="store_true",
+                    help="privileged only: the observation lists every object, hidden ones too (a diagnostic)")
+    ap.add_argument("--no-shuttle-rule", action="store_true",
+                    help="the no-shuttle correction off (shuttle_reveal None), to measure what it costs")
     args = ap.parse_args(argv)
+    if args.see_hidden and args.observation != "privileged":
+        print("error: --see-hidden needs the privileged observation", file=sys.stderr)
+        return 2
     try:
         tool_rules = parse_tool_rules(args.tool_rule, args.profile)
     except UserError as e:
@@ -120,9 +131,12 @@ def main(argv=None):
         seen = watch_last_arrangement(policy)
         if args.known_target:
             tell_target(policy, scene)
+        if args.no_shuttle_rule:
+            policy.shuttle_reveal = None
         t0 = time.process_time()
-        result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
-                           suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
+        with showing_hidden_objects(args.see_hidden):
+            result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
+                               suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
         longest = max((d.get("seconds", 0.0) for d in policy.decision_log), default=0.0)
         revealed += bool(result.success)
         print(f"{density:02d}_{index:04d} revealed={result.success} steps={result.steps} cost={result.cost:.1f} "
@@ -145,6 +159,31 @@ def main(argv=None):
         print(f"flips against {compare}: won {len(flips['won'])} ({' '.join(flips['won'])}), lost "
               f"{len(flips['lost'])} ({' '.join(flips['lost'])})")
     return 0
+
+
+@contextlib.contextmanager
+def showing_hidden_objects(on: bool):
+    """``--see-hidden``: while in the block, the shelf simulator's privileged observation lists every object of the
+    true scene (hidden ones too), where it stands; nothing changes when ``on`` is False."""
+    if not on:
+        yield
+        return
+    from slax_drake.shelf import simulator
+
+    observe = simulator.observation_for
+
+    def everything(policy, scene, observer=None):
+        obs = observe(policy, scene, observer)
+        if policy.needs_true_scene:
+            return obs
+        objects = tuple(scene.objects)
+        return dataclasses.replace(obs, known=objects, scene_template=obs.scene_template.with_objects(objects))
+
+    simulator.observation_for = everything
+    try:
+        yield
+    finally:
+        simulator.observation_for = observe
 
 
 def tell_target(policy, scene) -> None:

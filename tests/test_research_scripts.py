@@ -203,3 +203,9 @@ def test_belief_variants_known_target_tells_the_search_where_the_target_stands(c
     assert "revealed 0 / 1" in capsys.readouterr().out
     assert module.main(args + ["--known-target"]) == 0
     assert "revealed 1 / 1" in capsys.readouterr().out
+
+
+def test_belief_variants_shows_hidden_objects_only_to_a_privileged_observation(capsys):
+    assert script("belief_variants").main(["--trials", "4:0", "--see-hidden", "--observation", "camera"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.strip() == "error: --see-hidden needs the privileged observation"
