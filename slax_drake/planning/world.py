@@ -20,7 +20,8 @@ Collision semantics (the same for IK and for the checker):
   checked with ``CARRIED_MARGIN`` against the shelf, the other objects and the robot; its welded copy where it
   stood is ignored by the tool link during contact phases, so only the carried copy counts. An object that rests
   closer than ``CARRIED_MARGIN`` to a wall or a neighbour (physics leaves objects touching) has its footprint
-  shrunk by the difference plus ``REST_CONTACT_ALLOWANCE``, so that it may slide out along what it touches.
+  shrunk by the difference plus ``REST_CONTACT_ALLOWANCE``, so that it may slide out along what it touches; where
+  the estimates of two touching objects overlap, the difference is the overlap's depth (:func:`rest_gap`).
 """
 
 from __future__ import annotations
@@ -286,7 +287,9 @@ def pairs_text(pairs) -> str:
 
 def rest_gap(obj, scene: Scene) -> float:
     """The smallest horizontal gap (m; negative when overlapping) between ``obj``'s footprint and the side and
-    back walls or another object's footprint, as they stand."""
+    back walls or another object's footprint, as they stand. An overlap with another footprint (two estimates of
+    objects that physics left touching) counts as minus how far ``obj``'s footprint must shrink on every side to
+    clear it (to 0.1 mm, at most ``MAX_REST_OVERLAP``: a deeper overlap counts as that)."""
     from slax_drake.scene.footprint import Footprint
 
     poly = Footprint.of(obj).polygon()
@@ -299,9 +302,24 @@ def rest_gap(obj, scene: Scene) -> float:
         other_poly = Footprint.of(other).polygon()
         d = poly.distance(other_poly)
         if d == 0.0 and poly.intersects(other_poly):
-            d = -0.001
+            d = -_overlap_depth(poly, other_poly)
         gaps.append(d)
     return float(min(gaps))
+
+
+MAX_REST_OVERLAP = 0.005  # m: rest_gap's deepest overlap of two footprints; deeper estimates are not trusted
+
+
+def _overlap_depth(poly, other) -> float:
+    """How far (m) ``poly`` must shrink on every side (mitred) to stop meeting ``other``, by bisection to 0.1 mm;
+    ``MAX_REST_OVERLAP`` when it still meets it shrunk that far."""
+    if poly.buffer(-MAX_REST_OVERLAP, join_style=2).intersects(other):
+        return MAX_REST_OVERLAP
+    lo, hi = 0.0, MAX_REST_OVERLAP
+    while hi - lo > 1e-4:
+        mid = (lo + hi) / 2.0
+        lo, hi = (mid, hi) if poly.buffer(-mid, join_style=2).intersects(other) else (lo, mid)
+    return hi
 
 
 def _body_index(i: int):

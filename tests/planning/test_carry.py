@@ -118,6 +118,18 @@ def test_rest_gap_sees_walls_and_neighbours(two_boxes):
     assert abs(rest_gap(touching, scene.with_objects((touching, b)))) < 1e-9
 
 
+def test_rest_gap_of_overlapping_estimates_is_the_overlap_depth(two_boxes):
+    """Two estimates of boxes that physics left touching overlap by a few mm: the gap is minus the overlap's depth
+    (how far the footprint must shrink to clear it), not a fixed -1 mm; a gross overlap counts as the cap."""
+    from slax_drake.planning.world import MAX_REST_OVERLAP
+
+    scene, _, a, _ = two_boxes
+    right_of_a = _box("object_1", a.center[0] + 0.08 - 0.003, a.center[1], (0.08, 0.08, 0.12))  # 3 mm into A
+    assert rest_gap(a, scene.with_objects((a, right_of_a))) == pytest.approx(-0.003, abs=2e-4)
+    deep = _box("object_1", a.center[0] + 0.05, a.center[1], (0.08, 0.08, 0.12))  # 3 cm into A
+    assert rest_gap(a, scene.with_objects((a, deep))) == pytest.approx(-MAX_REST_OVERLAP)
+
+
 def test_the_way_out_is_lifted_only_as_high_as_it_needs(two_boxes):
     """A is carried out (nothing in its way), across in front of the shelf and pushed in over B's spot: it leaves
     at the plain lift, and the translation rises to B's height plus the clearance before it is pushed in."""
