@@ -106,6 +106,10 @@ class BeliefOptions:
     width of shelf into which the camera would see deeper than in any observed arrangement, judged on every seen
     object's footprint (:mod:`slax_drake.policies.sight`): the space behind an object moved far away was shown
     when it stood elsewhere, and the space behind another object it stood in front of never was."""
+    shuttle_reveal: float | None = 0.02
+    """The width (m) of space never revealed that a move back against its object's last move must uncover to pass
+    the no-shuttle correction (issue 27's rule); None: the correction is off (the variant
+    ``slax-belief-no-shuttle-rule``, which measures what the rule costs; it executes moves back the rule forbids)."""
     dead_end: str = "ignore"
     """What a plan that ends where the search could not go on costs. "ignore": nothing. "model": a plan whose last
     arrangement leaves no move at all (the action model allows none there) loses the worlds it has not revealed,
@@ -154,6 +158,8 @@ class BeliefOptions:
             raise ValueError("blocked_rule must be 'box', 'hidden' or 'risk'")
         if self.shuttle_rule not in ("width", "sight"):
             raise ValueError("shuttle_rule must be 'width' or 'sight'")
+        if self.shuttle_reveal is not None and not self.shuttle_reveal >= 0:
+            raise ValueError(f"shuttle_reveal must be a width in metres, 0 or more, or None (got {self.shuttle_reveal!r})")
         if self.dead_end not in DEAD_END_RULES:
             raise ValueError("dead_end must be 'ignore', 'model' or 'corrections'")
         if not 0 <= self.blocked_risk <= 1:

@@ -41,3 +41,12 @@ def test_a_policy_gets_its_variant_with_overrides_replaced(paper):
     assert policy.options == dataclasses.replace(DEFAULT_BELIEF_OPTIONS, blocked_rule="risk", beam=3)
     assert policy.beam == 3 and policy.blocked_rule == "risk" and policy.horizon == 2
     assert make_policy("slax-belief", paper).options == DEFAULT_BELIEF_OPTIONS
+
+
+def test_the_no_shuttle_rule_variant_turns_the_correction_off_and_a_negative_width_is_refused(paper):
+    assert make_policy("slax-belief", paper).shuttle_reveal == 0.02
+    assert make_policy("slax-belief-no-shuttle-rule", paper).shuttle_reveal is None
+    assert policy_settings(["slax-belief-no-shuttle-rule"])["slax-belief-no-shuttle-rule"]["options"] == {
+        "shuttle_reveal": None}
+    with pytest.raises(ValueError, match="shuttle_reveal"):
+        BeliefOptions(shuttle_reveal=-0.01)
