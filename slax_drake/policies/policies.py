@@ -209,10 +209,13 @@ class DistributionPolicy:
         :attr:`Reversal.UNCOVERS_NEW_WIDTH` when it does and passed the correction by uncovering at least
         ``shuttle_reveal`` m never seen; :attr:`Reversal.LET_THROUGH` when the correction screens it out as a shuttle
         and the policy took it all the same (the last resort, or slax-belief's move that clears more of a partly
-        seen target)."""
+        seen target); :attr:`Reversal.CORRECTION_OFF` when it does and the policy's no-shuttle correction is off
+        (``shuttle_reveal`` None)."""
         objects = self._objects if objects is None else tuple(objects)
-        if not (self.corrected and self.shuttle_reveal is not None and self.memory.undoes(objects, action)):
+        if not (self.corrected and self.memory.undoes(objects, action)):
             return None
+        if self.shuttle_reveal is None:
+            return Reversal.CORRECTION_OFF
         return Reversal.UNCOVERS_NEW_WIDTH if self.reveals_new(objects, action) else Reversal.LET_THROUGH
 
     def reveals_new(self, objects, action, memory: TrialMemory | None = None) -> bool:

@@ -51,6 +51,7 @@ class Reversal(enum.StrEnum):
 
     UNCOVERS_NEW_WIDTH = "uncovers new width"  # it passed the correction: it reveals space never seen
     LET_THROUGH = "let through"  # screened out as a shuttle and taken all the same (a last resort or an exception)
+    CORRECTION_OFF = "correction off"  # a move back of a policy whose no-shuttle correction is off (shuttle_reveal None)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -246,5 +246,8 @@ def test_the_reversal_rule_records_how_correction_3_judged_a_chosen_action(paper
         if name == "dar":
             assert not policy.reveals_new(after, short) and policy.reveals_new(after, far)
             assert rules == [None, "let through", "uncovers new width"]
+            policy.shuttle_reveal = None  # the correction off: a move back is recorded as such
+            assert [policy.reversal_rule(a, after) for a in (on, short, far)] == [None, "correction off",
+                                                                                  "correction off"]
         else:
             assert rules == [None, None, None]
