@@ -29,7 +29,6 @@ lost: the reverse) are counted at the end.
 
 import argparse
 import collections
-import contextlib
 import dataclasses
 import json
 import sys
@@ -42,7 +41,7 @@ from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.policies.registry import make_policy
 from slax_drake.errors import UserError
-from slax_drake.shelf.simulator import CameraObserver, run_trial
+from slax_drake.shelf.simulator import CameraObserver, observe, run_trial
 from slax_drake.shelf.tool import parse_tool_rules
 
 
@@ -109,10 +108,13 @@ def main(argv=None):
         return 2
     scenario = load_scenario(args.config)
     try:  # the options are checked once, before the first trial
-        make_policy(args.policy, scenario, horizon=1, profile=args.profile, policy_options=options,
-                    tool_overrides=tool_rules)
+        probe = make_policy(args.policy, scenario, horizon=1, profile=args.profile, policy_options=options,
+                            tool_overrides=tool_rules)
     except (TypeError, ValueError) as e:
         print(f"error: --options: {e}", file=sys.stderr)
+        return 2
+    if args.known_target and not hasattr(probe, "placements"):
+        print(f"error: --known-target: {args.policy} keeps no belief of the target's placements", file=sys.stderr)
         return 2
     size = tuple(scenario.target.sizes[0])
     revealed = 0
@@ -134,9 +136,10 @@ def main(argv=None):
         if args.no_shuttle_rule:
             policy.shuttle_reveal = None
         t0 = time.process_time()
-        with showing_hidden_objects(args.see_hidden):
-            result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
-                               suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
+        if args.see_hidden:
+            observer = SeeingHidden(policy)
+        result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
+                           suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
         longest = max((d.get("seconds", 0.0) for d in policy.decision_log), default=0.0)
         revealed += bool(result.success)
         print(f"{density:02d}_{index:04d} revealed={result.success} steps={result.steps} cost={result.cost:.1f} "
@@ -161,37 +164,29 @@ def main(argv=None):
     return 0
 
 
-@contextlib.contextmanager
-def showing_hidden_objects(on: bool):
-    """``--see-hidden``: while in the block, the shelf simulator's privileged observation lists every object of the
-    true scene (hidden ones too), where it stands; nothing changes when ``on`` is False."""
-    if not on:
-        yield
-        return
-    from slax_drake.shelf import simulator
+class SeeingHidden:
+    """``--see-hidden``: an observer for :func:`~slax_drake.shelf.simulator.run_trial` that gives the policy the
+    privileged observation (:func:`~slax_drake.shelf.simulator.observe`) with every object of the true scene listed,
+    hidden ones too, where it stands. It names no hypotheses (``observe`` returns None for the names), so the trial
+    executes the policy's actions on the objects they name, as in privileged mode."""
 
-    observe = simulator.observation_for
+    def __init__(self, policy):
+        self.policy = policy
 
-    def everything(policy, scene, observer=None):
-        obs = observe(policy, scene, observer)
-        if policy.needs_true_scene:
-            return obs
+    def start(self) -> None:
+        pass
+
+    def observe(self, scene):
+        obs = observe(scene, self.policy.distribution, self.policy.observation_width)
         objects = tuple(scene.objects)
-        return dataclasses.replace(obs, known=objects, scene_template=obs.scene_template.with_objects(objects))
-
-    simulator.observation_for = everything
-    try:
-        yield
-    finally:
-        simulator.observation_for = observe
+        return dataclasses.replace(obs, known=objects, scene_template=obs.scene_template.with_objects(objects)), None
 
 
 def tell_target(policy, scene) -> None:
-    """``--known-target``: wraps ``policy.placements`` (slax-belief's belief of where the target may stand) to
-    return the scene's true target placement alone, rounded to the policy's lattice (the wrapped method still runs:
-    it keeps the policy's bookkeeping of consistent placements)."""
-    if not hasattr(policy, "placements"):
-        raise SystemExit(f"error: --known-target: {policy.name} keeps no belief of placements")
+    """``--known-target``: wraps ``policy.placements`` (slax-belief's belief of where the target may stand; main
+    checks that the policy has one before the first trial) to return the scene's true target placement alone,
+    rounded to the policy's lattice (the wrapped method still runs: it keeps the policy's bookkeeping of consistent
+    placements)."""
     step = policy.grid_step
     truth = np.round(np.array([[scene.target.X_ST[0, 3], scene.target.X_ST[1, 3]]]) / step) * step
     placements = policy.placements

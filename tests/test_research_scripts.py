@@ -209,3 +209,7 @@ def test_belief_variants_shows_hidden_objects_only_to_a_privileged_observation(c
     assert script("belief_variants").main(["--trials", "4:0", "--see-hidden", "--observation", "camera"]) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err.strip() == "error: --see-hidden needs the privileged observation"
+    # a policy with no belief of placements cannot be told the target: refused before any trial
+    assert script("belief_variants").main(["--trials", "4:0", "--known-target", "--policy", "dar"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.strip().startswith("error: --known-target: dar keeps no belief")

@@ -407,6 +407,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             sel = [t for t in summary["trials"] if t["policy"] == p and (key == "all" or t["density"] == int(key))]
             matched = sum(t["matched_actions"] for t in sel)
             judged = sum(t["actions_with_outcome"] for t in sel)
+            no_motion_refused = [t.get("end_refused") for t in sel if _ending(t["drake_result"]) == "no feasible motion"]
             per[key] = {
                 "trials": len(sel),
                 "shelf_success_rate": round(sum(t["shelf_success"] for t in sel) / len(sel), 4) if sel else None,
@@ -416,10 +417,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "drake_endings": dict(sorted(collections.Counter(_ending(t["drake_result"]) for t in sel).items())),
                 # "no feasible motion" endings where the planner refused one candidate: the only one the action model
                 # and the policy's corrections had left (None where the records do not say)
-                "no_motion_one_left": (sum(1 for t in sel if _ending(t["drake_result"]) == "no feasible motion"
-                                           and t.get("end_refused") == 1)
-                                       if all(t.get("end_refused") is not None for t in sel
-                                              if _ending(t["drake_result"]) == "no feasible motion") else None),
+                "no_motion_one_left": None if None in no_motion_refused else no_motion_refused.count(1),
                 # guarded placements executed, and how many of them the guard stopped on contact
                 "guarded_placements": [sum(t.get("guarded", [0, 0])[0] for t in sel),
                                        sum(t.get("guarded", [0, 0])[1] for t in sel)],
