@@ -14,6 +14,8 @@ With ``--compare``: the scenes one folder reveals and the other does not, and th
 from __future__ import annotations
 
 import argparse
+import collections
+import re
 import sys
 from pathlib import Path
 
@@ -27,6 +29,27 @@ def first_seen(trial: dict) -> int | None:
     return next((i for i, v in enumerate(trial.get("visible_fractions", [])) if v > 0), None)
 
 
+def note_kind(note: str) -> str:
+    """A simulator note without its step, numbers and object names: ``"step 4: push stopped after -0.085 m by an
+    unseen obstacle"`` -> ``"push stopped after X m by an unseen obstacle"``."""
+    text = note.split(": ", 1)[1] if note.startswith("step ") else note
+    return re.sub(r"\b(object|track|segment)_\d+\b", "OBJ", re.sub(r"[-+]?\d+\.\d+", "X", text))
+
+
+def notes_after_sight(trials: dict) -> tuple[int, collections.Counter]:
+    """Over ``trials`` (failed, partly seen): the actions taken from the first decision that saw the target on, and
+    their simulator notes counted by :func:`note_kind`."""
+    actions, kinds = 0, collections.Counter()
+    for t in trials.values():
+        k0 = first_seen(t)
+        actions += len(t["actions"]) - k0
+        for note in t["notes"]:
+            step = int(note.split(":", 1)[0].split()[1]) if note.startswith("step ") else 0
+            if step > k0:
+                kinds[note_kind(note)] += 1
+    return actions, kinds
+
+
 def report(trials: dict, title: str) -> list[str]:
     lines = [f"## {title}", ""]
     failed = {k: t for k, t in trials.items() if not t["success"]}
@@ -34,6 +57,11 @@ def report(trials: dict, title: str) -> list[str]:
     seen_ok = sum(1 for t in trials.values() if t["success"] and first_seen(t) is not None)
     lines.append(f"{len(trials)} trials, {len(trials) - len(failed)} revealed ({seen_ok} of them after a partly seen "
                  f"target), {len(failed)} failed, {len(seen_failed)} of those with the target partly seen.")
+    if seen_failed:
+        actions, kinds = notes_after_sight(seen_failed)
+        lines.append(f"From their first sight on they took {actions} actions; {sum(kinds.values())} of them met "
+                     f"something the policy's estimate did not hold (the simulator's notes): "
+                     + "; ".join(f"{kind} {n}" for kind, n in kinds.most_common()) + ".")
     lines.append("")
     for key, t in seen_failed.items():
         fr = t["visible_fractions"]

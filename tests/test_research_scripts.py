@@ -1,4 +1,4 @@
-"""Bad arguments of the research scripts: one line on stderr and exit code 2, before any long run."""
+"""Research scripts: bad arguments give one line on stderr and exit code 2 before any long run; their small helpers."""
 
 import importlib.util
 import json
@@ -213,3 +213,17 @@ def test_belief_variants_shows_hidden_objects_only_to_a_privileged_observation(c
     assert script("belief_variants").main(["--trials", "4:0", "--known-target", "--policy", "dar"]) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err.strip().startswith("error: --known-target: dar keeps no belief")
+
+
+def test_partly_seen_target_counts_the_notes_from_the_first_sight_on():
+    module = script("partly_seen_target")
+    assert module.note_kind("step 4: push stopped after -0.085 m by an unseen obstacle") == (
+        "push stopped after X m by an unseen obstacle")
+    assert module.note_kind("step 2: blade blocked by object_3") == "blade blocked by OBJ"
+    seen_at_2 = {"visible_fractions": [0.0, 0.4, 0.4, 0.4], "actions": ["a", "b", "c", "d"],
+                 "notes": ["step 1: could not place the object: put back",  # before the sight: not counted
+                           "step 2: could not place the object: put back",
+                           "step 4: blade blocked by track_7"]}
+    actions, kinds = module.notes_after_sight({"06_0001": seen_at_2})
+    assert actions == 3
+    assert kinds == {"could not place the object: put back": 1, "blade blocked by OBJ": 1}
