@@ -10,7 +10,7 @@ registry row each.
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
-        [--known-target] [--see-hidden] [--no-shuttle-rule]
+        [--known-target] [--see-hidden] [--no-shuttle-rule] [--plan-clearance M] [--placement-margin M]
 
 ``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
 last arrangement the policy saw, how many of them each correction screened out and the action model's refusals by
@@ -21,6 +21,12 @@ lattice): what its search reaches when the belief is not the limit (the oracles 
 the target). A diagnostic, never a policy: it reads the scene's hidden state. ``--see-hidden`` (privileged only):
 its observation also lists the objects the camera cannot see, where they stand. ``--no-shuttle-rule``: the
 no-shuttle correction off (the policy's ``shuttle_reveal`` None), to measure what that rule costs.
+
+``--plan-clearance M`` and ``--placement-margin M`` (m; camera mode is where they matter): the policy plans with a
+margin for the estimate's error while the shelf simulator executes with the scenario's clearance. The first
+enumerates every candidate with the action model's ``clearance`` M (a push stops M short of a neighbour, a placement
+keeps M from every object and wall); the second keeps only a suction's placement ``clearance`` + M from every object.
+Measurements of the policy, not of a variant: no registry row plans so.
 
 ``--compare``: a `slax-drake benchmark` results folder run with the same protocol seed; each trial also prints
 the folder's outcome of ``--compare-policy`` for the same trial, and the flips (won: revealed here, not there;
@@ -41,6 +47,8 @@ from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.policies.registry import make_policy
 from slax_drake.errors import UserError
+from slax_drake.scene.footprint import clear_of
+from slax_drake.shelf.actions import ActionModel
 from slax_drake.shelf.simulator import CameraObserver, observe, run_trial
 from slax_drake.shelf.tool import parse_tool_rules
 
@@ -83,7 +91,17 @@ def main(argv=None):
                     help="privileged only: the observation lists every object, hidden ones too (a diagnostic)")
     ap.add_argument("--no-shuttle-rule", action="store_true",
                     help="the no-shuttle correction off (shuttle_reveal None), to measure what it costs")
+    ap.add_argument("--plan-clearance", type=float, default=None, metavar="M",
+                    help="the policy enumerates its candidates with this clearance (m); the simulator executes with "
+                         "the scenario's")
+    ap.add_argument("--placement-margin", type=float, default=None, metavar="M",
+                    help="the policy keeps a suction's placement this much (m) more than the clearance from every "
+                         "object")
     args = ap.parse_args(argv)
+    for flag, value in (("--plan-clearance", args.plan_clearance), ("--placement-margin", args.placement_margin)):
+        if value is not None and not 0 <= value < 0.1:
+            print(f"error: {flag} must be in [0, 0.1) m (got {value})", file=sys.stderr)
+            return 2
     if args.see_hidden and args.observation != "privileged":
         print("error: --see-hidden needs the privileged observation", file=sys.stderr)
         return 2
@@ -135,6 +153,8 @@ def main(argv=None):
             tell_target(policy, scene)
         if args.no_shuttle_rule:
             policy.shuttle_reveal = None
+        if args.plan_clearance is not None or args.placement_margin is not None:
+            plan_with_margin(policy, args.plan_clearance, args.placement_margin)
         t0 = time.process_time()
         if args.see_hidden:
             observer = SeeingHidden(policy)
@@ -180,6 +200,58 @@ class SeeingHidden:
         obs = observe(scene, self.policy.distribution, self.policy.observation_width)
         objects = tuple(scene.objects)
         return dataclasses.replace(obs, known=objects, scene_template=obs.scene_template.with_objects(objects)), None
+
+
+class MarginModel(ActionModel):
+    """``--placement-margin``: an action model whose suction placements keep ``placement_margin`` (m) more than the
+    clearance from every object (:meth:`ActionModel._placements_clear_of`); the shelf simulator's execution reads no
+    placement test, so it executes as the scenario's model."""
+
+    def __init__(self, base: ActionModel, placement_margin: float):
+        super().__init__(base.shelf, base_eye(base), base.tool)
+        self.placement_margin = placement_margin
+
+    def _placements_clear_of(self, lat, fp, other):
+        placed = np.column_stack([np.repeat(lat.xs, len(lat.y_placed)), np.tile(lat.y_placed, len(lat.xs))])
+        return clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), other,
+                        self.tool.physics.clearance + self.placement_margin).reshape(len(lat.xs), len(lat.y_placed))
+
+
+class EnumerateWith:
+    """``--plan-clearance``: the action model ``base`` (what the simulator executes with and the policy predicts
+    with), whose candidates are those ``planning`` (the same model with another clearance) enumerates."""
+
+    def __init__(self, base: ActionModel, planning: ActionModel):
+        self._base, self._planning = base, planning
+
+    def __getattr__(self, name):
+        if name in ("_base", "_planning"):
+            raise AttributeError(name)
+        return getattr(self._base, name)
+
+    def enumerate(self, *args, **kwargs):
+        return self._planning.enumerate(*args, **kwargs)
+
+
+def base_eye(model: ActionModel):
+    """The eye ``model`` was built with (x, y[, z])."""
+    return model.eye_xy if model.eye_z is None else (*model.eye_xy, model.eye_z)
+
+
+def plan_with_margin(policy, clearance: float | None, placement_margin: float | None) -> None:
+    """``--plan-clearance`` / ``--placement-margin``: swaps the action model inside slax-belief's wrapper
+    (``policy._action_model._model``, the one its enumeration reads) for one that plans with the margin."""
+    wrapper = policy._action_model
+    base = wrapper._model
+
+    def with_margin(model: ActionModel):
+        return MarginModel(model, placement_margin) if placement_margin is not None else model
+
+    model = with_margin(base)
+    if clearance is not None:
+        tool = dataclasses.replace(base.tool, physics=dataclasses.replace(base.tool.physics, clearance=clearance))
+        model = EnumerateWith(model, with_margin(ActionModel(base.shelf, base_eye(base), tool)))
+    wrapper._model = model
 
 
 def tell_target(policy, scene) -> None:
