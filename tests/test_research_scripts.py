@@ -227,3 +227,30 @@ def test_partly_seen_target_counts_the_notes_from_the_first_sight_on():
     actions, kinds = module.notes_after_sight({"06_0001": seen_at_2})
     assert actions == 3
     assert kinds == {"could not place the object: put back": 1, "blade blocked by OBJ": 1}
+
+
+@pytest.mark.parametrize("flag", ["--plan-clearance", "--placement-margin"])
+def test_belief_variants_refuses_a_margin_out_of_range_before_any_trial(capsys, flag):
+    assert script("belief_variants").main([flag, "0.2", "--trials", "4:0"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err == f"error: {flag} must be in [0, 0.1) m (got 0.2)\n"
+
+
+def test_belief_variants_placement_margin_refuses_placements_the_clearance_alone_allows():
+    from slax_drake.config import load_scenario
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
+    from slax_drake.policies.registry import make_policy
+    from slax_drake.shelf.actions import Suction
+
+    module = script("belief_variants")
+    scenario = load_scenario(Path(__file__).resolve().parents[1] / "sim_configs" / "table1.yaml")
+    scene = protocol_scene(scenario, 6, scene_seed(0, 6, 0))
+    placements = {}
+    for margin in (None, 0.02):
+        policy = make_policy("slax-belief", scenario, horizon=12, profile="paper")
+        if margin is not None:
+            module.plan_with_margin(policy, None, margin)
+        found = policy.action_model.enumerate(tuple(scene.objects))
+        placements[margin] = {a for a in found.feasible if isinstance(a, Suction)}
+    assert placements[0.02] and placements[0.02] < placements[None]  # fewer, none new
