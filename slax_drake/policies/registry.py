@@ -108,6 +108,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # both: stuck moves back may start a plan, and a plan ending where no move would be left loses its worlds
     "slax-belief-stuck-undo-dead-end": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, stuck_undo=True, dead_end="corrections"), ours=True),
+    # the two above, and a failed placement's box a risk rather than a refusal (slax-belief-v4's blocked_rule)
+    "slax-belief-stuck-undo-dead-end-risk": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, stuck_undo=True, dead_end="corrections", blocked_rule="risk"), ours=True),
     # the no-shuttle correction off: what issue 27's rule costs (it executes moves back the rule forbids)
     "slax-belief-no-shuttle-rule": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS,
                                                                             shuttle_reveal=None), ours=True),

@@ -22,7 +22,9 @@ def test_stuck_undo_is_off_by_default_and_on_in_its_variant():
     assert make_policy("slax-belief", scenario, horizon=8).stuck_undo is False
     assert make_policy("slax-belief-stuck-undo", scenario, horizon=8).stuck_undo is True
     both = make_policy("slax-belief-stuck-undo-dead-end", scenario, horizon=8)
-    assert both.stuck_undo is True and both.dead_end == "corrections"
+    assert both.stuck_undo is True and both.dead_end == "corrections" and both.blocked_rule == "box"
+    risk = make_policy("slax-belief-stuck-undo-dead-end-risk", scenario, horizon=8)
+    assert risk.stuck_undo is True and risk.dead_end == "corrections" and risk.blocked_rule == "risk"
 
 
 def _trial(options: dict):
