@@ -102,6 +102,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # a plan ending where no move would be left loses its unrevealed worlds (docs/research/physics.md)
     "slax-belief-dead-end": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, dead_end="corrections"),
                                         ours=True),
+    # the same with a failed placement's box a risk rather than a refusal (slax-belief-v4's blocked_rule)
+    "slax-belief-dead-end-risk": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, dead_end="corrections", blocked_rule="risk"), ours=True),
     # stuck (no plan reveals anything): moves back the corrections screen out may start a plan that reveals
     "slax-belief-stuck-undo": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, stuck_undo=True),
                                           ours=True),

@@ -23,6 +23,9 @@ def test_stuck_undo_is_off_by_default_and_on_in_its_variant():
     assert make_policy("slax-belief-stuck-undo", scenario, horizon=8).stuck_undo is True
     both = make_policy("slax-belief-stuck-undo-dead-end", scenario, horizon=8)
     assert both.stuck_undo is True and both.dead_end == "corrections" and both.blocked_rule == "box"
+    dead_end_risk = make_policy("slax-belief-dead-end-risk", scenario, horizon=8)
+    assert dead_end_risk.stuck_undo is False and dead_end_risk.dead_end == "corrections"
+    assert dead_end_risk.blocked_rule == "risk"
     risk = make_policy("slax-belief-stuck-undo-dead-end-risk", scenario, horizon=8)
     assert risk.stuck_undo is True and risk.dead_end == "corrections" and risk.blocked_rule == "risk"
 
