@@ -134,6 +134,11 @@ def main(argv=None):
     if args.known_target and not hasattr(probe, "placements"):
         print(f"error: --known-target: {args.policy} keeps no belief of the target's placements", file=sys.stderr)
         return 2
+    margins = args.plan_clearance is not None or args.placement_margin is not None
+    if margins and not hasattr(getattr(probe, "_action_model", None), "_model"):
+        print(f"error: --plan-clearance / --placement-margin: {args.policy} is not slax-belief or one of its variants",
+              file=sys.stderr)
+        return 2
     size = tuple(scenario.target.sizes[0])
     revealed = 0
     stuck = {"endings": 0, "feasible": 0, "screened": collections.Counter(), "refused": collections.Counter()}
@@ -153,7 +158,7 @@ def main(argv=None):
             tell_target(policy, scene)
         if args.no_shuttle_rule:
             policy.shuttle_reveal = None
-        if args.plan_clearance is not None or args.placement_margin is not None:
+        if margins:
             plan_with_margin(policy, args.plan_clearance, args.placement_margin)
         t0 = time.process_time()
         if args.see_hidden:

@@ -237,6 +237,14 @@ def test_belief_variants_refuses_a_margin_out_of_range_before_any_trial(capsys, 
     assert captured.err == f"error: {flag} must be in [0, 0.1) m (got 0.2)\n"
 
 
+def test_belief_variants_refuses_a_margin_for_a_policy_without_its_action_model_wrapper(capsys):
+    assert script("belief_variants").main(["--placement-margin", "0.01", "--policy", "bluction-dar",
+                                           "--trials", "4:0"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith("error: --plan-clearance / --placement-margin: bluction-dar is not slax-belief")
+
+
 def test_belief_variants_placement_margin_refuses_placements_the_clearance_alone_allows():
     from slax_drake.config import load_scenario
     from slax_drake.evaluation.table1 import protocol_scene, scene_seed
