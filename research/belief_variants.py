@@ -47,7 +47,6 @@ from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.policies.registry import make_policy
 from slax_drake.errors import UserError
-from slax_drake.scene.footprint import clear_of
 from slax_drake.shelf.actions import ActionModel
 from slax_drake.shelf.simulator import CameraObserver, observe, run_trial
 from slax_drake.shelf.tool import parse_tool_rules
@@ -209,17 +208,16 @@ class SeeingHidden:
 
 class MarginModel(ActionModel):
     """``--placement-margin``: an action model whose suction placements keep ``placement_margin`` (m) more than the
-    clearance from every object (:meth:`ActionModel._placements_clear_of`); the shelf simulator's execution reads no
+    clearance from every object (:attr:`ActionModel.placement_clearance`); the shelf simulator's execution reads no
     placement test, so it executes as the scenario's model."""
 
     def __init__(self, base: ActionModel, placement_margin: float):
-        super().__init__(base.shelf, base_eye(base), base.tool)
+        super().__init__(base.shelf, base.eye, base.tool)
         self.placement_margin = placement_margin
 
-    def _placements_clear_of(self, lat, fp, other):
-        placed = np.column_stack([np.repeat(lat.xs, len(lat.y_placed)), np.tile(lat.y_placed, len(lat.xs))])
-        return clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), other,
-                        self.tool.physics.clearance + self.placement_margin).reshape(len(lat.xs), len(lat.y_placed))
+    @property
+    def placement_clearance(self) -> float:
+        return self.tool.physics.clearance + self.placement_margin
 
 
 class EnumerateWith:
@@ -238,11 +236,6 @@ class EnumerateWith:
         return self._planning.enumerate(*args, **kwargs)
 
 
-def base_eye(model: ActionModel):
-    """The eye ``model`` was built with (x, y[, z])."""
-    return model.eye_xy if model.eye_z is None else (*model.eye_xy, model.eye_z)
-
-
 def plan_with_margin(policy, clearance: float | None, placement_margin: float | None) -> None:
     """``--plan-clearance`` / ``--placement-margin``: swaps the action model inside slax-belief's wrapper
     (``policy._action_model._model``, the one its enumeration reads) for one that plans with the margin."""
@@ -255,7 +248,7 @@ def plan_with_margin(policy, clearance: float | None, placement_margin: float | 
     model = with_margin(base)
     if clearance is not None:
         tool = dataclasses.replace(base.tool, physics=dataclasses.replace(base.tool.physics, clearance=clearance))
-        model = EnumerateWith(model, with_margin(ActionModel(base.shelf, base_eye(base), tool)))
+        model = EnumerateWith(model, with_margin(base.with_tool(tool)))
     wrapper._model = model
 
 

@@ -29,10 +29,19 @@ def first_seen(trial: dict) -> int | None:
     return next((i for i, v in enumerate(trial.get("visible_fractions", [])) if v > 0), None)
 
 
+def split_note(note: str) -> tuple[int | None, str]:
+    """A shelf-simulator note (``"step N: text"``, :func:`~slax_drake.shelf.simulator.run_trial`'s) as (N, text);
+    (None, note) for a note without a step."""
+    head, sep, text = note.partition(": ")
+    if sep and head.startswith("step ") and head[5:].isdigit():
+        return int(head[5:]), text
+    return None, note
+
+
 def note_kind(note: str) -> str:
     """A simulator note without its step, numbers and object names: ``"step 4: push stopped after -0.085 m by an
     unseen obstacle"`` -> ``"push stopped after X m by an unseen obstacle"``."""
-    text = note.split(": ", 1)[1] if note.startswith("step ") else note
+    text = split_note(note)[1]
     return re.sub(r"\b(object|track|segment)_\d+\b", "OBJ", re.sub(r"[-+]?\d+\.\d+", "X", text))
 
 
@@ -44,8 +53,8 @@ def notes_after_sight(trials: dict) -> tuple[int, collections.Counter]:
         k0 = first_seen(t)
         actions += len(t["actions"]) - k0
         for note in t["notes"]:
-            step = int(note.split(":", 1)[0].split()[1]) if note.startswith("step ") else 0
-            if step > k0:
+            step = split_note(note)[0]
+            if step is not None and step > k0:
                 kinds[note_kind(note)] += 1
     return actions, kinds
 
@@ -71,7 +80,7 @@ def report(trials: dict, title: str) -> list[str]:
                      f"{max(fr):.2f}, {t['visible_fraction']:.2f} at the end; belief collapsed at {collapsed} of the "
                      f"{len(fr) - k0} decisions after; fractions {' '.join(f'{v:.2f}' for v in fr)}")
         for i in range(k0, len(t["actions"])):
-            notes = [n.split(": ", 1)[1] for n in t["notes"] if n.startswith(f"step {i + 1}:")]
+            notes = [text for step, text in map(split_note, t["notes"]) if step == i + 1]
             lines.append(f"    - {i + 1}: `{t['actions'][i]}`{' (' + '; '.join(notes) + ')' if notes else ''}")
     lines.append("")
     return lines

@@ -37,7 +37,7 @@ import time
 
 import numpy as np
 
-from slax_drake.shelf.actions import ActionModel, Push, Suction, apply_action
+from slax_drake.shelf.actions import Push, Suction, apply_action
 from slax_drake.policies.policies import BluctionDAR
 from slax_drake.policies.protocol import Decision
 from slax_drake.scene.model import state_key
@@ -74,8 +74,7 @@ class Hindsight(BluctionDAR):
         if safe_suctions:
             model = self.action_model
             rules = dataclasses.replace(model.tool.rules, suction_hidden_rule="path")
-            eye = model.eye_xy if model.eye_z is None else np.array([*model.eye_xy, model.eye_z])
-            self.safe_model = ActionModel(model.shelf, eye, dataclasses.replace(model.tool, rules=rules))
+            self.safe_model = model.with_tool(dataclasses.replace(model.tool, rules=rules))
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)

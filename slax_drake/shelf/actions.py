@@ -247,6 +247,20 @@ class ActionModel:
         self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
     # ----------------------------------------------------------------------------------------------------
+
+    @property
+    def eye(self) -> tuple:
+        """The camera's position the model was built with (S, m): (x, y), or (x, y, z) when it has a height."""
+        return tuple(self.eye_xy) if self.eye_z is None else (*self.eye_xy, self.eye_z)
+
+    def with_tool(self, tool: ToolConfig) -> "ActionModel":
+        """A model of the same shelf and camera planning with ``tool`` (another rule or clearance)."""
+        return ActionModel(self.shelf, self.eye, tool)
+
+    @property
+    def placement_clearance(self) -> float:
+        """How far (m) a suction's placement keeps from every other object: the scenario's clearance."""
+        return self.tool.physics.clearance
     def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None) -> Candidates:
         """Candidates for moving each of ``objects`` (or only those named in ``only``); ``fixed`` are known
         obstacles that never move (the oracle's target). Returns feasible actions (deterministic order) and
@@ -863,10 +877,11 @@ class ActionModel:
         return lat.y_placed[None, :] <= y_reach[:, None] + 1e-9
 
     def _placements_clear_of(self, lat: "SuctionLattice", fp: Footprint, other: Footprint) -> np.ndarray:
-        """(A, B) bool: whether the object placed at each lattice point keeps ``clearance`` from ``other``."""
+        """(A, B) bool: whether the object placed at each lattice point keeps :attr:`placement_clearance` from
+        ``other``."""
         placed = np.column_stack([np.repeat(lat.xs, len(lat.y_placed)), np.tile(lat.y_placed, len(lat.xs))])
         return clear_of(fp.shape, placed, fp.yaw, (fp.half_x, fp.half_y), other,
-                        self.tool.physics.clearance).reshape(len(lat.xs), len(lat.y_placed))
+                        self.placement_clearance).reshape(len(lat.xs), len(lat.y_placed))
 
     def _suction_hidden_ok(self, ctx, i: int, lat: "SuctionLattice", path_rule: bool) -> np.ndarray:
         """(A, B) bool: the lattice placements the hidden-space rule allows for object i. "path": the footprint,
