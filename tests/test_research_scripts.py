@@ -192,12 +192,12 @@ def test_drake_divergence_tallies_the_planners_refusals(tmp_path, capsys):
 
 
 def test_belief_variants_known_target_tells_the_search_where_the_target_stands(capsys):
-    """Scene 4:14 under the Drake station's rules: slax-belief's first push locks the shelf (no feasible action
-    after one move); told where the target stands, its search takes the suction that reveals it."""
+    """Scene 4:14 under the Drake station's rules: the earlier default's first push locks the shelf (no feasible
+    action after one move); told where the target stands, its search takes the suction that reveals it."""
     rules = [f"--tool-rule={r}" for r in ("max_drag_pull=42.412", "max_drag_twist=0.6362", "max_seal_angle_deg=10",
                                           "max_suction_moment=0.4", "reach_map=models/reach/station_sim_shelf.json",
                                           "suction_hidden_rule=guarded")]
-    args = ["--trials", "4:14", "--profile", "station", "--config", "sim_configs/table1_household.yaml", *rules]
+    args = ["--trials", "4:14", "--policy", "slax-belief-box", "--profile", "station", "--config", "sim_configs/table1_household.yaml", *rules]
     module = script("belief_variants")
     assert module.main(args) == 0
     assert "revealed 0 / 1" in capsys.readouterr().out

@@ -70,9 +70,10 @@ station's rules a first move that revealed nothing often leaves only moves back 
 neighbour's tool lane), and the worlds an arrangement revealed are gone from the belief, so a move back whose plan
 reveals what the belief still holds is no cycle.
 
-``blocked_rule`` (what a failed placement's box refuses; ``slax-belief-v4`` sets "risk"). A placement put back or
-stopped short marks its placement box blocked (:meth:`note_outcome`); "box" (the default) refuses every later
-placement, of any object, that overlaps such a box, for the rest of the trial. But what stopped it stands somewhere
+``blocked_rule`` (what a failed placement's box refuses; "risk" is the default since 2026-12-06, "box" before it,
+the registry's ``slax-belief-box``). A placement put back or stopped short marks its placement box blocked
+(:meth:`note_outcome`); "box" refuses every later placement, of any object, that overlaps such a box, for the rest
+of the trial. But what stopped it stands somewhere
 along the way in, not necessarily in that box, and only in space the camera has not seen. "hidden": an overlap
 refuses only where it meets space still hidden (a possible target placement's footprint;
 :meth:`holds_hidden_space`); "risk": nothing is refused, and a placement overlapping a blocked region in hidden

@@ -50,10 +50,12 @@ class BeliefOptions:
     """The beam of a second search when the first reveals nothing (0: no second search)."""
     stuck_select: str = "value"
     """The plan taken when no plan looked at reveals anything: "value" (least V) or "progress" (least V - G)."""
-    blocked_rule: str = "box"
+    blocked_rule: str = "risk"
     """What the box of a placement that was put back or stopped short refuses: "box", every later placement
-    overlapping it; "hidden", only those overlapping it in hidden space; "risk", none, but those overlapping it in
-    hidden space fail with ``blocked_risk`` more."""
+    overlapping it (the default until 2026-12-06); "hidden", only those overlapping it in hidden space; "risk", none,
+    but those overlapping it in hidden space fail with ``blocked_risk`` more. Through the camera a placement mostly
+    fails on the estimates, not on an unseen object, and "box" then refuses the neighbourhood for the rest of the
+    trial (docs/research/physics.md, "A failed placement as a risk, not a refusal")."""
     blocked_risk: float = 0.5
     """``blocked_rule`` "risk": the failure chance a blocked box adds, in [0, 1]."""
     camera_depth: float | None = None
@@ -110,7 +112,7 @@ class BeliefOptions:
     """The width (m) of space never revealed that a move back against its object's last move must uncover to pass
     the no-shuttle correction (issue 27's rule); None: the correction is off (the variant
     ``slax-belief-no-shuttle-rule``, which measures what the rule costs; it executes moves back the rule forbids)."""
-    dead_end: str = "ignore"
+    dead_end: str = "corrections"
     """What a plan that ends where the search could not go on costs. "ignore": nothing. "model": a plan whose last
     arrangement leaves no move at all (the action model allows none there) loses the worlds it has not revealed,
     each at ``failure_cost``, in the rule that picks the plan (R / (G + failure_cost x the share of worlds left)
@@ -119,7 +121,7 @@ class BeliefOptions:
     observed or passed on the way, a shuttle; :meth:`TrialMemory.after_plan`). Without it a one-move plan that
     reveals much and leaves the shelf locked (the object pushed behind a neighbour that now blocks every tool
     path, or every object moved toward one wall) outranks plans that reveal a little less and keep the search
-    going."""
+    going. The default since 2026-12-06 (before: "ignore")."""
     stuck_undo: bool = False
     """When no plan from the moves the corrections allow reveals anything, even widened: the moves screened out only
     as a return to an observed arrangement or as a shuttle are looked at as first moves too, and a plan starting

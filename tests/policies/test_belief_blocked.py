@@ -66,10 +66,13 @@ def test_a_placement_clear_of_every_blocked_box_is_unaffected(paper):
         assert policy.placement_risk(objects, clear) == pytest.approx(risk) and risk > 0.0
 
 
-def test_registry_v4_sets_the_risk_rule_and_the_default_keeps_the_box(paper):
-    assert make_policy("slax-belief", paper, horizon=4).blocked_rule == "box"
+def test_the_default_takes_the_risk_rule_and_the_earlier_default_keeps_the_box(paper):
+    default = make_policy("slax-belief", paper, horizon=4)
+    assert default.blocked_rule == "risk" and default.blocked_risk == 0.5 and default.dead_end == "corrections"
+    earlier = make_policy("slax-belief-box", paper, horizon=4)
+    assert earlier.blocked_rule == "box" and earlier.dead_end == "ignore"
     v4 = make_policy("slax-belief-v4", paper, horizon=4)
-    assert v4.blocked_rule == "risk" and v4.blocked_risk == 0.5
+    assert v4.blocked_rule == "risk" and v4.blocked_risk == 0.5 and v4.dead_end == "ignore"
     with pytest.raises(ValueError, match="blocked_rule"):
         make_policy("slax-belief", paper, horizon=4, policy_options={"blocked_rule": "never"})
     with pytest.raises(ValueError, match="blocked_risk"):
