@@ -197,7 +197,7 @@ class BeliefSearch(Hindsight):
         o = options
         super().__init__(*args, samples=o.samples, seconds=o.seconds, failure_cost=o.failure_cost, safe_suctions=False,
                          shuttle_last_resort=o.shuttle_last_resort, shuttle_rule=o.shuttle_rule,
-                         shuttle_reveal=o.shuttle_reveal, **kwargs)
+                         shuttle_reveal=o.shuttle_reveal, shuttle_by_axis=o.shuttle_by_axis, **kwargs)
         self.options = o
         self.put_back_group = o.put_back_group  # camera mode: a suction put back excludes its object's suctions
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)

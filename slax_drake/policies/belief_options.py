@@ -112,6 +112,10 @@ class BeliefOptions:
     """The width (m) of space never revealed that a move back against its object's last move must uncover to pass
     the no-shuttle correction (issue 27's rule); None: the correction is off (the variant
     ``slax-belief-no-shuttle-rule``, which measures what the rule costs; it executes moves back the rule forbids)."""
+    shuttle_by_axis: bool = False
+    """The no-shuttle correction judges a move back against its object's last move along each axis, not its last
+    move (:attr:`TrialMemory.by_axis`): x +0.35, then y -0.10, then x -0.35 is a move back too. Without it a move
+    along y alone in between lets an object cycle along x (measured in Drake: docs/research/physics.md)."""
     dead_end: str = "corrections"
     """What a plan that ends where the search could not go on costs. "ignore": nothing. "model": a plan whose last
     arrangement leaves no move at all (the action model allows none there) loses the worlds it has not revealed,

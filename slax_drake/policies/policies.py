@@ -64,7 +64,8 @@ class DistributionPolicy:
 
     def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
                  observation_width: int = 160, max_placements: int = 4, corrected: bool = False,
-                 shuttle_reveal: float | None = 0.02, shuttle_last_resort: bool = False, shuttle_rule: str = "width"):
+                 shuttle_reveal: float | None = 0.02, shuttle_last_resort: bool = False, shuttle_rule: str = "width",
+                 shuttle_by_axis: bool = False):
         self.corrected = corrected  # the implementation's corrections (module docstring); False: the paper's text
         self.shuttle_reveal = shuttle_reveal  # m a shuttle must uncover never seen (correction 3); None: allowed
         # when the corrections leave no candidate, offer the ones screened out only as shuttles rather than stop
@@ -76,7 +77,9 @@ class DistributionPolicy:
             raise ValueError(f"shuttle_rule must be 'width' or 'sight' (got {shuttle_rule!r})")
         self.shuttle_rule = shuttle_rule
         self._view = None  # the DeepestView of this trial (shuttle_rule "sight"), made for the first frame's camera
-        self.memory = TrialMemory()
+        # correction 3 judges a move back against the object's last move, or with shuttle_by_axis its last move
+        # along each axis (TrialMemory.by_axis: a move along y alone in between does not hide a cycle along x)
+        self.memory = TrialMemory(by_axis=shuttle_by_axis)
         # camera mode: a suction that left its object where it stood excludes that object's suctions while it stands
         # there (slax-belief's option ``put_back_group``); False: only that action is excluded
         self.put_back_group = False

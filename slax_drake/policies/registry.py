@@ -123,6 +123,10 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # the default, and stuck moves back may start a plan (measured as the two above with blocked_rule "risk")
     "slax-belief-stuck-undo-dead-end-risk": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, stuck_undo=True), ours=True),
+    # the default with the no-shuttle correction judging a move back against the object's last move along each
+    # axis: a move along y alone in between no longer hides a cycle along x (docs/research/physics.md)
+    "slax-belief-axis-shuttle": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, shuttle_by_axis=True), ours=True),
     # the no-shuttle correction off: what issue 27's rule costs (it executes moves back the rule forbids)
     "slax-belief-no-shuttle-rule": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT,
                                                                             shuttle_reveal=None), ours=True),

@@ -16,6 +16,9 @@ redoes it, until the horizon. :class:`TrialMemory` holds the two facts the corre
   from the predicted pose), or None (as predicted, or the object is no longer seen and nothing can be said);
 - per object, the planar displacement (m) of the last executed action on it (as observed; as commanded when the
   object is hidden after it), so that :meth:`undoes` can tell a candidate that moves the object back (a shuttle).
+  With ``by_axis`` each axis keeps the last move along it: a move along y alone (a suction pulling the object
+  forward) leaves the last move along x in place, so that moving the object back along x after it is still a
+  move back (x +0.35, then y -0.10, then x -0.35 is a cycle too).
 
 Names are the observation's: true names in privileged mode, the tracker's stable names in camera mode
 (:mod:`slax_drake.perception.tracking`), so an object keeps its name across frames.
@@ -77,9 +80,10 @@ class TrialMemory:
     ``propose(action, objects)`` when a decision names its best candidate; ``withdraw()`` when that candidate is
     excluded before execution."""
 
-    def __init__(self, position_tolerance: float = 0.01, yaw_tolerance: float = 0.05):
+    def __init__(self, position_tolerance: float = 0.01, yaw_tolerance: float = 0.05, by_axis: bool = False):
         self.position_tolerance = position_tolerance
         self.yaw_tolerance = yaw_tolerance
+        self.by_axis = by_axis  # each axis keeps the last move along it (module docstring)
         self.reset()
 
     def reset(self) -> None:
@@ -87,10 +91,20 @@ class TrialMemory:
         self.proposal: Proposal | None = None
         self.moves: dict[str, tuple[float, float]] = {}  # object name -> its last executed displacement (m)
 
+    def record_move(self, name: str, d: tuple[float, float]) -> None:
+        """``d`` (m, along x and y of S) is the last executed move of object ``name``; with ``by_axis`` only along
+        the axes it moves over ``position_tolerance``, the last move along the other axis kept."""
+        d = (float(d[0]), float(d[1]))
+        last = self.moves.get(name)
+        if self.by_axis and last is not None:
+            d = tuple(now if abs(now) > self.position_tolerance else before for now, before in zip(d, last))
+        self.moves[name] = d
+
     def undoes(self, objects, action) -> bool:
-        """Whether ``action`` on ``objects`` moves its object back against the last executed action on it: along x
-        or along y, both that move and this one's commanded displacement exceed ``position_tolerance`` (m) and
-        point opposite ways (e.g. dx -0.05 then +0.10, whatever either did along y)."""
+        """Whether ``action`` on ``objects`` moves its object back against the last executed action on it (with
+        ``by_axis``, the last along each axis): along x or along y, both that move and this one's commanded
+        displacement exceed ``position_tolerance`` (m) and point opposite ways (e.g. dx -0.05 then +0.10, whatever
+        either did along y)."""
         last = self.moves.get(action.name)
         if last is None:
             return False
@@ -129,7 +143,7 @@ class TrialMemory:
         """A new memory holding what this one would after ``plan`` (actions) executed from ``objects`` exactly as
         the action model predicts: each arrangement along it observed, each action's displacement its object's last
         move. For a search that looks at what the corrections would leave at a plan's end; this one is unchanged."""
-        out = TrialMemory(self.position_tolerance, self.yaw_tolerance)
+        out = TrialMemory(self.position_tolerance, self.yaw_tolerance, self.by_axis)
         out.observed, out.moves = list(self.observed), dict(self.moves)
         state = tuple(objects)
         for a in plan:
@@ -139,7 +153,7 @@ class TrialMemory:
                 after = next(o for o in state if o.name == a.name)
                 d = (float(after.center[0] - before.center[0]), float(after.center[1] - before.center[1]))
                 if math.hypot(*d) > self.position_tolerance:
-                    out.moves[a.name] = d
+                    out.record_move(a.name, d)
             out.observe(state)
         return out
 
@@ -261,11 +275,11 @@ class TrialMemory:
         predicted = math.dist(p.predicted_xy, p.before_xy)
         now = next((o for o in objects if o.name == p.action.name), None)
         if now is None:
-            self.moves[p.action.name] = (p.predicted_xy[0] - p.before_xy[0], p.predicted_xy[1] - p.before_xy[1])
+            self.record_move(p.action.name, (p.predicted_xy[0] - p.before_xy[0], p.predicted_xy[1] - p.before_xy[1]))
         else:
             d = (float(now.center[0]) - p.before_xy[0], float(now.center[1]) - p.before_xy[1])
             if math.hypot(*d) > tol:
-                self.moves[p.action.name] = d
+                self.record_move(p.action.name, d)
         if predicted <= tol:
             return None  # too small a move to tell from the observation
         if now is None and self.same_arrangement(tuple(objects), p.before):

@@ -251,3 +251,27 @@ def test_the_reversal_rule_records_how_correction_3_judged_a_chosen_action(paper
                                                                                   "correction off"]
         else:
             assert rules == [None, None, None]
+
+
+def test_by_axis_a_move_along_y_in_between_does_not_hide_a_move_back_along_x(paper):
+    """Drake trial 10:18 of the physics benchmark: one object sucked +0.35 m along x, then pulled along y alone, then
+    carried -0.35 m back along x. Against the last move (along y) that is no move back; against the last move along
+    x (``by_axis``) it is. A later move along x replaces the last one along x."""
+    from slax_drake.shelf.actions import Push
+
+    objects = (box("a", 0.35, 0.0, sx=0.10),)
+    back, on = Push("a", (0.40, -0.04, 0.05), -0.35), Push("a", (0.30, -0.04, 0.05), 0.10)
+    plain, by_axis = TrialMemory(), TrialMemory(by_axis=True)
+    for memory in (plain, by_axis):
+        memory.record_move("a", (0.35, 0.002))
+        memory.record_move("a", (0.004, -0.10))
+    assert not plain.undoes(objects, back) and by_axis.undoes(objects, back)
+    assert by_axis.moves["a"] == pytest.approx((0.35, -0.10))
+    assert not by_axis.undoes(objects, on)
+    assert by_axis.after_plan(objects, ()).undoes(objects, back)  # a plan's memory judges alike
+    by_axis.record_move("a", (-0.05, 0.0))
+    assert by_axis.undoes(objects, on) and not by_axis.undoes(objects, back)
+    by_axis.reset()
+    assert by_axis.by_axis and by_axis.moves == {}
+    policy = make_policy("slax-belief-axis-shuttle", paper, horizon=4)
+    assert policy.memory.by_axis and not make_policy("slax-belief", paper, horizon=4).memory.by_axis
