@@ -1,6 +1,7 @@
 """Compares two physics-benchmark runs (``slax-drake benchmark --physics ... --out DIR``) on the scenes both hold:
 per density, Drake's trial endings, its success (and with nothing lost), the actions matching the first-order
-prediction, and the candidate motions the planner refused before each executed action. Made for the question
+prediction, the candidate motions the planner refused before each executed action, and the commanded moves back
+(undos against the object's previous move, and against its last move along each axis). Made for the question
 "what did a code change do to 'no feasible motion'?" on the same scenes (never typed by hand).
 
     python benchmarks/compare_physics_runs.py results/phys_cam results/phys_s8 [--policy bluction-dar]
@@ -20,7 +21,7 @@ import sys
 from pathlib import Path
 
 from slax_drake.errors import UserError
-from slax_drake.evaluation.physics import clean_success
+from slax_drake.evaluation.physics import clean_success, commanded_undoes
 from slax_drake.evaluation.trial_records import read_trial_records
 
 DENSITIES = ("04", "06", "08", "10")
@@ -68,6 +69,9 @@ def summary(trials: list[dict]) -> dict:
         "matched": sum(bool(a.get("matched")) for a in actions) if kept else None,
         "actions": len(actions) if kept else None,
         "refused_before": sum(a.get("rejected_before", 0) for a in actions) if kept else "-",
+        # commanded moves back against the object's previous move / its last move along each axis
+        "undoes": (f"{sum(commanded_undoes(t['drake']['actions']) for t in trials)} / "
+                   f"{sum(commanded_undoes(t['drake']['actions'], by_axis=True) for t in trials)}") if kept else "-",
         "endings": endings,
         "shelf_success": sum(t["shelf"]["success"] for t in trials),
     }
@@ -78,7 +82,7 @@ def row(label: str, density: str, s: dict) -> str:
     match = (f"{100 * s['matched'] / s['actions']:.0f} % ({s['matched']}/{s['actions']})" if s["actions"]
              else "-")
     return (f"| {label} | {density} | {s['scenes']} | {s['shelf_success']} | {s['success']} | {s['nothing_lost']} | "
-            f"{match} | {s['refused_before']} | {endings} |")
+            f"{match} | {s['refused_before']} | {s['undoes']} | {endings} |")
 
 
 def main(argv=None) -> int:
@@ -108,8 +112,9 @@ def main(argv=None) -> int:
           + (f" --new-policy {new_policy}" if new_policy != args.policy else "")
           + (f" --first {args.first}" if args.first is not None else "") + "`.\n")
     print("| run | objects | scenes | shelf sim. successes | Drake successes | nothing lost | actions matching | "
-          "motions refused before an action | Drake endings |")
-    print("|---" * 9 + "|")
+          "motions refused before an action | commanded moves back: against the previous move / by axis | "
+          "Drake endings |")
+    print("|---" * 10 + "|")
     for density in DENSITIES + ("all",):
         keys = [k for k in common if density == "all" or k.startswith(density + "_")]
         if not keys:

@@ -384,6 +384,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "undo_rules": undo_rules(d["actions"]),
             "commanded_undoes": commanded_undoes(d["actions"]),
             "commanded_undo_rules": undo_rules(d["actions"], commanded=True),
+            "axis_undoes": commanded_undoes(d["actions"], by_axis=True),
             "judged_by_kind": {kind: [sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"]),
                                       sum(1 for a in d["actions"] if action_kind(a) == kind and a["matched"] is not None)]
                                for kind in ACTION_KINDS},
@@ -448,6 +449,10 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "trials_with_commanded_undo": sum(1 for t in sel if t["commanded_undoes"]),
                 "commanded_undo_rules": dict(sum((collections.Counter(t["commanded_undo_rules"]) for t in sel),
                                                  collections.Counter())),
+                # the same against the object's last move along each axis (None: trials summarised before it)
+                "undoes_by_axis": sum(t["axis_undoes"] for t in sel) if all("axis_undoes" in t for t in sel) else None,
+                "trials_with_axis_undo": (sum(1 for t in sel if t["axis_undoes"])
+                                          if all("axis_undoes" in t for t in sel) else None),
                 "match_by_action": _match_by_action(sel),
                 "mismatch_kinds": _mismatch_counts(sel),
             }
@@ -459,10 +464,11 @@ REVERSAL_MIN = 0.01  # m: both moves' components along the reversed axis exceed 
 SAME_PLACE = 0.02  # m: an action's object stood within this of where an earlier action left it (the same object)
 
 
-def _reversed_axes(actions: list[dict]):
+def _reversed_axes(actions: list[dict], by_axis: bool = False):
     """Per executed action that moved an object back along x or y against the previous move of the same physical
     object (both components over :data:`REVERSAL_MIN`): (this action, that previous move, this move, the reversed
-    axes' indices).
+    axes' indices). ``by_axis``: against the object's last move along each axis (a move along the other axis alone
+    in between keeps it: x +0.35 m, y -0.10 m, x -0.35 m reverses the first move).
     Judged from the true poses of the record (``before``, ``outcome``, m in S): an action's object is the one an
     earlier action left within :data:`SAME_PLACE` of where this one found it (the record's track names are the
     planner's and may change)."""
@@ -479,7 +485,10 @@ def _reversed_axes(actions: list[dict]):
                     if p * c < 0 and abs(p) > REVERSAL_MIN and abs(c) > REVERSAL_MIN]
             if axes:
                 yield a, previous, move, axes
-        last_moves.insert(0, ((after["x"], after["y"]), move))
+        kept = move
+        if by_axis and previous is not None:
+            kept = tuple(c if abs(c) > REVERSAL_MIN else p for p, c in zip(previous, move))
+        last_moves.insert(0, ((after["x"], after["y"]), kept))
 
 
 def reversals(actions: list[dict]) -> int:
@@ -489,11 +498,11 @@ def reversals(actions: list[dict]) -> int:
     return sum(1 for _ in _reversed_axes(actions))
 
 
-def _undo_actions(actions: list[dict], commanded: bool = False):
+def _undo_actions(actions: list[dict], commanded: bool = False, by_axis: bool = False):
     """The actions of :func:`undoes`, in order; ``commanded``: only those that undo along an axis the action
     commands (:func:`commanded_axes`): a shuttle the policy chose, not a push along x that let its object drift back
-    1-2 cm in y."""
-    for a, previous, move, axes in _reversed_axes(actions):
+    1-2 cm in y. ``by_axis``: judged against the object's last move along each axis (:func:`_reversed_axes`)."""
+    for a, previous, move, axes in _reversed_axes(actions, by_axis):
         if commanded:
             axes = [k for k in axes if k in commanded_axes(a)]
         if any(abs(previous[k] + move[k]) <= abs(previous[k]) + REVERSAL_MIN for k in axes):
@@ -516,9 +525,11 @@ def commanded_axes(action: dict) -> set[int]:
     return {k for k, name in ((0, "dx"), (1, "dz")) if abs(action.get(name) or 0.0) > REVERSAL_MIN}
 
 
-def commanded_undoes(actions: list[dict]) -> int:
-    """How many of :func:`undoes` reverse the previous move along an axis the action commands."""
-    return sum(1 for _ in _undo_actions(actions, commanded=True))
+def commanded_undoes(actions: list[dict], by_axis: bool = False) -> int:
+    """How many of :func:`undoes` reverse the previous move along an axis the action commands; ``by_axis``: the
+    object's last move along that axis, a move along the other axis alone in between notwithstanding (the cycles
+    through a third move that the previous-move count misses)."""
+    return sum(1 for _ in _undo_actions(actions, commanded=True, by_axis=by_axis))
 
 
 UNDO_RULES = (*(str(r) for r in Reversal), "not a move back by the estimate", "not recorded")

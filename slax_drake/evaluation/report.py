@@ -364,6 +364,10 @@ def physics_section(folder: ResultFolder) -> str:
                               f"{_count(e['trials_with_commanded_undo'])} trials"
                               + (" (" + ", ".join(f"{k} {v}" for k, v in commanded.items()) + ")" if commanded else "")
                               + ".")
+            if e.get("undoes_by_axis") is not None:
+                lines[-1] += (f" Against the object's last move along that axis (a move along the other axis alone in "
+                              f"between does not hide a cycle): {_count(e['undoes_by_axis'])} in "
+                              f"{_count(e['trials_with_axis_undo'])} trials.")
     lines += ["", "Reversal: an executed move of an object back along x or y against its previous move (both over "
               "1 cm, judged from the true poses): the shuttles the no-shuttle rule forbids and the reversals it lets "
               "through because they uncover space no earlier arrangement uncovered; most carry the object past where it "

@@ -334,6 +334,21 @@ def test_an_undo_along_an_axis_the_action_does_not_command_is_drift_not_a_comman
     assert commanded_undoes([pulled, back]) == 1 and undo_rules([pulled, back], commanded=True) == {"let through": 1}
 
 
+def test_a_cycle_through_a_move_along_the_other_axis_is_an_undo_by_axis_only():
+    """Drake trial 10:18: sucked +0.35 m along x, pulled along y alone, carried -0.35 m back along x."""
+    from slax_drake.evaluation.physics import commanded_undoes
+
+    out = {**_moved(0.0, -0.1, 0.35, -0.1), "type": "suction", "dx": 0.35, "dz": 0.0}
+    pulled = {**_moved(0.35, -0.1, 0.35, -0.2), "type": "suction", "dx": 0.0, "dz": -0.10}
+    back = {**_moved(0.35, -0.2, 0.0, -0.2), "type": "suction", "dx": -0.35, "dz": 0.0}
+    assert commanded_undoes([out, pulled, back]) == 0
+    assert commanded_undoes([out, pulled, back], by_axis=True) == 1
+    # a move on along x in between is the last move along x: carrying it back past that one is no undo of it
+    on = {**_moved(0.35, -0.2, 0.40, -0.2), "type": "push", "d": 0.05}
+    farther = {**_moved(0.40, -0.2, 0.20, -0.2), "type": "push", "d": -0.20}
+    assert commanded_undoes([out, pulled, on, farther], by_axis=True) == 0
+
+
 def test_undo_rules_say_how_the_policys_correction_judged_each_undo():
     from slax_drake.evaluation.physics import undo_rules
 
