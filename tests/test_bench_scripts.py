@@ -192,7 +192,7 @@ def test_compare_physics_runs_reads_summaries_and_lists_the_scenes_whose_outcome
     out = capsys.readouterr().out
     assert "slax-belief (old) against v (new), the 3 scenes both runs hold" in out
     assert "in new, not in old: 2 (04_0001, 06_0000); in old, not in new: 1 (04_0000)." in out
-    assert "| new (new) | all | 3 | 3 | 2 | 2 | - | - | no feasible action 1, revealed 2 |" in out
+    assert "| new (new) | all | 3 | 3 | 2 | 2 | - | - | - | no feasible action 1, revealed 2 |" in out
     with pytest.raises(SystemExit) as exit_info:
         main([str(old), str(tmp_path / "typo"), "--policy", "slax-belief"])
     assert exit_info.value.code == 2
