@@ -34,7 +34,7 @@ from slax_drake.config import load_scenario
 from slax_drake.errors import UserError
 from slax_drake.shelf.actions import Push, Suction
 from slax_drake.policies.registry import make_policy
-from slax_drake.shelf.simulator import execute
+from slax_drake.shelf.simulator import execute, split_note
 from slax_drake.scene.raycast import SceneRaycaster
 from slax_drake.evaluation.table1 import protocol_scene
 from slax_drake.evaluation.trial_records import read_trial_records
@@ -87,7 +87,7 @@ def classify_trial(scenario, trial: dict, model, width: int = 160) -> list[tuple
     names = [o.name for o in scene.objects]
     ever: set = set()
     out = []
-    notes = {int(n.split(":")[0].split()[1]): n.split(": ", 1)[1] for n in trial["notes"] if n.startswith("step ")}
+    notes = {step: text for step, text in map(split_note, trial["notes"]) if step is not None}
     for k, text in enumerate(trial["actions"], start=1):
         _, labels = SceneRaycaster(scene, include_target=True).render(camera)
         now = {names[int(v) - 1] for v in np.unique(labels) if 1 <= v <= len(names)}

@@ -21,21 +21,13 @@ from pathlib import Path
 
 from slax_drake.errors import UserError
 from slax_drake.evaluation.trial_records import read_trial_records
+from slax_drake.shelf.simulator import split_note
 
 
 def first_seen(trial: dict) -> int | None:
     """The index of the first decision before which some of the target was visible (None: never, or not
     recorded)."""
     return next((i for i, v in enumerate(trial.get("visible_fractions", [])) if v > 0), None)
-
-
-def split_note(note: str) -> tuple[int | None, str]:
-    """A shelf-simulator note (``"step N: text"``, :func:`~slax_drake.shelf.simulator.run_trial`'s) as (N, text);
-    (None, note) for a note without a step."""
-    head, sep, text = note.partition(": ")
-    if sep and head.startswith("step ") and head[5:].isdigit():
-        return int(head[5:]), text
-    return None, note
 
 
 def note_kind(note: str) -> str:

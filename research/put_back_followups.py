@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import argparse
 import collections
-import re
 import sys
 from pathlib import Path
 
 from slax_drake.errors import UserError
 from slax_drake.evaluation.trial_records import read_trial_records
+from slax_drake.shelf.simulator import split_note
 
 
 def followups(folder: Path, policy: str) -> collections.Counter:
@@ -30,11 +30,7 @@ def followups(folder: Path, policy: str) -> collections.Counter:
         if not isinstance(trial.get("actions", []), list):
             path = folder / "trials" / policy / f"{stem}.json"
             raise UserError(f"{path}: not a trial file")
-        notes = {}
-        for note in trial.get("notes", []):
-            m = re.match(r"step (\d+): (.*)", note)
-            if m:
-                notes[int(m.group(1))] = m.group(2)
+        notes = {step: text for step, text in map(split_note, trial.get("notes", [])) if step is not None}
         actions = trial.get("actions", [])
         counts["trials"] += 1
         for step, action in enumerate(actions, 1):

@@ -373,6 +373,19 @@ class TrialResult:
         return out
 
 
+def step_note(step: int, text: str) -> str:
+    """A trial's note on its ``step``-th action (from 1), as :func:`run_trial` records it: ``"step N: text"``."""
+    return f"step {step}: {text}"
+
+
+def split_note(note: str) -> tuple[int | None, str]:
+    """A note of :func:`run_trial` as (N, text) (:func:`step_note`); (None, note) for a note without a step."""
+    head, sep, text = note.partition(": ")
+    if sep and head.startswith("step ") and head[5:].isdigit():
+        return int(head[5:]), text
+    return None, note
+
+
 def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, suction_cost: float = 1.3,
               density: int | None = None, max_seconds: float | None = None,
               observer: CameraObserver | None = None) -> TrialResult:
@@ -414,7 +427,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
             true_name = names.get(action.name)
             if true_name is None:
                 actions.append(action.describe())
-                notes.append(f"step {len(actions)}: {action.name} is no object (a segment of the shelf)")
+                notes.append(step_note(len(actions), f"{action.name} is no object (a segment of the shelf)"))
                 pushes, suctions = (pushes + 1, suctions) if isinstance(action, Push) else (pushes, suctions + 1)
                 continue
             chosen = action
@@ -426,7 +439,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
         scene, note = execute(scene, action, policy.action_model)
         actions.append(action.describe())
         if note:
-            notes.append(f"step {len(actions)}: {note}")
+            notes.append(step_note(len(actions), note))
         if isinstance(action, Push):
             pushes += 1
         else:

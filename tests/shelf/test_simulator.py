@@ -77,3 +77,13 @@ def test_a_placement_over_a_low_object_backs_out_to_the_last_landing_spot(sim_sc
     assert abs(end.center[0] - 0.15) < 1e-12
     in_front_of_low = -0.04 - 0.03 - clearance  # the largest y where it stands clear of the low object
     assert in_front_of_low - cell - 1e-9 <= end.center[1] <= in_front_of_low + 1e-9
+
+
+def test_a_step_note_splits_back_into_its_step_and_text():
+    from slax_drake.shelf.simulator import split_note, step_note
+
+    note = step_note(4, "push stopped after -0.085 m by an unseen obstacle: 12 s")
+    assert note == "step 4: push stopped after -0.085 m by an unseen obstacle: 12 s"
+    assert split_note(note) == (4, "push stopped after -0.085 m by an unseen obstacle: 12 s")
+    assert split_note("stopped: no feasible action") == (None, "stopped: no feasible action")
+    assert split_note("step x: text") == (None, "step x: text")
