@@ -416,10 +416,10 @@ def table2_section(folder: ResultFolder) -> str:
 def is_rerun_of(later: ResultFolder, first: ResultFolder) -> bool:
     """Whether ``later`` is a Table I run of ``first``'s very protocol (its settings but the policy set, and its
     scenes per density and densities) that reran some of its policies: its rows replace ``first``'s in the
-    headline."""
+    headline. The code that made each (the settings' ``code``) is no part of the protocol: a rerun is made later."""
     def protocol(f):
-        return ({k: v for k, v in f.settings.items() if k != "policies"}, f.meta.get("scenes_per_density"),
-                sorted(f.meta.get("densities") or []))
+        return ({k: v for k, v in f.settings.items() if k not in ("policies", "code")},
+                f.meta.get("scenes_per_density"), sorted(f.meta.get("densities") or []))
 
     shared = set(later.summary["policies"]) & set(first.summary["policies"])
     return (later is not first and later.kind == first.kind == "table1" and bool(first.settings)

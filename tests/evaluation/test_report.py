@@ -1,5 +1,6 @@
 """slax-drake report: the results pages and the README's headline table, generated from committed result folders."""
 
+import json
 from pathlib import Path
 
 import pytest
@@ -67,6 +68,20 @@ def test_the_readme_headline_takes_the_rows_of_a_later_run_of_the_same_protocol(
     assert "- Oracle-P; Oracle-P+S:\n  `slax-drake benchmark" in text and "--out " + str(folders[0]) + "`" in text
     assert "slax-belief (ours):\n  `slax-drake benchmark" in text and "--out " + str(folders[2]) + "`" in text
     assert str(folders[1]) + "`" not in text
+
+
+def test_a_rerun_made_by_later_code_is_still_a_rerun(tmp_path):
+    """Settings record the code that made a run; a rerun of the same protocol by later code replaces the rows."""
+    import shutil
+
+    rerun = tmp_path / "table1_paper_nonoracle_later"
+    shutil.copytree(RESULTS / "table1_paper_nonoracle", rerun)
+    settings = json.loads((rerun / "settings.json").read_text())
+    (rerun / "settings.json").write_text(json.dumps({**settings, "code": ["slax-drake 0.1.0 (git 0123456789)"]}))
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{README_BEGIN}\n{README_END}\n")
+    assert main(["report", str(RESULTS / "table1_paper"), str(rerun), "--readme", str(readme)]) == 0
+    assert "| slax-belief (ours) | 97 | 91 | 73 | 66 | 82 |" in readme.read_text()
 
 
 @pytest.mark.parametrize("setup, message", [
