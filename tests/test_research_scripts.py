@@ -197,7 +197,8 @@ def test_belief_variants_known_target_tells_the_search_where_the_target_stands(c
     rules = [f"--tool-rule={r}" for r in ("max_drag_pull=42.412", "max_drag_twist=0.6362", "max_seal_angle_deg=10",
                                           "max_suction_moment=0.4", "reach_map=models/reach/station_sim_shelf.json",
                                           "suction_hidden_rule=guarded")]
-    args = ["--trials", "4:14", "--policy", "slax-belief-box", "--profile", "station", "--config", "sim_configs/table1_household.yaml", *rules]
+    args = ["--trials", "4:14", "--policy", "slax-belief-box", "--profile", "station",
+            "--config", "sim_configs/table1_household.yaml", *rules]
     module = script("belief_variants")
     assert module.main(args) == 0
     assert "revealed 0 / 1" in capsys.readouterr().out
