@@ -40,6 +40,7 @@ import numpy as np
 from slax_drake.errors import PhysicsBenchmarkError
 from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
 from slax_drake.policies.protocol import Reversal
+from slax_drake.policies.trial_memory import last_move_by_axis
 
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
@@ -449,10 +450,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 "trials_with_commanded_undo": sum(1 for t in sel if t["commanded_undoes"]),
                 "commanded_undo_rules": dict(sum((collections.Counter(t["commanded_undo_rules"]) for t in sel),
                                                  collections.Counter())),
-                # the same against the object's last move along each axis (None: trials summarised before it)
-                "undoes_by_axis": sum(t["axis_undoes"] for t in sel) if all("axis_undoes" in t for t in sel) else None,
-                "trials_with_axis_undo": (sum(1 for t in sel if t["axis_undoes"])
-                                          if all("axis_undoes" in t for t in sel) else None),
+                # the same against the object's last move along each axis
+                "undoes_by_axis": sum(t["axis_undoes"] for t in sel),
+                "trials_with_axis_undo": sum(1 for t in sel if t["axis_undoes"]),
                 "match_by_action": _match_by_action(sel),
                 "mismatch_kinds": _mismatch_counts(sel),
             }
@@ -485,10 +485,9 @@ def _reversed_axes(actions: list[dict], by_axis: bool = False):
                     if p * c < 0 and abs(p) > REVERSAL_MIN and abs(c) > REVERSAL_MIN]
             if axes:
                 yield a, previous, move, axes
-        kept = move
         if by_axis and previous is not None:
-            kept = tuple(c if abs(c) > REVERSAL_MIN else p for p, c in zip(previous, move))
-        last_moves.insert(0, ((after["x"], after["y"]), kept))
+            move = last_move_by_axis(previous, move, REVERSAL_MIN)
+        last_moves.insert(0, ((after["x"], after["y"]), move))
 
 
 def reversals(actions: list[dict]) -> int:

@@ -97,7 +97,7 @@ class TrialMemory:
         d = (float(d[0]), float(d[1]))
         last = self.moves.get(name)
         if self.by_axis and last is not None:
-            d = tuple(now if abs(now) > self.position_tolerance else before for now, before in zip(d, last))
+            d = last_move_by_axis(last, d, self.position_tolerance)
         self.moves[name] = d
 
     def undoes(self, objects, action) -> bool:
@@ -293,6 +293,12 @@ class TrialMemory:
             return p, Failed(Miss.UNCHANGED)
         moved, off = math.dist(xy, p.before_xy), math.dist(xy, p.predicted_xy)
         return p, Failed(Miss.SHORT if moved < predicted else Miss.ELSEWHERE, moved, predicted, off)
+
+
+def last_move_by_axis(last: tuple[float, float], move: tuple[float, float], tolerance: float) -> tuple:
+    """An object's last move along each axis of S (m) after ``move``: ``move``'s component where it exceeds
+    ``tolerance``, else ``last``'s (a move along y alone keeps the last move along x)."""
+    return tuple(now if abs(now) > tolerance else before for before, now in zip(last, move))
 
 
 def _x_extent(o) -> tuple[float, float]:

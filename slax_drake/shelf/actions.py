@@ -246,8 +246,6 @@ class ActionModel:
         self._lattices: dict = {}  # id(obj) -> (obj, SuctionLattice) (suction_lattice)
         self.reach = load_reach_map(tool.rules.reach_map) if tool.rules.reach_map else None  # the reach_map rule
 
-    # ----------------------------------------------------------------------------------------------------
-
     @property
     def eye(self) -> tuple:
         """The camera's position the model was built with (S, m): (x, y), or (x, y, z) when it has a height."""
@@ -261,6 +259,8 @@ class ActionModel:
     def placement_clearance(self) -> float:
         """How far (m) a suction's placement keeps from every other object: the scenario's clearance."""
         return self.tool.physics.clearance
+
+    # ----------------------------------------------------------------------------------------------------
     def enumerate(self, objects, fixed=(), pushes: bool = True, suctions: bool = True, only=None) -> Candidates:
         """Candidates for moving each of ``objects`` (or only those named in ``only``); ``fixed`` are known
         obstacles that never move (the oracle's target). Returns feasible actions (deterministic order) and
