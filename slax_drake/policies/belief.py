@@ -200,6 +200,7 @@ class BeliefSearch(Hindsight):
                          shuttle_reveal=o.shuttle_reveal, shuttle_by_axis=o.shuttle_by_axis, **kwargs)
         self.options = o
         self.put_back_group = o.put_back_group  # camera mode: a suction put back excludes its object's suctions
+        self.put_back_lane = o.put_back_lane  # a suction that moved nothing excludes its object's suctions by its dx
         self._hidden_centers = None  # the target's possible placements at this decision (x, y; m)
         self._risk_by_box: dict = {}  # placement box -> its placement_risk, for this decision's hidden centres
         self._risk_cache: dict = {}  # (id(object), action) -> (the object, its placement_risk), this decision

@@ -102,6 +102,14 @@ class BeliefOptions:
     the object reaches beyond its hypothesis (a mostly hidden object is wider or deeper than its visible part), so
     its other placements fail alike: of 263 later suctions of an object put back in the camera-mode Table I run,
     176 failed again (privileged: 6 of 43)."""
+    put_back_lane: bool = False
+    """A suction that left its object where it stood excludes every suction of that object by the same dx, whatever
+    its placement depth dz, while the object stands there (within the exclusions' tolerances in camera mode;
+    :func:`~slax_drake.policies.protocol.suction_lane`); without it only the same dx with a dz within 1 cm. Such a
+    suction failed before its depth mattered: its way out was blocked, the object did not fit between the walls at
+    that x, or the way in at that x was blocked before the object was inside the bay (put back), and its other
+    depths fail alike. In the camera-mode Table I run at 2100fd5, 166 of the 498 put-backs at 10 objects repeated
+    an earlier put-back's object and dx, the object unmoved since."""
     shuttle_rule: str = "width"
     """What a move back against its object's last move must uncover to pass the no-shuttle correction (at least
     0.02 m of it): "width", width its own footprint covered in every arrangement observed in the trial; "sight",

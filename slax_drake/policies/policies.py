@@ -83,6 +83,9 @@ class DistributionPolicy:
         # camera mode: a suction that left its object where it stood excludes that object's suctions while it stands
         # there (slax-belief's option ``put_back_group``); False: only that action is excluded
         self.put_back_group = False
+        # a suction that left its object where it stood excludes that object's suctions by the same dx, any
+        # placement depth, while it stands there (slax-belief's option ``put_back_lane``)
+        self.put_back_lane = False
         self._action_model = action_model
         self.distribution = distribution
         self.psi = psi
@@ -137,7 +140,8 @@ class DistributionPolicy:
             proposal, how = failed
             unchanged = how.miss is Miss.UNCHANGED
             group = isinstance(proposal.action, Push) or (self.put_back_group and self._exclusions.tolerant)
-            self._exclusions.add(proposal.action, f"executed: {how.message}", unchanged and group, proposal.before)
+            self._exclusions.add(proposal.action, f"executed: {how.message}", unchanged and group, proposal.before,
+                                 lane=unchanged and self.put_back_lane)
         self.memory.observe(obs.known)
         if self._view is not None:
             self._view.observe(obs.known)

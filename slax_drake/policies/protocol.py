@@ -103,6 +103,18 @@ def action_group(action) -> tuple:
     return ("suction", action.name)
 
 
+def suction_lane(action) -> tuple | None:
+    """The suctions of one object to one x (the same ``dx``, any placement depth ``dz``) for ``action``, a suction;
+    None for a push. A suction that leaves its object where it stood failed before its placement depth mattered:
+    its way out was blocked, its object did not fit between the walls at that x, or the way in at that x was
+    blocked before the object was inside the bay (put back); every suction of that object to that x fails alike
+    while it and its neighbours stand where they stood (the exclusion holds while the object stands there: a
+    neighbour moved since may have cleared the lane)."""
+    if isinstance(action, Push):
+        return None
+    return ("suction lane", action.name, round(float(action.dx), 6), bool(getattr(action, "drag", False)))
+
+
 def _pose_keys(objects) -> dict:
     """Per object name in ``objects``, its planar pose as :func:`~slax_drake.scene.model.state_key` rounds it."""
     from slax_drake.scene.model import state_key
@@ -122,30 +134,40 @@ class Exclusions:
     specific to where its object stood); a group (see :func:`action_group`) is excluded while its object stands at
     the pose it had when the group was excluded (``objects``: the objects the policy last decided on).
 
+    A suction's lane (:func:`suction_lane`: the same object and dx, any dz) is excluded the same way as a group,
+    while its object stands where it stood (``lane=True`` in :meth:`add`).
+
     ``tolerant`` (set by a policy deciding on a camera frame): estimated poses differ from frame to frame by the
     estimate's noise, and so do the contact points and placements the actions name, so exact comparison never
     matches again (a push blocked at once was repeated to the horizon). Then an action is also excluded when an
     excluded one names the same object, kind and displacement (a push's d; a suction's dx, and its placement dz
     within ``position_tolerance``) while its object stands within ``position_tolerance`` (m) and
-    ``yaw_tolerance`` (rad) of where it stood then, and a group while its object stands so near its pose then."""
+    ``yaw_tolerance`` (rad) of where it stood then, and a group or lane while its object stands so near its pose
+    then."""
 
     def __init__(self, position_tolerance: float = 0.01, yaw_tolerance: float = 0.05):
         self._records: list[tuple] = []
         self._actions: set = set()
-        self._groups: set = set()
-        self._near: list[tuple] = []  # (action, whole group, the object's pose then) for the tolerant comparison
+        self._groups: set = set()  # (action_group or suction_lane key, the object's pose then)
+        self._near: list[tuple] = []  # (action, scope, the object's pose then) for the tolerant comparison
         self.tolerant = False
         self.position_tolerance = position_tolerance
         self.yaw_tolerance = yaw_tolerance
 
-    def add(self, action, reason: str, whole_group: bool, objects) -> None:
+    def add(self, action, reason: str, whole_group: bool, objects, lane: bool = False) -> None:
+        """Excludes ``action`` (``objects``: the state it was decided on); with ``whole_group`` its group
+        (:func:`action_group`), with ``lane`` (a suction) its lane (:func:`suction_lane`), while its object stands
+        where it stands in ``objects``."""
         self._records.append((action, reason))
         self._actions.add(action)
         pose = _pose_key(action.name, objects)
+        lane = lane and suction_lane(action) is not None
         if whole_group:
             self._groups.add((action_group(action), pose))
+        if lane:
+            self._groups.add((suction_lane(action), pose))
         if pose is not None:
-            self._near.append((action, whole_group, pose))
+            self._near.append((action, "group" if whole_group else "lane" if lane else "action", pose))
 
     def allowed(self, actions, objects) -> list:
         """``actions`` less the excluded ones (``objects``: the state they were enumerated in)."""
@@ -154,7 +176,8 @@ class Exclusions:
         keep = [a for a in actions if a not in self._actions]
         poses = _pose_keys(objects)  # per object name, computed once for every candidate
         if self._groups:
-            keep = [a for a in keep if (action_group(a), poses.get(a.name)) not in self._groups]
+            keep = [a for a in keep if (action_group(a), poses.get(a.name)) not in self._groups
+                    and (suction_lane(a), poses.get(a.name)) not in self._groups]
         if self.tolerant and self._near:
             keep = [a for a in keep if not self._near_excluded(a, poses.get(a.name))]
         return keep
@@ -164,10 +187,12 @@ class Exclusions:
         tolerances."""
         if pose is None:
             return False
-        for excluded, whole_group, then in self._near:
+        for excluded, scope, then in self._near:
             if excluded.name != action.name or not self._same_place(pose, then):
                 continue
-            if whole_group and action_group(excluded) == action_group(action):
+            if scope == "group" and action_group(excluded) == action_group(action):
+                return True
+            if scope == "lane" and suction_lane(excluded) == suction_lane(action):
                 return True
             if _same_move(excluded, action, self.position_tolerance):
                 return True

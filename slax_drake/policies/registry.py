@@ -139,6 +139,10 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # camera mode: a suction put back excludes its object's suctions while it stands there (put_back_group)
     "slax-belief-put-back-group": PolicyEntry(_BELIEF, dataclasses.replace(
         _EARLIER_DEFAULT, put_back_group=True), ours=True),
+    # the default, and a suction that moved nothing excludes its object's suctions by the same dx at every
+    # placement depth while it stands there (put_back_lane)
+    "slax-belief-put-back-lane": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, put_back_lane=True), ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, blocked_rule="risk"),

@@ -160,3 +160,39 @@ def test_in_camera_mode_an_exclusion_holds_while_the_estimated_object_stands_wit
     exclusions.tolerant = True
     assert exclusions.allowed(candidates, now) == [back, elsewhere]
     assert exclusions.allowed(candidates, moved) == candidates  # the object moved 3 cm: everything may work now
+
+
+def test_a_suction_lane_exclusion_refuses_every_placement_depth_at_that_dx_while_the_object_stands_there():
+    """A suction that left its object where it stood failed before its placement depth mattered (way out blocked,
+    outside the walls at that x, or put back at the front of the bay): with ``lane`` its object's suctions by the
+    same dx are excluded at every dz, exactly and (camera mode) within the tolerances; other dx, drags and pushes
+    stay allowed, and everything is allowed again once the object has moved."""
+    from slax_drake.policies.protocol import Exclusions, suction_lane
+    from slax_drake.scene.model import SceneObject, planar_pose
+    from slax_drake.shelf.actions import Push, Suction
+
+    def box(x, y):
+        return SceneObject("track_3", "box", (0.1, 0.1, 0.15), planar_pose(x, y, 0.075, 0.0))
+
+    then, noisy, moved = (box(0.0, 0.0),), (box(0.004, -0.003),), (box(0.05, 0.0),)
+    put_back = Suction("track_3", (0.0, -0.05, 0.1), -0.1, -0.031)
+    deeper = Suction("track_3", (0.0, -0.05, 0.1), -0.1, 0.069)
+    shallower = Suction("track_3", (0.0, -0.05, 0.1), -0.1, -0.081)
+    other_x = Suction("track_3", (0.0, -0.05, 0.1), -0.15, -0.031)
+    drag = Suction("track_3", (0.0, -0.05, 0.1), -0.1, 0.069, drag=True)
+    push = Push("track_3", (0.05, -0.05, 0.07), -0.1)
+    assert suction_lane(push) is None and suction_lane(deeper) == suction_lane(shallower) != suction_lane(drag)
+    candidates = [deeper, shallower, other_x, drag, push]
+
+    single = Exclusions()
+    single.add(put_back, "executed: moved nothing", False, then)
+    assert single.allowed(candidates, then) == candidates  # only the very action: dz 0.10 m away is not it
+
+    lane = Exclusions()
+    lane.add(put_back, "executed: moved nothing", False, then, lane=True)
+    assert lane.allowed(candidates, then) == [other_x, drag, push]
+    assert lane.allowed(candidates, noisy) == candidates  # exact comparison: the estimate moved by 5 mm
+    lane.tolerant = True
+    assert lane.allowed(candidates, noisy) == [other_x, drag, push]
+    assert lane.allowed(candidates, moved) == candidates
+    assert lane.records == ((put_back, "executed: moved nothing"),)
