@@ -143,6 +143,10 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # placement depth while it stands there (put_back_lane)
     "slax-belief-put-back-lane": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, put_back_lane=True), ours=True),
+    # camera mode: the default, and the tracker's hidden objects are obstacles where they were last seen
+    # (camera_memory, without slax-belief-camera-depth's deeper prior)
+    "slax-belief-camera-memory": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, camera_memory=True), ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, blocked_rule="risk"),
