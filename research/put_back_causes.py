@@ -16,8 +16,10 @@ the first that places the object names the cause:
 - ``seen neighbour``: every object seen in the frame replaced by its hypothesis: a seen neighbour reaches beyond
   its estimate (or several seen objects together);
 - ``target``: the target removed as well;
-- else an object not in the frame stops it (the first whose removal alone places the object): ``seen before`` (an
-  earlier frame of the trial showed it: the tracker remembers it as hidden), ``never seen``, or ``several``.
+- else an object not in the frame stops it (the first such object whose removal alone changes the outcome; a seen
+  object's estimate may share the blame, e.g. the carried object cannot be lowered onto it short of the unseen
+  one): ``seen before`` (an earlier frame of the trial showed it), ``never seen``, or ``several`` (no single
+  object not in the frame).
 
 ``on the policy's own estimates``: the same placement executed on the frame's hypotheses alone (what the policy
 planned on; every put-back should be placed there). ``replay`` counts the steps whose replayed frame gave the
@@ -100,7 +102,7 @@ def put_back_causes(scenario, trial: dict, model, width: int) -> tuple[list[str]
             elif _placed(execute(no_target, on_hypothesis, model)[1]):
                 causes.append("target")
             else:
-                found = blockers(no_target, on_hypothesis, model)
+                found = [b for b in blockers(no_target, on_hypothesis, model) if b not in hypotheses]
                 causes.append("several" if not found else "seen before" if found[0] in ever else "never seen")
         observer.executed(dataclasses.replace(on_hypothesis, name=track))
         scene, _ = execute(scene, action, model)
