@@ -147,6 +147,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # (camera_memory, without slax-belief-camera-depth's deeper prior)
     "slax-belief-camera-memory": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, camera_memory=True), ours=True),
+    # both: the tracker's hidden objects as obstacles, and a suction that moved nothing excludes its lane
+    "slax-belief-camera-memory-lane": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, camera_memory=True, put_back_lane=True), ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, blocked_rule="risk"),
