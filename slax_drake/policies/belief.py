@@ -84,8 +84,8 @@ excluded by the corrections.
 Camera mode (the observation is a frame: ``known`` holds the estimator's hypotheses, named ``track_<k>`` by the
 object tracker, never true objects). The observer's hypotheses assume the least depth an object can have, so an action may run into an
 object the frame showed, reaching beyond its hypothesis, into an object seen before and hidden now, or beyond the
-walls. The options below address these; all but ``seen_target`` and ``uncover_seen`` are off in the registry's
-``slax-belief``; ``slax-belief-camera-depth`` sets ``camera_depth``, ``camera_memory`` and
+walls. The options below address these; all but ``seen_target``, ``uncover_seen`` and ``camera_memory`` are off
+in the registry's ``slax-belief``; ``slax-belief-camera-depth`` sets ``camera_depth``, ``camera_memory`` and
 ``camera_outcome_tolerance`` and turns ``seen_target`` off:
 
 - ``camera_depth`` (m): the hypotheses are estimated again from the frame assuming each at least this deep behind
@@ -94,9 +94,9 @@ walls. The options below address these; all but ``seen_target`` and ``uncover_se
 - ``maybe_occupied``: the target's placements are judged against the observer's (shallow) hypotheses, so a
   placement in the part of a hypothesis that only the assumed depth fills stays possible, at this weight
   (:meth:`placements`); with ``camera_depth`` alone such placements are excluded;
-- ``camera_memory``: :meth:`with_remembered` in camera mode, a hypothesis matched across frames by where it
-  stands (segment ids are not kept by a real segmentation), remembered as ``remembered_<name>``, an obstacle the
-  policy takes no action on (:meth:`remembered_in_frame`);
+- ``camera_memory``: :meth:`with_remembered` in camera mode, the tracker's hidden objects (without a tracker, a
+  hypothesis matched across frames by where it stands: segment ids are not kept by a real segmentation),
+  remembered as ``remembered_<name>``, an obstacle the policy takes no action on (:meth:`remembered_in_frame`);
 - ``camera_outcome_tolerance`` (m): the outcome evidence and the placement check compare estimated poses, within
   this tolerance rather than the 3 mm (5 mm) that exact poses allow;
 - ``camera_extents`` (a share in [0, 1]): as ``camera_depth``, but each hypothesis's unseen edges lie that share

@@ -59,8 +59,11 @@ class PolicyEntry:
         return getattr(importlib.import_module(module), name)
 
 
-# slax-belief's default until 2026-12-06, the base of the variants measured against it
-_EARLIER_DEFAULT = dataclasses.replace(DEFAULT_BELIEF_OPTIONS, dead_end="ignore", blocked_rule="box")
+# slax-belief's default of 2100fd5 (2026-12-06), before the tracker's hidden objects were obstacles in camera mode
+# (camera_memory): the base of the variants measured against it
+_DEFAULT_2100FD5 = dataclasses.replace(DEFAULT_BELIEF_OPTIONS, camera_memory=False)
+# slax-belief's default until 2100fd5, the base of the variants measured against it
+_EARLIER_DEFAULT = dataclasses.replace(_DEFAULT_2100FD5, dead_end="ignore", blocked_rule="box")
 
 _POLICIES = "slax_drake.policies.policies"
 _BELIEF = "slax_drake.policies.belief:BeliefSearch"
@@ -79,9 +82,12 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "bluction-la2": PolicyEntry(f"{_POLICIES}:BluctionLookahead", ours=True),
     "slax-hindsight": PolicyEntry("slax_drake.policies.hindsight:Hindsight", ours=True),
     # our best: a plan that would leave the shelf locked loses the worlds it leaves unrevealed (dead_end
-    # "corrections"), a failed placement's box is a risk, not a refusal (blocked_rule "risk"); the default since
-    # 2026-12-06 (docs/research/physics.md, "A failed placement as a risk, not a refusal")
+    # "corrections"), a failed placement's box is a risk, not a refusal (blocked_rule "risk"), both since 2100fd5
+    # (docs/research/physics.md, "A failed placement as a risk, not a refusal"); in camera mode the objects seen
+    # before and hidden now are obstacles (camera_memory; docs/research/observation-modes.md)
     "slax-belief": PolicyEntry(_BELIEF, DEFAULT_BELIEF_OPTIONS, ours=True),
+    # the default of 2100fd5: in camera mode an object hidden now is forgotten
+    "slax-belief-no-camera-memory": PolicyEntry(_BELIEF, _DEFAULT_2100FD5, ours=True),
     # the default until 2026-12-06: dead ends not priced, a failed placement's box refuses every later placement
     # overlapping it. The variants below built on _EARLIER_DEFAULT were measured against it and keep its options,
     # so that their results folders' commands still reproduce them
@@ -112,21 +118,22 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # a plan ending where no move would be left loses its unrevealed worlds (docs/research/physics.md)
     "slax-belief-dead-end": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, dead_end="corrections"),
                                         ours=True),
-    # the default's options under the name they were measured by before they became the default
-    "slax-belief-dead-end-risk": PolicyEntry(_BELIEF, DEFAULT_BELIEF_OPTIONS, ours=True),
+    # the default of 2100fd5 under the name it was measured by before it became the default
+    "slax-belief-dead-end-risk": PolicyEntry(_BELIEF, _DEFAULT_2100FD5, ours=True),
     # stuck (no plan reveals anything): moves back the corrections screen out may start a plan that reveals
     "slax-belief-stuck-undo": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, stuck_undo=True),
                                           ours=True),
     # both: stuck moves back may start a plan, and a plan ending where no move would be left loses its worlds
     "slax-belief-stuck-undo-dead-end": PolicyEntry(_BELIEF, dataclasses.replace(
         _EARLIER_DEFAULT, stuck_undo=True, dead_end="corrections"), ours=True),
-    # the default, and stuck moves back may start a plan (measured as the two above with blocked_rule "risk")
+    # the default of 2100fd5, and stuck moves back may start a plan (measured as the two above with blocked_rule
+    # "risk")
     "slax-belief-stuck-undo-dead-end-risk": PolicyEntry(_BELIEF, dataclasses.replace(
-        DEFAULT_BELIEF_OPTIONS, stuck_undo=True), ours=True),
-    # the default with the no-shuttle correction judging a move back against the object's last move along each
-    # axis: a move along y alone in between no longer hides a cycle along x (docs/research/physics.md)
+        _DEFAULT_2100FD5, stuck_undo=True), ours=True),
+    # the default of 2100fd5 with the no-shuttle correction judging a move back against the object's last move
+    # along each axis: a move along y alone in between no longer hides a cycle along x (docs/research/physics.md)
     "slax-belief-axis-shuttle": PolicyEntry(_BELIEF, dataclasses.replace(
-        DEFAULT_BELIEF_OPTIONS, shuttle_by_axis=True), ours=True),
+        _DEFAULT_2100FD5, shuttle_by_axis=True), ours=True),
     # the no-shuttle correction off: what issue 27's rule costs (it executes moves back the rule forbids)
     "slax-belief-no-shuttle-rule": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT,
                                                                             shuttle_reveal=None), ours=True),
@@ -139,17 +146,15 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # camera mode: a suction put back excludes its object's suctions while it stands there (put_back_group)
     "slax-belief-put-back-group": PolicyEntry(_BELIEF, dataclasses.replace(
         _EARLIER_DEFAULT, put_back_group=True), ours=True),
-    # the default, and a suction that moved nothing excludes its object's suctions by the same dx at every
-    # placement depth while it stands there (put_back_lane)
+    # the default of 2100fd5, and a suction that moved nothing excludes its object's suctions by the same dx at
+    # every placement depth while it stands there (put_back_lane); measured, not the default (+1 scene of 200)
     "slax-belief-put-back-lane": PolicyEntry(_BELIEF, dataclasses.replace(
-        DEFAULT_BELIEF_OPTIONS, put_back_lane=True), ours=True),
-    # camera mode: the default, and the tracker's hidden objects are obstacles where they were last seen
-    # (camera_memory, without slax-belief-camera-depth's deeper prior)
-    "slax-belief-camera-memory": PolicyEntry(_BELIEF, dataclasses.replace(
-        DEFAULT_BELIEF_OPTIONS, camera_memory=True), ours=True),
-    # both: the tracker's hidden objects as obstacles, and a suction that moved nothing excludes its lane
+        _DEFAULT_2100FD5, put_back_lane=True), ours=True),
+    # the default under the name it was measured by before it became the default (camera_memory)
+    "slax-belief-camera-memory": PolicyEntry(_BELIEF, DEFAULT_BELIEF_OPTIONS, ours=True),
+    # the default with put_back_lane: measured, worse (-5 scenes of 200 at 8 and 10 objects, camera mode)
     "slax-belief-camera-memory-lane": PolicyEntry(_BELIEF, dataclasses.replace(
-        DEFAULT_BELIEF_OPTIONS, camera_memory=True, put_back_lane=True), ours=True),
+        DEFAULT_BELIEF_OPTIONS, put_back_lane=True), ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, blocked_rule="risk"),
