@@ -4,7 +4,10 @@ as ``slax-drake benchmark`` runs it (scene sampling, policy construction and the
 per-decision CPU limit), with nothing written. Run it with PYTHONPATH set to the checkout to measure, on one core:
 
     OMP_NUM_THREADS=1 taskset -c 0 python benchmarks/table1_cpu.py [--profile paper|station] \\
-        [--policies dar,oracle-p+s] [--scenes-per-density 4] [--seed 0] [--json OUT.json]
+        [--policies dar,oracle-p+s] [--scenes-per-density 4] [--seed 0] [--observation camera] [--json OUT.json]
+
+``--observation camera``: the non-oracle policies see rendered frames with the render's labels (the benchmark's
+camera mode, no sensor noise); default privileged.
 
 ``--json`` also writes every trial's CPU seconds ({"<policy>/<density>_<index>": seconds}), so two checkouts can
 be compared trial by trial.
@@ -20,7 +23,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
 from slax_drake.config import load_scenario  # noqa: E402
-from slax_drake.evaluation.table1 import run_benchmark_trial, scene_seed  # noqa: E402
+from slax_drake.evaluation.table1 import CameraMode, run_benchmark_trial, scene_seed  # noqa: E402
 from slax_drake.errors import UserError  # noqa: E402
 from slax_drake.policies.registry import POLICY_NAMES  # noqa: E402
 from slax_drake.shelf.tool import scenario_profile
@@ -35,6 +38,8 @@ def main(argv=None) -> int:
     ap.add_argument("--scenes-per-density", type=int, default=4)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", default=None, help="write each trial's CPU seconds here")
+    ap.add_argument("--observation", choices=("privileged", "camera"), default="privileged",
+                    help="camera: rendered frames with the render's labels for the non-oracle policies")
     args = ap.parse_args(argv)
     unknown = [p for p in args.policies.split(",") if p not in POLICY_NAMES]
     problem = (f"unknown policies {unknown} (known: {', '.join(POLICY_NAMES)})" if unknown else
@@ -53,8 +58,10 @@ def main(argv=None) -> int:
     densities = list(scenario.protocol.densities)
     import slax_drake
 
-    print(f"Table I trials' CPU seconds (process time), profile {profile}, {args.scenes_per_density} scenes per "
-          f"density {densities}, seed {args.seed}, package {os.path.dirname(slax_drake.__file__)}")
+    camera = CameraMode() if args.observation == "camera" else None
+    print(f"Table I trials' CPU seconds (process time), profile {profile}, {args.observation} observation, "
+          f"{args.scenes_per_density} scenes per density {densities}, seed {args.seed}, "
+          f"package {os.path.dirname(slax_drake.__file__)}")
     print("| policy | trials | CPU s, sum | CPU s, max trial |")
     print("|---|---|---|---|")
     per_trial, total = {}, 0.0
@@ -63,7 +70,7 @@ def main(argv=None) -> int:
         for density in densities:
             for index in range(args.scenes_per_density):
                 job = (scenario, policy, density, index, scene_seed(args.seed, density, index), "ground-truth", {},
-                       None, profile, None)
+                       camera, profile, None)
                 t0 = time.process_time()
                 run_benchmark_trial(job)
                 seconds.append(time.process_time() - t0)
