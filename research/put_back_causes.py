@@ -41,17 +41,20 @@ from slax_drake.evaluation.table1 import protocol_scene
 from slax_drake.evaluation.trial_records import read_trial_records
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.actions import Suction
-from slax_drake.shelf.simulator import CameraObserver, execute, split_note
+from slax_drake.shelf.simulator import PUT_BACK, CameraObserver, execute, split_note
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from camera_divergence import blockers, parse_action  # noqa: E402  (the research scripts' shared helpers)
 
-PUT_BACK = "could not place the object: put back"
 CAUSES = ("carried object", "seen neighbour", "target", "seen before", "never seen", "several")
 
 
-def _placed(note: str) -> bool:
-    return note == "" or "stopped" in note
+def _placed(scene, action, model) -> bool:
+    """Whether ``action`` on ``scene`` moves its object (placed, perhaps stopped short; not left where it stood)."""
+    after, _ = execute(scene, action, model)
+    before = next(o for o in scene.objects if o.name == action.name)
+    moved = next(o for o in after.objects if o.name == action.name)
+    return bool((before.center[:2] != moved.center[:2]).any())
 
 
 def _as(hypothesis, name: str):
@@ -88,18 +91,18 @@ def put_back_causes(scenario, trial: dict, model, width: int) -> tuple[list[str]
         if k in notes and notes[k] == PUT_BACK:
             own = dataclasses.replace(scene, objects=tuple(observation.known), target=None)
             checks["placed on the policy's own estimates" if _placed(
-                execute(own, dataclasses.replace(on_hypothesis, name=track), model)[1])
+                own, dataclasses.replace(on_hypothesis, name=track), model)
                 else "put back on the policy's own estimates too"] += 1
             carried = scene.with_objects(tuple(_as(hyp, o.name) if o.name == action.name else o
                                                for o in scene.objects))
             seen = scene.with_objects(tuple(_as(hypotheses[o.name], o.name) if o.name in hypotheses else o
                                             for o in scene.objects))
             no_target = dataclasses.replace(seen, target=None)
-            if _placed(execute(carried, on_hypothesis, model)[1]):
+            if _placed(carried, on_hypothesis, model):
                 causes.append("carried object")
-            elif _placed(execute(seen, on_hypothesis, model)[1]):
+            elif _placed(seen, on_hypothesis, model):
                 causes.append("seen neighbour")
-            elif _placed(execute(no_target, on_hypothesis, model)[1]):
+            elif _placed(no_target, on_hypothesis, model):
                 causes.append("target")
             else:
                 found = [b for b in blockers(no_target, on_hypothesis, model) if b not in hypotheses]

@@ -201,6 +201,7 @@ def observation_for(policy, scene: Scene, observer: CameraObserver | None = None
 
 
 WEIGHED_PUT_BACK = "weighed at the lift and put back"  # the note that opens a lift undone as too heavy
+PUT_BACK = "could not place the object: put back"  # the note of a suction whose way in stopped short of the bay
 
 
 def lift_over_limit(obj, action, model: ActionModel) -> float | None:
@@ -304,7 +305,7 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         y_final = ys[k - 1] if k > 0 else None
         if y_final is None or y_final - ey < -shelf.depth / 2 + t.physics.clearance - 1e-9:
             # stopped before the whole object is back inside the bay: it is put back where it was
-            return scene, "could not place the object: put back"
+            return scene, PUT_BACK
         moved = obj.moved_to(float(x_new), float(y_final))
         note = "" if k == n_in else ("guarded placement stopped on contact" if action.guarded
                                      else "placement stopped early by an unseen obstacle")
