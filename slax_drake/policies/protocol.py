@@ -149,7 +149,7 @@ class Exclusions:
         self._records: list[tuple] = []
         self._actions: set = set()
         self._groups: set = set()  # (action_group or suction_lane key, the object's pose then)
-        self._near: list[tuple] = []  # (action, scope, the object's pose then) for the tolerant comparison
+        self._near: list[tuple] = []  # (action, its excluded group keys, the object's pose then): tolerant comparison
         self.tolerant = False
         self.position_tolerance = position_tolerance
         self.yaw_tolerance = yaw_tolerance
@@ -161,13 +161,11 @@ class Exclusions:
         self._records.append((action, reason))
         self._actions.add(action)
         pose = _pose_key(action.name, objects)
-        lane = lane and suction_lane(action) is not None
-        if whole_group:
-            self._groups.add((action_group(action), pose))
-        if lane:
-            self._groups.add((suction_lane(action), pose))
+        keys = tuple(k for k in ((action_group(action) if whole_group else None),
+                                 (suction_lane(action) if lane else None)) if k is not None)
+        self._groups.update((k, pose) for k in keys)
         if pose is not None:
-            self._near.append((action, "group" if whole_group else "lane" if lane else "action", pose))
+            self._near.append((action, keys, pose))
 
     def allowed(self, actions, objects) -> list:
         """``actions`` less the excluded ones (``objects``: the state they were enumerated in)."""
@@ -187,12 +185,11 @@ class Exclusions:
         tolerances."""
         if pose is None:
             return False
-        for excluded, scope, then in self._near:
+        own = (action_group(action), suction_lane(action))  # the groups it belongs to
+        for excluded, keys, then in self._near:
             if excluded.name != action.name or not self._same_place(pose, then):
                 continue
-            if scope == "group" and action_group(excluded) == action_group(action):
-                return True
-            if scope == "lane" and suction_lane(excluded) == suction_lane(action):
+            if own[0] in keys or own[1] in keys:
                 return True
             if _same_move(excluded, action, self.position_tolerance):
                 return True
