@@ -112,14 +112,23 @@ def put_back_causes(scenario, trial: dict, model, width: int) -> tuple[list[str]
     return causes, checks
 
 
+def _densities(text: str) -> list[int]:
+    try:
+        return [int(d) for d in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma-separated list of object counts: {text!r}") from None
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("folder")
     ap.add_argument("--policy", default="slax-belief")
-    ap.add_argument("--densities", default="8,10")
+    ap.add_argument("--densities", type=_densities, default=[8, 10])
     ap.add_argument("--scenes", type=int, default=None, help="the first N scenes per density (default: all)")
     ap.add_argument("--config", default="sim_configs/table1.yaml")
     args = ap.parse_args()
+    if args.scenes is not None and args.scenes < 1:
+        ap.error("--scenes must be 1 or more")
     try:
         settings = json.loads(Path(args.folder, "settings.json").read_text())
         trials = read_trial_records(args.folder, args.policy, missing_ok=True)
@@ -136,7 +145,7 @@ def main():
     print(f"# Put-backs of {args.policy} in {args.folder}\n")
     print("| objects | trials | put back | " + " | ".join(CAUSES) + " | replay checks |")
     print("|---|---|---|" + "---|" * len(CAUSES) + "---|")
-    for density in (int(d) for d in args.densities.split(",")):
+    for density in args.densities:
         policy = make_policy(args.policy, scenario, horizon=2 * density, profile=settings.get("profile"),
                              tool_overrides=settings.get("tool_rules") or None)
         keys = sorted(k for k in trials if k.startswith(f"{density:02d}_"))[:args.scenes]
