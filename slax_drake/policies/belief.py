@@ -146,6 +146,7 @@ from slax_drake.policies.protocol import Decision, Screened
 from slax_drake.scene.model import state_key
 
 
+EXPLAIN_SHARES = (0.25, 0.5, 0.75, 1.0)  # explain_failed: the shares of an extent range tried, least first
 REMEMBERED = "remembered_"  # camera mode: the name prefix of a remembered hypothesis (SceneObject.remembered)
 
 
@@ -218,7 +219,10 @@ class BeliefSearch(Hindsight):
         self.select = o.select
         self._blocked: list = []  # boxes (x_lo, x_hi, y_lo, y_hi) where a placement failed: an unseen obstacle
         self.deepen_failed = o.deepen_failed  # camera mode: an object whose placement failed is assumed deepest
-        self._deepened: set = set()  # camera mode with deepen_failed: the names of those objects
+        self._deepened: dict = {}  # camera mode: name -> the share of its extent range it is assumed at
+        self.explain_failed = o.explain_failed  # camera mode: what a put-back teaches about the extents
+        self._explained = None  # (name, share) the last put-back was explained by, for this decision's log
+        self._share_cache: dict = {}  # (id(frame), share) -> (the frame, its hypotheses at that share): _estimate_at
         self._last = None  # (the suction taken last, the pose it predicts for its object)
         self.evidence = o.evidence
         self.block_weight = float(o.block_weight)
@@ -254,7 +258,7 @@ class BeliefSearch(Hindsight):
         super().reset(scene_or_observation)
         self._plan, self._expected = [], None
         self._blocked, self._last = [], None
-        self._deepened = set()
+        self._deepened, self._explained, self._share_cache = {}, None, {}
         self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
         self._weights, self._executed, self.evidence_log = {}, None, []
         self._remembered = {}
@@ -317,11 +321,13 @@ class BeliefSearch(Hindsight):
         if abs(x - (x_lo + x_hi) / 2) > limit or abs(y - (y_lo + y_hi) / 2) > limit:
             self._blocked.append((x_lo, x_hi, y_lo, y_hi))
             if self._camera_mode and self.deepen_failed:
-                self._deepened.add(name)
+                self._deepened[name] = 1.0
 
     # ---- objects seen before and hidden now ---------------------------------------------------------------------
     def decide(self, obs) -> Decision:
         self._camera_mode = getattr(obs, "belief", None) is not None
+        if self._camera_mode and self.explain_failed != "none":
+            self.explain_put_back(obs)
         self._action_model.unaimable = self.unaimable(obs) if self._camera_mode and self.aim_visible else frozenset()
         return super().decide(self.with_remembered(self.with_camera_hypotheses(obs)))
 
@@ -374,11 +380,9 @@ class BeliefSearch(Hindsight):
             prior = None  # the observer's hypotheses, but for the deepened ones below
         hypotheses = (list(belief.hypotheses) if prior is None
                       else estimate_objects(belief.observation, belief.shelf, EstimatorConfig(prior=prior)))
-        if deepened:  # the objects whose placement failed, as deep and wide as the frame allows
-            deepest = {h.segment_id: h for h in estimate_objects(
-                belief.observation, belief.shelf, EstimatorConfig(prior=DepthPrior(rule="range", fraction=1.0)))}
-            hypotheses = [deepest.get(h.segment_id, h) if names.get(h.segment_id) in self._deepened else h
-                          for h in hypotheses]
+        if deepened:  # the objects whose placement failed, at the share of their extent range assumed for them
+            hypotheses = [self._estimate_at(belief, self._deepened[names[h.segment_id]]).get(h.segment_id, h)
+                          if names.get(h.segment_id) in self._deepened else h for h in hypotheses]
         hypotheses = [dataclasses.replace(h, object=dataclasses.replace(h.object, name=names[h.segment_id]))
                       if h.segment_id in names else h for h in hypotheses]
         deeper = ObservedBelief(belief.observation, belief.shelf, belief.source, background=belief.background,
@@ -386,6 +390,63 @@ class BeliefSearch(Hindsight):
         known = deeper.known
         return dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known),
                                    belief=deeper)
+
+    def _estimate_at(self, belief, share: float) -> dict:
+        """segment id -> the hypothesis of ``belief``'s frame estimated with every unseen edge ``share`` of the way
+        along its extent range (``DepthPrior(rule="range", fraction=share)``); cached per frame and share."""
+        from slax_drake.perception.estimator import DepthPrior, EstimatorConfig, estimate_objects
+
+        key = (id(belief.observation), share)
+        cache = self._share_cache
+        if key not in cache:
+            if len(cache) > 8:
+                cache.clear()
+            cache[key] = (belief.observation, {h.segment_id: h for h in estimate_objects(
+                belief.observation, belief.shelf, EstimatorConfig(prior=DepthPrior(rule="range", fraction=share)))})
+        return cache[key][1]
+
+    def explain_put_back(self, obs) -> None:
+        """Camera mode with ``explain_failed``: when the last action was a suction and this frame shows its object
+        where it stood (put back), the least share of an extent range (:data:`EXPLAIN_SHARES`) at which the action
+        model puts it back too, on the objects the suction was planned on with that one object estimated again from
+        this frame at that share, is assumed for that object from then on (the carried object first; "any": then
+        each other seen object, in frame order). An object already assumed at a share is tried only at larger
+        ones. Nothing changes when no share of any suspect explains the put-back (its cause is not in the frame)."""
+        from slax_drake.shelf.simulator import execute
+
+        self._explained = None
+        if self._last is None or self._executed is None or not isinstance(self._executed[0], Suction):
+            return
+        a, before = self._executed
+        start = next((o for o in before if o.name == a.name), None)
+        now = next((o for o in obs.known if o.name == a.name), None)
+        if start is None or now is None:
+            return
+        limit = max(0.005, self.camera_outcome_tolerance)
+        if float(np.hypot(*(np.asarray(now.center[:2]) - np.asarray(start.center[:2])))) > limit:
+            return  # it moved: placed, or stopped short
+        belief = obs.belief
+        segment_of = {h.object.name: h.segment_id for h in belief.hypotheses}
+        suspects = [a.name] + ([n for n in segment_of if n != a.name] if self.explain_failed == "any" else [])
+        suspects = [n for n in suspects if n in segment_of]
+        for share in EXPLAIN_SHARES:
+            estimates = None
+            for name in suspects:
+                if self._deepened.get(name, 0.0) >= share:
+                    continue
+                estimates = estimates if estimates is not None else self._estimate_at(belief, share)
+                h = estimates.get(segment_of[name])
+                if h is None:
+                    continue
+                wider = dataclasses.replace(h.object, name=name)
+                objects = tuple(wider if o.name == name else o for o in before)
+                after, _ = execute(self._template.with_objects(objects), a, self.action_model)
+                moved = after.object_named(a.name)
+                carried = next(o for o in objects if o.name == a.name)
+                if float(np.hypot(*(np.asarray(moved.center[:2]) - np.asarray(carried.center[:2])))) <= 1e-6:
+                    self._deepened[name] = share
+                    self._explained = (name, share)
+                    return
 
     def with_remembered(self, obs):
         """``obs`` with the objects seen earlier in this trial and hidden now added to ``known`` (and to the scene
@@ -983,6 +1044,9 @@ class BeliefSearch(Hindsight):
         if not cands:
             return Decision.stop("no feasible action")
         log = {"placements": int(len(placements)), "samples": 0, "expanded": 0, "capped": False}
+        if self._explained is not None:
+            log["put_back_explained"] = {"object": self._explained[0], "share": self._explained[1]}
+            self._explained = None
         if self._target_seen_now:
             log["target_seen"] = True  # the placements were collapsed onto a partly seen target (seen_target)
         self.decision_log.append(log)

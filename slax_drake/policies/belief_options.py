@@ -15,6 +15,7 @@ EVIDENCE_RULES = ("outcome", "none")
 STUCK_RULES = ("value", "progress")
 BLOCKED_RULES = ("box", "hidden", "risk")
 DEAD_END_RULES = ("ignore", "model", "corrections")
+EXPLAIN_RULES = ("none", "carried", "any")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -99,6 +100,14 @@ class BeliefOptions:
     for the trial, as deep and wide as the frame allows (its extent range's farthest edges, the estimator's
     ``DepthPrior(rule="range", fraction=1)``) rather than the least depth: its unseen part is the likeliest cause,
     and a deeper object's failed placement box covers the neighbouring placements that fail alike."""
+    explain_failed: str = "none"
+    """Camera mode: what a suction put back (the next frame shows its object where it stood) teaches about the
+    extents. "carried": the carried object is assumed, for the rest of the trial, the least share of its extent
+    range (:data:`~slax_drake.policies.belief.EXPLAIN_SHARES`: the estimator's ``DepthPrior(rule="range")``) at which the put-back follows on
+    the objects the suction was planned on (the action model puts it back too); "any": the same, the carried
+    object first, else the least share of any one other seen object that explains it; "none" (the default): the
+    extents stay as the frame shows them. No share explains a put-back whose cause is not in the frame (an object
+    never seen): nothing changes then. ``deepen_failed`` goes to the farthest at once, whatever the cause."""
     put_back_group: bool = False
     """Camera mode: a suction that left its object where it stood (put back, or its way out blocked) excludes every
     suction of that object while it stands there (within the tolerant exclusions' 1 cm / 0.05 rad), as a push
@@ -172,6 +181,8 @@ class BeliefOptions:
             raise ValueError(f"camera_extents must be in [0, 1] or None (got {self.camera_extents!r})")
         if self.stuck_select not in STUCK_RULES:
             raise ValueError("stuck_select must be 'value' or 'progress'")
+        if self.explain_failed not in EXPLAIN_RULES:
+            raise ValueError("explain_failed must be 'none', 'carried' or 'any'")
         if self.blocked_rule not in BLOCKED_RULES:
             raise ValueError("blocked_rule must be 'box', 'hidden' or 'risk'")
         if self.shuttle_rule not in ("width", "sight"):

@@ -155,6 +155,12 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # the default with put_back_lane: measured, worse (-5 scenes of 200 at 8 and 10 objects, camera mode)
     "slax-belief-camera-memory-lane": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, put_back_lane=True), ours=True),
+    # camera mode: a suction put back assumes its object (explain-carried), or else any one seen object
+    # (explain-any), at the least share of its extent range that explains the put-back (explain_failed)
+    "slax-belief-explain-carried": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, explain_failed="carried"), ours=True),
+    "slax-belief-explain-any": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, explain_failed="any"), ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, blocked_rule="risk"),
