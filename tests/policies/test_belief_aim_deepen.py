@@ -1,6 +1,8 @@
 """slax-belief's camera-mode options ``aim_visible`` (no action on a hypothesis whose segment shows no cup-sized
 patch) and ``deepen_failed`` (an object whose placement failed is assumed as deep as the frame allows)."""
 
+import dataclasses
+
 import pytest
 
 from slax_drake.policies.registry import make_policy
@@ -89,3 +91,61 @@ def test_put_back_group_excludes_the_objects_other_suctions_after_one_left_it_in
         assert [a for a, _ in policy.exclusions] == [tried]
         outcome[option] = policy._exclusions.allowed([tried, other], obs.known)
     assert outcome == {True: [], False: [other]}
+
+
+def _put_back_scene():
+    """A 0.16 m deep box seen face on (its hypothesis as deep as the frame shows, 0.06 m) and, to its left, a box
+    standing 0.11 m behind the shelf's front, too tall to be passed over: carried over there, the deep box cannot get past that box's front
+    face before it is inside the bay (put back), where its hypothesis would fit in front of it."""
+    return [box("deep", 0.05, 0.0, 0.12, 0.16, 0.25), box("front", -0.18, -0.15, 0.10, 0.08, 0.45)]
+
+
+@pytest.mark.parametrize("rule", ["carried", "any"])
+def test_explain_failed_assumes_the_least_share_of_the_extent_range_that_explains_a_put_back(paper, rule):
+    from slax_drake.shelf.actions import Suction
+    from slax_drake.shelf.simulator import PUT_BACK, execute
+
+    scene, obs, names = _observe(paper, _put_back_scene())
+    by_true = {names[o.name]: o for o in obs.known}
+    seen = by_true["deep"]
+    suction = Suction(seen.name, (0.05, -0.08, 0.1), -0.23, 0.1)
+    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"explain_failed": rule})
+    truth = scene.with_objects(tuple(dataclasses.replace(o, name=next(h for h, t in names.items() if t == o.name))
+                                     for o in scene.objects))
+    assert execute(truth, suction, policy.action_model)[1] == PUT_BACK  # the true object is put back
+    placed, _ = execute(obs.scene_template.with_objects(obs.known), suction, policy.action_model)
+    assert placed.object_named(seen.name).center[0] != seen.center[0]  # its hypothesis would have been placed
+    policy.reset()
+    policy._camera_mode = True
+    policy._template = obs.scene_template
+    policy._last = (policy.placement_box(obs.known, suction), seen.name)
+    policy._executed = (suction, tuple(obs.known))
+    policy.explain_put_back(obs)  # the next frame shows it where it stood
+    assert policy._explained is not None and policy._explained[0] == seen.name
+    share = policy._explained[1]
+    assert share < 1.0  # the least share that explains it, not the farthest
+    assumed = next(o for o in policy.with_camera_hypotheses(obs).known if o.name == seen.name)
+    assert assumed.size[1] > seen.size[1] + 0.03
+    put_back, _ = execute(obs.scene_template.with_objects(
+        tuple(assumed if o.name == seen.name else o for o in obs.known)), suction, policy.action_model)
+    assert put_back.object_named(seen.name).center[0] == pytest.approx(seen.center[0])  # explained
+    assert policy._deepened == {seen.name: share}
+
+
+def test_explain_failed_changes_nothing_when_the_cause_is_not_in_the_frame(paper):
+    """The same put-back seen without the box that caused it (it is not in the frame): no share of the carried
+    object's range explains it (a share that would also block the way out or in on its own is not this case)."""
+    from slax_drake.shelf.actions import Suction
+
+    scene, obs, names = _observe(paper, _put_back_scene()[:1])
+    (seen,) = obs.known
+    suction = Suction(seen.name, (0.05, -0.08, 0.1), -0.23, 0.1)
+    policy = make_policy("slax-belief", paper, horizon=4, policy_options={"explain_failed": "any"})
+    policy.reset()
+    policy._camera_mode = True
+    policy._template = obs.scene_template
+    policy._last = (policy.placement_box(obs.known, suction), seen.name)
+    policy._executed = (suction, tuple(obs.known))
+    policy.explain_put_back(obs)
+    assert policy._explained is None and policy._deepened == {}
+    assert policy.with_camera_hypotheses(obs) is obs
