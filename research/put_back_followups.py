@@ -4,9 +4,10 @@ simulator's notes) and prints one Markdown row per folder.
 
     python research/put_back_followups.py FOLDER[:POLICY] [FOLDER[:POLICY] ...]
 
-POLICY defaults to slax-belief. A put-back is a step whose note reads "could not place the object: put back"; its
-follow-up is the next suction of the same object in that trial (on the true object: trial files name true objects
-in both observation modes): "put back again", "failed otherwise" (any other note on that step) or "as planned".
+POLICY defaults to slax-belief. A put-back is a step whose note is the simulator's ``PUT_BACK`` ("could not place the
+object: put back"; a lift weighed and put back as too heavy is not one); its follow-up is the next suction of the
+same object in that trial (on the true object: trial files name true objects in both observation modes): "put back
+again", "failed otherwise" (any other note on that step) or "as planned".
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from pathlib import Path
 
 from slax_drake.errors import UserError
 from slax_drake.evaluation.trial_records import read_trial_records
-from slax_drake.shelf.simulator import split_note
+from slax_drake.shelf.simulator import PUT_BACK, split_note
 
 
 def followups(folder: Path, policy: str) -> collections.Counter:
@@ -34,7 +35,7 @@ def followups(folder: Path, policy: str) -> collections.Counter:
         actions = trial.get("actions", [])
         counts["trials"] += 1
         for step, action in enumerate(actions, 1):
-            if "put back" not in notes.get(step, ""):
+            if notes.get(step) != PUT_BACK:
                 continue
             counts["put back"] += 1
             name = action.split()[1]
@@ -44,7 +45,7 @@ def followups(folder: Path, policy: str) -> collections.Counter:
                 continue
             counts["suctioned again"] += 1
             note = notes.get(later[0], "")
-            counts["put back again" if "put back" in note else "failed otherwise" if note else "as planned"] += 1
+            counts["put back again" if note == PUT_BACK else "failed otherwise" if note else "as planned"] += 1
             counts["at the next step"] += later[0] == step + 1
     return counts
 
