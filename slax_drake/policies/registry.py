@@ -161,6 +161,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
         DEFAULT_BELIEF_OPTIONS, explain_failed="carried"), ours=True),
     "slax-belief-explain-any": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, explain_failed="any"), ours=True),
+    # camera mode: no action on a hypothesis whose segment shows no cup-sized patch (aim_visible), on today's default
+    "slax-belief-aim-visible": PolicyEntry(_BELIEF, dataclasses.replace(DEFAULT_BELIEF_OPTIONS, aim_visible=True),
+                                           ours=True),
     # a failed placement's box refuses no later placement; one overlapping it in hidden space fails with 0.5
     # more. Measured, not the default (docs/research/slax_belief.md)
     "slax-belief-v4": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, blocked_rule="risk"),
