@@ -150,6 +150,10 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # every placement depth while it stands there (put_back_lane); measured, not the default (+1 scene of 200)
     "slax-belief-put-back-lane": PolicyEntry(_BELIEF, dataclasses.replace(
         _DEFAULT_2100FD5, put_back_lane=True), ours=True),
+    # today's default with put_back_group (measured under depth-only segmentation and noise, where a put-back's
+    # object is put back again more often than with the render's labels)
+    "slax-belief-camera-memory-group": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, put_back_group=True), ours=True),
     # the default under the name it was measured by before it became the default (camera_memory)
     "slax-belief-camera-memory": PolicyEntry(_BELIEF, DEFAULT_BELIEF_OPTIONS, ours=True),
     # the default with put_back_lane: measured, worse (-5 scenes of 200 at 8 and 10 objects, camera mode)
