@@ -160,7 +160,8 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     "slax-belief-camera-memory-lane": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, put_back_lane=True), ours=True),
     # camera mode: a suction put back assumes its object (explain-carried), or else any one seen object
-    # (explain-any), at the least share of its extent range that explains the put-back (explain_failed)
+    # (explain-any), at the least share of its extent range that explains the put-back (explain_failed); measured at 8
+    # and 10 objects in camera mode, not the default (132 and 130 of 200 against 135)
     "slax-belief-explain-carried": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, explain_failed="carried"), ours=True),
     "slax-belief-explain-any": PolicyEntry(_BELIEF, dataclasses.replace(
