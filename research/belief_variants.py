@@ -174,7 +174,8 @@ def main(argv=None):
             print("   ", stuck_ending(policy, seen["known"], result.screened or {}, stuck), flush=True)
         if args.log:
             for action, log in zip(result.actions, policy.decision_log):
-                print("   ", action, {k: log.get(k) for k in ("revealed", "value", "widened", "plan", "dead_ends", "stranded", "put_back_explained") if k in log})
+                keys = ("revealed", "value", "widened", "plan", "dead_ends", "put_back_explained")
+                print("   ", action, {k: log[k] for k in keys if k in log})
     print(f"revealed {revealed} / {len(trials)} ({args.policy}, options {options})")
     if args.stuck and stuck["endings"]:
         n = stuck["endings"]

@@ -150,6 +150,11 @@ EXPLAIN_SHARES = (0.25, 0.5, 0.75, 1.0)  # explain_failed: the shares of an exte
 REMEMBERED = "remembered_"  # camera mode: the name prefix of a remembered hypothesis (SceneObject.remembered)
 
 
+def _planar_distance(a, b) -> float:
+    """The distance (m) between two objects' centres in the shelf's floor plane."""
+    return float(np.hypot(*(np.asarray(a.center[:2], dtype=float) - np.asarray(b.center[:2], dtype=float))))
+
+
 class _NoActionsOnRemembered:
     """The policy's action model, enumerating no action on a remembered hypothesis (``remembered``: the camera
     shows no segment of it to act on) nor on one named in ``unaimable`` (``aim_visible``: the camera shows too
@@ -222,7 +227,7 @@ class BeliefSearch(Hindsight):
         self._deepened: dict = {}  # camera mode: name -> the share of its extent range it is assumed at
         self.explain_failed = o.explain_failed  # camera mode: what a put-back teaches about the extents
         self._explained = None  # (name, share) the last put-back was explained by, for this decision's log
-        self._share_cache: dict = {}  # (id(frame), share) -> (the frame, its hypotheses at that share): _estimate_at
+        self._share_cache = (None, {})  # (the frame, share -> its hypotheses at that share): _estimate_at
         self._last = None  # (the suction taken last, the pose it predicts for its object)
         self.evidence = o.evidence
         self.block_weight = float(o.block_weight)
@@ -258,7 +263,7 @@ class BeliefSearch(Hindsight):
         super().reset(scene_or_observation)
         self._plan, self._expected = [], None
         self._blocked, self._last = [], None
-        self._deepened, self._explained, self._share_cache = {}, None, {}
+        self._deepened, self._explained, self._share_cache = {}, None, (None, {})
         self._worlds, self._distance_cache, self._n_worlds = None, {}, 0
         self._weights, self._executed, self.evidence_log = {}, None, []
         self._remembered = {}
@@ -393,17 +398,18 @@ class BeliefSearch(Hindsight):
 
     def _estimate_at(self, belief, share: float) -> dict:
         """segment id -> the hypothesis of ``belief``'s frame estimated with every unseen edge ``share`` of the way
-        along its extent range (``DepthPrior(rule="range", fraction=share)``); cached per frame and share."""
+        along its extent range (``DepthPrior(rule="range", fraction=share)``); cached per share for the frame of
+        this decision (:meth:`explain_put_back` and :meth:`with_camera_hypotheses` read the same frame)."""
         from slax_drake.perception.estimator import DepthPrior, EstimatorConfig, estimate_objects
 
-        key = (id(belief.observation), share)
-        cache = self._share_cache
-        if key not in cache:
-            if len(cache) > 8:
-                cache.clear()
-            cache[key] = (belief.observation, {h.segment_id: h for h in estimate_objects(
-                belief.observation, belief.shelf, EstimatorConfig(prior=DepthPrior(rule="range", fraction=share)))})
-        return cache[key][1]
+        frame, by_share = self._share_cache
+        if frame is not belief.observation:
+            frame, by_share = belief.observation, {}
+            self._share_cache = (frame, by_share)
+        if share not in by_share:
+            by_share[share] = {h.segment_id: h for h in estimate_objects(
+                frame, belief.shelf, EstimatorConfig(prior=DepthPrior(rule="range", fraction=share)))}
+        return by_share[share]
 
     def explain_put_back(self, obs) -> None:
         """Camera mode with ``explain_failed``: when the last action was a suction and this frame shows its object
@@ -415,7 +421,7 @@ class BeliefSearch(Hindsight):
         from slax_drake.shelf.simulator import execute
 
         self._explained = None
-        if self._last is None or self._executed is None or not isinstance(self._executed[0], Suction):
+        if self._executed is None or not isinstance(self._executed[0], Suction):
             return
         a, before = self._executed
         start = next((o for o in before if o.name == a.name), None)
@@ -423,7 +429,7 @@ class BeliefSearch(Hindsight):
         if start is None or now is None:
             return
         limit = max(0.005, self.camera_outcome_tolerance)
-        if float(np.hypot(*(np.asarray(now.center[:2]) - np.asarray(start.center[:2])))) > limit:
+        if _planar_distance(now, start) > limit:
             return  # it moved: placed, or stopped short
         belief = obs.belief
         segment_of = {h.object.name: h.segment_id for h in belief.hypotheses}
@@ -441,9 +447,8 @@ class BeliefSearch(Hindsight):
                 wider = dataclasses.replace(h.object, name=name)
                 objects = tuple(wider if o.name == name else o for o in before)
                 after, _ = execute(self._template.with_objects(objects), a, self.action_model)
-                moved = after.object_named(a.name)
-                carried = next(o for o in objects if o.name == a.name)
-                if float(np.hypot(*(np.asarray(moved.center[:2]) - np.asarray(carried.center[:2])))) <= 1e-6:
+                carried = wider if name == a.name else start
+                if _planar_distance(after.object_named(a.name), carried) <= 1e-6:  # put back on these objects too
                     self._deepened[name] = share
                     self._explained = (name, share)
                     return

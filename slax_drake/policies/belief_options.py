@@ -103,11 +103,12 @@ class BeliefOptions:
     explain_failed: str = "none"
     """Camera mode: what a suction put back (the next frame shows its object where it stood) teaches about the
     extents. "carried": the carried object is assumed, for the rest of the trial, the least share of its extent
-    range (:data:`~slax_drake.policies.belief.EXPLAIN_SHARES`: the estimator's ``DepthPrior(rule="range")``) at which the put-back follows on
-    the objects the suction was planned on (the action model puts it back too); "any": the same, the carried
-    object first, else the least share of any one other seen object that explains it; "none" (the default): the
-    extents stay as the frame shows them. No share explains a put-back whose cause is not in the frame (an object
-    never seen): nothing changes then. ``deepen_failed`` goes to the farthest at once, whatever the cause."""
+    range (:data:`~slax_drake.policies.belief.EXPLAIN_SHARES`; the estimator's ``DepthPrior(rule="range")``) at
+    which the put-back follows on the objects the suction was planned on (the action model puts it back too);
+    "any": the same, the carried object first, else the least share of any one other seen object that explains it;
+    "none" (the default): the extents stay as the frame shows them. No share explains a put-back whose cause is not
+    in the frame (an object never seen): nothing changes then. ``deepen_failed`` goes to the farthest at once,
+    whatever the cause."""
     put_back_group: bool = False
     """Camera mode: a suction that left its object where it stood (put back, or its way out blocked) excludes every
     suction of that object while it stands there (within the tolerant exclusions' 1 cm / 0.05 rad), as a push

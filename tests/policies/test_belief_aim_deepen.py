@@ -94,9 +94,9 @@ def test_put_back_group_excludes_the_objects_other_suctions_after_one_left_it_in
 
 
 def _put_back_scene():
-    """A 0.16 m deep box seen face on (its hypothesis as deep as the frame shows, 0.06 m) and, to its left, a box
-    standing 0.11 m behind the shelf's front, too tall to be passed over: carried over there, the deep box cannot get past that box's front
-    face before it is inside the bay (put back), where its hypothesis would fit in front of it."""
+    """A 0.16 m deep box seen face on (its hypothesis as deep as the frame shows) and, to its left, a box standing
+    0.11 m behind the shelf's front, too tall to be passed over: carried over there, the deep box cannot get past
+    that box's front face before it is inside the bay (put back), where its hypothesis would fit in front of it."""
     return [box("deep", 0.05, 0.0, 0.12, 0.16, 0.25), box("front", -0.18, -0.15, 0.10, 0.08, 0.45)]
 
 
