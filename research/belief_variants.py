@@ -10,7 +10,8 @@ registry row each.
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
-        [--known-target] [--see-hidden] [--no-shuttle-rule] [--plan-clearance M] [--placement-margin M]
+        [--known-target] [--see-hidden] [--true-extents] [--no-shuttle-rule] [--plan-clearance M]
+        [--placement-margin M]
 
 ``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
 last arrangement the policy saw, how many of them each correction screened out and the action model's refusals by
@@ -21,6 +22,10 @@ lattice): what its search reaches when the belief is not the limit (the oracles 
 the target). A diagnostic, never a policy: it reads the scene's hidden state. ``--see-hidden`` (privileged only):
 its observation also lists the objects the camera cannot see, where they stand. ``--no-shuttle-rule``: the
 no-shuttle correction off (the policy's ``shuttle_reveal`` None), to measure what that rule costs.
+``--true-extents`` (camera only): each hypothesis the frame gives is replaced by the true object it shows, under
+the hypothesis's name, where it stands (what the camera cannot see of the seen objects, told; the frame, its
+segmentation, the target mask and the hidden objects stay the camera's): how much of the camera mode's loss the
+seen objects' unseen extents make. A diagnostic, never a policy.
 
 ``--plan-clearance M`` and ``--placement-margin M`` (m; camera mode is where they matter): the policy plans with a
 margin for the estimate's error while the shelf simulator executes with the scenario's clearance. The first
@@ -88,6 +93,8 @@ def main(argv=None):
                          "search's own ceiling, a diagnostic")
     ap.add_argument("--see-hidden", action="store_true",
                     help="privileged only: the observation lists every object, hidden ones too (a diagnostic)")
+    ap.add_argument("--true-extents", action="store_true",
+                    help="camera only: each hypothesis replaced by the true object it shows (a diagnostic)")
     ap.add_argument("--no-shuttle-rule", action="store_true",
                     help="the no-shuttle correction off (shuttle_reveal None), to measure what it costs")
     ap.add_argument("--plan-clearance", type=float, default=None, metavar="M",
@@ -103,6 +110,9 @@ def main(argv=None):
             return 2
     if args.see_hidden and args.observation != "privileged":
         print("error: --see-hidden needs the privileged observation", file=sys.stderr)
+        return 2
+    if args.true_extents and args.observation != "camera":
+        print("error: --true-extents needs --observation camera", file=sys.stderr)
         return 2
     try:
         tool_rules = parse_tool_rules(args.tool_rule, args.profile)
@@ -162,6 +172,8 @@ def main(argv=None):
         t0 = time.process_time()
         if args.see_hidden:
             observer = SeeingHidden(policy)
+        if args.true_extents:
+            observer = TrueExtents(observer)
         result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                            suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
         longest = max((d.get("seconds", 0.0) for d in policy.decision_log), default=0.0)
@@ -205,6 +217,42 @@ class SeeingHidden:
         obs = observe(scene, self.policy.distribution, self.policy.observation_width)
         objects = tuple(scene.objects)
         return dataclasses.replace(obs, known=objects, scene_template=obs.scene_template.with_objects(objects)), None
+
+
+class TrueExtents:
+    """``--true-extents``: a camera observer (:class:`~slax_drake.shelf.simulator.CameraObserver`) whose
+    observations list, for each hypothesis of the frame, the true object it shows (its footprint, height and pose)
+    under the hypothesis's name; a second hypothesis of the same object is dropped. Everything else (the frame, its
+    segments and target mask, P_t, the tracker's hidden objects) is the camera's, and the trial executes the
+    policy's actions on the objects they name through the observer's names, as in camera mode."""
+
+    def __init__(self, camera):
+        self.camera = camera
+
+    def __getattr__(self, name):
+        if name == "camera":
+            raise AttributeError(name)
+        return getattr(self.camera, name)
+
+    def observe(self, scene):
+        from slax_drake.perception.belief import ObservedBelief
+
+        obs, names = self.camera.observe(scene)
+        belief = obs.belief
+        true = {o.name: o for o in scene.objects}
+        hypotheses, shown = [], set()
+        for h in belief.hypotheses:
+            truth = true.get(names.get(h.object.name))
+            if truth is None:
+                hypotheses.append(h)
+            elif truth.name not in shown:
+                shown.add(truth.name)
+                hypotheses.append(dataclasses.replace(h, object=dataclasses.replace(truth, name=h.object.name)))
+        told = ObservedBelief(belief.observation, belief.shelf, belief.source, background=belief.background,
+                              hypotheses=hypotheses, p1d=belief.p1d, remembered=belief.remembered)
+        known = told.known
+        return dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known),
+                                   p1d=told.p1d, belief=told), names
 
 
 class MarginModel(ActionModel):
