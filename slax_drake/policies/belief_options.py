@@ -109,6 +109,13 @@ class BeliefOptions:
     "none" (the default): the extents stay as the frame shows them. No share explains a put-back whose cause is not
     in the frame (an object never seen): nothing changes then. ``deepen_failed`` goes to the farthest at once,
     whatever the cause."""
+    extent_risk: float = 0.0
+    """Camera mode: a first move is scored by the chance that the unseen extents of the objects the frame shows make
+    it fail. The move is executed (the shelf simulator's first-order executor) on the frame's hypotheses grown to
+    each share of their extent ranges in :data:`~slax_drake.policies.belief.EXTENT_TAIL`, least first; at the least
+    share where it does not go as planned (put back, stopped early, blocked), its chance of failing is the tail's
+    probability that an object reaches that share, times this factor (0: off; 1: the tail as measured on the
+    simulated shelf's frames), and the reveals after it count for that much less, as a suction's ``hidden_risk``."""
     put_back_group: bool = False
     """Camera mode: a suction that left its object where it stood (put back, or its way out blocked) excludes every
     suction of that object while it stands there (within the tolerant exclusions' 1 cm / 0.05 rad), as a push
@@ -192,6 +199,8 @@ class BeliefOptions:
             raise ValueError(f"shuttle_reveal must be a width in metres, 0 or more, or None (got {self.shuttle_reveal!r})")
         if self.dead_end not in DEAD_END_RULES:
             raise ValueError("dead_end must be 'ignore', 'model' or 'corrections'")
+        if not 0 <= self.extent_risk:
+            raise ValueError(f"extent_risk must be a factor, 0 or more (got {self.extent_risk!r})")
         if not 0 <= self.blocked_risk <= 1:
             raise ValueError(f"blocked_risk must be in [0, 1] (got {self.blocked_risk!r})")
 
