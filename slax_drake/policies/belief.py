@@ -153,6 +153,45 @@ EXPLAIN_SHARES = (0.25, 0.5, 0.75, 1.0)  # explain_failed: the shares of an exte
 # end within a tenth of their range (the observed part was the whole object), and at 10 objects 28 % reach a
 # quarter of it or more, 16 % half, 5 % nine tenths (docs/research/uncertain-extents.md, "Scored by its risk").
 EXTENT_TAIL = ((0.25, 0.28), (0.5, 0.16), (1.0, 0.05))
+# extent_prior: the same measurement pooled over 6, 8 and 10 objects, (share, P(the true edge lies at least that far
+# along its range)); linear between the points, 1 at share 0
+EXTENT_SHARE_TAIL = ((0.0, 1.0), (0.02, 0.56), (0.05, 0.48), (0.1, 0.4), (0.25, 0.28), (0.5, 0.13), (0.75, 0.06),
+                     (1.0, 0.03))
+
+
+def extent_share_tail(shares: np.ndarray) -> np.ndarray:
+    """P(an unseen edge reaches at least ``shares`` of its extent range), elementwise (:data:`EXTENT_SHARE_TAIL`);
+    0 past share 1 (beyond the range's farthest edge)."""
+    s = np.asarray(shares, dtype=float)
+    xs, ps = zip(*EXTENT_SHARE_TAIL)
+    return np.where(s > 1.0, 0.0, np.interp(s, xs, ps))
+
+
+def extent_free_weights(placements: np.ndarray, half: tuple[float, float], extents) -> np.ndarray:
+    """(K,) the chance that none of ``extents`` (:class:`~slax_drake.perception.estimator.ExtentRange`, one per seen
+    object) reaches a target of half sizes ``half`` (m, shelf-aligned) at each of ``placements`` (K, 2; m, S): per
+    range, the least share s* at which its rectangle, every edge s of the way from the observed part to its
+    farthest, meets the target's footprint (separating axes of the range's rectangle), and 1 - tail(s*)
+    (:func:`extent_share_tail`), multiplied over the ranges."""
+    w = np.ones(len(placements))
+    if not len(placements):
+        return w
+    for e in extents:
+        c, s = np.cos(e.yaw), np.sin(e.yaw)
+        need = np.zeros(len(placements))
+        for k, (axis, reach) in enumerate(((np.array([c, s]), half[0] * abs(c) + half[1] * abs(s)),
+                                           (np.array([-s, c]), half[0] * abs(s) + half[1] * abs(c)))):
+            mid = placements @ axis
+            lo, hi = mid - reach, mid + reach
+            low_room = e.least_lo[k] - e.most_lo[k]
+            high_room = e.most_hi[k] - e.least_hi[k]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                below = np.where(low_room > 0, (e.least_lo[k] - hi) / low_room, np.inf)
+                above = np.where(high_room > 0, (lo - e.least_hi[k]) / high_room, np.inf)
+            axis_need = np.where(hi <= e.least_lo[k], below, np.where(lo >= e.least_hi[k], above, 0.0))
+            need = np.maximum(need, axis_need)
+        w *= 1.0 - extent_share_tail(need)
+    return w
 REMEMBERED = "remembered_"  # camera mode: the name prefix of a remembered hypothesis (SceneObject.remembered)
 
 
@@ -234,6 +273,8 @@ class BeliefSearch(Hindsight):
         self.explain_failed = o.explain_failed  # camera mode: what a put-back teaches about the extents
         self._explained = None  # (name, share) the last put-back was explained by, for this decision's log
         self._share_cache = (None, {})  # (the frame, share -> its hypotheses at that share): _estimate_at
+        self.extent_prior = o.extent_prior  # camera mode: placements weighed by the seen objects' extent ranges
+        self._extent_weights: dict = {}  # lattice key -> the chance no seen object's unseen extent reaches it
         self.extent_risk = float(o.extent_risk)  # camera mode: a first move's risk from the unseen extents
         self._extent_belief = None  # camera mode with extent_risk: this decision's ObservedBelief
         self._extent_cache: dict = {}  # action -> its extent risk, this decision (first moves only)
@@ -278,6 +319,7 @@ class BeliefSearch(Hindsight):
         self._remembered = {}
         self._as_observed, self._maybe = {}, frozenset()
         self._unseen_keys = None
+        self._extent_weights = {}
 
     @property
     def worlds(self) -> "PackedWorlds | None":
@@ -576,7 +618,7 @@ class BeliefSearch(Hindsight):
         shallow = self._as_observed
         if self.maybe_occupied is None or not shallow:
             self._maybe = frozenset()
-            return self.on_seen_target(obs, super().placements(obs))
+            return self.with_extent_weights(obs, self.on_seen_target(obs, super().placements(obs)))
         from slax_drake.scene.footprint import Footprint, clear_of
 
         objects = tuple(shallow.get(o.name, o) for o in obs.known)
@@ -589,6 +631,19 @@ class BeliefSearch(Hindsight):
                 inside |= ~clear_of("box", out, 0.0, half, Footprint.of(o), 0.0)
         self._maybe = frozenset(self.lattice_keys(out[inside]))
         return self.on_seen_target(obs, out)
+
+    def with_extent_weights(self, obs, placements: np.ndarray) -> np.ndarray:
+        """``placements`` unchanged; camera mode with ``extent_prior``: their weights in the draw
+        (:meth:`draw`) set to the chance that no seen object's unseen extent reaches them
+        (:func:`extent_free_weights` over this frame's hypotheses' extent ranges)."""
+        belief = getattr(obs, "belief", None)
+        if not self.extent_prior or belief is None:
+            return placements
+        extents = [h.uncertainty.extent for h in belief.hypotheses if h.uncertainty.extent is not None]
+        size = self.target_size()
+        w = extent_free_weights(placements, (size[0] / 2, size[1] / 2), extents)
+        self._extent_weights = dict(zip(self.lattice_keys(placements), (float(v) for v in w)))
+        return placements
 
     def on_seen_target(self, obs, placements: np.ndarray) -> np.ndarray:
         """Camera mode with ``seen_target``: when the frame's target mask shows part of the target, the placements
@@ -745,7 +800,8 @@ class BeliefSearch(Hindsight):
         per stratum of equal weight along x (then y), by the same seeded generator (systematic sampling of the
         weighted belief, which :meth:`condition_on_outcome` and, in camera mode, :meth:`placements` set)."""
         keys = self.lattice_keys(placements)
-        w = np.array([self._weights.get(k, 1.0) * (self.maybe_occupied if k in self._maybe else 1.0) for k in keys])
+        w = np.array([self._weights.get(k, 1.0) * (self.maybe_occupied if k in self._maybe else 1.0)
+                      * self._extent_weights.get(k, 1.0) for k in keys])
         if not len(w) or np.all(w == 1.0):
             return super().draw(placements, seed)
         rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, self._step])

@@ -109,6 +109,14 @@ class BeliefOptions:
     "none" (the default): the extents stay as the frame shows them. No share explains a put-back whose cause is not
     in the frame (an object never seen): nothing changes then. ``deepen_failed`` goes to the farthest at once,
     whatever the cause."""
+    extent_prior: bool = False
+    """Camera mode: the target's placements are drawn jointly with the seen objects' unseen extents. A placement
+    whose target footprint lies inside a seen object's extent range (beyond what the frame shows of it: the walls,
+    the neighbours, space seen empty and the largest object bound it) weighs the chance that the object does not
+    reach it: 1 - the tail probability (:data:`~slax_drake.policies.belief.EXTENT_SHARE_TAIL`) of the least share
+    of the range at which the grown object meets the target, multiplied over the objects. Without it such a
+    placement weighs as much as one in space seen empty around it, and the worlds hidden in the unseen part of an
+    object draw plans that can never reveal them."""
     extent_risk: float = 0.0
     """Camera mode: a first move is scored by the chance that the unseen extents of the objects the frame shows make
     it fail. The move is executed (the shelf simulator's first-order executor) on the frame's hypotheses grown to
