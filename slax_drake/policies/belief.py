@@ -147,14 +147,15 @@ from slax_drake.scene.model import state_key
 
 
 EXPLAIN_SHARES = (0.25, 0.5, 0.75, 1.0)  # explain_failed: the shares of an extent range tried, least first
-# extent_risk: (share of an unseen edge's extent range, the probability that the true edge lies at least that far),
-# least first. Measured on first frames of the simulated shelf (6, 8 and 10 objects, 30 scenes each, 160 px, label
-# segmentation; every edge whose range reaches more than 2 cm past the observed part): about 60 % of such edges
-# end within a tenth of their range (the observed part was the whole object), and at 10 objects 28 % reach a
-# quarter of it or more, 16 % half, 5 % nine tenths (docs/research/uncertain-extents.md, "Scored by its risk").
-EXTENT_TAIL = ((0.25, 0.28), (0.5, 0.16), (1.0, 0.05))
-# extent_prior: the same measurement pooled over 6, 8 and 10 objects, (share, P(the true edge lies at least that far
-# along its range)); linear between the points, 1 at share 0
+# extent_risk: the shares of an unseen edge's extent range an object's draw takes, with their probabilities: the
+# bins of EXTENT_SHARE_TAIL below, each at its least share (below a tenth of the range: none of it)
+EXTENT_DRAW = ((0.0, 0.60), (0.1, 0.12), (0.25, 0.15), (0.5, 0.07), (0.75, 0.03), (1.0, 0.03))
+EXTENT_DRAWS = 8  # extent_risk: joint draws of every seen object's share per decision
+# extent_prior and extent_risk: (share of an unseen edge's extent range, the probability that the true edge lies at
+# least that far along it), linear between the points, 1 at share 0. Measured on first frames of the simulated shelf
+# (6, 8 and 10 objects, 30 scenes each, 160 px, label segmentation; every edge whose range reaches more than 2 cm past
+# the observed part): about 60 % of such edges end within a tenth of their range (the observed part was the whole
+# object), 28 % reach a quarter of it or more, 13 % half (docs/research/uncertain-extents.md)
 EXTENT_SHARE_TAIL = ((0.0, 1.0), (0.02, 0.56), (0.05, 0.48), (0.1, 0.4), (0.25, 0.28), (0.5, 0.13), (0.75, 0.06),
                      (1.0, 0.03))
 
@@ -278,6 +279,7 @@ class BeliefSearch(Hindsight):
         self.extent_risk = float(o.extent_risk)  # camera mode: a first move's risk from the unseen extents
         self._extent_belief = None  # camera mode with extent_risk: this decision's ObservedBelief
         self._extent_cache: dict = {}  # action -> its extent risk, this decision (first moves only)
+        self._extent_draws = None  # this decision's joint draws of the seen objects' extents (extent_draws)
         self._last = None  # (the suction taken last, the pose it predicts for its object)
         self.evidence = o.evidence
         self.block_weight = float(o.block_weight)
@@ -507,32 +509,45 @@ class BeliefSearch(Hindsight):
     def first_move_extent_risk(self, objects, a) -> float:
         """``extent_risk``: the chance that first move ``a``, planned on ``objects`` (this frame's hypotheses and the
         remembered ones), does not go as planned because the objects the frame shows reach farther than their
-        hypotheses: ``a`` is executed (:func:`~slax_drake.shelf.simulator.execute`) on the hypotheses estimated
-        again with every unseen edge at each share of :data:`EXTENT_TAIL` (least first; a suction's placement
-        depth follows its object's centre, as the shelf simulator executes it on the true object), and the tail's
-        probability at the least share where it fails, times ``extent_risk``, is the risk (0 when it goes as planned
-        at every share). Cached per action for this decision."""
+        hypotheses. Each of :data:`EXTENT_DRAWS` joint draws (:meth:`extent_draws`) gives every seen object a share
+        of its extent range; ``a`` is executed (:func:`~slax_drake.shelf.simulator.execute`) on the hypotheses
+        estimated again at those shares (a suction's placement depth follows its object's centre, as the shelf
+        simulator executes it on the true object), and the share of draws in which it does not go as planned (put
+        back, stopped early, blocked), times ``extent_risk``, is the risk. Cached per action for this decision."""
         from slax_drake.shelf.simulator import execute, on_true_object
 
         hit = self._extent_cache.get(a)
         if hit is not None:
             return hit
-        risk = 0.0
         belief = self._extent_belief
         segment_of = {h.object.name: h.segment_id for h in belief.hypotheses}
+        failed = 0
         if a.name in segment_of:
-            for share, tail in EXTENT_TAIL:
-                estimates = self._estimate_at(belief, share)
-                grown = tuple(dataclasses.replace(estimates[segment_of[o.name]].object, name=o.name)
-                              if segment_of.get(o.name) in estimates else o for o in objects)
-                scene = self._template.with_objects(grown)
-                moved = on_true_object(a, objects, scene, a.name)
-                _, note = execute(scene, moved, self.action_model)
-                if note:
-                    risk = min(1.0, tail * self.extent_risk)
-                    break
+            for shares in self.extent_draws(belief):
+                grown = []
+                for o in objects:
+                    share = shares.get(segment_of.get(o.name), 0.0)
+                    h = self._estimate_at(belief, share).get(segment_of[o.name]) if share > 0 else None
+                    grown.append(dataclasses.replace(h.object, name=o.name) if h is not None else o)
+                scene = self._template.with_objects(tuple(grown))
+                _, note = execute(scene, on_true_object(a, objects, scene, a.name), self.action_model)
+                failed += bool(note)
+        risk = min(1.0, self.extent_risk * failed / EXTENT_DRAWS)
         self._extent_cache[a] = risk
         return risk
+
+    def extent_draws(self, belief) -> list[dict]:
+        """``extent_risk``: this decision's :data:`EXTENT_DRAWS` joint draws of the frame's seen objects' extents,
+        each {segment id: share of its extent range} (:data:`EXTENT_DRAW`'s probabilities, independent per object),
+        by a generator seeded with the scene seed and the step; drawn once per decision."""
+        if self._extent_draws is None:
+            seed = self._template.seed if self._template.seed is not None else 0
+            rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, self._step, 7])
+            levels, probs = zip(*EXTENT_DRAW)
+            ids = [h.segment_id for h in belief.hypotheses]
+            picks = rng.choice(len(levels), size=(EXTENT_DRAWS, len(ids)), p=np.array(probs) / sum(probs))
+            self._extent_draws = [{sid: levels[k] for sid, k in zip(ids, row)} for row in picks]
+        return self._extent_draws
 
     def with_remembered(self, obs):
         """``obs`` with the objects seen earlier in this trial and hidden now added to ``known`` (and to the scene
@@ -1143,7 +1158,7 @@ class BeliefSearch(Hindsight):
         self._hidden_centers = self.hidden_space(obs, placements)
         self._risk_by_box, self._risk_cache = {}, {}
         self._extent_belief = getattr(obs, "belief", None) if self.extent_risk > 0 else None
-        self._extent_cache = {}
+        self._extent_cache, self._extent_draws = {}, None
         cands = maximal_pushes_only(self.action_model_candidates(known))
         if not cands:
             return Decision.stop("no feasible action")

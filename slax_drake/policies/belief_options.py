@@ -119,11 +119,11 @@ class BeliefOptions:
     object draw plans that can never reveal them."""
     extent_risk: float = 0.0
     """Camera mode: a first move is scored by the chance that the unseen extents of the objects the frame shows make
-    it fail. The move is executed (the shelf simulator's first-order executor) on the frame's hypotheses grown to
-    each share of their extent ranges in :data:`~slax_drake.policies.belief.EXTENT_TAIL`, least first; at the least
-    share where it does not go as planned (put back, stopped early, blocked), its chance of failing is the tail's
-    probability that an object reaches that share, times this factor (0: off; 1: the tail as measured on the
-    simulated shelf's frames), and the reveals after it count for that much less, as a suction's ``hidden_risk``."""
+    it fail: the share of joint draws of every seen object's extent (each object at a share of its extent range
+    drawn from where true edges lie in their ranges, :data:`~slax_drake.policies.belief.EXTENT_DRAW`) in which the
+    move, executed by the shelf simulator's first-order executor, does not go as planned (put back, stopped early,
+    blocked), times this factor (0: off; 1: the draws' share as it is). The reveals after it count for that much
+    less, as after a suction's ``hidden_risk``."""
     put_back_group: bool = False
     """Camera mode: a suction that left its object where it stood (put back, or its way out blocked) excludes every
     suction of that object while it stands there (within the tolerant exclusions' 1 cm / 0.05 rad), as a push
