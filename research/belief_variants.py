@@ -10,7 +10,7 @@ registry row each.
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
-        [--known-target] [--see-hidden] [--true-extents] [--no-shuttle-rule] [--plan-clearance M]
+        [--known-target] [--see-hidden] [--true-extents | --true-extents-belief] [--no-shuttle-rule] [--plan-clearance M]
         [--placement-margin M]
 
 ``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
@@ -25,7 +25,10 @@ no-shuttle correction off (the policy's ``shuttle_reveal`` None), to measure wha
 ``--true-extents`` (camera only): each hypothesis the frame gives is replaced by the true object it shows, under
 the hypothesis's name, where it stands (what the camera cannot see of the seen objects, told; the frame, its
 segmentation, the target mask and the hidden objects stay the camera's): how much of the camera mode's loss the
-seen objects' unseen extents make. A diagnostic, never a policy.
+seen objects' unseen extents make. A diagnostic, never a policy. ``--true-extents-belief``: the same objects only
+where slax-belief judges where the target may stand (its ``placements``: clear of the seen objects); its actions
+are planned and predicted on the camera's hypotheses, so the two flags split the loss between the belief and the
+actions.
 
 ``--plan-clearance M`` and ``--placement-margin M`` (m; camera mode is where they matter): the policy plans with a
 margin for the estimate's error while the shelf simulator executes with the scenario's clearance. The first
@@ -95,6 +98,8 @@ def main(argv=None):
                     help="privileged only: the observation lists every object, hidden ones too (a diagnostic)")
     ap.add_argument("--true-extents", action="store_true",
                     help="camera only: each hypothesis replaced by the true object it shows (a diagnostic)")
+    ap.add_argument("--true-extents-belief", action="store_true",
+                    help="camera only: the true objects only where slax-belief judges the target's placements")
     ap.add_argument("--no-shuttle-rule", action="store_true",
                     help="the no-shuttle correction off (shuttle_reveal None), to measure what it costs")
     ap.add_argument("--plan-clearance", type=float, default=None, metavar="M",
@@ -111,8 +116,8 @@ def main(argv=None):
     if args.see_hidden and args.observation != "privileged":
         print("error: --see-hidden needs the privileged observation", file=sys.stderr)
         return 2
-    if args.true_extents and args.observation != "camera":
-        print("error: --true-extents needs --observation camera", file=sys.stderr)
+    if (args.true_extents or args.true_extents_belief) and args.observation != "camera":
+        print("error: --true-extents and --true-extents-belief need --observation camera", file=sys.stderr)
         return 2
     try:
         tool_rules = parse_tool_rules(args.tool_rule, args.profile)
@@ -139,6 +144,9 @@ def main(argv=None):
                             tool_overrides=tool_rules)
     except (TypeError, ValueError) as e:
         print(f"error: --options: {e}", file=sys.stderr)
+        return 2
+    if args.true_extents_belief and not hasattr(probe, "placements"):
+        print(f"error: --true-extents-belief: {args.policy} keeps no belief of the target's placements", file=sys.stderr)
         return 2
     if args.known_target and not hasattr(probe, "placements"):
         print(f"error: --known-target: {args.policy} keeps no belief of the target's placements", file=sys.stderr)
@@ -174,6 +182,9 @@ def main(argv=None):
             observer = SeeingHidden(policy)
         if args.true_extents:
             observer = TrueExtents(observer)
+        if args.true_extents_belief:
+            observer = TrueExtents(observer)
+            observer.belief_only(policy)
         result = run_trial(scene, policy, horizon, threshold=scenario.target.visibility_threshold,
                            suction_cost=scenario.protocol.suction_cost, density=density, observer=observer)
         longest = max((d.get("seconds", 0.0) for d in policy.decision_log), default=0.0)
@@ -228,6 +239,23 @@ class TrueExtents:
 
     def __init__(self, camera):
         self.camera = camera
+        self.told = None  # the last observation with the true objects (belief_only)
+        self.only_belief = False
+
+    def belief_only(self, policy) -> None:
+        """``--true-extents-belief``: :meth:`observe` returns the camera's observation, and ``policy.placements``
+        judges the target's placements on the true objects of the frame (the remembered hypotheses and the others
+        as the policy has them)."""
+        self.only_belief = True
+        placements = policy.placements
+
+        def told(obs):
+            true = {o.name: o for o in self.told.known}
+            known = tuple(true.get(o.name, o) for o in obs.known if o.name in true or o.remembered)
+            return placements(dataclasses.replace(obs, known=known,
+                                                  scene_template=obs.scene_template.with_objects(known)))
+
+        policy.placements = told
 
     def __getattr__(self, name):
         if name == "camera":
@@ -251,8 +279,9 @@ class TrueExtents:
         told = ObservedBelief(belief.observation, belief.shelf, belief.source, background=belief.background,
                               hypotheses=hypotheses, p1d=belief.p1d, remembered=belief.remembered)
         known = told.known
-        return dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known),
-                                   p1d=told.p1d, belief=told), names
+        self.told = dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known),
+                                        p1d=told.p1d, belief=told)
+        return (obs if self.only_belief else self.told), names
 
 
 class MarginModel(ActionModel):
