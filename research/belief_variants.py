@@ -10,7 +10,8 @@ registry row each.
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
-        [--known-target] [--see-hidden] [--true-extents | --true-extents-belief] [--no-shuttle-rule] [--plan-clearance M]
+        [--known-target] [--see-hidden] [--true-extents | --true-extents-belief] [--fuse-extents]
+        [--no-shuttle-rule] [--plan-clearance M]
         [--placement-margin M]
 
 ``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
@@ -28,7 +29,8 @@ segmentation, the target mask and the hidden objects stay the camera's): how muc
 seen objects' unseen extents make. A diagnostic, never a policy. ``--true-extents-belief``: the same objects only
 where slax-belief judges where the target may stand (its ``placements``: clear of the seen objects); its actions
 are planned and predicted on the camera's hypotheses, so the two flags split the loss between the belief and the
-actions.
+actions. ``--fuse-extents`` (camera only): the object tracker keeps what earlier frames showed of an unmoved box
+(:class:`~slax_drake.perception.tracking.ObjectTracker`'s ``fuse_extents``).
 
 ``--plan-clearance M`` and ``--placement-margin M`` (m; camera mode is where they matter): the policy plans with a
 margin for the estimate's error while the shelf simulator executes with the scenario's clearance. The first
@@ -100,6 +102,8 @@ def main(argv=None):
                     help="camera only: each hypothesis replaced by the true object it shows (a diagnostic)")
     ap.add_argument("--true-extents-belief", action="store_true",
                     help="camera only: the true objects only where slax-belief judges the target's placements")
+    ap.add_argument("--fuse-extents", action="store_true",
+                    help="camera only: the tracker keeps what earlier frames showed of an unmoved box")
     ap.add_argument("--no-shuttle-rule", action="store_true",
                     help="the no-shuttle correction off (shuttle_reveal None), to measure what it costs")
     ap.add_argument("--plan-clearance", type=float, default=None, metavar="M",
@@ -116,8 +120,9 @@ def main(argv=None):
     if args.see_hidden and args.observation != "privileged":
         print("error: --see-hidden needs the privileged observation", file=sys.stderr)
         return 2
-    if (args.true_extents or args.true_extents_belief) and args.observation != "camera":
-        print("error: --true-extents and --true-extents-belief need --observation camera", file=sys.stderr)
+    if (args.true_extents or args.true_extents_belief or args.fuse_extents) and args.observation != "camera":
+        print("error: --true-extents, --true-extents-belief and --fuse-extents need --observation camera",
+              file=sys.stderr)
         return 2
     try:
         tool_rules = parse_tool_rules(args.tool_rule, args.profile)
@@ -170,6 +175,8 @@ def main(argv=None):
         if args.observation == "camera":
             observer = CameraObserver(scene.shelf, scene.camera, size, width=policy.observation_width,
                                       segmentation=args.segmentation, noise_seed=seed if args.sensor_noise else None)
+        if args.fuse_extents:
+            observer.tracker.fuse_extents = True
         seen = watch_last_arrangement(policy)
         if args.known_target:
             tell_target(policy, scene)

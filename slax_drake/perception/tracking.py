@@ -26,6 +26,12 @@ Per frame (:meth:`ObjectTracker.update`), with the action executed since the las
    ``remembered``, and its uncertainty grows to cover the commanded path when the action moved it. A hidden
    track that the frame contradicts -- the frame sees past its surface (deeper by ``see_through`` m) on more
    than half of the pixels where it would show were it alone on the shelf -- is dropped: it is not there.
+4. With ``fuse_extents``: a box track matched and not moved since its last estimate keeps what earlier frames
+   showed of it. Its new estimate is the least rectangle, in the new estimate's axes, holding both footprints,
+   when the two yaws agree within ``FUSE_YAW`` (modulo a quarter turn) and they overlap by at least half of the
+   new one: what the camera saw of an object stays part of it when another object is placed in front of it and
+   the frame shows less (in the camera-mode Table I trials at 10 objects, 6 % of such estimates lost more than
+   1 cm^2 of footprint from one frame to the next, a median of 12 cm^2).
 
 Positions in the shelf frame S (x right, y into the shelf; metres). Deterministic; the state is plain data
 (:meth:`ObjectTracker.to_dict`, :meth:`ObjectTracker.from_dict`) so that a caller that sees one frame per process
@@ -41,6 +47,7 @@ import numpy as np
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.model import SceneObject
 
+FUSE_YAW = np.radians(3.0)  # fuse_extents: the most two estimates' yaws may differ (modulo a quarter turn)
 PREFIX = "track_"  # the stable names: track_1, track_2, ... in order of first sighting (true objects are object_<k>)
 
 
@@ -96,8 +103,10 @@ class ObjectTracker:
     footprint) that makes an otherwise unmatched hypothesis the object of an unmatched, unmoved track;
     ``see_through`` (m): how far past a hidden track's surface the frame must see to contradict it."""
 
-    def __init__(self, gate: float = 0.04, see_through: float = 0.01, overlap_share: float = 0.2):
+    def __init__(self, gate: float = 0.04, see_through: float = 0.01, overlap_share: float = 0.2,
+                 fuse_extents: bool = False):
         self.gate = float(gate)
+        self.fuse_extents = bool(fuse_extents)
         self.overlap_share = float(overlap_share)
         self.see_through = float(see_through)
         self.reset()
@@ -180,6 +189,10 @@ class ObjectTracker:
         seen = set()
         for i, o in enumerate(objs):
             name = out_names[i]
+            if self.fuse_extents and name is not None and name not in path:
+                fused = fused_box(self.tracks[name].object, o)
+                if fused is not None:
+                    objs[i] = o = fused
             if name is None:
                 name = f"{PREFIX}{self.next_id}"
                 self.next_id += 1
@@ -204,14 +217,13 @@ class ObjectTracker:
             self._drop_contradicted(frame, template)
         self.frames += 1
         out = []
-        for h, name in zip(items, out_names):
+        for h, o, name in zip(items, objs, out_names):
             mass = self.tracks[name].mass
             if hasattr(h, "object"):
-                o = h.object
                 out.append(dataclasses.replace(h, object=dataclasses.replace(o, name=name, mass=o.mass if mass is None
                                                                              else mass)))
             else:
-                out.append(dataclasses.replace(h, name=name, mass=h.mass if mass is None else mass))
+                out.append(dataclasses.replace(o, name=name, mass=o.mass if mass is None else mass))
         return out
 
     def weighed(self, name: str, mass: float) -> None:
@@ -254,14 +266,16 @@ class ObjectTracker:
                            "uncertainty": t.uncertainty, "hidden": t.hidden, "frames": t.frames,
                            **({"mass": t.mass} if t.mass is not None else {})})
         return {"next_id": self.next_id, "frames": self.frames, "tracks": tracks,
-                "gate": self.gate, "see_through": self.see_through, "overlap_share": self.overlap_share}
+                "gate": self.gate, "see_through": self.see_through, "overlap_share": self.overlap_share,
+                "fuse_extents": self.fuse_extents}
 
     @classmethod
     def from_dict(cls, doc: dict) -> "ObjectTracker":
         from slax_drake.scene.model import planar_pose
 
         tracker = cls(gate=float(doc.get("gate", 0.04)), see_through=float(doc.get("see_through", 0.01)),
-                      overlap_share=float(doc.get("overlap_share", 0.2)))
+                      overlap_share=float(doc.get("overlap_share", 0.2)),
+                      fuse_extents=bool(doc.get("fuse_extents", False)))
         tracker.next_id = int(doc.get("next_id", 1))
         tracker.frames = int(doc.get("frames", 0))
         for t in doc.get("tracks", []):
@@ -272,6 +286,34 @@ class ObjectTracker:
             tracker.tracks[t["name"]] = Track(t["name"], o, float(t["uncertainty"]), bool(t["hidden"]),
                                               int(t["frames"]), mass)
         return tracker
+
+
+def fused_box(old: SceneObject, new: SceneObject) -> SceneObject | None:
+    """``new`` grown to the least rectangle, in its own axes, that holds both its footprint and ``old``'s (the same
+    unmoved box estimated in an earlier frame), at ``new``'s height; None when either is not a box, their yaws
+    differ by more than :data:`FUSE_YAW` modulo a quarter turn, they overlap by less than half of ``new``'s
+    footprint, or ``old`` adds nothing (under 0.5 mm on every side)."""
+    if old.shape != "box" or new.shape != "box":
+        return None
+    turn = (new.yaw - old.yaw) % (np.pi / 2)
+    if min(turn, np.pi / 2 - turn) > FUSE_YAW:
+        return None
+    p_old, p_new = Footprint.of(old).polygon(), Footprint.of(new).polygon()
+    if p_old.intersection(p_new).area < 0.5 * p_new.area:
+        return None
+    c, s = np.cos(new.yaw), np.sin(new.yaw)
+    axes = np.array([[c, s], [-s, c]])
+    along_new = np.asarray(p_new.exterior.coords) @ axes.T
+    along_both = np.vstack([along_new, np.asarray(p_old.exterior.coords) @ axes.T])
+    lo, hi = along_both.min(axis=0), along_both.max(axis=0)
+    if np.all(lo >= along_new.min(axis=0) - 5e-4) and np.all(hi <= along_new.max(axis=0) + 5e-4):
+        return None
+    from slax_drake.scene.model import planar_pose
+
+    mid = axes.T @ ((lo + hi) / 2)
+    size = (float(hi[0] - lo[0]), float(hi[1] - lo[1]), float(new.size[2]))
+    return dataclasses.replace(new, size=size, X_SO=planar_pose(float(mid[0]), float(mid[1]), float(new.center[2]),
+                                                                new.yaw))
 
 
 def _uncertainty_of(h) -> float:
