@@ -1,12 +1,18 @@
 """How often the estimator's extent range holds the true footprint, on ray-cast frames of the simulated shelf
 (the shelf simulator's camera mode: label segmentation), per density, clean or with the L515 noise model.
 
-    python benchmarks/extent_ranges.py [--scenes 10] [--width 160] [--noise]
+    python benchmarks/extent_ranges.py [--scenes 10] [--width 160] [--noise] [--tail]
 
 Scenes: ``sim_configs/sim_shelf.yaml``, 4, 6, 8 and 10 objects, seeds 1000..1000+N-1. A seen object counts as
 held when at most 1 cm^2 of its true footprint lies outside the range's farthest rectangle grown by 5 mm. Also
 printed: the mean reach of the range beyond the observed part along the axis nearest the viewing direction (m),
 and the true depth beyond the observed part, for the objects held.
+
+``--tail``: also, per density, where the true edges lie in their ranges: over every edge of every seen box or
+cylinder whose range reaches more than 2 cm past the observed part, the share of the range the true footprint
+reaches past the observed part (0: the observed part was the whole object along that edge; 1: the farthest the
+frame allows), and the share of those edges at least each of the shares slax-belief's ``EXTENT_SHARE_TAIL`` lists
+(the tail its ``extent_prior`` and ``extent_risk`` options read; measured with ``--scenes 30 --tail``).
 """
 
 import argparse
@@ -30,6 +36,7 @@ def main(argv=None) -> int:
     parser.add_argument("--scenes", type=int, default=10, help="scenes per density (seeds 1000..)")
     parser.add_argument("--width", type=int, default=160, help="image width (px); the height keeps the aspect")
     parser.add_argument("--noise", action="store_true", help="the L515 noise model on the depth")
+    parser.add_argument("--tail", action="store_true", help="also where the true edges lie in their ranges")
     args = parser.parse_args(argv)
     if args.scenes < 1 or args.width < 16:
         parser.error("--scenes must be at least 1 and --width at least 16")
@@ -38,7 +45,7 @@ def main(argv=None) -> int:
     print(f"{'objects':>7} {'seen':>5} {'held':>5} {'share':>6} {'reach m':>8} {'true m':>7}")
     for n in (4, 6, 8, 10):
         seen = held = 0
-        reach, true_depth = [], []
+        reach, true_depth, shares = [], [], []
         for seed in range(1000, 1000 + args.scenes):
             scene = sample_scene(scenario, n, seed)
             camera = scene.camera.with_resolution(args.width, int(round(scene.camera.height * args.width
@@ -53,6 +60,7 @@ def main(argv=None) -> int:
                 truth = Footprint.of(scene.objects[h.segment_id - 1])
                 extent = h.uncertainty.extent
                 seen += 1
+                shares += edge_shares(truth, extent)
                 if truth.polygon().difference(extent.most().polygon().buffer(0.005)).area > 1e-4:
                     continue
                 held += 1
@@ -71,7 +79,29 @@ def main(argv=None) -> int:
                     true_depth.append(max(extent.least_lo[k] - along.min(), 0.0))
         share = held / max(seen, 1)
         print(f"{n:>7} {seen:>5} {held:>5} {share:>6.3f} {np.mean(reach):>8.3f} {np.mean(true_depth):>7.3f}")
+        if args.tail:
+            tail = np.array(shares)
+            points = ", ".join(f"{t:g}: {(tail >= t).mean():.3f}" for t in TAIL_POINTS)
+            print(f"{'':>7} {len(tail)} edges reaching over 2 cm; share of them reaching at least ... {points}")
     return 0
+
+
+TAIL_POINTS = (0.02, 0.05, 0.1, 0.25, 0.5, 0.75, 1.0)
+
+
+def edge_shares(truth: Footprint, extent) -> list[float]:
+    """For each edge of ``extent`` (an ExtentRange) whose range reaches more than 2 cm past the observed part, the
+    share of that reach the true footprint ``truth`` extends past the observed part (0 when it does not)."""
+    c, s = np.cos(extent.yaw), np.sin(extent.yaw)
+    corners = np.asarray(truth.polygon().exterior.coords)
+    out = []
+    for k, axis in enumerate((np.array([c, s]), np.array([-s, c]))):
+        along = corners @ axis
+        for room, past in ((extent.most_hi[k] - extent.least_hi[k], along.max() - extent.least_hi[k]),
+                           (extent.least_lo[k] - extent.most_lo[k], extent.least_lo[k] - along.min())):
+            if room > 0.02:
+                out.append(max(float(past), 0.0) / room)
+    return out
 
 
 if __name__ == "__main__":

@@ -148,14 +148,15 @@ from slax_drake.scene.model import state_key
 
 EXPLAIN_SHARES = (0.25, 0.5, 0.75, 1.0)  # explain_failed: the shares of an extent range tried, least first
 # extent_risk: the shares of an unseen edge's extent range an object's draw takes, with their probabilities: the
-# bins of EXTENT_SHARE_TAIL below, each at its least share (below a tenth of the range: none of it)
+# bins of EXTENT_SHARE_TAIL below, each at its least share (below a tenth of the range: none of it; 3 % at the farthest)
 EXTENT_DRAW = ((0.0, 0.60), (0.1, 0.12), (0.25, 0.15), (0.5, 0.07), (0.75, 0.03), (1.0, 0.03))
 EXTENT_DRAWS = 8  # extent_risk: joint draws of every seen object's share per decision
 # extent_prior and extent_risk: (share of an unseen edge's extent range, the probability that the true edge lies at
 # least that far along it), linear between the points, 1 at share 0. Measured on first frames of the simulated shelf
 # (6, 8 and 10 objects, 30 scenes each, 160 px, label segmentation; every edge whose range reaches more than 2 cm past
 # the observed part): about 60 % of such edges end within a tenth of their range (the observed part was the whole
-# object), 28 % reach a quarter of it or more, 13 % half (docs/research/uncertain-extents.md)
+# object), 28 % reach a quarter of it or more, 13 % half, 0 / 1.5 / 3.4 % (6 / 8 / 10 objects) the farthest
+# (`python benchmarks/extent_ranges.py --scenes 30 --tail`; docs/research/uncertain-extents.md)
 EXTENT_SHARE_TAIL = ((0.0, 1.0), (0.02, 0.56), (0.05, 0.48), (0.1, 0.4), (0.25, 0.28), (0.5, 0.13), (0.75, 0.06),
                      (1.0, 0.03))
 
