@@ -10,7 +10,7 @@ registry row each.
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
-        [--known-target] [--see-hidden] [--true-extents | --true-extents-belief] [--fuse-extents]
+        [--known-target] [--see-hidden] [--true-extents | --true-extents-belief | --true-misfits] [--fuse-extents]
         [--no-shuttle-rule] [--plan-clearance M]
         [--placement-margin M]
 
@@ -29,7 +29,8 @@ segmentation, the target mask and the hidden objects stay the camera's): how muc
 seen objects' unseen extents make. A diagnostic, never a policy. ``--true-extents-belief``: the same objects only
 where slax-belief judges where the target may stand (its ``placements``: clear of the seen objects); its actions
 are planned and predicted on the camera's hypotheses, so the two flags split the loss between the belief and the
-actions. ``--fuse-extents`` (camera only): the object tracker keeps what earlier frames showed of an unmoved box
+actions. ``--true-misfits``: only the hypotheses whose shape is not the object's (a box taken for a cylinder, or
+the reverse) or whose yaw is more than 10 degrees off (modulo a quarter turn) are replaced. ``--fuse-extents`` (camera only): the object tracker keeps what earlier frames showed of an unmoved box
 (:class:`~slax_drake.perception.tracking.ObjectTracker`'s ``fuse_extents``).
 
 ``--plan-clearance M`` and ``--placement-margin M`` (m; camera mode is where they matter): the policy plans with a
@@ -102,6 +103,8 @@ def main(argv=None):
                     help="camera only: each hypothesis replaced by the true object it shows (a diagnostic)")
     ap.add_argument("--true-extents-belief", action="store_true",
                     help="camera only: the true objects only where slax-belief judges the target's placements")
+    ap.add_argument("--true-misfits", action="store_true",
+                    help="camera only: --true-extents for the hypotheses of the wrong shape or 10+ deg off in yaw")
     ap.add_argument("--fuse-extents", action="store_true",
                     help="camera only: the tracker keeps what earlier frames showed of an unmoved box")
     ap.add_argument("--no-shuttle-rule", action="store_true",
@@ -120,8 +123,9 @@ def main(argv=None):
     if args.see_hidden and args.observation != "privileged":
         print("error: --see-hidden needs the privileged observation", file=sys.stderr)
         return 2
-    if (args.true_extents or args.true_extents_belief or args.fuse_extents) and args.observation != "camera":
-        print("error: --true-extents, --true-extents-belief and --fuse-extents need --observation camera",
+    if (args.true_extents or args.true_extents_belief or args.true_misfits or args.fuse_extents) \
+            and args.observation != "camera":
+        print("error: --true-extents, --true-extents-belief, --true-misfits and --fuse-extents need --observation camera",
               file=sys.stderr)
         return 2
     try:
@@ -189,6 +193,8 @@ def main(argv=None):
             observer = SeeingHidden(policy)
         if args.true_extents:
             observer = TrueExtents(observer)
+        if args.true_misfits:
+            observer = TrueExtents(observer, misfits_only=True)
         if args.true_extents_belief:
             observer = TrueExtents(observer)
             observer.belief_only(policy)
@@ -244,8 +250,9 @@ class TrueExtents:
     segments and target mask, P_t, the tracker's hidden objects) is the camera's, and the trial executes the
     policy's actions on the objects they name through the observer's names, as in camera mode."""
 
-    def __init__(self, camera):
+    def __init__(self, camera, misfits_only: bool = False):
         self.camera = camera
+        self.misfits_only = misfits_only  # --true-misfits: replace only hypotheses of the wrong shape or yaw
         self.told = None  # the last observation with the true objects (belief_only)
         self.only_belief = False
 
@@ -278,7 +285,7 @@ class TrueExtents:
         hypotheses, shown = [], set()
         for h in belief.hypotheses:
             truth = true.get(names.get(h.object.name))
-            if truth is None:
+            if truth is None or (self.misfits_only and not misfit(h.object, truth)):
                 hypotheses.append(h)
             elif truth.name not in shown:
                 shown.add(truth.name)
@@ -289,6 +296,17 @@ class TrueExtents:
         self.told = dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known),
                                         p1d=told.p1d, belief=told)
         return (obs if self.only_belief else self.told), names
+
+
+def misfit(hypothesis, truth) -> bool:
+    """Whether ``hypothesis`` has another shape than the object ``truth`` it shows, or, both boxes, a yaw more
+    than 10 degrees off modulo a quarter turn."""
+    if hypothesis.shape != truth.shape:
+        return True
+    if truth.shape != "box":
+        return False
+    turn = (hypothesis.yaw - truth.yaw) % (np.pi / 2)
+    return min(turn, np.pi / 2 - turn) > np.radians(10.0)
 
 
 class MarginModel(ActionModel):
