@@ -1,7 +1,7 @@
 """How often the estimator's extent range holds the true footprint, on ray-cast frames of the simulated shelf
 (the shelf simulator's camera mode: label segmentation), per density, clean or with the L515 noise model.
 
-    python benchmarks/extent_ranges.py [--scenes 10] [--width 160] [--noise] [--tail]
+    python benchmarks/extent_ranges.py [--scenes 10] [--width 160] [--noise] [--tail] [--fit]
 
 Scenes: ``sim_configs/sim_shelf.yaml``, 4, 6, 8 and 10 objects, seeds 1000..1000+N-1. A seen object counts as
 held when at most 1 cm^2 of its true footprint lies outside the range's farthest rectangle grown by 5 mm. Also
@@ -13,6 +13,12 @@ cylinder whose range reaches more than 2 cm past the observed part, the share of
 reaches past the observed part (0: the observed part was the whole object along that edge; 1: the farthest the
 frame allows), and the share of those edges at least each of the shares slax-belief's ``EXTENT_SHARE_TAIL`` lists
 (the tail its ``extent_prior`` and ``extent_risk`` options read; measured with ``--scenes 30 --tail``).
+
+``--fit``: also, per density, how the hypotheses themselves differ from the objects they show: how many have
+another shape (a box taken for a cylinder or the reverse), the boxes' yaw error (modulo a quarter turn; median,
+90th percentile, share over 10 degrees), how far a hypothesis reaches outside its object (the farthest corner,
+mm; median and 90th percentile, boxes and cylinders apart) and how much of the object's footprint it leaves out
+(cm^2; median, 90th percentile).
 """
 
 import argparse
@@ -37,6 +43,7 @@ def main(argv=None) -> int:
     parser.add_argument("--width", type=int, default=160, help="image width (px); the height keeps the aspect")
     parser.add_argument("--noise", action="store_true", help="the L515 noise model on the depth")
     parser.add_argument("--tail", action="store_true", help="also where the true edges lie in their ranges")
+    parser.add_argument("--fit", action="store_true", help="also how the hypotheses differ from their objects")
     args = parser.parse_args(argv)
     if args.scenes < 1 or args.width < 16:
         parser.error("--scenes must be at least 1 and --width at least 16")
@@ -46,6 +53,7 @@ def main(argv=None) -> int:
     for n in (4, 6, 8, 10):
         seen = held = 0
         reach, true_depth, shares = [], [], []
+        fits = {"shape": 0, "yaw": [], "out box": [], "out cylinder": [], "missed": []}
         for seed in range(1000, 1000 + args.scenes):
             scene = sample_scene(scenario, n, seed)
             camera = scene.camera.with_resolution(args.width, int(round(scene.camera.height * args.width
@@ -61,6 +69,7 @@ def main(argv=None) -> int:
                 extent = h.uncertainty.extent
                 seen += 1
                 shares += edge_shares(truth, extent)
+                fit_errors(scene.objects[h.segment_id - 1], h.object, fits)
                 if truth.polygon().difference(extent.most().polygon().buffer(0.005)).area > 1e-4:
                     continue
                 held += 1
@@ -83,10 +92,36 @@ def main(argv=None) -> int:
             tail = np.array(shares)
             points = ", ".join(f"{t:g}: {(tail >= t).mean():.3f}" for t in TAIL_POINTS)
             print(f"{'':>7} {len(tail)} edges reaching over 2 cm; share of them reaching at least ... {points}")
+        if args.fit:
+            yaw = np.array(fits["yaw"])
+
+            def q(values, scale):
+                v = np.array(values) * scale
+                return f"{np.median(v):.1f} / {np.quantile(v, 0.9):.1f}" if len(v) else "-"
+
+            print(f"{'':>7} another shape {fits['shape']} of {seen}; box yaw error (deg) {q(yaw, 1)}, over 10 deg "
+                  f"{(yaw > 10).mean():.2f}; outside the object (mm) boxes {q(fits['out box'], 1e3)}, cylinders "
+                  f"{q(fits['out cylinder'], 1e3)}; object left out (cm^2) {q(fits['missed'], 1e4)}")
     return 0
 
 
 TAIL_POINTS = (0.02, 0.05, 0.1, 0.25, 0.5, 0.75, 1.0)
+
+
+def fit_errors(true_object, hypothesis, fits: dict) -> None:
+    """Adds ``hypothesis``'s differences from ``true_object`` to ``fits`` (see ``--fit``)."""
+    from shapely.geometry import Point
+
+    truth, fitted = Footprint.of(true_object).polygon(), Footprint.of(hypothesis).polygon()
+    if hypothesis.shape != true_object.shape:
+        fits["shape"] += 1
+    elif true_object.shape == "box":
+        turn = (hypothesis.yaw - true_object.yaw) % (np.pi / 2)
+        fits["yaw"].append(float(np.degrees(min(turn, np.pi / 2 - turn))))
+    out = max(truth.exterior.distance(Point(c)) if not truth.contains(Point(c)) else 0.0
+              for c in fitted.exterior.coords)
+    fits[f"out {true_object.shape}"].append(out)
+    fits["missed"].append(truth.difference(fitted).area)
 
 
 def edge_shares(truth: Footprint, extent) -> list[float]:
