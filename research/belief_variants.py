@@ -11,7 +11,7 @@ registry row each.
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
         [--known-target] [--see-hidden] [--true-extents | --true-extents-belief | --true-misfits] [--fuse-extents]
-        [--no-shuttle-rule] [--plan-clearance M]
+        [--silhouette-growth PX] [--no-shuttle-rule] [--plan-clearance M]
         [--placement-margin M]
 
 ``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
@@ -31,7 +31,8 @@ where slax-belief judges where the target may stand (its ``placements``: clear o
 are planned and predicted on the camera's hypotheses, so the two flags split the loss between the belief and the
 actions. ``--true-misfits``: only the hypotheses whose shape is not the object's (a box taken for a cylinder, or
 the reverse) or whose yaw is more than 10 degrees off (modulo a quarter turn) are replaced. ``--fuse-extents`` (camera only): the object tracker keeps what earlier frames showed of an unmoved box
-(:class:`~slax_drake.perception.tracking.ObjectTracker`'s ``fuse_extents``).
+(:class:`~slax_drake.perception.tracking.ObjectTracker`'s ``fuse_extents``). ``--silhouette-growth PX`` (camera
+only): the estimator grows the extents on the silhouette sides by this many pixel footprints (its default 0.5).
 
 ``--plan-clearance M`` and ``--placement-margin M`` (m; camera mode is where they matter): the policy plans with a
 margin for the estimate's error while the shelf simulator executes with the scenario's clearance. The first
@@ -105,6 +106,8 @@ def main(argv=None):
                     help="camera only: the true objects only where slax-belief judges the target's placements")
     ap.add_argument("--true-misfits", action="store_true",
                     help="camera only: --true-extents for the hypotheses of the wrong shape or 10+ deg off in yaw")
+    ap.add_argument("--silhouette-growth", type=float, default=None, metavar="PX",
+                    help="camera only: the estimator's growth on the silhouette sides (pixel footprints)")
     ap.add_argument("--fuse-extents", action="store_true",
                     help="camera only: the tracker keeps what earlier frames showed of an unmoved box")
     ap.add_argument("--no-shuttle-rule", action="store_true",
@@ -123,9 +126,11 @@ def main(argv=None):
     if args.see_hidden and args.observation != "privileged":
         print("error: --see-hidden needs the privileged observation", file=sys.stderr)
         return 2
-    if (args.true_extents or args.true_extents_belief or args.true_misfits or args.fuse_extents) \
+    if (args.true_extents or args.true_extents_belief or args.true_misfits or args.fuse_extents
+            or args.silhouette_growth is not None) \
             and args.observation != "camera":
-        print("error: --true-extents, --true-extents-belief, --true-misfits and --fuse-extents need --observation camera",
+        print("error: --true-extents, --true-extents-belief, --true-misfits, --fuse-extents and --silhouette-growth "
+              "need --observation camera",
               file=sys.stderr)
         return 2
     try:
@@ -181,6 +186,10 @@ def main(argv=None):
                                       segmentation=args.segmentation, noise_seed=seed if args.sensor_noise else None)
         if args.fuse_extents:
             observer.tracker.fuse_extents = True
+        if args.silhouette_growth is not None:
+            from slax_drake.perception.estimator import EstimatorConfig
+
+            observer.estimator = EstimatorConfig(silhouette_growth=args.silhouette_growth)
         seen = watch_last_arrangement(policy)
         if args.known_target:
             tell_target(policy, scene)

@@ -22,8 +22,8 @@ For each segment of an :class:`~slax_drake.perception.observation.Observation`:
    returns of the far end of a face seen at a grazing angle; a stray return stands apart), except, on a noisy frame, the camera-facing faces: range noise spreads a face's points
    both ways along the rays, so a low percentile lies in front of the face; the face is placed at the median of
    its points near that edge (the band follows the range noise measured on the back panel). The extents are
-   grown by half a pixel's footprint on the silhouette sides (pixel centres sample the surface, the edge lies on
-   average half a pixel beyond the outermost centre).
+   grown by ``silhouette_growth`` (half) a pixel's footprint on the silhouette sides (pixel centres sample the
+   surface, the edge lies on average half a pixel beyond the outermost centre).
 4b. A segment whose fit stands mostly inside a larger segment's (its observed footprint, grown by 5 mm, at least
    ``contained_share`` inside the other's footprint with its prior; ``drop_contained``) is a part of that object,
    cut off by a depth-only segmentation (a top face seen as one row, a sliver beside the occluder), and yields no
@@ -128,6 +128,9 @@ class EstimatorConfig:
     tail_radius: float = 0.01
     tail_gap: float = 0.01  # ... joining while each is within this of the edge so far
     tail_gap_pixels: float = 6.0  # ... or within this many pixel footprints at the segment
+    # the extents' growth on the silhouette sides, in pixel footprints at the segment (0.5: the edge half a pixel
+    # beyond the outermost pixel centre on average)
+    silhouette_growth: float = 0.5
     yaw_step_deg: float = 2.0  # coarse yaw search step; refined to a twentieth of it
     closeness_floor: float = 0.001  # the L-shape criterion's minimum distance (m)
     cylinder_residual_ratio: float = 0.8  # circle rms below this fraction of the rectangle's rms -> cylinder
@@ -477,7 +480,7 @@ def _box_extents(xy, yaw, eye, pixel, occluded_left, occluded_right, height, con
     lateral = np.array([-view[1], view[0]])
     eye_c = axes @ eye
     for k in range(2):
-        growth = 0.5 * pixel * abs(axes[k] @ lateral)  # silhouette sides only: those facing sideways
+        growth = config.silhouette_growth * pixel * abs(axes[k] @ lateral)  # silhouette sides only: those facing sideways
         lo[k] -= growth
         hi[k] += growth
     observed_lo, observed_hi = lo.copy(), hi.copy()

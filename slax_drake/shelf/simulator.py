@@ -84,11 +84,13 @@ class CameraObserver:
     ``tracking`` (default): the hypotheses are associated with the objects seen in earlier frames of the trial
     (:class:`~slax_drake.perception.tracking.ObjectTracker`, told the action executed since the last frame through
     :meth:`executed`) and named by their tracks (``track_<k>``, stable across frames) instead of by segment;
-    :meth:`start` begins a new trial. False: ``segment_<id>`` names, nothing carried between frames."""
+    :meth:`start` begins a new trial. False: ``segment_<id>`` names, nothing carried between frames.
+    ``estimator``: the estimator's tuning (an :class:`~slax_drake.perception.estimator.EstimatorConfig`; None: its
+    defaults)."""
 
     def __init__(self, shelf, camera, target_size, source: str = "depth", width: int = 160,
                  segmentation: str = "labels", noise_seed: int | None = None, tracking: bool = True,
-                 full_resolution: bool = False):
+                 full_resolution: bool = False, estimator=None):
         from slax_drake.perception.belief import background_depth, make_source
 
         if segmentation not in SEGMENTATIONS:
@@ -109,6 +111,9 @@ class CameraObserver:
 
         self.tracker = ObjectTracker() if tracking else None
         self._executed = None
+        from slax_drake.perception.estimator import EstimatorConfig
+
+        self.estimator = estimator if estimator is not None else EstimatorConfig()
 
     def start(self) -> None:
         """A new trial: the tracker forgets every object and the noise's step index starts again at 0."""
@@ -163,9 +168,10 @@ class CameraObserver:
             from slax_drake.perception.estimator import estimate_objects
 
             executed, self._executed = self._executed, None
-            hypotheses = self.tracker.update(estimate_objects(frame, self.shelf), executed, frame,
+            hypotheses = self.tracker.update(estimate_objects(frame, self.shelf, self.estimator), executed, frame,
                                              dataclasses.replace(scene, objects=(), target=None))
         belief = ObservedBelief(frame, self.shelf, self.source, background=self.background, hypotheses=hypotheses,
+                                config=self.estimator,
                                 remembered=None if self.tracker is None else self.tracker.hidden())
         names = {}
         for h in belief.hypotheses:
