@@ -119,6 +119,10 @@ in the registry's ``slax-belief``; ``slax-belief-camera-depth`` sets ``camera_de
   (:meth:`unaimable`);
 - ``deepen_failed``: an object whose suction placement failed is estimated, for the rest of the trial, with the
   range prior at its farthest (:meth:`with_camera_hypotheses`).
+- ``extent_prior`` and ``extent_risk`` (the extents drawn with the target's placement; both off, measured in
+  docs/research/uncertain-extents.md): a placement inside a seen object's extent range weighs the chance that the
+  object does not reach it (:func:`extent_free_weights`); a first move is scored by the share of joint draws of the
+  seen objects' extents in which it fails (:meth:`first_move_extent_risk`).
 
 The privileged path does not read any of them. The measurements behind each option's default are in the
 research note docs/research/slax_belief.md.
