@@ -121,3 +121,24 @@ def test_a_weighed_object_carries_its_mass_in_every_later_frame_hidden_or_seen_a
     again = ObjectTracker.from_dict(t.to_dict())
     seen = again.update(frame(box("b", 0.1, -0.1), box("a", -0.15, -0.1)))
     assert {o.name: o.mass for o in seen} == {"track_1": None, "track_2": 1.25}
+
+
+def test_fuse_extents_keeps_what_an_earlier_frame_showed_of_an_unmoved_box():
+    t = ObjectTracker(fuse_extents=True)
+    t.update(frame(box("a", -0.15, -0.1, sx=0.12), box("b", 0.1, -0.1)))
+    # an object placed in front now hides the right half of "a": the frame shows it 0.06 m wide
+    narrow = box("a", -0.18, -0.1, sx=0.06)
+    fused = {o.name: o for o in t.update(frame(narrow, box("b", 0.1, -0.1)))}
+    assert abs(fused["track_1"].size[0] - 0.12) < 1e-9
+    assert abs(float(fused["track_1"].center[0]) + 0.15) < 1e-9
+    # once moved, it is what the new frame shows
+    push = Push("track_1", (-0.25, -0.1, 0.05), 0.05)
+    moved = {o.name: o for o in t.update(frame(box("a", -0.13, -0.1, sx=0.06), box("b", 0.1, -0.1)), push)}
+    assert abs(moved["track_1"].size[0] - 0.06) < 1e-9
+
+
+def test_without_fuse_extents_the_frame_is_what_it_shows():
+    t = ObjectTracker()
+    t.update(frame(box("a", -0.15, -0.1, sx=0.12)))
+    (only,) = t.update(frame(box("a", -0.18, -0.1, sx=0.06)))
+    assert abs(only.size[0] - 0.06) < 1e-9
