@@ -1,5 +1,6 @@
 """Runs slax-belief with extra constructor options on chosen Table I trials and prints, per trial, whether the
-target was revealed, the steps, the cost and the longest decision (CPU s), then the count revealed. The trials are
+target was revealed, the steps, the cost, the simulator's notes (actions that did not go as planned) and the longest
+decision (CPU s), then the count revealed. The trials are
 the benchmark's (`slax-drake benchmark`): the same scene seed per (protocol seed, density, index), the registry's
 policy with the protocol's horizon, privileged observation (``--observation camera``: the benchmark's camera mode,
 rendered frames with label segmentation; ``--segmentation depth`` and ``--sensor-noise`` as the benchmark's),
@@ -212,7 +213,7 @@ def main(argv=None):
         longest = max((d.get("seconds", 0.0) for d in policy.decision_log), default=0.0)
         revealed += bool(result.success)
         print(f"{density:02d}_{index:04d} revealed={result.success} steps={result.steps} cost={result.cost:.1f} "
-              f"visible={result.visible_fraction:.2f} cpu_s={time.process_time() - t0:.1f} "
+              f"visible={result.visible_fraction:.2f} notes={len(result.notes)} cpu_s={time.process_time() - t0:.1f} "
               f"longest_decision_s={longest:.2f}" + earlier_outcome(compare, density, index, result.success, flips),
               flush=True)
         if args.stuck and result.reason == "no feasible action":
