@@ -11,8 +11,9 @@ and the true depth beyond the observed part, for the objects held.
 ``--tail``: also, per density, where the true edges lie in their ranges: over every edge of every seen box or
 cylinder whose range reaches more than 2 cm past the observed part, the share of the range the true footprint
 reaches past the observed part (0: the observed part was the whole object along that edge; 1: the farthest the
-frame allows), and the share of those edges at least each of the shares slax-belief's ``EXTENT_SHARE_TAIL`` lists
-(the tail its ``extent_prior`` and ``extent_risk`` options read; measured with ``--scenes 30 --tail``).
+frame allows), and the share of those edges at least each of the shares
+``slax_drake.policies.extents.EXTENT_SHARE_TAIL`` lists (the tail slax-belief's ``extent_prior`` and ``extent_risk``
+options read; measured with ``--scenes 30 --tail``).
 
 ``--fit``: also, per density, how the hypotheses themselves differ from the objects they show: how many have
 another shape (a box taken for a cylinder or the reverse), the boxes' yaw error (modulo a quarter turn; median,

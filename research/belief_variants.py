@@ -31,7 +31,8 @@ seen objects' unseen extents make. A diagnostic, never a policy. ``--true-extent
 where slax-belief judges where the target may stand (its ``placements``: clear of the seen objects); its actions
 are planned and predicted on the camera's hypotheses, so the two flags split the loss between the belief and the
 actions. ``--true-misfits``: only the hypotheses whose shape is not the object's (a box taken for a cylinder, or
-the reverse) or whose yaw is more than 10 degrees off (modulo a quarter turn) are replaced. ``--fuse-extents`` (camera only): the object tracker keeps what earlier frames showed of an unmoved box
+the reverse) or whose yaw is more than 10 degrees off (modulo a quarter turn) are replaced. ``--fuse-extents``
+(camera only): the object tracker keeps what earlier frames showed of an unmoved box
 (:class:`~slax_drake.perception.tracking.ObjectTracker`'s ``fuse_extents``). ``--silhouette-growth PX`` (camera
 only): the estimator grows the extents on the silhouette sides by this many pixel footprints (its default 0.5).
 
@@ -161,7 +162,8 @@ def main(argv=None):
         print(f"error: --options: {e}", file=sys.stderr)
         return 2
     if args.true_extents_belief and not hasattr(probe, "placements"):
-        print(f"error: --true-extents-belief: {args.policy} keeps no belief of the target's placements", file=sys.stderr)
+        print(f"error: --true-extents-belief: {args.policy} keeps no belief of the target's placements",
+              file=sys.stderr)
         return 2
     if args.known_target and not hasattr(probe, "placements"):
         print(f"error: --known-target: {args.policy} keeps no belief of the target's placements", file=sys.stderr)

@@ -1,7 +1,7 @@
 """How well slax-belief's ``extent_risk`` tells a failing first move from one that goes as planned, in camera mode:
 runs chosen Table I trials with today's slax-belief (the risk computed for every first move but given no weight,
 so the trials take the default's actions), and counts the executed actions by kind and by how many of the
-:data:`~slax_drake.policies.belief.EXTENT_DRAWS` joint draws of the seen objects' extents made them fail, with how
+:data:`~slax_drake.policies.extents.EXTENT_DRAWS` joint draws of the seen objects' extents made them fail, with how
 many of them did not go as planned in the shelf simulator (put back, stopped early, blocked: a simulator note).
 
     python research/extent_risk_calibration.py --trials 10:0-14 [--profile paper] [--seed 0]
@@ -18,7 +18,7 @@ import sys
 
 from slax_drake.config import load_scenario
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
-from slax_drake.policies.belief import EXTENT_DRAWS
+from slax_drake.policies.extents import EXTENT_DRAWS
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.simulator import CameraObserver, run_trial
 

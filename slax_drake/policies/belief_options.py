@@ -113,14 +113,14 @@ class BeliefOptions:
     """Camera mode: the target's placements are drawn jointly with the seen objects' unseen extents. A placement
     whose target footprint lies inside a seen object's extent range (beyond what the frame shows of it: the walls,
     the neighbours, space seen empty and the largest object bound it) weighs the chance that the object does not
-    reach it: 1 - the tail probability (:data:`~slax_drake.policies.belief.EXTENT_SHARE_TAIL`) of the least share
+    reach it: 1 - the tail probability (:data:`~slax_drake.policies.extents.EXTENT_SHARE_TAIL`) of the least share
     of the range at which the grown object meets the target, multiplied over the objects. Without it such a
     placement weighs as much as one in space seen empty around it, and the worlds hidden in the unseen part of an
     object draw plans that can never reveal them."""
     extent_risk: float = 0.0
     """Camera mode: a first move is scored by the chance that the unseen extents of the objects the frame shows make
     it fail: the share of joint draws of every seen object's extent (each object at a share of its extent range
-    drawn from where true edges lie in their ranges, :data:`~slax_drake.policies.belief.EXTENT_DRAW`) in which the
+    drawn from where true edges lie in their ranges, :data:`~slax_drake.policies.extents.EXTENT_DRAW`) in which the
     move, executed by the shelf simulator's first-order executor, does not go as planned (put back, stopped early,
     blocked), times this factor (0: off; 1: the draws' share as it is). The reveals after it count for that much
     less, as after a suction's ``hidden_risk``."""

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from slax_drake.perception.estimator import ExtentRange
-from slax_drake.policies.belief import EXTENT_DRAWS, extent_free_weights, extent_share_tail
+from slax_drake.policies.extents import EXTENT_DRAWS, extent_free_weights, extent_share_tail
 from slax_drake.policies.registry import make_policy
 from slax_drake.scene import Camera
 from slax_drake.scene.model import Scene, Shelf, Target, planar_pose
