@@ -12,7 +12,7 @@ registry row each.
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
         [--known-target] [--see-hidden] [--true-extents | --true-extents-belief | --true-misfits] [--fuse-extents]
-        [--silhouette-growth PX] [--no-shuttle-rule] [--plan-clearance M]
+        [--silhouette-growth PX] [--second-view LIFT:PITCH] [--no-shuttle-rule] [--plan-clearance M]
         [--placement-margin M]
 
 ``--stuck``: for each trial that ends with no feasible action, also the action model's feasible candidates on the
@@ -35,6 +35,9 @@ the reverse) or whose yaw is more than 10 degrees off (modulo a quarter turn) ar
 (camera only): the object tracker keeps what earlier frames showed of an unmoved box
 (:class:`~slax_drake.perception.tracking.ObjectTracker`'s ``fuse_extents``). ``--silhouette-growth PX`` (camera
 only): the estimator grows the extents on the silhouette sides by this many pixel footprints (its default 0.5).
+``--second-view LIFT:PITCH`` (camera only): each box hypothesis grown by what a second frame shows of its object,
+the camera raised LIFT m and pitched down PITCH deg (:class:`SecondView`; the frames associated by the render's
+labels): what a second look would be worth.
 
 ``--plan-clearance M`` and ``--placement-margin M`` (m; camera mode is where they matter): the policy plans with a
 margin for the estimate's error while the shelf simulator executes with the scenario's clearance. The first
@@ -110,6 +113,8 @@ def main(argv=None):
                     help="camera only: --true-extents for the hypotheses of the wrong shape or 10+ deg off in yaw")
     ap.add_argument("--silhouette-growth", type=float, default=None, metavar="PX",
                     help="camera only: the estimator's growth on the silhouette sides (pixel footprints)")
+    ap.add_argument("--second-view", default=None, metavar="LIFT:PITCH",
+                    help="camera only: hypotheses grown by a second frame, the camera LIFT m higher, PITCH deg down")
     ap.add_argument("--fuse-extents", action="store_true",
                     help="camera only: the tracker keeps what earlier frames showed of an unmoved box")
     ap.add_argument("--no-shuttle-rule", action="store_true",
@@ -128,11 +133,21 @@ def main(argv=None):
     if args.see_hidden and args.observation != "privileged":
         print("error: --see-hidden needs the privileged observation", file=sys.stderr)
         return 2
+    second_view = None
+    if args.second_view is not None:
+        try:
+            second_view = tuple(float(v) for v in args.second_view.split(":"))
+            if len(second_view) != 2 or not 0 <= second_view[1] < 90:
+                raise ValueError
+        except ValueError:
+            print(f"error: --second-view must be LIFT:PITCH, metres and degrees in [0, 90) (got {args.second_view})",
+                  file=sys.stderr)
+            return 2
     if (args.true_extents or args.true_extents_belief or args.true_misfits or args.fuse_extents
-            or args.silhouette_growth is not None) \
+            or args.silhouette_growth is not None or second_view is not None) \
             and args.observation != "camera":
-        print("error: --true-extents, --true-extents-belief, --true-misfits, --fuse-extents and --silhouette-growth "
-              "need --observation camera",
+        print("error: --true-extents, --true-extents-belief, --true-misfits, --fuse-extents, --silhouette-growth and "
+              "--second-view need --observation camera",
               file=sys.stderr)
         return 2
     try:
@@ -207,6 +222,8 @@ def main(argv=None):
             observer = TrueExtents(observer)
         if args.true_misfits:
             observer = TrueExtents(observer, misfits_only=True)
+        if second_view is not None:
+            observer = SecondView(observer, *second_view)
         if args.true_extents_belief:
             observer = TrueExtents(observer)
             observer.belief_only(policy)
@@ -288,6 +305,12 @@ class TrueExtents:
             raise AttributeError(name)
         return getattr(self.camera, name)
 
+    def replacement(self, hypothesis, truth):
+        """What stands for ``hypothesis`` (of the true object ``truth``) in the observation; None: itself."""
+        if self.misfits_only and not misfit(hypothesis, truth):
+            return None
+        return truth
+
     def observe(self, scene):
         from slax_drake.perception.belief import ObservedBelief
 
@@ -297,17 +320,56 @@ class TrueExtents:
         hypotheses, shown = [], set()
         for h in belief.hypotheses:
             truth = true.get(names.get(h.object.name))
-            if truth is None or (self.misfits_only and not misfit(h.object, truth)):
+            told = None if truth is None else self.replacement(h.object, truth)
+            if told is None:
                 hypotheses.append(h)
             elif truth.name not in shown:
                 shown.add(truth.name)
-                hypotheses.append(dataclasses.replace(h, object=dataclasses.replace(truth, name=h.object.name)))
+                hypotheses.append(dataclasses.replace(h, object=dataclasses.replace(told, name=h.object.name)))
         told = ObservedBelief(belief.observation, belief.shelf, belief.source, background=belief.background,
                               hypotheses=hypotheses, p1d=belief.p1d, remembered=belief.remembered)
         known = told.known
         self.told = dataclasses.replace(obs, known=known, scene_template=obs.scene_template.with_objects(known),
                                         p1d=told.p1d, belief=told)
         return (obs if self.only_belief else self.told), names
+
+
+class SecondView(TrueExtents):
+    """``--second-view LIFT:PITCH``: a camera observer whose hypotheses are grown by what a second frame shows of the
+    same objects: the camera raised by LIFT metres and pitched down PITCH degrees (a Fetch raises its torso and
+    tilts its head), ray-cast at the working resolution, label segmentation; each box hypothesis of the first frame
+    becomes the least rectangle in its own axes holding both frames' estimates of its object
+    (:func:`~slax_drake.perception.tracking.fused_box`: where the yaws agree and the footprints overlap), the rest
+    stay as the first frame has them. Objects only the second frame shows are not added. The frames are associated by
+    the render's labels (the idealised segmentation of camera mode): a diagnostic of what a second look is worth."""
+
+    def __init__(self, camera, lift: float, pitch_deg: float):
+        super().__init__(camera)
+        self.lift, self.pitch_deg = float(lift), float(pitch_deg)
+        self._second: dict = {}  # true object name -> its estimate from the second frame
+
+    def replacement(self, hypothesis, truth):
+        from slax_drake.perception.tracking import fused_box
+
+        other = self._second.get(truth.name)
+        return None if other is None else fused_box(other, hypothesis)
+
+    def observe(self, scene):
+        from slax_drake.perception.estimator import estimate_objects
+        from slax_drake.perception.observation import Observation, occluder_segmentation
+        from slax_drake.scene.camera import camera_pose
+        from slax_drake.scene.raycast import SceneRaycaster
+
+        first = self.camera.camera
+        position = first.position + np.array([0.0, 0.0, self.lift])
+        second = dataclasses.replace(first, X_SC=camera_pose(position, self.pitch_deg))
+        depth, labels = SceneRaycaster(scene, include_target=True).render(second)
+        n = len(scene.objects)
+        target = labels == n + 1
+        segments = occluder_segmentation(np.where((labels >= 1) & (labels <= n), labels, 0), target)
+        frame = Observation(depth, segments, target, second, min_valid_fraction=0.0)
+        self._second = {scene.objects[h.segment_id - 1].name: h.object for h in estimate_objects(frame, scene.shelf)}
+        return super().observe(scene)
 
 
 def misfit(hypothesis, truth) -> bool:
