@@ -2,6 +2,7 @@
 (the shelf simulator's camera mode: label segmentation), per density, clean or with the L515 noise model.
 
     python benchmarks/extent_ranges.py [--scenes 10] [--width 160] [--noise] [--tail] [--fit]
+        [--second-view LIFT:PITCH]
 
 Scenes: ``sim_configs/sim_shelf.yaml``, 4, 6, 8 and 10 objects, seeds 1000..1000+N-1. A seen object counts as
 held when at most 1 cm^2 of its true footprint lies outside the range's farthest rectangle grown by 5 mm. Also
@@ -19,10 +20,13 @@ options read; measured with ``--scenes 30 --tail``).
 another shape (a box taken for a cylinder or the reverse), the boxes' yaw error (modulo a quarter turn; median,
 90th percentile, share over 10 degrees), how far a hypothesis reaches outside its object (the farthest corner,
 mm; median and 90th percentile, boxes and cylinders apart) and how much of the object's footprint it leaves out
-(cm^2; median, 90th percentile).
+(cm^2; median, 90th percentile). ``--second-view LIFT:PITCH`` with ``--fit``: the same for the hypotheses grown by
+what a second frame shows of their objects, the camera raised LIFT m and pitched down PITCH deg (the frames
+associated by their labels; :func:`~slax_drake.perception.tracking.fused_box`), and how many were grown.
 """
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +35,9 @@ from slax_drake.config import load_scenario
 from slax_drake.perception.estimator import estimate_objects
 from slax_drake.perception.observation import Observation, occluder_segmentation
 from slax_drake.perception.sensor_noise import l515_depth_noise
+from slax_drake.perception.tracking import fused_box
 from slax_drake.scene import sample_scene
+from slax_drake.scene.camera import camera_pose
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.raycast import SceneRaycaster
 
@@ -45,7 +51,16 @@ def main(argv=None) -> int:
     parser.add_argument("--noise", action="store_true", help="the L515 noise model on the depth")
     parser.add_argument("--tail", action="store_true", help="also where the true edges lie in their ranges")
     parser.add_argument("--fit", action="store_true", help="also how the hypotheses differ from their objects")
+    parser.add_argument("--second-view", default=None, metavar="LIFT:PITCH",
+                        help="with --fit: also the hypotheses grown by a second frame from a raised, tilted camera")
     args = parser.parse_args(argv)
+    second_view = None
+    if args.second_view is not None:
+        try:
+            lift, pitch = (float(v) for v in args.second_view.split(":"))
+        except ValueError:
+            parser.error(f"--second-view must be LIFT:PITCH in metres and degrees (got {args.second_view})")
+        second_view = (lift, pitch)
     if args.scenes < 1 or args.width < 16:
         parser.error("--scenes must be at least 1 and --width at least 16")
     scenario = load_scenario(REPO / "sim_configs" / "sim_shelf.yaml")
@@ -55,6 +70,7 @@ def main(argv=None) -> int:
         seen = held = 0
         reach, true_depth, shares = [], [], []
         fits = {"shape": 0, "yaw": [], "out box": [], "out cylinder": [], "missed": []}
+        grown = {"shape": 0, "yaw": [], "out box": [], "out cylinder": [], "missed": [], "count": 0}
         for seed in range(1000, 1000 + args.scenes):
             scene = sample_scene(scenario, n, seed)
             camera = scene.camera.with_resolution(args.width, int(round(scene.camera.height * args.width
@@ -65,12 +81,25 @@ def main(argv=None) -> int:
             target = labels == n + 1
             segments = occluder_segmentation(np.where((labels >= 1) & (labels <= n), labels, 0), target)
             frame = Observation(depth, segments, target, camera, min_valid_fraction=0.0)
+            second = {}
+            if second_view is not None:
+                other = dataclasses.replace(camera, X_SC=camera_pose(camera.position + np.array([0.0, 0.0, second_view[0]]),
+                                                                     second_view[1]))
+                depth2, labels2 = SceneRaycaster(scene, include_target=True).render(other)
+                target2 = labels2 == n + 1
+                segments2 = occluder_segmentation(np.where((labels2 >= 1) & (labels2 <= n), labels2, 0), target2)
+                second = {h2.segment_id: h2.object for h2 in estimate_objects(
+                    Observation(depth2, segments2, target2, other, min_valid_fraction=0.0), scene.shelf)}
             for h in estimate_objects(frame, scene.shelf):
                 truth = Footprint.of(scene.objects[h.segment_id - 1])
                 extent = h.uncertainty.extent
                 seen += 1
                 shares += edge_shares(truth, extent)
                 fit_errors(scene.objects[h.segment_id - 1], h.object, fits)
+                if second_view is not None:
+                    fused = fused_box(second[h.segment_id], h.object) if h.segment_id in second else None
+                    grown["count"] += fused is not None
+                    fit_errors(scene.objects[h.segment_id - 1], fused if fused is not None else h.object, grown)
                 if truth.polygon().difference(extent.most().polygon().buffer(0.005)).area > 1e-4:
                     continue
                 held += 1
@@ -102,7 +131,12 @@ def main(argv=None) -> int:
 
             print(f"{'':>7} another shape {fits['shape']} of {seen}; box yaw error (deg) {q(yaw, 1)}, over 10 deg "
                   f"{(yaw > 10).mean():.2f}; outside the object (mm) boxes {q(fits['out box'], 1e3)}, cylinders "
-                  f"{q(fits['out cylinder'], 1e3)}; object left out (cm^2) {q(fits['missed'], 1e4)}")
+                  f"{q(fits['out cylinder'], 1e3)}; object left out (cm^2) {q(fits['missed'], 1e4)}, "
+                  f"mean {np.mean(fits['missed']) * 1e4:.1f}")
+            if second_view is not None:
+                print(f"{'':>7} with the second view: {grown['count']} grown; outside the object (mm) boxes "
+                      f"{q(grown['out box'], 1e3)}; object left out (cm^2) {q(grown['missed'], 1e4)}, "
+                      f"mean {np.mean(grown['missed']) * 1e4:.1f}")
     return 0
 
 
