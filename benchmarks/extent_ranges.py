@@ -83,8 +83,8 @@ def main(argv=None) -> int:
             frame = Observation(depth, segments, target, camera, min_valid_fraction=0.0)
             second = {}
             if second_view is not None:
-                other = dataclasses.replace(camera, X_SC=camera_pose(camera.position + np.array([0.0, 0.0, second_view[0]]),
-                                                                     second_view[1]))
+                raised = camera.position + np.array([0.0, 0.0, second_view[0]])
+                other = dataclasses.replace(camera, X_SC=camera_pose(raised, second_view[1]))
                 depth2, labels2 = SceneRaycaster(scene, include_target=True).render(other)
                 target2 = labels2 == n + 1
                 segments2 = occluder_segmentation(np.where((labels2 >= 1) & (labels2 <= n), labels2, 0), target2)
