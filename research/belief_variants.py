@@ -341,7 +341,8 @@ class SecondView(TrueExtents):
     becomes the least rectangle in its own axes holding both frames' estimates of its object
     (:func:`~slax_drake.perception.tracking.fused_box`: where the yaws agree and the footprints overlap), the rest
     stay as the first frame has them. Objects only the second frame shows are not added. The frames are associated by
-    the render's labels (the idealised segmentation of camera mode): a diagnostic of what a second look is worth."""
+    the render's labels (the idealised segmentation of camera mode): a diagnostic of what a second look is worth.
+    Both frames are estimated with the wrapped observer's tuning (``estimator``)."""
 
     def __init__(self, camera, lift: float, pitch_deg: float):
         super().__init__(camera)
@@ -368,7 +369,8 @@ class SecondView(TrueExtents):
         target = labels == n + 1
         segments = occluder_segmentation(np.where((labels >= 1) & (labels <= n), labels, 0), target)
         frame = Observation(depth, segments, target, second, min_valid_fraction=0.0)
-        self._second = {scene.objects[h.segment_id - 1].name: h.object for h in estimate_objects(frame, scene.shelf)}
+        self._second = {scene.objects[h.segment_id - 1].name: h.object
+                        for h in estimate_objects(frame, scene.shelf, self.camera.estimator)}
         return super().observe(scene)
 
 
