@@ -11,7 +11,8 @@ registry row each.
     python research/belief_variants.py --options '{"room_weight": 1.0}' --trials 10:0-9 [--profile paper]
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
-        [--known-target] [--see-hidden] [--true-extents | --true-extents-belief | --true-misfits] [--fuse-extents]
+        [--known-target] [--see-hidden] [--true-extents | --true-extents-belief | --true-misfits | --true-grown]
+        [--fuse-extents]
         [--silhouette-growth PX] [--second-view LIFT:PITCH] [--no-shuttle-rule] [--plan-clearance M]
         [--placement-margin M]
 
@@ -31,7 +32,9 @@ seen objects' unseen extents make. A diagnostic, never a policy. ``--true-extent
 where slax-belief judges where the target may stand (its ``placements``: clear of the seen objects); its actions
 are planned and predicted on the camera's hypotheses, so the two flags split the loss between the belief and the
 actions. ``--true-misfits``: only the hypotheses whose shape is not the object's (a box taken for a cylinder, or
-the reverse) or whose yaw is more than 10 degrees off (modulo a quarter turn) are replaced. ``--fuse-extents``
+the reverse) or whose yaw is more than 10 degrees off (modulo a quarter turn) are replaced. ``--true-grown``: each
+box hypothesis grown, in its own axes, to hold its true object (what it leaves out added, its overhang and yaw
+kept; :func:`~slax_drake.perception.tracking.fused_box`), the rest as the camera has them. ``--fuse-extents``
 (camera only): the object tracker keeps what earlier frames showed of an unmoved box
 (:class:`~slax_drake.perception.tracking.ObjectTracker`'s ``fuse_extents``). ``--silhouette-growth PX`` (camera
 only): the estimator grows the extents on the silhouette sides by this many pixel footprints (its default 0.5).
@@ -113,6 +116,8 @@ def main(argv=None):
                     help="camera only: --true-extents for the hypotheses of the wrong shape or 10+ deg off in yaw")
     ap.add_argument("--silhouette-growth", type=float, default=None, metavar="PX",
                     help="camera only: the estimator's growth on the silhouette sides (pixel footprints)")
+    ap.add_argument("--true-grown", action="store_true",
+                    help="camera only: each box hypothesis grown to hold its true object (a diagnostic)")
     ap.add_argument("--second-view", default=None, metavar="LIFT:PITCH",
                     help="camera only: hypotheses grown by a second frame, the camera LIFT m higher, PITCH deg down")
     ap.add_argument("--fuse-extents", action="store_true",
@@ -143,11 +148,11 @@ def main(argv=None):
             print(f"error: --second-view must be LIFT:PITCH, metres and degrees in [0, 90) (got {args.second_view})",
                   file=sys.stderr)
             return 2
-    if (args.true_extents or args.true_extents_belief or args.true_misfits or args.fuse_extents
+    if (args.true_extents or args.true_extents_belief or args.true_misfits or args.true_grown or args.fuse_extents
             or args.silhouette_growth is not None or second_view is not None) \
             and args.observation != "camera":
-        print("error: --true-extents, --true-extents-belief, --true-misfits, --fuse-extents, --silhouette-growth and "
-              "--second-view need --observation camera",
+        print("error: --true-extents, --true-extents-belief, --true-misfits, --true-grown, --fuse-extents, "
+              "--silhouette-growth and --second-view need --observation camera",
               file=sys.stderr)
         return 2
     try:
@@ -222,6 +227,8 @@ def main(argv=None):
             observer = TrueExtents(observer)
         if args.true_misfits:
             observer = TrueExtents(observer, misfits_only=True)
+        if args.true_grown:
+            observer = TrueExtents(observer, grown=True)
         if second_view is not None:
             observer = SecondView(observer, *second_view)
         if args.true_extents_belief:
@@ -279,9 +286,10 @@ class TrueExtents:
     segments and target mask, P_t, the tracker's hidden objects) is the camera's, and the trial executes the
     policy's actions on the objects they name through the observer's names, as in camera mode."""
 
-    def __init__(self, camera, misfits_only: bool = False):
+    def __init__(self, camera, misfits_only: bool = False, grown: bool = False):
         self.camera = camera
         self.misfits_only = misfits_only  # --true-misfits: replace only hypotheses of the wrong shape or yaw
+        self.grown = grown  # --true-grown: grow each box hypothesis to hold its object instead
         self.told = None  # the last observation with the true objects (belief_only)
         self.only_belief = False
 
@@ -309,6 +317,10 @@ class TrueExtents:
         """What stands for ``hypothesis`` (of the true object ``truth``) in the observation; None: itself."""
         if self.misfits_only and not misfit(hypothesis, truth):
             return None
+        if self.grown:
+            from slax_drake.perception.tracking import fused_box
+
+            return fused_box(truth, hypothesis)
         return truth
 
     def observe(self, scene):
