@@ -12,7 +12,7 @@ registry row each.
         [--policy slax-belief] [--seed 0] [--log] [--compare RESULTS_FOLDER [--compare-policy slax-belief]]
         [--observation camera [--segmentation depth] [--sensor-noise]] [--tool-rule FIELD=VALUE ...] [--stuck]
         [--known-target] [--see-hidden] [--true-extents | --true-extents-belief | --true-misfits | --true-grown]
-        [--fuse-extents]
+        [--true-inflate M] [--fuse-extents]
         [--silhouette-growth PX] [--second-view LIFT:PITCH] [--no-shuttle-rule] [--plan-clearance M]
         [--placement-margin M]
 
@@ -34,7 +34,9 @@ are planned and predicted on the camera's hypotheses, so the two flags split the
 actions. ``--true-misfits``: only the hypotheses whose shape is not the object's (a box taken for a cylinder, or
 the reverse) or whose yaw is more than 10 degrees off (modulo a quarter turn) are replaced. ``--true-grown``: each
 box hypothesis grown, in its own axes, to hold its true object (what it leaves out added, its overhang and yaw
-kept; :func:`~slax_drake.perception.tracking.fused_box`), the rest as the camera has them. ``--fuse-extents``
+kept; :func:`~slax_drake.perception.tracking.fused_box`), the rest as the camera has them. ``--true-inflate M``
+with ``--true-extents``: the true objects M metres larger on every side (an outline error of M, nothing else).
+``--fuse-extents``
 (camera only): the object tracker keeps what earlier frames showed of an unmoved box
 (:class:`~slax_drake.perception.tracking.ObjectTracker`'s ``fuse_extents``). ``--silhouette-growth PX`` (camera
 only): the estimator grows the extents on the silhouette sides by this many pixel footprints (its default 0.5).
@@ -116,6 +118,8 @@ def main(argv=None):
                     help="camera only: --true-extents for the hypotheses of the wrong shape or 10+ deg off in yaw")
     ap.add_argument("--silhouette-growth", type=float, default=None, metavar="PX",
                     help="camera only: the estimator's growth on the silhouette sides (pixel footprints)")
+    ap.add_argument("--true-inflate", type=float, default=0.0, metavar="M",
+                    help="with --true-extents: the true objects this much larger on every side (m)")
     ap.add_argument("--true-grown", action="store_true",
                     help="camera only: each box hypothesis grown to hold its true object (a diagnostic)")
     ap.add_argument("--second-view", default=None, metavar="LIFT:PITCH",
@@ -135,6 +139,9 @@ def main(argv=None):
         if value is not None and not 0 <= value < 0.1:
             print(f"error: {flag} must be in [0, 0.1) m (got {value})", file=sys.stderr)
             return 2
+    if args.true_inflate and (not args.true_extents or not 0 < args.true_inflate < 0.05):
+        print("error: --true-inflate needs --true-extents and a margin in (0, 0.05) m", file=sys.stderr)
+        return 2
     if args.see_hidden and args.observation != "privileged":
         print("error: --see-hidden needs the privileged observation", file=sys.stderr)
         return 2
@@ -224,7 +231,7 @@ def main(argv=None):
         if args.see_hidden:
             observer = SeeingHidden(policy)
         if args.true_extents:
-            observer = TrueExtents(observer)
+            observer = TrueExtents(observer, inflate=args.true_inflate)
         if args.true_misfits:
             observer = TrueExtents(observer, misfits_only=True)
         if args.true_grown:
@@ -286,8 +293,9 @@ class TrueExtents:
     segments and target mask, P_t, the tracker's hidden objects) is the camera's, and the trial executes the
     policy's actions on the objects they name through the observer's names, as in camera mode."""
 
-    def __init__(self, camera, misfits_only: bool = False, grown: bool = False):
+    def __init__(self, camera, misfits_only: bool = False, grown: bool = False, inflate: float = 0.0):
         self.camera = camera
+        self.inflate = float(inflate)  # --true-inflate: the true objects this much (m) larger on every side
         self.misfits_only = misfits_only  # --true-misfits: replace only hypotheses of the wrong shape or yaw
         self.grown = grown  # --true-grown: grow each box hypothesis to hold its object instead
         self.told = None  # the last observation with the true objects (belief_only)
@@ -321,6 +329,9 @@ class TrueExtents:
             from slax_drake.perception.tracking import fused_box
 
             return fused_box(truth, hypothesis)
+        if self.inflate:
+            size = (truth.size[0] + 2 * self.inflate, truth.size[1] + 2 * self.inflate, truth.size[2])
+            return dataclasses.replace(truth, size=size)
         return truth
 
     def observe(self, scene):
