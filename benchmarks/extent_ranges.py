@@ -33,7 +33,7 @@ import numpy as np
 
 from slax_drake.config import load_scenario
 from slax_drake.perception.estimator import estimate_objects
-from slax_drake.perception.observation import Observation, occluder_segmentation
+from slax_drake.perception.observation import labelled_frame
 from slax_drake.perception.sensor_noise import l515_depth_noise
 from slax_drake.perception.tracking import fused_box
 from slax_drake.scene import sample_scene
@@ -78,18 +78,13 @@ def main(argv=None) -> int:
             depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
             if args.noise:
                 depth = l515_depth_noise(depth, camera, seed, 0)
-            target = labels == n + 1
-            segments = occluder_segmentation(np.where((labels >= 1) & (labels <= n), labels, 0), target)
-            frame = Observation(depth, segments, target, camera, min_valid_fraction=0.0)
+            frame = labelled_frame(depth, labels, n, camera)
             second = {}
             if second_view is not None:
                 raised = camera.position + np.array([0.0, 0.0, second_view[0]])
                 other = dataclasses.replace(camera, X_SC=camera_pose(raised, second_view[1]))
-                depth2, labels2 = SceneRaycaster(scene, include_target=True).render(other)
-                target2 = labels2 == n + 1
-                segments2 = occluder_segmentation(np.where((labels2 >= 1) & (labels2 <= n), labels2, 0), target2)
-                second = {h2.segment_id: h2.object for h2 in estimate_objects(
-                    Observation(depth2, segments2, target2, other, min_valid_fraction=0.0), scene.shelf)}
+                other_frame = labelled_frame(*SceneRaycaster(scene, include_target=True).render(other), n, other)
+                second = {h2.segment_id: h2.object for h2 in estimate_objects(other_frame, scene.shelf)}
             for h in estimate_objects(frame, scene.shelf):
                 truth = Footprint.of(scene.objects[h.segment_id - 1])
                 extent = h.uncertainty.extent

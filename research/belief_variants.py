@@ -380,7 +380,7 @@ class SecondView(TrueExtents):
 
     def observe(self, scene):
         from slax_drake.perception.estimator import estimate_objects
-        from slax_drake.perception.observation import Observation, occluder_segmentation
+        from slax_drake.perception.observation import labelled_frame
         from slax_drake.scene.camera import camera_pose
         from slax_drake.scene.raycast import SceneRaycaster
 
@@ -388,10 +388,7 @@ class SecondView(TrueExtents):
         position = first.position + np.array([0.0, 0.0, self.lift])
         second = dataclasses.replace(first, X_SC=camera_pose(position, self.pitch_deg))
         depth, labels = SceneRaycaster(scene, include_target=True).render(second)
-        n = len(scene.objects)
-        target = labels == n + 1
-        segments = occluder_segmentation(np.where((labels >= 1) & (labels <= n), labels, 0), target)
-        frame = Observation(depth, segments, target, second, min_valid_fraction=0.0)
+        frame = labelled_frame(depth, labels, len(scene.objects), second)
         self._second = {scene.objects[h.segment_id - 1].name: h.object
                         for h in estimate_objects(frame, scene.shelf, self.camera.estimator)}
         return super().observe(scene)

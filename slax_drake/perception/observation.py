@@ -103,6 +103,15 @@ def occluder_segmentation(labels: np.ndarray, target_mask: np.ndarray, min_pixel
     return out
 
 
+def labelled_frame(depth: np.ndarray, labels: np.ndarray, count: int, camera: Camera) -> "Observation":
+    """The frame of a ray-cast whose label image (0 shelf, i + 1 object i of ``count``, ``count`` + 1 the target)
+    stands for the segmentation, as the shelf simulator's camera mode makes it with label segmentation: the
+    occluders segmented by their labels, the target's pixels its mask."""
+    target = np.asarray(labels) == count + 1
+    segments = occluder_segmentation(np.where((labels >= 1) & (labels <= count), labels, 0), target)
+    return Observation(depth, segments, target, camera, min_valid_fraction=0.0)
+
+
 def target_mask_from_labels(label_image: np.ndarray, target_label: int) -> np.ndarray:
     """The simulation's stand-in for colour detection: pixels whose render label is the target's."""
     label_image = np.asarray(label_image)

@@ -237,8 +237,8 @@ class BeliefSearch(Hindsight):
         self._extent_weights: dict = {}  # lattice key -> the chance no seen object's unseen extent reaches it
         self.extent_risk = float(o.extent_risk)  # camera mode: a first move's risk from the unseen extents
         self._extent_belief = None  # camera mode with extent_risk: this decision's ObservedBelief
-        self._extent_cache: dict = {}  # action -> its extent risk, this decision (first moves only)
-        self._extent_draws = None  # this decision's joint draws of the seen objects' extents (extent_draws)
+        self._extent_cache: dict = {}  # action -> the extent draws it fails in, this decision (first moves only)
+        self._extent_draws = None  # (seen names, this decision's joint draws of their extents): extent_draws
         self._last = None  # (the suction taken last, the pose it predicts for its object)
         self.evidence = o.evidence
         self.block_weight = float(o.block_weight)
@@ -468,44 +468,46 @@ class BeliefSearch(Hindsight):
     def first_move_extent_risk(self, objects, a) -> float:
         """``extent_risk``: the chance that first move ``a``, planned on ``objects`` (this frame's hypotheses and the
         remembered ones), does not go as planned because the objects the frame shows reach farther than their
-        hypotheses. Each of :data:`EXTENT_DRAWS` joint draws (:meth:`extent_draws`) gives every seen object a share
-        of its extent range; ``a`` is executed (:func:`~slax_drake.shelf.simulator.execute`) on the hypotheses
-        estimated again at those shares (a suction's placement depth follows its object's centre, as the shelf
-        simulator executes it on the true object), and the share of draws in which it does not go as planned (put
-        back, stopped early, blocked), times ``extent_risk``, is the risk. Cached per action for this decision."""
-        from slax_drake.shelf.simulator import execute, on_true_object
+        hypotheses: ``a`` is executed (:func:`~slax_drake.shelf.simulator.execute`) in each of this decision's
+        joint draws of the seen objects' extents (:meth:`extent_draws`; a suction's placement depth follows its
+        object's centre, as the shelf simulator executes it on the true object), and the share of draws in which it
+        does not go as planned (put back, stopped early, blocked), times ``extent_risk``, is the risk. The count of
+        failing draws is cached per action for this decision (``decision_log`` records the taken move's)."""
+        failed = self._extent_cache.get(a)
+        if failed is None:
+            from slax_drake.shelf.simulator import execute, on_true_object
 
-        hit = self._extent_cache.get(a)
-        if hit is not None:
-            return hit
-        belief = self._extent_belief
-        segment_of = {h.object.name: h.segment_id for h in belief.hypotheses}
-        failed = 0
-        if a.name in segment_of:
-            for shares in self.extent_draws(belief):
-                grown = []
-                for o in objects:
-                    share = shares.get(segment_of.get(o.name), 0.0)
-                    h = self._estimate_at(belief, share).get(segment_of[o.name]) if share > 0 else None
-                    grown.append(dataclasses.replace(h.object, name=o.name) if h is not None else o)
-                scene = self._template.with_objects(tuple(grown))
-                _, note = execute(scene, on_true_object(a, objects, scene, a.name), self.action_model)
-                failed += bool(note)
-        risk = min(1.0, self.extent_risk * failed / EXTENT_DRAWS)
-        self._extent_cache[a] = risk
-        return risk
+            failed = 0
+            seen, draws = self.extent_draws()
+            if a.name in seen:
+                for grown in draws:
+                    scene = self._template.with_objects(tuple(grown.get(o.name, o) for o in objects))
+                    _, note = execute(scene, on_true_object(a, objects, scene, a.name), self.action_model)
+                    failed += bool(note)
+            self._extent_cache[a] = failed
+        return min(1.0, self.extent_risk * failed / EXTENT_DRAWS)
 
-    def extent_draws(self, belief) -> list[dict]:
-        """``extent_risk``: this decision's :data:`EXTENT_DRAWS` joint draws of the frame's seen objects' extents,
-        each {segment id: share of its extent range} (:data:`EXTENT_DRAW`'s probabilities, independent per object),
-        by a generator seeded with the scene seed and the step; drawn once per decision."""
+    def extent_draws(self) -> tuple[frozenset, list[dict]]:
+        """``extent_risk``: (the names of this frame's seen objects, this decision's :data:`EXTENT_DRAWS` joint draws
+        of their extents). Each draw gives every seen object a share of its extent range (:data:`EXTENT_DRAW`'s
+        probabilities, independent per object; a generator seeded with the scene seed and the step) and holds, by
+        name, the objects it grows: the hypothesis estimated again at that share. Drawn once per decision."""
         if self._extent_draws is None:
+            belief = self._extent_belief
             seed = self._template.seed if self._template.seed is not None else 0
             rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, self._step, 7])
             levels, probs = zip(*EXTENT_DRAW)
-            ids = [h.segment_id for h in belief.hypotheses]
-            picks = rng.choice(len(levels), size=(EXTENT_DRAWS, len(ids)), p=np.array(probs) / sum(probs))
-            self._extent_draws = [{sid: levels[k] for sid, k in zip(ids, row)} for row in picks]
+            hypotheses = belief.hypotheses
+            picks = rng.choice(len(levels), size=(EXTENT_DRAWS, len(hypotheses)), p=np.array(probs) / sum(probs))
+            draws = []
+            for row in picks:
+                grown = {}
+                for h, k in zip(hypotheses, row):
+                    estimate = self._estimate_at(belief, levels[k]).get(h.segment_id) if levels[k] > 0 else None
+                    if estimate is not None:
+                        grown[h.object.name] = dataclasses.replace(estimate.object, name=h.object.name)
+                draws.append(grown)
+            self._extent_draws = (frozenset(h.object.name for h in hypotheses), draws)
         return self._extent_draws
 
     def with_remembered(self, obs):
@@ -1183,8 +1185,10 @@ class BeliefSearch(Hindsight):
         log["plan"] = [a.describe() for a in best.plan]
         log["seconds"] = round(time.process_time() - t0, 3)
         first = best.plan[0]
-        if self._extent_belief is not None:
-            log["extent_risk"] = round(self._extent_cache.get(first, 0.0), 4)  # the taken move's (extent_risk)
+        if self._extent_belief is not None:  # the taken move's (extent_risk)
+            failed = self._extent_cache.get(first, 0)
+            log["extent_draws_failed"] = failed
+            log["extent_risk"] = round(min(1.0, self.extent_risk * failed / EXTENT_DRAWS), 4)
         if isinstance(first, Suction):
             self._last = (self.placement_box(known, first), first.name)
         self._executed = (first, known)

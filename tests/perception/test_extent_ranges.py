@@ -2,12 +2,11 @@
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from slax_drake.config import load_scenario
 from slax_drake.perception.estimator import EstimatorConfig, estimate_objects
-from slax_drake.perception.observation import Observation, occluder_segmentation
+from slax_drake.perception.observation import labelled_frame
 from slax_drake.scene import sample_scene
 from slax_drake.scene.footprint import Footprint
 from slax_drake.scene.raycast import SceneRaycaster
@@ -36,9 +35,7 @@ def _frames(width: int):
             scene = sample_scene(scenario, n, seed)
             camera = scene.camera.with_resolution(width, int(round(scene.camera.height * width / scene.camera.width)))
             depth, labels = SceneRaycaster(scene, include_target=True).render(camera)
-            target = labels == n + 1
-            segments = occluder_segmentation(np.where((labels >= 1) & (labels <= n), labels, 0), target)
-            yield scene, Observation(depth, segments, target, camera, min_valid_fraction=0.0)
+            yield scene, labelled_frame(depth, labels, n, camera)
 
 
 @pytest.mark.parametrize("width,share", [pytest.param(640, 0.99, marks=pytest.mark.slow), (160, 0.97)])  # full size: slow step
