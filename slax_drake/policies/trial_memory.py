@@ -32,6 +32,8 @@ import dataclasses
 import enum
 import math
 
+import numpy as np
+
 from slax_drake.scene.model import box_yaw_difference
 from slax_drake.shelf.actions import apply_action
 
@@ -159,8 +161,13 @@ class TrialMemory:
 
     # ---- arrangements -------------------------------------------------------------------------------------------
     def observe(self, objects) -> None:
+        """Adds ``objects`` to the observed arrangements, each one as observed: an arrangement within the tolerances
+        of the last one is kept too (only an identical one is not), so that tolerances do not chain. Were it
+        dropped as "the same", an object moved by just under ``position_tolerance`` (a 1 cm push) would be
+        remembered at its earlier pose only, and a later move back to where it stands now, 1.005 cm from that pose,
+        would pass the no-return correction."""
         objects = tuple(objects)
-        if not any(self.same_arrangement(objects, seen) for seen in self.observed[-1:]):
+        if not self.observed or not _identical(objects, self.observed[-1]):
             self.observed.append(objects)
 
     def seen_before(self, objects) -> bool:
@@ -293,6 +300,12 @@ class TrialMemory:
             return p, Failed(Miss.UNCHANGED)
         moved, off = math.dist(xy, p.before_xy), math.dist(xy, p.predicted_xy)
         return p, Failed(Miss.SHORT if moved < predicted else Miss.ELSEWHERE, moved, predicted, off)
+
+
+def _identical(a: tuple, b: tuple) -> bool:
+    """Whether two arrangements hold the same objects (names and shapes) at exactly the same poses."""
+    return len(a) == len(b) and all(p.name == q.name and p.shape == q.shape and np.array_equal(p.X_SO, q.X_SO)
+                                    for p, q in zip(a, b))
 
 
 def last_move_by_axis(last: tuple[float, float], move: tuple[float, float], tolerance: float) -> tuple:

@@ -275,3 +275,25 @@ def test_by_axis_a_move_along_y_in_between_does_not_hide_a_move_back_along_x(pap
     assert by_axis.by_axis and by_axis.moves == {}
     policy = make_policy("slax-belief-axis-shuttle", paper, horizon=4)
     assert policy.memory.by_axis and not make_policy("slax-belief", paper, horizon=4).memory.by_axis
+
+
+def test_tolerances_do_not_chain_a_push_just_under_the_tolerance_is_remembered():
+    """An object pushed 0.99 cm (under the 1 cm tolerance) and observed there is remembered there too: a later move
+    that puts it back onto that pose, 1.04 cm from its first pose, leads back to an observed arrangement (the
+    replayed shelf-simulator trial 8:9 of the physics protocol returned an object this way and cycled)."""
+    from slax_drake.shelf.actions import Push
+
+    a, b = box("a", -0.10, 0.00), box("b", 0.15, 0.05)
+    memory = TrialMemory()
+    memory.observe((a, b))
+    nudged = (box("a", -0.1099, 0.00), b)
+    memory.observe(nudged)
+    memory.observe(nudged)  # the same frame again adds nothing
+    assert len(memory.observed) == 2
+    elsewhere = (box("a", -0.0604, 0.00), b)  # then carried 5 cm right (and 0.5 mm more)
+    back = Push("a", (0.0, -0.2, 0.04), -0.05)  # and pushed back to 0.5 mm from the nudged pose
+    assert memory.leads_back(elsewhere, [back]) == [True]
+    assert memory.seen_before(apply_action(elsewhere, back))
+    only_first = TrialMemory()
+    only_first.observed = [(a, b)]  # what was kept before: the first pose alone, 1.04 cm from where it lands
+    assert only_first.leads_back(elsewhere, [back]) == [False]
