@@ -148,6 +148,7 @@ from slax_drake.policies.extents import EXTENT_DRAW, EXTENT_DRAWS, extent_free_w
 from slax_drake.policies.hindsight import Hindsight, Worlds
 from slax_drake.policies.oracle_search import maximal_pushes_only
 from slax_drake.policies.protocol import Decision, Screened
+from slax_drake.policies.trial_memory import TrialMemory
 from slax_drake.scene.model import state_key
 
 
@@ -203,6 +204,7 @@ class BeliefSearch(Hindsight):
 
     name = "slax-belief"
     uses_horizon = True  # the registry passes the protocol's H (see the module docstring)
+    SHUTTLE_RULES = ("width", "sight", "belief")  # "belief": reveals_new reads the worlds still alive
 
     def __init__(self, *args, options: BeliefOptions = DEFAULT_BELIEF_OPTIONS, horizon: int | None = None, **kwargs):
         o = options
@@ -269,6 +271,7 @@ class BeliefSearch(Hindsight):
         self.blocked_risk = float(o.blocked_risk)  # blocked_rule="risk": the failure chance a blocked box adds
         self.dead_end = o.dead_end  # what a plan ending where no move is left costs ("ignore", "model", ...)
         self.stuck_undo = o.stuck_undo  # stuck: moves back screened by the corrections start plans too (undo_plans)
+        self._root_worlds = None  # shuttle_rule "belief": (arrangement, worlds, alive) of the decision being made
 
     def reset(self, scene_or_observation=None) -> None:
         super().reset(scene_or_observation)
@@ -1045,6 +1048,27 @@ class BeliefSearch(Hindsight):
             counts[str(Screened.PLACEMENT_NOT_ALLOWED)] = blocked
         return counts
 
+    def reveals_new(self, objects, action, memory: TrialMemory | None = None) -> bool:
+        """Correction 3's test (:meth:`Policy.reveals_new`). ``shuttle_rule`` "belief": the width rule, or, for a
+        first move of the decision being made (``objects`` its arrangement, ``memory`` this trial's), the
+        arrangement after ``action`` shows the target in at least one of the belief's worlds still alive (a
+        world is alive only while no frame of this trial showed its place: the move shows space no earlier
+        arrangement showed). Moves later in a plan (another ``memory`` or arrangement) are judged by width."""
+        if self.shuttle_rule != "belief":
+            return super().reveals_new(objects, action, memory)
+        memory = self.memory if memory is None else memory
+        width = memory.vacates_unseen(objects, action) >= self.shuttle_reveal
+        root = self._root_worlds
+        objects = tuple(objects)
+        if width or memory is not self.memory or root is None or len(objects) != len(root[0]) \
+                or not all(a is b for a, b in zip(objects, root[0])):
+            return width
+        _, worlds, alive = root
+        if not alive.any():
+            return False
+        after = apply_action(objects, action)
+        return bool((alive & (self.distances(worlds, after) == 0)).any())
+
     def action_model_candidates(self, objects) -> list:
         """The first moves: the policy's candidates (every suction of the profile; exclusions and no return
         applied), less the placements overlapping a blocked region."""
@@ -1120,6 +1144,13 @@ class BeliefSearch(Hindsight):
         self._risk_by_box, self._risk_cache = {}, {}
         self._extent_belief = getattr(obs, "belief", None) if self.extent_risk > 0 else None
         self._extent_cache, self._extent_draws = {}, None
+        template = obs.scene_template
+        seed = template.seed if template.seed is not None else 0
+        worlds = consistent = self._root_worlds = None
+        if len(placements):  # before the first moves are screened: shuttle_rule "belief" reads them (reveals_new)
+            worlds, consistent = self.worlds_for(template, placements, seed)
+            if self.shuttle_rule == "belief":
+                self._root_worlds = (known, worlds, consistent & (self.distances(worlds, known) > 0))
         cands = maximal_pushes_only(self.action_model_candidates(known))
         if not cands:
             return Decision.stop("no feasible action")
@@ -1132,9 +1163,6 @@ class BeliefSearch(Hindsight):
         self.decision_log.append(log)
         if not len(placements):
             return Decision(tuple(cands))
-        template = obs.scene_template
-        seed = template.seed if template.seed is not None else 0
-        worlds, consistent = self.worlds_for(template, placements, seed)
         self._n_worlds = int(consistent.sum())
         log["samples"] = self._n_worlds
         remaining = self.horizon - (self._step - 1) if self.horizon is not None else 10 ** 6

@@ -144,7 +144,11 @@ class BeliefOptions:
     0.02 m of it): "width", width its own footprint covered in every arrangement observed in the trial; "sight",
     width of shelf into which the camera would see deeper than in any observed arrangement, judged on every seen
     object's footprint (:mod:`slax_drake.policies.sight`): the space behind an object moved far away was shown
-    when it stood elsewhere, and the space behind another object it stood in front of never was."""
+    when it stood elsewhere, and the space behind another object it stood in front of never was. "belief": the
+    width rule, or, for a first move, the arrangement after it shows the target in at least one of the belief's
+    worlds still alive (:meth:`BeliefSearch.reveals_new`): a world is alive only while no frame of the trial has
+    shown its place, so the move reveals space no earlier arrangement revealed, in the one sense the search
+    values (a move back later in a plan is judged by width)."""
     shuttle_reveal: float | None = 0.02
     """The width (m) of space never revealed that a move back against its object's last move must uncover to pass
     the no-shuttle correction (issue 27's rule); None: the correction is off (the variant
@@ -201,8 +205,8 @@ class BeliefOptions:
             raise ValueError("explain_failed must be 'none', 'carried' or 'any'")
         if self.blocked_rule not in BLOCKED_RULES:
             raise ValueError("blocked_rule must be 'box', 'hidden' or 'risk'")
-        if self.shuttle_rule not in ("width", "sight"):
-            raise ValueError("shuttle_rule must be 'width' or 'sight'")
+        if self.shuttle_rule not in ("width", "sight", "belief"):
+            raise ValueError("shuttle_rule must be 'width', 'sight' or 'belief'")
         if self.shuttle_reveal is not None and not self.shuttle_reveal >= 0:
             raise ValueError(f"shuttle_reveal must be a width in metres, 0 or more, or None (got {self.shuttle_reveal!r})")
         if self.dead_end not in DEAD_END_RULES:

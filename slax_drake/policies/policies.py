@@ -61,6 +61,7 @@ class DistributionPolicy:
     needs_true_scene = False
     use_pushes = True
     use_suctions = False
+    SHUTTLE_RULES = ("width", "sight")  # the shuttle_rule values this policy can judge by
 
     def __init__(self, action_model: ActionModel, distribution: DistributionModel, psi: float = 1.3,
                  observation_width: int = 160, max_placements: int = 4, corrected: bool = False,
@@ -72,9 +73,11 @@ class DistributionPolicy:
         self.shuttle_last_resort = shuttle_last_resort
         # what a shuttle must uncover to pass correction 3: "width", width its own footprint covered in every
         # observed arrangement (TrialMemory.vacates_unseen); "sight", width of shelf no observed arrangement let the
-        # camera see as deep (slax_drake.policies.sight)
-        if shuttle_rule not in ("width", "sight"):
-            raise ValueError(f"shuttle_rule must be 'width' or 'sight' (got {shuttle_rule!r})")
+        # camera see as deep (slax_drake.policies.sight); "belief" (a policy with a belief: SHUTTLE_RULES), the width
+        # rule or a place the belief still holds for the target shown (slax_drake.policies.belief)
+        if shuttle_rule not in self.SHUTTLE_RULES:
+            raise ValueError(f"shuttle_rule must be one of {', '.join(map(repr, self.SHUTTLE_RULES))} "
+                             f"(got {shuttle_rule!r})")
         self.shuttle_rule = shuttle_rule
         self._view = None  # the DeepestView of this trial (shuttle_rule "sight"), made for the first frame's camera
         # correction 3 judges a move back against the object's last move, or with shuttle_by_axis its last move

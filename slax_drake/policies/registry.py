@@ -140,6 +140,10 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # a move back passes the no-shuttle correction when it lets the camera see deeper than any observed arrangement
     "slax-belief-sight": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, shuttle_rule="sight"),
                                      ours=True),
+    # today's default with the belief's shuttle rule: a first move back passes the no-shuttle correction when it
+    # also shows the target in a world the belief still holds (no frame has shown that place)
+    "slax-belief-belief-shuttle": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, shuttle_rule="belief"), ours=True),
     # camera mode: the object of a failed placement is assumed as deep and wide as the frame allows (deepen_failed)
     "slax-belief-deepen-failed": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, deepen_failed=True),
                                              ours=True),
