@@ -147,7 +147,7 @@ from slax_drake.policies.belief_options import DEFAULT_BELIEF_OPTIONS, BeliefOpt
 from slax_drake.policies.extents import EXTENT_DRAW, EXTENT_DRAWS, extent_free_weights
 from slax_drake.policies.hindsight import Hindsight, Worlds
 from slax_drake.policies.oracle_search import maximal_pushes_only
-from slax_drake.policies.protocol import Decision, Screened
+from slax_drake.policies.protocol import NO_REVEALING_PLAN, Decision, Screened
 from slax_drake.policies.trial_memory import TrialMemory
 from slax_drake.scene.model import state_key
 
@@ -1197,6 +1197,11 @@ class BeliefSearch(Hindsight):
             if undo:
                 seen_nodes = undo
                 first_level = [k for k in undo if len(k.plan) == 1]
+        if self.stuck_select == "stop" and not log["capped"] and not any(k.revealed > 0 for k in seen_nodes):
+            log["stalled"] = True  # no plan looked at reveals anything: stop rather than move on
+            log["seconds"] = round(time.process_time() - t0, 3)
+            self._plan = []
+            return Decision.stop(NO_REVEALING_PLAN)
         if self.select == "ratio" and any(k.revealed > 0 for k in seen_nodes):
             # the most revealed mass per expected cost, R / (G + dead end); ties: the lesser V, the earlier plan
             best = self.least(seen_nodes, lambda k, extra: (-k.revealed / max(k.g + extra, 1e-9), k.value, k.order),

@@ -12,7 +12,7 @@ import dataclasses
 
 SELECT_RULES = ("ratio", "value")
 EVIDENCE_RULES = ("outcome", "none")
-STUCK_RULES = ("value", "progress")
+STUCK_RULES = ("value", "progress", "stop")
 BLOCKED_RULES = ("box", "hidden", "risk")
 DEAD_END_RULES = ("ignore", "model", "corrections")
 EXPLAIN_RULES = ("none", "carried", "any")
@@ -50,7 +50,11 @@ class BeliefOptions:
     widen_beam: int = 12
     """The beam of a second search when the first reveals nothing (0: no second search)."""
     stuck_select: str = "value"
-    """The plan taken when no plan looked at reveals anything: "value" (least V) or "progress" (least V - G)."""
+    """The plan taken when no plan looked at reveals anything (the search stalls): "value" (least V) or "progress"
+    (least V - G); "stop": none, the policy stops with :data:`~slax_drake.policies.protocol.NO_REVEALING_PLAN`
+    (a plan cut by the CPU cap is not a stall). Under the Drake station's rules the stalled search reveals the
+    target in 1 of 41 trials and takes half of all actions and three quarters of the moves back; in the paper
+    profile it reveals in 12 of 62 (docs/research/physics.md, "Where the failed trials stall")."""
     blocked_rule: str = "risk"
     """What the box of a placement that was put back or stopped short refuses: "box", every later placement
     overlapping it (the default until 2026-12-06); "hidden", only those overlapping it in hidden space; "risk", none,
@@ -200,7 +204,7 @@ class BeliefOptions:
         if self.camera_extents is not None and not 0 <= self.camera_extents <= 1:
             raise ValueError(f"camera_extents must be in [0, 1] or None (got {self.camera_extents!r})")
         if self.stuck_select not in STUCK_RULES:
-            raise ValueError("stuck_select must be 'value' or 'progress'")
+            raise ValueError("stuck_select must be 'value', 'progress' or 'stop'")
         if self.explain_failed not in EXPLAIN_RULES:
             raise ValueError("explain_failed must be 'none', 'carried' or 'any'")
         if self.blocked_rule not in BLOCKED_RULES:

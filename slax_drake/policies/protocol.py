@@ -45,6 +45,11 @@ class Screened(enum.StrEnum):
     PLACEMENT_NOT_ALLOWED = "placement not allowed"  # slax-hindsight/-belief: its placement overlaps a blocked box
 
 
+# the stop reason of a policy whose search finds no plan revealing any place the target may stand, and that stops
+# rather than move on (slax-belief's stuck_select "stop"); the Drake trial ends with it as its result
+NO_REVEALING_PLAN = "no plan reveals the target"
+
+
 class Reversal(enum.StrEnum):
     """How correction 3 judged an executed action that moves its object back against its last move (the trial
     record's ``reversal_rule``; None when it is not such a move)."""

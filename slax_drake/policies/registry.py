@@ -144,6 +144,9 @@ POLICY_TABLE: dict[str, PolicyEntry] = {
     # also shows the target in a world the belief still holds (no frame has shown that place)
     "slax-belief-belief-shuttle": PolicyEntry(_BELIEF, dataclasses.replace(
         DEFAULT_BELIEF_OPTIONS, shuttle_rule="belief"), ours=True),
+    # today's default that stops when its search stalls (no plan looked at reveals anything) rather than moving on
+    "slax-belief-stall-stop": PolicyEntry(_BELIEF, dataclasses.replace(
+        DEFAULT_BELIEF_OPTIONS, stuck_select="stop"), ours=True),
     # camera mode: the object of a failed placement is assumed as deep and wide as the frame allows (deepen_failed)
     "slax-belief-deepen-failed": PolicyEntry(_BELIEF, dataclasses.replace(_EARLIER_DEFAULT, deepen_failed=True),
                                              ours=True),

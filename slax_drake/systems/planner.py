@@ -52,6 +52,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from slax_drake.perception.belief import ObservedBelief
 from slax_drake.planning.planner import MotionPlanner
+from slax_drake.policies.protocol import NO_REVEALING_PLAN
 from slax_drake.shelf.actions import GRAVITY, Push, Suction
 from slax_drake.shelf.distribution import support
 from slax_drake.shelf.simulator import PolicyObservation
@@ -239,8 +240,11 @@ class PlannerSystem(LeafSystem):
         if motion is None:
             entry.update(stop_record(policy, belief.known, rejected,
                                      decision.stop_reason if decision is not None and action is None else None))
-            return self._finish(s, "no feasible action" if not rejected else "no feasible motion", entry, frame,
-                                hold=True)
+            stop = decision.stop_reason if decision is not None and action is None else None
+            result = "no feasible action" if not rejected else "no feasible motion"
+            if stop == NO_REVEALING_PLAN and not rejected:
+                result = NO_REVEALING_PLAN  # the policy stopped: no plan of it reveals the target
+            return self._finish(s, result, entry, frame, hold=True)
         entry["action"] = _describe(action)
         # how the no-shuttle correction judged it (None: not a move back; Policy.reversal_rule)
         rule = getattr(policy, "reversal_rule", lambda a: None)(action)

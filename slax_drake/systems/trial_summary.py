@@ -16,6 +16,7 @@ OUTCOMES = {
     "horizon": "target not revealed: the horizon of {horizon} actions was spent",
     "no feasible action": "target not revealed: the policy had no feasible action left",
     "no feasible motion": "target not revealed: no candidate action had a collision-free motion",
+    "no plan reveals the target": "target not revealed: the policy stopped, no plan of it reveals the target",
     "time limit": "target not revealed: the simulated-time limit (--max-sim-time) ran out",
 }
 

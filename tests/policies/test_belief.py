@@ -257,6 +257,33 @@ def test_belief_when_nothing_reveals_takes_the_plan_nearest_to_a_reveal(paper):
     assert plans[0] == plans[1] and plans[0]
 
 
+def test_belief_with_stuck_select_stop_stops_where_no_plan_reveals_anything(paper):
+    """The wall scene above: no plan reveals anything, even widened. With stuck_select "stop" the policy stops there
+    with NO_REVEALING_PLAN (its decision log says it stalled) instead of taking the plan nearest to a reveal; where a
+    plan reveals something it decides as the default does."""
+    from slax_drake.policies.protocol import NO_REVEALING_PLAN
+
+    objects = (box("front", 0.0, -0.20, 0.24, 0.06, 0.12), box("middle", 0.0, -0.11, 0.54, 0.06, 0.25))
+    scene = Scene(Shelf(0.6, 0.6, 0.6, 0.02), Camera.from_config(paper.camera), objects,
+                  Target(TARGET, planar_pose(0.0, 0.20, 0.03, 0.0)), 7)
+    small = {"depth": 2, "max_depth": 2, "beam": 2, "widen_beam": 4}
+    stopping = make_policy("slax-belief", paper, horizon=6, policy_options={**small, "stuck_select": "stop"})
+    stopping.reset(scene)
+    decision = stopping.decide(observation_for(stopping, scene))
+    assert decision.best is None and decision.stop_reason == NO_REVEALING_PLAN
+    assert stopping.decision_log[-1]["stalled"] and stopping.decision_log[-1]["widened"]
+    result = run_trial(scene, make_policy("slax-belief", paper, horizon=6, policy_options={
+        **small, "stuck_select": "stop"}), 6)
+    assert result.reason == NO_REVEALING_PLAN and result.steps == 0
+    plans = []
+    for rule in ("stop", "value"):
+        policy = make_policy("slax-belief", paper, horizon=4, policy_options={"stuck_select": rule})
+        policy.reset(stacked_scene(paper))
+        plans.append(policy.decide(observation_for(policy, stacked_scene(paper))).best)
+    assert plans[0] == plans[1] is not None
+    assert make_policy("slax-belief-stall-stop", paper, horizon=4).stuck_select == "stop"
+
+
 def test_belief_rejects_an_unknown_stuck_rule(paper):
     with pytest.raises(ValueError, match="stuck_select"):
         make_policy("slax-belief", paper, horizon=4, policy_options={"stuck_select": "random"})

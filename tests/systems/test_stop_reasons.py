@@ -52,6 +52,15 @@ def test_summary_names_the_most_frequent_reason_and_check_action():
     assert "check-action" not in revealed
 
 
+def test_summary_says_the_policy_stopped_when_no_plan_reveals_the_target():
+    from slax_drake.policies.protocol import NO_REVEALING_PLAN
+
+    last = {"rejected": [], "refused": [], "feasible_left": 5, "stop_reason": NO_REVEALING_PLAN, "reasons": []}
+    text = trial_summary(_ended(NO_REVEALING_PLAN, last), [Path("out/trial.json")])
+    assert "outcome: target not revealed: the policy stopped, no plan of it reveals the target" in text
+    assert "check-action" not in text  # candidates were left; the policy chose to stop
+
+
 @pytest.mark.slow
 def test_trial_ending_with_no_feasible_action_records_its_reasons(tmp_path):
     """The default station, six objects, seed 2: the policy has no feasible action at its first decision."""
