@@ -99,3 +99,14 @@ def plural(n: int, word: str, many: str | None = None) -> str:
     if many is None:
         many = word + ("es" if word.endswith(("s", "x", "z", "ch", "sh")) else "s")
     return f"{n} {many}"
+
+
+def json_safe(value):
+    """``value`` (dicts, lists, numbers, strings, NumPy scalars and arrays) as plain JSON types: a policy's decision log
+    holds NumPy scalars, which ``json.dumps`` does not take."""
+    import json
+
+    def plain(v):
+        return v.tolist() if hasattr(v, "tolist") else str(v)
+
+    return json.loads(json.dumps(value, default=plain))

@@ -20,7 +20,7 @@ import numpy as np
 
 from slax_drake.config import Scenario
 from slax_drake.errors import BenchmarkError
-from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
+from slax_drake.io import figure_png, json_safe, write_bytes_atomic, write_text_atomic
 
 PAPER_TABLE1 = {  # success % for 4/6/8/10/All (paper Table I)
     "oracle-p": [100, 100, 99, 94, 98], "oracle-p+s": [100, 100, 100, 100, 100], "dar": [77, 68, 45, 24, 54],
@@ -122,7 +122,7 @@ def run_benchmark_trial(job) -> dict:
         result["tool_rules"] = tool_rules
     decisions = getattr(policy, "decision_log", None)
     if decisions is not None:  # ours (slax-hindsight, slax-belief): per decision, what the search looked at and chose
-        result["decision_log"] = json.loads(json.dumps(decisions, default=lambda v: v.item()))  # numpy scalars
+        result["decision_log"] = json_safe(decisions)  # numpy scalars
     searches = getattr(policy, "search_log", None)
     if searches is not None:  # the oracles: how each search ended (proven optimal, infeasible, cut by time)
         result["oracle_searches"] = searches

@@ -51,6 +51,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from slax_drake.perception.belief import ObservedBelief
+from slax_drake.io import json_safe
 from slax_drake.planning.planner import MotionPlanner
 from slax_drake.policies.protocol import NO_REVEALING_PLAN
 from slax_drake.shelf.actions import GRAVITY, Push, Suction
@@ -209,6 +210,7 @@ class PlannerSystem(LeafSystem):
         rejected = []
         t0, c0 = time.perf_counter(), time.process_time()
         motion, action, decide_s, decide_cpu_s, decision = None, None, 0.0, 0.0, None
+        logged = len(getattr(policy, "decision_log", ()))  # the policy's own record of its decisions, if it keeps one
         for _ in range(MAX_PLAN_ATTEMPTS):
             td, cd = time.perf_counter(), time.process_time()
             decision = policy.decide(obs)
@@ -228,6 +230,8 @@ class PlannerSystem(LeafSystem):
                              "planning_s": result.timings.get("total_s")})
             policy.exclude(action, result.reason, whole_group=result.failure.early)
             action = None
+        if hasattr(policy, "decision_log"):  # this step's decisions (one more per candidate the planner rejected)
+            entry["decision_log"] = json_safe(policy.decision_log[logged:])
         history = policy.history
         entry["support"] = support(history)
         entry["p1d"] = np.round(obs.p1d, 6).tolist()

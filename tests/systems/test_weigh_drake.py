@@ -47,3 +47,18 @@ def test_the_put_back_exports_as_two_motions_that_pass_the_checker(trial, tmp_pa
     capsys.readouterr()
     assert main(["check-trajectory", str(path)]) == 0, capsys.readouterr().out
     assert "OK: no violation" in capsys.readouterr().out
+
+
+def test_the_trial_record_holds_the_policys_decision_log(trial):
+    """slax-belief keeps a record of each decision (its plan, the share of its belief the plan reveals, ...); the
+    Drake trial writes it per step, one entry per decision made (one more for each candidate the planner
+    rejected)."""
+    data = json.loads((trial / "trial.json").read_text())
+    steps = data["steps_log"]
+    assert all(isinstance(step.get("decision_log"), list) for step in steps)
+    executed = [step for step in steps if step.get("action")]
+    assert executed and all(step["decision_log"] for step in executed)
+    for step in executed:
+        last = step["decision_log"][-1]
+        assert last["plan"][0].startswith(step["action"]["type"])  # the plan it took starts with the executed move
+        assert 0.0 <= last["revealed"] <= 1.0
