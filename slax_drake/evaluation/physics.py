@@ -66,6 +66,16 @@ def trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return Path(out) / "physics_trials" / policy / f"{density:02d}_{index:04d}.json"
 
 
+def stall_step(decisions) -> int | None:
+    """The index of the first decision in ``decisions`` (per step, the policy's decision-log entry it acted on or
+    stopped at) at which its search found no plan revealing any place the target may stand (``revealed`` 0, not cut
+    by the CPU cap, or ``stalled``: it stopped there); None when there is none."""
+    for k, log in enumerate(decisions):
+        if log and (log.get("stalled") or (not log.get("capped") and float(log.get("revealed", 1.0)) == 0.0)):
+            return k
+    return None
+
+
 def action_matches(predicted: dict, outcome: dict | None, before: dict | None = None) -> bool | None:
     """Whether the physical outcome is within 2 cm and 10 deg of the first-order prediction (None: no outcome).
 
@@ -159,6 +169,8 @@ def _run_scene(job) -> dict:
                                   full_resolution=shelf_camera.full_resolution)
     shelf = run_shelf_trial(scene, policy, opts.horizon, threshold=scenario.target.visibility_threshold,
                             suction_cost=scenario.protocol.suction_cost, density=density, observer=observer).to_dict()
+    if hasattr(policy, "decision_log"):  # one decision per step in the shelf simulator
+        shelf["stall_step"] = stall_step(policy.decision_log)
     t0 = time.perf_counter()
     with drake_info_silenced():
         d = run_trial(opts).data  # a simulation that blew up ends the trial "simulation diverged: ...", its actions kept
@@ -197,6 +209,10 @@ def _run_scene(job) -> dict:
         "dropped": sorted(n for n, p in final.items() if not p["inside"]),
         "initial_objects": d["initial_objects"], "final_objects": final, "sleep": d.get("sleep", False),
     }
+    logs = [step["decision_log"][-1] if step["decision_log"] else None
+            for step in d.get("steps_log") or [] if "decision_log" in step]
+    if logs:  # the policy keeps a decision log: the step at which its search stalled (None: it never did)
+        drake["stall_step"] = stall_step(logs)
     last = (d.get("steps_log") or [{}])[-1]
     if last.get("reasons") is not None:  # ended with no action to execute: why, by stage and kind
         drake["end_reasons"] = last["reasons"]
@@ -204,7 +220,7 @@ def _run_scene(job) -> dict:
         if last.get("screened") is not None:  # the feasible candidates the policy's corrections screened out
             drake["end_screened"] = last["screened"]
     shelf_keep = {k: shelf[k] for k in ("success", "steps", "cost", "reason", "actions", "notes", "visible_fraction",
-                                        "screened") if k in shelf}
+                                        "screened", "stall_step") if k in shelf}
     return {"policy": policy_name, "density": density, "index": index, "seed": seed, "shelf": shelf_keep,
             "drake": drake, "profile": profile, "tool_rules": tool_rules}
 
@@ -374,6 +390,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "shelf_success": r["shelf"]["success"], "shelf_steps": r["shelf"]["steps"],
             "drake_success": d["success"], "drake_result": d["result"], "drake_steps": d["steps"],
             "drake_clean_success": clean_success(d),
+            "actions_executed": len(d["actions"]),
             "matched_actions": sum(1 for a in d["actions"] if a["matched"]),
             "actions_with_outcome": sum(1 for a in d["actions"] if a["matched"] is not None),
             "toppled": len(d["toppled"]), "dropped": len(d["dropped"]), "real_time_factor": d["real_time_factor"],
@@ -398,6 +415,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "guarded": [sum(1 for a in d["actions"] if "guard" in a),
                         sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped"))],
         })
+        if "stall_step" in d:  # the policy's search stalled at this step (None: never); actions from it on
+            stalled = d["stall_step"]
+            summary["trials"][-1]["stall"] = [stalled, 0 if stalled is None else len(d["actions"][stalled:])]
         if any("weighed" in a for a in d["actions"]):  # lifts weighed at the cup, and how many were put back
             summary["trials"][-1]["weighed"] = [sum(1 for a in d["actions"] if "weighed" in a),
                                                 sum(1 for a in d["actions"] if (a.get("weighed") or {}).get("put_back"))]
@@ -428,6 +448,13 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                     "put_back_why": dict(sorted(sum((collections.Counter(t.get("put_back_why", {})) for t in sel),
                                                     collections.Counter()).items()))}
                    if any("weighed" in t for t in sel) else {}),
+                # trials whose search stalled, of them revealed all the same, actions executed from the stall on,
+                # and all actions executed (where the records keep the policy's decision log)
+                **({"stalls": [sum(t["stall"][0] is not None for t in sel if "stall" in t),
+                               sum(t["stall"][0] is not None and t["drake_success"] for t in sel if "stall" in t),
+                               sum(t["stall"][1] for t in sel if "stall" in t),
+                               sum(t["actions_executed"] for t in sel if "stall" in t)]}
+                   if any("stall" in t for t in sel) else {}),
                 "shelf_median_steps": _median([t["shelf_steps"] for t in sel if t["shelf_success"]]),
                 "drake_median_steps": _median([t["drake_steps"] for t in sel if t["drake_success"]]),
                 "same_outcome_rate": round(sum(t["shelf_success"] == t["drake_success"] for t in sel) / len(sel), 4)
@@ -661,6 +688,11 @@ def markdown_table(summary: dict) -> str:
         if guarded and guarded[0]:
             lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "
                           f"stopped on contact {guarded[1]}.")
+        stalls = per.get("all", {}).get("stalls")
+        if stalls and lines[-1].startswith(f"{p}, Drake trial endings"):
+            lines[-1] += (f" Stalls (the first decision at which no plan of the policy's reveals anything): "
+                          f"{stalls[0]} trials, {stalls[1]} of them revealed the target after it; {stalls[2]} of the "
+                          f"{stalls[3]} executed actions came from a stall on.")
         weighed = per.get("all", {}).get("weighed_lifts")
         if weighed and weighed[0]:
             why = per["all"].get("put_back_why") or {}

@@ -421,3 +421,35 @@ def test_the_report_says_how_many_no_feasible_motion_endings_refused_the_last_ca
     e = summarise(old, ["p"], [4])["policies"]["p"]["all"]
     assert e["no_motion_one_left"] is None
     assert "ended when the motion planner refused" not in markdown_table(summarise(old, ["p"], [4]))
+
+
+def test_the_stall_step_is_the_first_decision_whose_search_reveals_nothing():
+    from slax_drake.evaluation.physics import stall_step
+
+    assert stall_step([{"revealed": 0.3}, {"revealed": 0.0, "capped": True}, {"revealed": 0.0}, {"revealed": 0.0}]) == 2
+    assert stall_step([{"revealed": 0.3}, {"stalled": True}]) == 1  # the policy stopped there (stuck_select "stop")
+    assert stall_step([{"revealed": 0.3}, None, {}]) is None  # no decision log entry, or none with the share
+
+
+def test_the_summary_counts_stalled_trials_and_the_actions_from_their_stall_on():
+    from slax_drake.evaluation.physics import markdown_table, summarise
+
+    def trial(i, success, stall, actions):
+        act = {"type": "push", "d": 0.05, "planning_s": 0.1, "lost_after": False, "before": None,
+               "predicted": {"x": 0.05, "y": 0.0, "yaw": 0.0}, "outcome": {"x": 0.05, "y": 0.0, "yaw": 0.0}}
+        drake = {"success": success, "result": "revealed" if success else "horizon", "steps": actions,
+                 "toppled": [], "dropped": [], "real_time_factor": 1.0, "wall_s": 1.0, "actions": [act] * actions}
+        if stall != "unrecorded":
+            drake["stall_step"] = stall
+        return {"policy": "p", "density": 4, "index": i, "seed": i, "shelf": {"success": success, "steps": 1},
+                "drake": drake}
+
+    results = [trial(0, False, 2, 8), trial(1, True, 3, 5), trial(2, True, None, 2)]
+    summary = summarise(results, ["p"], [4])
+    assert [t["stall"] for t in summary["trials"]] == [[2, 6], [3, 2], [None, 0]]
+    assert summary["policies"]["p"]["all"]["stalls"] == [2, 1, 8, 15]
+    assert ("Stalls (the first decision at which no plan of the policy's reveals anything): 2 trials, 1 of them "
+            "revealed the target after it; 8 of the 15 executed actions came from a stall on.") in markdown_table(summary)
+    # a policy keeping no decision log (Bluction-DAR) or a record from before: no stall figures
+    old = summarise([trial(0, False, "unrecorded", 3)], ["p"], [4])
+    assert "stall" not in old["trials"][0] and "stalls" not in old["policies"]["p"]["all"]
