@@ -15,11 +15,18 @@ slax-belief, the protocol's horizon) it prints the outcome and, when the trial s
   corrections off (no return to an observed arrangement, no shuttle; exclusions kept), told where the target
   stands, both, and with twice the beam: the share of the belief the best plan reveals and its first move.
 
-Then the counts. A diagnostic, never a policy: the oracle and the told target read the scene's hidden state.
+Then the counts, with the actions taken and the moves back chosen (against their object's last move: the trial
+record's ``reversal_rule``) before a stall and from it on. A diagnostic, never a policy: the oracle and the told
+target read the scene's hidden state.
+
+``--census FOLDER``: no trial is run; the trial files of a ``slax-drake benchmark`` folder (``--policy``, default
+slax-belief, which keeps a decision log) are read instead: per density, the trials that stalled, those revealed
+after their stall, and the actions taken from the stall on.
 
     python research/stall_analysis.py --trials 4:0-19,6:0-19,8:0-19,10:0-19 --config sim_configs/table1_household.yaml \\
         --profile station --tool-rule max_drag_pull=42.412 ... [--observation camera [--full-resolution]]
         [--oracle-seconds 5] [--variants] [--seed 0]
+    python research/stall_analysis.py --census RESULTS_FOLDER [--policy slax-belief]
 """
 
 import argparse
@@ -58,6 +65,7 @@ class StallWatch:
         self.step = 0
         self.stall = None  # dict once stalled
         self._placements = None
+        self.moves_back = collections.Counter()  # chosen moves against their object's last move (reversal_rule)
         self._decide, self._place = policy.decide, policy.placements
         policy.decide, policy.placements = self.decide, self.placements
 
@@ -77,6 +85,7 @@ class StallWatch:
     def decide(self, obs):
         before = self._copy() if self.stall is None and self.variants else None
         decision = self._decide(obs)
+        back = decision.best is not None and self.policy.reversal_rule(decision.best) is not None
         log = self.policy.decision_log[-1] if self.policy.decision_log else {}
         if self.stall is None and decision.best is not None and float(log.get("revealed", 1.0)) == 0.0:
             truth = self.scene.target.X_ST[:2, 3]
@@ -97,6 +106,8 @@ class StallWatch:
                     d = type(again).decide(again, obs)
                     revealed = float(again.decision_log[-1].get("revealed", 0.0)) if again.decision_log else 0.0
                     self.stall["variants"][name] = (revealed, d.best.describe() if d.best else d.stop_reason)
+        if back:
+            self.moves_back["from the stall on" if self.stall is not None else "before"] += 1
         self.step += 1
         return decision
 
@@ -142,9 +153,53 @@ def oracle_from(scenario, scene, left: int, density: int, rules: dict, profile: 
                      suction_cost=scenario.protocol.suction_cost, density=density)
 
 
+def census(folder: Path, policy: str) -> int:
+    """``--census``: the stalls of a benchmark folder's trial files (see the module docstring)."""
+    import json
+
+    from slax_drake.evaluation.physics import stall_step
+
+    files = sorted((folder / "trials" / policy).glob("*.json"))
+    if not files:
+        print(f"error: --census: no trial files in {folder / 'trials' / policy}", file=sys.stderr)
+        return 2
+    rows = collections.defaultdict(collections.Counter)
+    for path in files:
+        try:
+            trial = json.loads(path.read_text())
+            log = trial["decision_log"]
+            if isinstance(log, str):  # files written before the decision log was stored as a list
+                import ast
+
+                log = ast.literal_eval(log)
+            density, steps, success = int(trial["density"]), int(trial["steps"]), trial["success"] in (True, "True")
+        except (OSError, ValueError, SyntaxError, KeyError, TypeError) as e:
+            print(f"error: {path}: unreadable trial file ({type(e).__name__}: {e})", file=sys.stderr)
+            return 2
+        stalled = stall_step(log)
+        for key in (density, "all"):
+            row = rows[key]
+            row["trials"] += 1
+            row["revealed"] += success
+            row["actions"] += steps
+            if stalled is not None:
+                row["stalled"] += 1
+                row["revealed after the stall"] += success
+                row["actions from the stall on"] += steps - stalled
+    print(f"{folder} ({policy}): per density, trials / revealed / stalled / revealed after the stall / actions / "
+          "actions from the stall on")
+    for key in sorted(rows, key=lambda k: (k == "all", k if k != "all" else 0)):
+        r = rows[key]
+        print(f"  {key}: {r['trials']} / {r['revealed']} / {r['stalled']} / {r['revealed after the stall']} / "
+              f"{r['actions']} / {r['actions from the stall on']}")
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--trials", required=True, help="DENSITY:FIRST-LAST,... (Table I scene indices)")
+    ap.add_argument("--trials", help="DENSITY:FIRST-LAST,... (Table I scene indices)")
+    ap.add_argument("--census", type=Path, metavar="FOLDER", help="read a benchmark folder's trial files instead")
+    ap.add_argument("--policy", default="slax-belief", help="with --census: the policy's trial files")
     ap.add_argument("--config", default="sim_configs/table1_household.yaml")
     ap.add_argument("--profile", default="station")
     ap.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE")
@@ -155,6 +210,11 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", action="store_true")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
+    if args.census is not None:
+        return census(args.census, args.policy)
+    if args.trials is None:
+        print("error: --trials or --census is required", file=sys.stderr)
+        return 2
     try:
         trials = parse_trials(args.trials)
     except ValueError:
@@ -190,7 +250,12 @@ def main(argv=None) -> int:
         line = f"{density:02d}_{index:04d} revealed={result.success} ending={result.reason!r} steps={result.steps}"
         counts["trials"] += 1
         counts["revealed"] += bool(result.success)
+        counts["actions"] += result.steps
+        counts["moves back before a stall"] += watch.moves_back["before"]
+        counts["moves back from a stall on"] += watch.moves_back["from the stall on"]
         stall = watch.stall
+        if stall is not None:
+            counts["actions from a stall on"] += result.steps - stall["step"]
         if stall is not None:
             counts["stalled"] += 1
             counts["stalled, then revealed"] += bool(result.success)

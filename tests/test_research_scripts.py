@@ -263,3 +263,47 @@ def test_belief_variants_placement_margin_refuses_placements_the_clearance_alone
         found = policy.action_model.enumerate(tuple(scene.objects))
         placements[margin] = {a for a in found.feasible if isinstance(a, Suction)}
     assert placements[0.02] and placements[0.02] < placements[None]  # fewer, none new
+
+
+def test_stall_analysis_census_counts_stalls_and_the_actions_from_them_on(tmp_path, capsys):
+    trials = tmp_path / "run" / "trials" / "slax-belief"
+    trials.mkdir(parents=True)
+    stalled = [{"revealed": 0.4}, {"revealed": 0.0}, {"revealed": 0.0}, {"revealed": 0.2}]
+    (trials / "10_0000.json").write_text(json.dumps({"density": 10, "steps": 4, "success": True,
+                                                     "decision_log": stalled}))
+    (trials / "10_0001.json").write_text(json.dumps({"density": 10, "steps": 2, "success": True,
+                                                     "decision_log": [{"revealed": 0.5}, {"revealed": 1.0}]}))
+    (trials / "04_0000.json").write_text(json.dumps({"density": 4, "steps": 3, "success": False,
+                                                     "decision_log": str([{"revealed": 0.0, "capped": True},
+                                                                          {"revealed": 0.0}, {"revealed": 0.0}])}))
+    module = script("stall_analysis")
+    assert module.main(["--census", str(tmp_path / "run")]) == 0
+    out = capsys.readouterr().out
+    assert "  4: 1 / 0 / 1 / 0 / 3 / 2\n" in out  # a capped search is not a stall: it stalled at its second decision
+    assert "  10: 2 / 2 / 1 / 1 / 6 / 3\n" in out
+    assert "  all: 3 / 2 / 2 / 1 / 9 / 5\n" in out
+    (trials / "10_0002.json").write_text('["not", "a", "record"]')
+    assert module.main(["--census", str(tmp_path / "run")]) == 2
+    assert capsys.readouterr().err.startswith(f"error: {trials / '10_0002.json'}: unreadable trial file")
+
+
+@pytest.mark.parametrize("argv", [[], ["--trials", "4:x"], ["--trials", "4:0", "--config", "nope.yaml"],
+                                  ["--census", "nowhere"]])
+def test_stall_analysis_refuses_bad_arguments(capsys, argv):
+    assert script("stall_analysis").main(argv) == 2
+    assert capsys.readouterr().err.startswith("error: ")
+
+
+@pytest.mark.slow  # a 4-object trial and two oracle searches of a second each
+def test_stall_analysis_follows_a_trial_to_its_stall_and_asks_the_oracle(capsys):
+    module = script("stall_analysis")
+    rules = ["max_drag_pull=42.412", "max_drag_twist=0.6362", "max_seal_angle_deg=10", "max_suction_moment=0.4",
+             "reach_map=models/reach/station_sim_shelf.json", "suction_hidden_rule=guarded"]
+    argv = ["--trials", "4:4", "--full-resolution", "--variants", "--oracle-seconds", "1"]
+    for rule in rules:
+        argv += ["--tool-rule", rule]
+    assert module.main(argv) == 0
+    out = capsys.readouterr().out
+    assert "04_0004 revealed=False" in out and "stall at decision 2" in out
+    assert "corrections off: reveals 1.00 of the belief" in out
+    assert "  stalled: 1\n" in out
