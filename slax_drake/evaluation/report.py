@@ -368,6 +368,11 @@ def physics_section(folder: ResultFolder) -> str:
                 lines[-1] += (f" Against the object's last move along that axis (a move along the other axis alone in "
                               f"between does not hide a cycle): {_count(e['undoes_by_axis'])} in "
                               f"{_count(e['trials_with_axis_undo'])} trials.")
+        stalls = per.get("all", {}).get("stalls")
+        if stalls:
+            lines += ["", f"{policy}, its stalls (the first decision at which no plan of the policy's reveals "
+                      f"anything; research/stall_analysis.py): {stalls[0]} trials, {stalls[1]} of them revealed the "
+                      f"target after it; {stalls[2]} of the {stalls[3]} executed actions came from a stall on."]
     lines += ["", "Reversal: an executed move of an object back along x or y against its previous move (both over "
               "1 cm, judged from the true poses): the shuttles the no-shuttle rule forbids and the reversals it lets "
               "through because they uncover space no earlier arrangement uncovered; most carry the object past where it "
