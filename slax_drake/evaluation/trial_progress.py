@@ -3,13 +3,14 @@
 A line starts when the planner has chosen and planned an action and ends when the next decision (or the end of the
 trial) shows where the object went::
 
-    step 3/12: push track_2 -0.100 m, planned in 0.4 s after 1 rejected candidate, executed, object_4 moved as predicted
+    step 3/12: push track_2 -0.100 m (its plan reveals 61% of the belief), planned in 0.4 s after 1 rejected candidate, executed, object_4 moved as predicted
     step 4/12: suction track_1 by +0.050 m to y = -0.190 m, planned in 1.2 s, executed, object_1 ended 3.4 cm from the prediction
     step 5/12: suction track_3 by -0.100 m to y = +0.150 m, planned in 0.9 s, guarded, stopped on contact after 0.212 m, executed, object_2 ended 6.1 cm from the prediction
     step 6/12: suction track_4 by -0.050 m to y = -0.220 m, planned in 0.7 s, weighed 7.8 N hanging 0.37 N m off the cup, not hanging free: put back
     done after 4 actions: target revealed (96% of it visible)
 
-What a line says is what the trial knows at that moment: the policy's action on a camera segment, the planner's
+What a line says is what the trial knows at that moment: the policy's action on a camera segment, for a policy that
+keeps a decision log the share of its belief the plan it took reveals (or that no plan reveals anything), the planner's
 seconds, and the referee's view of the outcome (the true object behind the segment, its pose at the next decision
 against the first-order prediction, within the physics benchmark's tolerances: 2 cm and 10 deg; lost when it
 toppled or left the bay). A segment that no true object stood behind has no judged outcome ("executed").
@@ -20,6 +21,20 @@ from __future__ import annotations
 import sys
 
 from slax_drake.io import plural
+
+
+def _plan_text(entry: dict) -> str:
+    """For a policy that keeps a decision log (slax-belief): how much of its belief the plan it took reveals, or that
+    its search found no plan revealing anything (it stalled, and moves on); empty for the others."""
+    from slax_drake.evaluation.physics import stall_step
+
+    logs = entry.get("decision_log") or []
+    last = logs[-1] if logs else {}
+    if "revealed" not in last:
+        return ""
+    if stall_step([last]) == 0:
+        return " (no plan reveals any place the target may stand: moving on)"
+    return f" (its plan reveals {100 * float(last['revealed']):.0f}% of the belief)"
 
 
 class DecisionPrinter:
@@ -76,7 +91,8 @@ class DecisionPrinter:
             grip = " (dragged)" if a.get("grip") == "drag" else ""
             what = f"suction {a['object']} by {a['dx']:+.3f} m to y = {a['dz']:+.3f} m{grip}"
         rejected = len(entry.get("rejected", ()))
-        return (f"step {entry['step'] + 1}/{self.horizon}: {what}, planned in {entry.get('planning_s', 0.0):.1f} s"
+        return (f"step {entry['step'] + 1}/{self.horizon}: {what}{_plan_text(entry)}, planned in "
+                f"{entry.get('planning_s', 0.0):.1f} s"
                 + (f" after {plural(rejected, 'rejected candidate')}" if rejected else "") + ", ")
 
     def _final_text(self, entry: dict, snap) -> str:

@@ -136,3 +136,19 @@ def test_a_lift_weighed_and_put_back_says_so():
     printer.update((lift, _decision(1, 20.0)), (_snap(0.5, 0.05), _snap(20.0, 0.05)))
     assert out.getvalue().splitlines()[0].endswith(
         "planned in 0.4 s, weighed 7.8 N hanging 0.37 N m off the cup, not hanging free: put back")
+
+
+def test_a_belief_policys_line_says_what_its_plan_reveals_or_that_it_found_none():
+    out = io.StringIO()
+    printer = DecisionPrinter(8, out)
+    first = {**_decision(0, 0.5), "decision_log": [{"revealed": 0.6094, "plan": ["push segment_2 d=-0.100"]}]}
+    stalled = {**_decision(1, 20.0), "decision_log": [{"revealed": 0.0, "widened": True}]}
+    printer.update((first,), (_snap(0.5, 0.05),))
+    printer.update((first, stalled), (_snap(0.5, 0.05), _snap(20.0, -0.05)))
+    lines = out.getvalue().splitlines()
+    assert lines[0].startswith("step 1/8: push segment_2 -0.100 m (its plan reveals 61% of the belief), planned in")
+    assert lines[1].startswith("step 2/8: push segment_2 -0.100 m (no plan reveals any place the target may stand: "
+                               "moving on), planned in 0.4 s")
+    plain = io.StringIO()  # a policy without a decision log (Bluction-DAR): nothing added
+    DecisionPrinter(8, plain).update((_decision(0, 0.5),), (_snap(0.5, 0.05),))
+    assert plain.getvalue() == "step 1/8: push segment_2 -0.100 m, planned in 0.4 s, "
