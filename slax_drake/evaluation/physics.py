@@ -66,14 +66,22 @@ def trial_path(out: Path, policy: str, density: int, index: int) -> Path:
     return Path(out) / "physics_trials" / policy / f"{density:02d}_{index:04d}.json"
 
 
+def is_stall(log: dict | None) -> bool:
+    """Whether a policy's decision-log entry is a stall: its search found no plan revealing any place the target may
+    stand (``revealed`` 0, not cut by the CPU cap), or it stopped there (``stalled``)."""
+    return bool(log) and bool(log.get("stalled") or (not log.get("capped") and float(log.get("revealed", 1.0)) == 0.0))
+
+
 def stall_step(decisions) -> int | None:
     """The index of the first decision in ``decisions`` (per step, the policy's decision-log entry it acted on or
-    stopped at) at which its search found no plan revealing any place the target may stand (``revealed`` 0, not cut
-    by the CPU cap, or ``stalled``: it stopped there); None when there is none."""
-    for k, log in enumerate(decisions):
-        if log and (log.get("stalled") or (not log.get("capped") and float(log.get("revealed", 1.0)) == 0.0)):
-            return k
-    return None
+    stopped at) that is a stall (:func:`is_stall`); None when there is none."""
+    return next((k for k, log in enumerate(decisions) if is_stall(log)), None)
+
+
+def stall_words(stalls: list) -> str:
+    """A summary's ``stalls`` [stalled trials, of them revealed, actions from the stall on, all actions] in words."""
+    return (f"{stalls[0]} trials, {stalls[1]} of them revealed the target after it; {stalls[2]} of the {stalls[3]} "
+            f"executed actions came from a stall on.")
 
 
 def action_matches(predicted: dict, outcome: dict | None, before: dict | None = None) -> bool | None:
@@ -376,6 +384,17 @@ def clean_success(drake: dict) -> bool:
     return bool(drake["success"] and not drake["toppled"] and not drake["dropped"])
 
 
+def _stall_counts(recorded: list[dict]) -> dict:
+    """``{"stalls": [...]}`` of the summary rows ``recorded`` (those whose records keep the policy's decision log):
+    trials whose search stalled, of them revealed all the same, actions executed from the stall on, all actions
+    executed; {} when there are none."""
+    if not recorded:
+        return {}
+    stalled = [t for t in recorded if t["stall"][0] is not None]
+    return {"stalls": [len(stalled), sum(t["drake_success"] for t in stalled), sum(t["stall"][1] for t in stalled),
+                       sum(t["actions_executed"] for t in recorded)]}
+
+
 def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.inf)) -> dict:
     """Per policy and density key ("4", ..., "all"): shelf and Drake success rate and median steps (over
     successful trials), the fraction of Drake actions whose outcome matched the prediction (judged again from the
@@ -450,11 +469,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                    if any("weighed" in t for t in sel) else {}),
                 # trials whose search stalled, of them revealed all the same, actions executed from the stall on,
                 # and all actions executed (where the records keep the policy's decision log)
-                **({"stalls": [sum(t["stall"][0] is not None for t in sel if "stall" in t),
-                               sum(t["stall"][0] is not None and t["drake_success"] for t in sel if "stall" in t),
-                               sum(t["stall"][1] for t in sel if "stall" in t),
-                               sum(t["actions_executed"] for t in sel if "stall" in t)]}
-                   if any("stall" in t for t in sel) else {}),
+                **_stall_counts([t for t in sel if "stall" in t]),
                 "shelf_median_steps": _median([t["shelf_steps"] for t in sel if t["shelf_success"]]),
                 "drake_median_steps": _median([t["drake_steps"] for t in sel if t["drake_success"]]),
                 "same_outcome_rate": round(sum(t["shelf_success"] == t["drake_success"] for t in sel) / len(sel), 4)
@@ -689,10 +704,9 @@ def markdown_table(summary: dict) -> str:
             lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "
                           f"stopped on contact {guarded[1]}.")
         stalls = per.get("all", {}).get("stalls")
-        if stalls and lines[-1].startswith(f"{p}, Drake trial endings"):
-            lines[-1] += (f" Stalls (the first decision at which no plan of the policy's reveals anything): "
-                          f"{stalls[0]} trials, {stalls[1]} of them revealed the target after it; {stalls[2]} of the "
-                          f"{stalls[3]} executed actions came from a stall on.")
+        if stalls and endings:  # on the endings' line
+            lines[-1] += " Stalls (the first decision at which no plan of the policy's reveals anything): " + \
+                stall_words(stalls)
         weighed = per.get("all", {}).get("weighed_lifts")
         if weighed and weighed[0]:
             why = per["all"].get("put_back_why") or {}

@@ -323,7 +323,7 @@ def _drake_mode(folder: ResultFolder) -> tuple[str, str]:
 def physics_section(folder: ResultFolder) -> str:
     """Markdown of one physics-benchmark folder: profile, the two simulators' observation modes, the command and
     per policy and density the success in both simulators, the matched actions and Drake's endings."""
-    from slax_drake.evaluation.physics import mass_model_words, planning_cell
+    from slax_drake.evaluation.physics import mass_model_words, planning_cell, stall_words
 
     meta = folder.meta
     rules = ", ".join(f"{k} = {v}" for k, v in (meta.get("tool_rules") or {}).items())
@@ -371,8 +371,7 @@ def physics_section(folder: ResultFolder) -> str:
         stalls = per.get("all", {}).get("stalls")
         if stalls:
             lines += ["", f"{policy}, its stalls (the first decision at which no plan of the policy's reveals "
-                      f"anything; research/stall_analysis.py): {stalls[0]} trials, {stalls[1]} of them revealed the "
-                      f"target after it; {stalls[2]} of the {stalls[3]} executed actions came from a stall on."]
+                      f"anything; research/stall_analysis.py): {stall_words(stalls)}"]
     lines += ["", "Reversal: an executed move of an object back along x or y against its previous move (both over "
               "1 cm, judged from the true poses): the shuttles the no-shuttle rule forbids and the reversals it lets "
               "through because they uncover space no earlier arrangement uncovered; most carry the object past where it "

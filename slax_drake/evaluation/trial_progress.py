@@ -26,13 +26,13 @@ from slax_drake.io import plural
 def _plan_text(entry: dict) -> str:
     """For a policy that keeps a decision log (slax-belief): how much of its belief the plan it took reveals, or that
     its search found no plan revealing anything (it stalled, and moves on); empty for the others."""
-    from slax_drake.evaluation.physics import stall_step
+    from slax_drake.evaluation.physics import is_stall
 
     logs = entry.get("decision_log") or []
     last = logs[-1] if logs else {}
     if "revealed" not in last:
         return ""
-    if stall_step([last]) == 0:
+    if is_stall(last):
         return " (no plan reveals any place the target may stand: moving on)"
     return f" (its plan reveals {100 * float(last['revealed']):.0f}% of the belief)"
 

@@ -45,9 +45,14 @@ class Screened(enum.StrEnum):
     PLACEMENT_NOT_ALLOWED = "placement not allowed"  # slax-hindsight/-belief: its placement overlaps a blocked box
 
 
-# the stop reason of a policy whose search finds no plan revealing any place the target may stand, and that stops
-# rather than move on (slax-belief's stuck_select "stop"); the Drake trial ends with it as its result
-NO_REVEALING_PLAN = "no plan reveals the target"
+class StopReason(enum.StrEnum):
+    """A policy's stop reason that a trial acts on (``Decision.stop_reason``); a ``StrEnum``: it compares equal to
+    its text and is written as its text in records."""
+
+    NO_REVEALING_PLAN = "no plan reveals the target"  # slax-belief's stuck_select "stop": no plan reveals anything
+
+
+NO_REVEALING_PLAN = StopReason.NO_REVEALING_PLAN  # the Drake trial ends with it as its result
 
 
 class Reversal(enum.StrEnum):

@@ -246,7 +246,7 @@ class PlannerSystem(LeafSystem):
                                      decision.stop_reason if decision is not None and action is None else None))
             stop = decision.stop_reason if decision is not None and action is None else None
             result = "no feasible action" if not rejected else "no feasible motion"
-            if stop == NO_REVEALING_PLAN and not rejected:
+            if stop is NO_REVEALING_PLAN and not rejected:
                 result = NO_REVEALING_PLAN  # the policy stopped: no plan of it reveals the target
             return self._finish(s, result, entry, frame, hold=True)
         entry["action"] = _describe(action)
