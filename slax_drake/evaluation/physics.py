@@ -38,9 +38,10 @@ from pathlib import Path
 import numpy as np
 
 from slax_drake.errors import PhysicsBenchmarkError
-from slax_drake.io import figure_png, write_bytes_atomic, write_text_atomic
+from slax_drake.io import figure_png, plural, write_bytes_atomic, write_text_atomic
 from slax_drake.policies.protocol import Reversal
 from slax_drake.policies.trial_memory import last_move_by_axis
+from slax_drake.systems.trial_summary import TARGET_MOVED
 
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
 MATCH_YAW = math.radians(10.0)  # rad
@@ -216,6 +217,7 @@ def _run_scene(job) -> dict:
         "toppled": sorted(n for n, p in final.items() if not p["upright"]),
         "dropped": sorted(n for n, p in final.items() if not p["inside"]),
         "initial_objects": d["initial_objects"], "final_objects": final, "sleep": d.get("sleep", False),
+        "target_moved_m": d.get("target_moved_m"),  # how far the trial's moves pushed the target (m)
     }
     logs = [step["decision_log"][-1] if step["decision_log"] else None
             for step in d.get("steps_log") or [] if "decision_log" in step]
@@ -433,6 +435,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "end_refused": len(d["end_rejected"]) if "end_rejected" in d else None,
             "guarded": [sum(1 for a in d["actions"] if "guard" in a),
                         sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped"))],
+            "target_moved_m": d.get("target_moved_m"),  # None in records written before it was kept
         })
         if "stall_step" in d:  # the policy's search stalled at this step (None: never); actions from it on
             stalled = d["stall_step"]
@@ -462,6 +465,11 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 # guarded placements executed, and how many of them the guard stopped on contact
                 "guarded_placements": [sum(t.get("guarded", [0, 0])[0] for t in sel),
                                        sum(t.get("guarded", [0, 0])[1] for t in sel)],
+                # trials whose moves pushed the target TARGET_MOVED or farther, and of them revealed (None where the
+                # records do not say)
+                "target_moved": None if any(t.get("target_moved_m") is None for t in sel) else [
+                    sum(1 for t in sel if t["target_moved_m"] >= TARGET_MOVED),
+                    sum(1 for t in sel if t["target_moved_m"] >= TARGET_MOVED and t["drake_success"])],
                 **({"weighed_lifts": [sum(t["weighed"][0] for t in sel if "weighed" in t),
                                       sum(t["weighed"][1] for t in sel if "weighed" in t)],
                     "put_back_why": dict(sorted(sum((collections.Counter(t.get("put_back_why", {})) for t in sel),
@@ -703,6 +711,11 @@ def markdown_table(summary: dict) -> str:
         if guarded and guarded[0]:
             lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "
                           f"stopped on contact {guarded[1]}.")
+        moved = per.get("all", {}).get("target_moved")
+        if moved and endings:
+            lines[-1] += (f" The target pushed {100 * TARGET_MOVED:.0f} cm or more by a move that brushed it: "
+                          f"{plural(moved[0], 'trial')}, {moved[1]} of them revealed (the target scored where it "
+                          f"stands).")
         stalls = per.get("all", {}).get("stalls")
         if stalls and endings:  # on the endings' line
             lines[-1] += " Stalls (the first decision at which no plan of the policy's reveals anything): " + \

@@ -143,6 +143,10 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
     result = f"{DIVERGED}: {diverged}" if diverged else (state.result or "time limit")
     # where each object ended; unknown (empty) after the simulation blew up
     final = {} if diverged else _final_poses(plant, plant_context, X_WS, scene, bodies)
+    target_final = None
+    if not diverged and scene.target is not None:
+        target_final = _final_poses(plant, plant_context, X_WS, scene.with_objects([scene.target.as_object()]),
+                                    [plant.GetBodyByName("target").index()])["target"]
     if printer is not None:
         printer.update(state.log, snapshots)
         printer.finish(final if diverged is None else None)
@@ -205,6 +209,11 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
         "initial_objects": {o.name: {"x": round(float(o.center[0]), 5), "y": round(float(o.center[1]), 5),
                                      "yaw": round(float(o.yaw), 5)} for o in scene.objects},
         "final_objects": final,
+        # the target where it ended and how far (m, in the shelf floor's plane) the trial moved it: a move that
+        # brushes it can push it deeper or turn it (the evaluator scores it where it stands)
+        "target_final": target_final,
+        "target_moved_m": None if target_final is None else round(math.hypot(
+            target_final["x"] - float(scene.target.center[0]), target_final["y"] - float(scene.target.center[1])), 5),
         "executed_trajectory": trajectory.to_dict(stride=opts.stride, keep_times=[t for t, _ in state.motions]),
         "executed_trajectory_note": f"the commanded (planned) joint trajectory, every {opts.stride} ms and at the "
                                     "first commanded sample of each motion",

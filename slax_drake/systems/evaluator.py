@@ -12,8 +12,9 @@ Output port:
 
 Every ``period`` seconds (the planner's decision period, same phase) a periodic update checks ``deciding``; when the
 planner decides at this tick it records one :class:`Snapshot` (so the camera is not rendered between decisions): the
-target's visible fraction (its pixels in the label image over the pixels it covers with no occluder, ray-cast once)
-and the objects lost (toppled: z axis tilted over 20 deg; dropped: centre outside the bay), with every object's
+target's visible fraction (its pixels in the label image over the pixels it covers with no occluder where it stands
+now, ray-cast again whenever the target has moved: a target a move pushed deeper covers fewer pixels, and all of it
+seen must read 1), the target's own pose, and the objects lost (toppled: z axis tilted over 20 deg; dropped: centre outside the bay), with every object's
 planar pose in the shelf frame S. The runner joins them to the planner's decisions by time for the trial record.
 The ``stop`` output is computed from the label image directly (a direct feedthrough), so the planner sees success
 at the very tick it happens.
@@ -37,27 +38,31 @@ TOPPLE_ANGLE = math.radians(20.0)
 @dataclasses.dataclass(frozen=True)
 class Snapshot:
     """What the evaluator saw at ``time`` s: ``visible_fraction`` of the target, ``lost`` object names, ``poses``
-    {name: (x, y, yaw)} in S (metres, radians), ``segments`` {"segment_<id>": true object name}."""
+    {name: (x, y, yaw)} in S (metres, radians), ``segments`` {"segment_<id>": true object name}, ``target_pose``
+    (x, y, yaw) of the target in S (None in a scene without one)."""
 
     time: float
     visible_fraction: float
     lost: tuple
     poses: dict
     segments: dict
+    target_pose: tuple | None = None
 
 
 class EvaluatorSystem(LeafSystem):
     """See the module docstring. ``scene``: the trial's initial scene (names, camera, target); ``body_indices``:
-    the plant BodyIndex of every scene object (scene order); ``X_WS``: the shelf frame in the world."""
+    the plant BodyIndex of every scene object (scene order); ``target_body_index``: the target's (None: it stands
+    where the scene puts it); ``X_WS``: the shelf frame in the world."""
 
     def __init__(self, scene: Scene, body_indices, X_WS, threshold: float = 0.80, period: float = 0.1,
-                 image_size=(640, 480)):
+                 image_size=(640, 480), target_body_index=None):
         LeafSystem.__init__(self)
         self.scene = scene
         self.body_indices = list(body_indices)
+        self.target_body_index = target_body_index
         self.X_SW = X_WS.inverse()
         self.threshold = threshold
-        self._target_pixels = None  # a cache of a pure function of the scene and image size
+        self._target_pixels = None  # (pose key, image size, pixels): the last ray-cast of the target alone
         w, h = image_size
         self._labels = self.DeclareAbstractInputPort("label_image", AbstractValue.Make(ImageLabel16I(w, h)))
         self._poses = self.DeclareAbstractInputPort("body_poses", AbstractValue.Make([X_WS]))
@@ -78,17 +83,28 @@ class EvaluatorSystem(LeafSystem):
         return next((s for s in self.snapshots(root_context) if abs(s.time - time) < 1e-6), None)
 
     # ---------------------------------------------------------------------------------------------------------
+    def target_pose(self, context) -> np.ndarray:
+        """X_ST (4x4) of the target where it stands now: the plant's pose of its body, or the scene's."""
+        if self.target_body_index is None:
+            return self.scene.target.X_ST
+        return (self.X_SW @ self._poses.Eval(context)[int(self.target_body_index)]).GetAsMatrix4()
+
     def visible_fraction(self, context) -> float:
+        """The target's pixels in the label image over the pixels it covers where it stands now with nothing in
+        front of it (ray-cast at the label image's size, again only when it moved by 0.1 mm or 1e-4 in rotation)."""
         raw = np.array(self._labels.Eval(context).data[:, :, 0], dtype=np.int32)
         target_label = len(self.scene.objects) + 1
-        if self._target_pixels is None:
+        X_ST = self.target_pose(context)
+        key = (tuple(np.round(X_ST[:3, :].ravel(), 4)), raw.shape)
+        if self._target_pixels is None or self._target_pixels[0] != key:
             from slax_drake.scene.raycast import SceneRaycaster
 
             h, w = raw.shape
-            alone = self.scene.with_objects(())
+            alone = dataclasses.replace(self.scene, objects=(),
+                                        target=dataclasses.replace(self.scene.target, X_ST=X_ST))
             _, lab = SceneRaycaster(alone, include_target=True).render(self.scene.camera.with_resolution(w, h))
-            self._target_pixels = max(1, int(np.count_nonzero(lab == 1)))
-        return float(np.count_nonzero(raw == target_label)) / self._target_pixels
+            self._target_pixels = (key, max(1, int(np.count_nonzero(lab == 1))))
+        return float(np.count_nonzero(raw == target_label)) / self._target_pixels[1]
 
     def poses_and_lost(self, context) -> tuple[dict, list]:
         poses = self._poses.Eval(context)
@@ -132,6 +148,10 @@ class EvaluatorSystem(LeafSystem):
             return
         log = context.get_abstract_state(self._log).get_value()
         poses, lost = self.poses_and_lost(context)
+        target = None
+        if self.scene.target is not None:
+            X_ST = self.target_pose(context)
+            target = (float(X_ST[0, 3]), float(X_ST[1, 3]), math.atan2(X_ST[1, 0], X_ST[0, 0]))
         snap = Snapshot(round(context.get_time(), 6), self.visible_fraction(context), tuple(lost), poses,
-                        self.segment_owners(context))
+                        self.segment_owners(context), target)
         state.get_mutable_abstract_state(0).set_value(log + (snap,))

@@ -182,7 +182,8 @@ def build_trial(opts: TrialOptions, meshcat=None) -> TrialDiagram:
         guard=guard))
     evaluator = builder.AddNamedSystem("evaluator", EvaluatorSystem(
         scene, bodies, X_WS, threshold=scenario.target.visibility_threshold,
-        image_size=(scene.camera.width, scene.camera.height)))
+        image_size=(scene.camera.width, scene.camera.height),
+        target_body_index=plant.GetBodyByName("target").index() if scene.target is not None else None))
     for name in ("observation", "hypotheses", "occupancy_1d"):
         builder.Connect(perception.GetOutputPort(name), planner_system.GetInputPort(name))
     builder.Connect(station_diagram.GetOutputPort("measured_state"), planner_system.GetInputPort("measured_state"))

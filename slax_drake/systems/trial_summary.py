@@ -21,12 +21,19 @@ OUTCOMES = {
 }
 
 
+# the robot moved the target when a move brushed it this far (m) or more: said in the outcome line
+TARGET_MOVED = 0.01
+
+
 def outcome_line(data: dict) -> str:
     """One phrase for how the trial ended, with the target's visible share, e.g. "target revealed (93% of it
-    visible)"."""
+    visible)", and how far the trial moved the target when a move brushed it ``TARGET_MOVED`` or more."""
     template = OUTCOMES.get(data["result"], "target not revealed: {result}")
+    moved = data.get("target_moved_m")
     return (template.format(horizon=data.get("horizon"), result=data["result"])
-            + f" ({data['visible_fraction'] * 100:.0f}% of it visible at the end)")
+            + f" ({data['visible_fraction'] * 100:.0f}% of it visible at the end"
+            + (f"; a move pushed the target {moved * 100:.1f} cm" if moved is not None and moved >= TARGET_MOVED
+               else "") + ")")
 
 
 _plural = plural

@@ -453,3 +453,22 @@ def test_the_summary_counts_stalled_trials_and_the_actions_from_their_stall_on()
     # a policy keeping no decision log (Bluction-DAR) or a record from before: no stall figures
     old = summarise([trial(0, False, "unrecorded", 3)], ["p"], [4])
     assert "stall" not in old["trials"][0] and "stalls" not in old["policies"]["p"]["all"]
+
+
+def test_the_summary_counts_the_trials_whose_moves_pushed_the_target():
+    from slax_drake.evaluation.physics import markdown_table, summarise
+
+    def trial(i, success, moved):
+        drake = {"success": success, "result": "revealed" if success else "horizon", "steps": 1, "toppled": [],
+                 "dropped": [], "real_time_factor": 1.0, "wall_s": 1.0, "actions": [], "target_moved_m": moved}
+        return {"policy": "p", "density": 4, "index": i, "seed": i, "shelf": {"success": success, "steps": 1},
+                "drake": drake}
+
+    summary = summarise([trial(0, True, 0.0645), trial(1, False, 0.012), trial(2, True, 0.004)], ["p"], [4])
+    assert summary["policies"]["p"]["all"]["target_moved"] == [2, 1]
+    assert ("The target pushed 1 cm or more by a move that brushed it: 2 trials, 1 of them revealed"
+            in markdown_table(summary))
+    # records from before the target's pose was kept: unknown, not 0
+    old = summarise([trial(0, True, None)], ["p"], [4])
+    assert old["policies"]["p"]["all"]["target_moved"] is None
+    assert "The target pushed" not in markdown_table(old)

@@ -69,6 +69,17 @@ def test_summary_says_why_the_target_was_not_revealed(tmp_path, result, phrase):
     assert "slax-drake view-trial" in text and "(no simulation)" in text  # no replay written: say how to get one
 
 
+def test_summary_says_how_far_a_move_pushed_the_target(tmp_path):
+    record = _record()
+    record["target_moved_m"] = 0.0645
+    text = trial_summary(record, _written(tmp_path, html=False))
+    assert "outcome: target revealed (93% of it visible at the end; a move pushed the target 6.5 cm)" in text
+    record["target_moved_m"] = 0.004  # under a centimetre: not worth a word
+    again = tmp_path / "again"
+    again.mkdir()
+    assert "(93% of it visible at the end)" in trial_summary(record, _written(again, html=False))
+
+
 def test_summary_says_the_live_view_dies_with_the_process(tmp_path):
     text = trial_summary(_record(), _written(tmp_path), html=str(tmp_path / "trial.html"),
                          meshcat_url="http://localhost:7000")

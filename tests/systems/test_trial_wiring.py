@@ -96,3 +96,29 @@ def test_a_guarded_trial_feeds_the_planner_the_arm_s_efforts_and_nothing_of_the_
     planner = weightless.planner_system
     names = {planner.get_input_port(i).get_name() for i in range(planner.num_input_ports())}
     assert names == PLANNER_INPUTS
+
+
+def test_the_evaluator_scores_a_moved_target_where_it_stands(trial):
+    """A target a move pushed deeper and turned covers fewer pixels than at its start; seen whole there, it still
+    reads as wholly visible (its unoccluded pixels are ray-cast where it stands now)."""
+    import math
+
+    from pydrake.math import RigidTransform, RollPitchYaw
+
+    context = trial.diagram.CreateDefaultContext()
+    plant = trial.plant
+    pc = plant.GetMyContextFromRoot(context)
+    X_WS = trial.X_WS
+    for obj in trial.scene.objects:  # every occluder out of the camera's view
+        plant.SetFreeBodyPose(pc, plant.GetBodyByName(obj.name), RigidTransform([10.0, 10.0, 0.0]))
+    ec = trial.evaluator.GetMyContextFromRoot(context)
+    assert trial.evaluator.visible_fraction(ec) > 0.97
+    start_pixels = trial.evaluator._target_pixels[1]
+    c = trial.scene.target.center
+    X_ST = RigidTransform(RollPitchYaw(0.0, 0.0, math.radians(40.0)), [c[0], c[1] + 0.12, c[2]])
+    plant.SetFreeBodyPose(pc, plant.GetBodyByName("target"), X_WS @ X_ST)
+    fraction = trial.evaluator.visible_fraction(ec)
+    assert trial.evaluator._target_pixels[1] < 0.9 * start_pixels  # deeper: fewer pixels than at the start
+    assert fraction > 0.97
+    pose = trial.evaluator.target_pose(ec)
+    assert abs(pose[1, 3] - (c[1] + 0.12)) < 1e-9
