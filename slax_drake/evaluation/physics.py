@@ -435,8 +435,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             "end_refused": len(d["end_rejected"]) if "end_rejected" in d else None,
             "guarded": [sum(1 for a in d["actions"] if "guard" in a),
                         sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped"))],
-            "target_moved_m": d.get("target_moved_m"),  # None in records written before it was kept
         })
+        if "target_moved_m" in d:  # None: the simulation diverged (no final pose); absent: a record from before
+            summary["trials"][-1]["target_moved_m"] = d["target_moved_m"]
         if "stall_step" in d:  # the policy's search stalled at this step (None: never); actions from it on
             stalled = d["stall_step"]
             summary["trials"][-1]["stall"] = [stalled, 0 if stalled is None else len(d["actions"][stalled:])]
@@ -467,9 +468,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                                        sum(t.get("guarded", [0, 0])[1] for t in sel)],
                 # trials whose moves pushed the target TARGET_MOVED or farther, and of them revealed (None where the
                 # records do not say)
-                "target_moved": None if any(t.get("target_moved_m") is None for t in sel) else [
-                    sum(1 for t in sel if t["target_moved_m"] >= TARGET_MOVED),
-                    sum(1 for t in sel if t["target_moved_m"] >= TARGET_MOVED and t["drake_success"])],
+                "target_moved": None if any("target_moved_m" not in t for t in sel) else [
+                    sum(1 for t in sel if (t["target_moved_m"] or 0.0) >= TARGET_MOVED),
+                    sum(1 for t in sel if (t["target_moved_m"] or 0.0) >= TARGET_MOVED and t["drake_success"])],
                 **({"weighed_lifts": [sum(t["weighed"][0] for t in sel if "weighed" in t),
                                       sum(t["weighed"][1] for t in sel if "weighed" in t)],
                     "put_back_why": dict(sorted(sum((collections.Counter(t.get("put_back_why", {})) for t in sel),
@@ -712,10 +713,10 @@ def markdown_table(summary: dict) -> str:
             lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "
                           f"stopped on contact {guarded[1]}.")
         moved = per.get("all", {}).get("target_moved")
-        if moved and endings:
+        if moved is not None and endings:
             lines[-1] += (f" The target pushed {100 * TARGET_MOVED:.0f} cm or more by a move that brushed it: "
-                          f"{plural(moved[0], 'trial')}, {moved[1]} of them revealed (the target scored where it "
-                          f"stands).")
+                          + (f"{plural(moved[0], 'trial')}, {moved[1]} of them revealed (the target scored where it "
+                             f"stands)." if moved[0] else "in no trial."))
         stalls = per.get("all", {}).get("stalls")
         if stalls and endings:  # on the endings' line
             lines[-1] += " Stalls (the first decision at which no plan of the policy's reveals anything): " + \

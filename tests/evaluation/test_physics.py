@@ -468,7 +468,13 @@ def test_the_summary_counts_the_trials_whose_moves_pushed_the_target():
     assert summary["policies"]["p"]["all"]["target_moved"] == [2, 1]
     assert ("The target pushed 1 cm or more by a move that brushed it: 2 trials, 1 of them revealed"
             in markdown_table(summary))
+    # a diverged simulation (no final pose) is no moved target; none moved, the report says so
+    calm = summarise([trial(0, True, 0.002), trial(1, False, None)], ["p"], [4])
+    assert calm["policies"]["p"]["all"]["target_moved"] == [0, 0]
+    assert "The target pushed 1 cm or more by a move that brushed it: in no trial." in markdown_table(calm)
     # records from before the target's pose was kept: unknown, not 0
-    old = summarise([trial(0, True, None)], ["p"], [4])
+    unrecorded = trial(0, True, None)
+    del unrecorded["drake"]["target_moved_m"]
+    old = summarise([unrecorded], ["p"], [4])
     assert old["policies"]["p"]["all"]["target_moved"] is None
     assert "The target pushed" not in markdown_table(old)
