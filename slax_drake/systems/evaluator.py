@@ -14,10 +14,10 @@ Every ``period`` seconds (the planner's decision period, same phase) a periodic 
 planner decides at this tick it records one :class:`Snapshot` (so the camera is not rendered between decisions): the
 target's visible fraction (its pixels in the label image over the pixels it covers with no occluder where it stands
 now, ray-cast again whenever the target has moved: a target a move pushed deeper covers fewer pixels, and all of it
-seen must read 1), the target's own pose, and the objects lost (toppled: z axis tilted over 20 deg; dropped: centre outside the bay), with every object's
-planar pose in the shelf frame S. The runner joins them to the planner's decisions by time for the trial record.
-The ``stop`` output is computed from the label image directly (a direct feedthrough), so the planner sees success
-at the very tick it happens.
+seen must read 1) and the objects lost (toppled: z axis tilted over 20 deg; dropped: centre outside the bay), with
+every object's planar pose in the shelf frame S. The runner joins them to the planner's decisions by time for the
+trial record. The ``stop`` output is computed from the label image directly (a direct feedthrough), so the planner
+sees success at the very tick it happens.
 """
 
 from __future__ import annotations
@@ -38,15 +38,13 @@ TOPPLE_ANGLE = math.radians(20.0)
 @dataclasses.dataclass(frozen=True)
 class Snapshot:
     """What the evaluator saw at ``time`` s: ``visible_fraction`` of the target, ``lost`` object names, ``poses``
-    {name: (x, y, yaw)} in S (metres, radians), ``segments`` {"segment_<id>": true object name}, ``target_pose``
-    (x, y, yaw) of the target in S (None in a scene without one)."""
+    {name: (x, y, yaw)} in S (metres, radians), ``segments`` {"segment_<id>": true object name}."""
 
     time: float
     visible_fraction: float
     lost: tuple
     poses: dict
     segments: dict
-    target_pose: tuple | None = None
 
 
 class EvaluatorSystem(LeafSystem):
@@ -62,7 +60,7 @@ class EvaluatorSystem(LeafSystem):
         self.target_body_index = target_body_index
         self.X_SW = X_WS.inverse()
         self.threshold = threshold
-        self._target_pixels = None  # (pose key, image size, pixels): the last ray-cast of the target alone
+        self._target_pixels = None  # ((rounded pose, image shape), pixels): the last ray-cast of the target alone
         w, h = image_size
         self._labels = self.DeclareAbstractInputPort("label_image", AbstractValue.Make(ImageLabel16I(w, h)))
         self._poses = self.DeclareAbstractInputPort("body_poses", AbstractValue.Make([X_WS]))
@@ -148,10 +146,6 @@ class EvaluatorSystem(LeafSystem):
             return
         log = context.get_abstract_state(self._log).get_value()
         poses, lost = self.poses_and_lost(context)
-        target = None
-        if self.scene.target is not None:
-            X_ST = self.target_pose(context)
-            target = (float(X_ST[0, 3]), float(X_ST[1, 3]), math.atan2(X_ST[1, 0], X_ST[0, 0]))
         snap = Snapshot(round(context.get_time(), 6), self.visible_fraction(context), tuple(lost), poses,
-                        self.segment_owners(context), target)
+                        self.segment_owners(context))
         state.get_mutable_abstract_state(0).set_value(log + (snap,))
