@@ -307,3 +307,10 @@ def test_stall_analysis_follows_a_trial_to_its_stall_and_asks_the_oracle(capsys)
     assert "04_0004 revealed=False" in out and "stall at decision 2" in out
     assert "corrections off: reveals 1.00 of the belief" in out
     assert "  stalled: 1\n" in out
+
+
+@pytest.mark.parametrize("argv", [["--sizes", "0.1x"], ["--sizes", "0.1x0.2x0.3"], ["--d", "a"], ["--contacts", "back"]])
+def test_push_contact_refuses_bad_arguments_before_any_drake_run(capsys, argv):
+    with pytest.raises(SystemExit) as e:
+        script("push_contact").main(argv)
+    assert e.value.code == 2 and "error:" in capsys.readouterr().err

@@ -90,12 +90,13 @@ def action_matches(predicted: dict, outcome: dict | None, before: dict | None = 
 
     With ``before`` (the true object's pose at the decision) the yaw test is the object's own turn, outcome less
     before: the first-order model never turns an object, and the prediction's yaw is the perceived hypothesis's,
-    whose box axes may be the true object's turned by 90 or 180 deg (the same box). Without it (records from
-    before it was kept), the predicted yaw is compared directly."""
+    whose box axes may be the true object's turned by 90 or 180 deg (the same box). A push the quasi-static model
+    predicted (``push_turn``) turns the object by the prediction's ``turn`` (rad): the test is the object's turn
+    against it. Without ``before`` (records from before it was kept), the predicted yaw is compared directly."""
     if outcome is None:
         return None
     distance = math.hypot(outcome["x"] - predicted["x"], outcome["y"] - predicted["y"])
-    reference = before["yaw"] if before is not None else predicted["yaw"]
+    reference = before["yaw"] + predicted.get("turn", 0.0) if before is not None else predicted["yaw"]
     dyaw = abs(math.remainder(outcome["yaw"] - reference, 2.0 * math.pi))
     return distance <= MATCH_DISTANCE and dyaw <= MATCH_YAW
 

@@ -123,13 +123,16 @@ STATION_RULES = frozenset({"max_suction_moment", "max_drag_pull", "max_drag_twis
 
 def _physics_rule_args(rules: dict) -> dict:
     """The --tool-rule values a physics run with these recorded rules needs now: the station files give their cup's
-    limits, reach map and guarded placement (``guarded_placement``: suction_hidden_rule=guarded), so a run recorded
-    without that rule (before the stations set it, or with it taken away) needs suction_hidden_rule=placement."""
+    limits, reach map, guarded placement (``guarded_placement``: suction_hidden_rule=guarded) and push model
+    (``push_turn``: quasi-static), so a run recorded without one of those two rules (before the stations set it, or
+    with it taken away) needs suction_hidden_rule=placement or push_turn=none."""
     args = {k: v for k, v in rules.items() if k not in STATION_RULES}
-    if args.get("suction_hidden_rule") == "guarded":
-        del args["suction_hidden_rule"]
-    elif "suction_hidden_rule" not in args:
-        args["suction_hidden_rule"] = "placement"
+    for rule, station_value, without in (("suction_hidden_rule", "guarded", "placement"),
+                                         ("push_turn", "quasi-static", "none")):
+        if args.get(rule) == station_value:
+            del args[rule]
+        elif rule not in args:
+            args[rule] = without
     return args
 
 

@@ -106,7 +106,7 @@ class Checker:
             longest = max(abs(a.d) for a in same)
             if abs(d) > longest + PUSH_TOLERANCE:
                 return None, f"{name} can be pushed at most {longest:.3f} m toward {'+' if d > 0 else '-'}x here"
-            return Push(name, same[0].q, d), ""
+            return dataclasses.replace(same[0], d=d), ""
         dx, dz = spec[2], spec[3]
         mine = [a for a in cands.feasible if a.kind == "suction" and a.name == name]
         match = [a for a in mine if abs(a.dx - dx) <= SUCTION_TOLERANCE and abs(a.dz - dz) <= SUCTION_TOLERANCE]

@@ -570,7 +570,8 @@ def _action_of(doc):
         return None
     try:
         if doc.get("type") == "push":
-            return Push(str(doc["object"]), tuple(float(v) for v in doc["q"]), float(doc["d"]))
+            return Push(str(doc["object"]), tuple(float(v) for v in doc["q"]), float(doc["d"]),
+                        turns=bool(doc.get("turns", False)))
         if doc.get("type") == "suction":
             return Suction(str(doc["object"]), tuple(float(v) for v in doc["q"]), float(doc["dx"]),
                            float(doc["dz"]), float(doc.get("yaw", 0.0)))

@@ -72,10 +72,14 @@ class SceneObject:
             return self.size[0] / 2.0
         return 0.5 * math.hypot(self.size[0], self.size[1])
 
-    def moved_to(self, x: float, y: float) -> "SceneObject":
-        """The same object translated to (x, y) on the support surface."""
+    def moved_to(self, x: float, y: float, yaw: float | None = None) -> "SceneObject":
+        """The same object translated to (x, y) on the support surface and, with ``yaw``, turned to that yaw (rad,
+        about the support's z)."""
         X = self.X_SO.copy()
         X[0, 3], X[1, 3] = x, y
+        if yaw is not None:
+            c, s = math.cos(yaw), math.sin(yaw)
+            X[:2, :2] = [[c, -s], [s, c]]
         X.flags.writeable = False  # taken as it is (see the class docstring)
         return dataclasses.replace(self, X_SO=X)
 

@@ -51,14 +51,15 @@ import math
 import numpy as np
 
 from slax_drake.caches import memo
-from slax_drake.shelf.rules import RULES, ToolConfig, tool_config_problem
+from slax_drake.shelf.pushing import push_pose
+from slax_drake.shelf.rules import RULES, ToolConfig, ToolGeometry, tool_config_problem
 from slax_drake.shelf.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
     push_end_hidden,
 )
 from slax_drake.shelf.reach import hold_height_span, load_reach_map
 from slax_drake.scene import mass as scene_mass
-from slax_drake.scene.footprint import Footprint, clear_of
+from slax_drake.scene.footprint import Footprint, clear_of, footprints_clear, inside_shelf
 from slax_drake.scene.model import SceneObject, Shelf
 
 GRAVITY = 9.81  # m/s^2
@@ -97,11 +98,14 @@ TUBE_CHECK_SLACK = 0.004  # m: how far the planned tool may stray from its strai
 
 @dataclasses.dataclass(frozen=True)
 class Push:
-    """Push object ``name`` by ``d`` metres along x with the blade starting at ``q`` (x, y, z)."""
+    """Push object ``name`` by ``d`` metres along x with the blade starting at ``q`` (x, y, z). ``turns``: the
+    object moves as the quasi-static model predicts (:func:`slax_drake.shelf.pushing.push_pose`, the
+    ``push_turn`` rule) instead of translating by ``d``."""
 
     name: str
     q: tuple[float, float, float]
     d: float
+    turns: bool = False
 
     kind = "push"
 
@@ -213,13 +217,23 @@ def weighed_mass(weight_n: float, moment_nm: float, lever: float) -> float:
     return max(mass, moment_nm / (GRAVITY * lever)) if lever > 0.0 else mass
 
 
+def pushed(obj: SceneObject, action: Push) -> SceneObject:
+    """``obj`` after the push ``action``: translated by d, or where the quasi-static model leaves it (``turns``)."""
+    x, y = float(obj.center[0]), float(obj.center[1])
+    if not action.turns or obj.shape == "cylinder":
+        return obj.moved_to(x + action.d, y)
+    tip = action.q[1]
+    x, y, yaw = push_pose(Footprint.of(obj), 1.0 if action.d > 0 else -1.0, abs(action.d),
+                          tip - ToolGeometry.blade_width, tip)
+    return obj.moved_to(x, y, yaw)
+
+
 def apply_action(objects: tuple[SceneObject, ...], action) -> tuple[SceneObject, ...]:
     """The objects after the action, exactly as the model says (no feasibility check)."""
     out = []
     for o in objects:
         if o.name == action.name:
-            x, y = float(o.center[0]), float(o.center[1])
-            o = o.moved_to(x + action.d, y) if isinstance(action, Push) else o.moved_to(x + action.dx, action.dz)
+            o = pushed(o, action) if isinstance(action, Push) else o.moved_to(float(o.center[0]) + action.dx, action.dz)
         out.append(o)
     return tuple(out)
 
@@ -410,8 +424,16 @@ class ActionModel:
             ds = [d for d in ds if end_ok[int(round(d / t.grid.cell)) - 1]]
         if not ds or d_max - ds[-1] > (1e-9 if t.rules.push_stop == "exact" else t.grid.cell / 2):
             ds.append(d_max)
+        turns = t.rules.push_turn == "quasi-static" and fp.shape != "cylinder"
         for d in ds:
-            feasible.append(Push(obj.name, q, round(float(sign * d), 6)))
+            push = Push(obj.name, q, round(float(sign * d), 6), turns=turns)
+            if turns:  # the box turns on its way: where it ends must be clear of the walls and the known objects
+                blocker = self._turned_end_blocker(ctx, i, push)
+                if blocker is not None:
+                    rejected.append(refused(f"{what} by {d:.3f}", f"{obj.name} would turn into {blocker}",
+                                            distance=push.d, kind=RefusalKind.BLOCKED))
+                    continue
+            feasible.append(push)
         d = (int(d_max / step + 1e-9) + 1) * step
         if d < shelf.width:
             rejected.append(refused(f"{what} by {d:.3f}", f"{obj.name} would hit {stopper} after {d_max:.3f} m",
@@ -913,6 +935,17 @@ class ActionModel:
             return tool_rects, tuple(self._swept_rects(tool_rects, sign))
 
         return memo(self._push_rects_cache, (fp, sign), compute, PAIR_CACHE_SIZE)
+
+    def _turned_end_blocker(self, ctx, i: int, push: Push) -> str | None:
+        """What the box of ``ctx.objects[i]``, turned where ``push`` leaves it, would meet (a known object, within
+        ``clearance``, or "the wall"), or None."""
+        end = Footprint.of(pushed(ctx.objects[i], push))
+        if not inside_shelf(end, self.shelf, self.tool.physics.clearance):
+            return "the wall"
+        for j, other in enumerate(ctx.all_fps):
+            if j != i and not footprints_clear(end, other, self.tool.physics.clearance):
+                return ctx.all_names[j]
+        return None
 
     def push_tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:
         """The tool's outline when inserted to push ``fp`` toward ``sign`` x: (centre x, centre y, half x,

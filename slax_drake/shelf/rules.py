@@ -179,6 +179,19 @@ class PushStop(Rule):
 
 
 @register
+class PushTurn(Rule):
+    """How a pushed box moves. "none" (both profiles): it translates by d along x, the paper's first-order model.
+    "quasi-static": it turns as a box standing on its corners turns under the blade's flat face until a face lies
+    flush against it (:mod:`slax_drake.shelf.pushing`; a box met at a corner, or along only the front of a deep
+    side, turns 10-40 deg and shifts 1-3 cm along y over a 0.10 m push in the Drake station); the pushed box must
+    end clear of the known objects and the walls; discs translate. The stations set it (``push_turn`` in the
+    station YAML): the first-order translation matched 20 of 58 lone-box pushes in Drake, this model 50
+    (research/push_contact.py). The hidden-space check still follows the straight sweep."""
+
+    name, type, paper, station, choices = "push_turn", str, "none", "none", ("none", "quasi-static")
+
+
+@register
 class HiddenSpace(Rule):
     """Which space counts as hidden, for the pushes' (and suction placements') hidden-space rule: "3d", a cell
     whose point ``hidden_probe_height`` above it is not seen by the camera (an unseen object at least that tall

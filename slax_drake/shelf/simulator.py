@@ -23,10 +23,10 @@ import time
 import numpy as np
 
 from slax_drake.shelf.actions import (
-    BLADE_CONTACT_CLEARANCE, GRAVITY, ActionModel, Push, Suction, apply_action, object_mass, weighed_mass,
+    BLADE_CONTACT_CLEARANCE, GRAVITY, ActionModel, Push, Suction, apply_action, object_mass, pushed, weighed_mass,
 )
 from slax_drake.shelf.rules import RULES
-from slax_drake.scene.footprint import Footprint, clear_of
+from slax_drake.scene.footprint import Footprint, clear_of, footprints_clear
 from slax_drake.scene.model import Scene
 from slax_drake.scene.raycast import SceneRaycaster
 from slax_drake.scene.sampling import target_visible_fraction
@@ -266,12 +266,16 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
                     return scene, f"blade blocked by {name}"
         n = max(1, int(math.ceil(abs(action.d) / t.grid.cell)))
         s = np.linspace(0.0, action.d, n + 1)[1:]
-        xs = fp.x + s
-        inside = np.abs(xs) + ex <= shelf.width / 2 - t.physics.clearance + 1e-12
-        ok = inside.copy()
-        centers = np.column_stack([xs, np.full(n, fp.y)])
+        # the object at each step: translated, or turning as the quasi-static model has it (``turns``)
+        steps = [pushed(obj, dataclasses.replace(action, d=float(v))) for v in s]
+        ok = np.array([abs(float(o.center[0])) + Footprint.of(o).extents()[0] <= shelf.width / 2 - t.physics.clearance
+                       + 1e-12 for o in steps])  # within the side walls
         for _, other in obstacles:
-            ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.physics.clearance)
+            if action.turns:
+                ok &= np.array([footprints_clear(Footprint.of(o), other, t.physics.clearance) for o in steps])
+            else:
+                centers = np.array([o.center[:2] for o in steps])
+                ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.physics.clearance)
             for rx, ry, hx, hy in rects:
                 ok &= clear_of("box", np.column_stack([rx + s, np.full(n, ry)]), 0.0, (hx, hy), other,
                                BLADE_CONTACT_CLEARANCE)
@@ -279,7 +283,7 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         k = int(bad[0]) if len(bad) else n
         if k == 0:
             return scene, "pushed object blocked at once"
-        moved = obj.moved_to(float(xs[k - 1]), fp.y)
+        moved = steps[k - 1]
         note = "" if k == n else f"push stopped after {s[k - 1]:+.3f} m by an unseen obstacle"
         return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
 

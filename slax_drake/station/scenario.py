@@ -58,6 +58,9 @@ def _default_plant_config():
     return MultibodyPlantConfig(time_step=0.005, contact_model="point", discrete_contact_approximation="lagged")
 
 
+PUSH_TURNS = ("none", "quasi-static")  # the action model's push_turn rule's values (slax_drake.shelf.rules)
+
+
 @dataclasses.dataclass
 class StationScenario:
     """A station: the scene scenario it serves, the model directives and the plant, control and camera settings.
@@ -86,6 +89,10 @@ class StationScenario:
     # on the contact its joint efforts sense, slax_drake.systems.guard): when true, trials and plan-step on it plan
     # with suction_hidden_rule=guarded (systems.trial.station_tool_rules), which a --tool-rule overrides.
     guarded_placement: bool = False
+    # How a push moves a box on this station (the action model's push_turn rule in trials on it): "quasi-static",
+    # it turns as a box standing on its corners does under the blade (slax_drake.shelf.pushing); "none", it
+    # translates (the paper's first-order model).
+    push_turn: str = "none"
 
 
 def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:
@@ -157,6 +164,9 @@ def _validate(scenario: StationScenario, source: str) -> None:
             f"{source}: key 'plant_config.discrete_contact_approximation' = "
             f"{scenario.plant_config.discrete_contact_approximation!r}: PD-controlled actuators need 'sap', 'similar' or 'lagged'"
         )
+    if scenario.push_turn not in PUSH_TURNS:
+        raise ConfigError(f"{source}: key 'push_turn' = {scenario.push_turn!r}: must be one of "
+                          f"{', '.join(map(repr, PUSH_TURNS))}")
     p = scenario.suction
     for name in ("vacuum_pressure", "cup_radius", "max_distance", "max_angle_deg"):
         if not getattr(p, name) > 0:

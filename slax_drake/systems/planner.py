@@ -44,6 +44,7 @@ replays the same trial. Read it with :meth:`PlannerSystem.trial_state`.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 
 import numpy as np
@@ -406,7 +407,8 @@ def stop_record(policy, known, rejected: list, stop_reason: str | None) -> dict:
 
 def _describe(action) -> dict:
     if isinstance(action, Push):
-        return {"type": "push", "object": action.name, "q": list(action.q), "d": action.d}
+        return {"type": "push", "object": action.name, "q": list(action.q), "d": action.d,
+                **({"turns": True} if action.turns else {})}
     return {"type": "suction", "object": action.name, "q": list(action.q), "dx": action.dx, "dz": action.dz,
             "yaw": action.yaw, "grip": action.grip, "guarded": bool(action.guarded)}
 
@@ -414,6 +416,10 @@ def _describe(action) -> dict:
 def _predicted(objects, action) -> dict:
     from slax_drake.shelf.actions import apply_action
 
+    before = next(o for o in objects if o.name == action.name)
     moved = next(o for o in apply_action(tuple(objects), action) if o.name == action.name)
-    return {"object": action.name, "x": round(float(moved.center[0]), 5), "y": round(float(moved.center[1]), 5),
-            "yaw": round(float(moved.yaw), 5)}
+    out = {"object": action.name, "x": round(float(moved.center[0]), 5), "y": round(float(moved.center[1]), 5),
+           "yaw": round(float(moved.yaw), 5)}
+    if getattr(action, "turns", False):  # the quasi-static push's predicted turn of the object (rad)
+        out["turn"] = round(math.remainder(float(moved.yaw) - float(before.yaw), 2.0 * math.pi), 5)
+    return out

@@ -81,7 +81,8 @@ def station_tool_rules(station, overrides: dict | None = None, profile: str = "s
     (``suction.max_held_moment`` as ``max_suction_moment`` when finite, with the cup's pull,
     ``suction.vacuum_pressure`` x cup area, as ``max_drag_pull`` and its lip moment, that times ``cup_radius``, as
     ``max_drag_twist``; ``suction.max_seal_angle_deg`` when under 90), its reach map (``reach_map`` when given) and, when the station
-    places by guarded moves (``guarded_placement``), ``suction_hidden_rule`` "guarded"; then ``overrides`` on top;
+    places by guarded moves (``guarded_placement``), ``suction_hidden_rule`` "guarded"; its ``push_turn``; then
+    ``overrides`` on top;
     entries equal to the profile's values are left out."""
     from slax_drake.shelf.tool import without_defaults
 
@@ -97,6 +98,8 @@ def station_tool_rules(station, overrides: dict | None = None, profile: str = "s
         rules["reach_map"] = station.reach_map
     if station.guarded_placement:
         rules["suction_hidden_rule"] = "guarded"
+    if station.push_turn != "none":
+        rules["push_turn"] = station.push_turn
     rules.update(overrides or {})
     if not math.isfinite(rules.get("max_suction_moment", math.inf)):
         for name in ("max_drag_pull", "max_drag_twist"):  # nothing is dragged when every object is lifted

@@ -137,13 +137,13 @@ def test_the_command_and_heading_of_a_camera_run_name_its_segmentation_and_noise
 def test_a_physics_runs_command_names_the_rules_given_on_the_command_line_not_the_stations():
     from slax_drake.evaluation.report import benchmark_command
 
-    # the stations now place by guarded moves: a run recorded with the guard needs no rule, one without it needs
-    # the guard taken away
+    # the stations now place by guarded moves and predict pushes as turning: a run recorded with a station's rule
+    # needs no --tool-rule for it, one recorded without it needs it taken away
     guarded = benchmark_command(load_folder(RESULTS / "physics_belief_household_guarded"))
-    assert "--tool-rule" not in guarded
-    assert "--tool-rule" not in benchmark_command(load_folder(RESULTS / "physics_belief_household_f6d908a"))
+    assert "suction_hidden_rule" not in guarded and guarded.count("--tool-rule") == 1
+    assert "--tool-rule push_turn=none" in guarded  # recorded before the stations predicted pushes as turning
     before = benchmark_command(load_folder(RESULTS / "physics_belief_household_ace0a2a"))
-    assert "--tool-rule suction_hidden_rule=placement" in before
+    assert "--tool-rule suction_hidden_rule=placement" in before and "--tool-rule push_turn=none" in before
     assert "max_suction_moment" not in before and "reach_map" not in before  # the station file's limits
 
 

@@ -131,8 +131,8 @@ def test_bad_station_file(tmp_path):
 
 
 def test_the_station_cup_limits_are_planning_rules_that_overrides_replace():
-    """A trial plans with the station cup's limits, reach map and guarded placement unless a tool rule says
-    otherwise; .inf / 90 lift the limits."""
+    """A trial plans with the station cup's limits, reach map, guarded placement and push model unless a tool rule
+    says otherwise; .inf / 90 lift the limits."""
     import dataclasses
     import math
 
@@ -143,10 +143,11 @@ def test_the_station_cup_limits_are_planning_rules_that_overrides_replace():
     # and so is its guarded placement (the station profile's "placement" otherwise), which an override replaces
     assert station_tool_rules(shipped) == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0,
                                            "reach_map": "models/reach/station_sim_shelf.json",
-                                           "suction_hidden_rule": "guarded"}
+                                           "suction_hidden_rule": "guarded", "push_turn": "quasi-static"}
     assert "suction_hidden_rule" not in station_tool_rules(shipped, {"suction_hidden_rule": "placement"})
+    assert "push_turn" not in station_tool_rules(shipped, {"push_turn": "none"})  # the profile's value
     assert station_tool_rules(shipped, {"suction_hidden_rule": "path"})["suction_hidden_rule"] == "path"
-    station = dataclasses.replace(shipped, reach_map="", guarded_placement=False)
+    station = dataclasses.replace(shipped, reach_map="", guarded_placement=False, push_turn="none")
     assert station.suction.max_held_moment == pytest.approx(0.4)
     assert station.suction.max_seal_angle_deg == pytest.approx(10.0)
     assert station_tool_rules(station) == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0}
@@ -188,3 +189,14 @@ def test_resting_objects_fall_asleep_where_the_json_puts_them(sim_scenario):
     poses = [plant.EvalBodyPoseInWorld(plant_context, b).GetAsMatrix4() for b in bodies]
     simulator.AdvanceTo(1.0)
     assert all(np.array_equal(plant.EvalBodyPoseInWorld(plant_context, b).GetAsMatrix4(), X) for b, X in zip(bodies, poses))
+
+
+def test_a_station_names_a_push_model_the_action_model_knows(tmp_path):
+    from slax_drake.shelf.rules import RULES
+    from slax_drake.station.scenario import PUSH_TURNS
+
+    assert PUSH_TURNS == RULES["push_turn"].choices
+    bad = tmp_path / "station.yaml"
+    bad.write_text(DEFAULT_STATION_PATH.read_text().replace("push_turn: quasi-static", "push_turn: spin"))
+    with pytest.raises(ConfigError, match="push_turn"):
+        load_station_scenario(bad)
