@@ -18,7 +18,7 @@ the foot of its centre on the face lies between them, and turns about the contac
 The blade advances in steps of ``STEP``; its travel after the first contact is d, as in the first-order model.
 
 Discs (cylinders) are pushed through their centre and translate; so does a box whose contact's lever about its
-centre is nil. Neighbours are not modelled: the action model keeps the pushed object's way free.
+centre is nil. A box that turns off the blade's end stays where it was left. Neighbours are not modelled: the action model keeps the pushed object's way free.
 """
 
 from __future__ import annotations
@@ -69,6 +69,8 @@ def point_push_twist(p: np.ndarray, sign: float, mu: float, c2: float) -> np.nda
     twists = [_twist(p, f, c2) for f in edges]
     vels = [_point_velocity(v, p) for v in twists]
     a, b = vels
+    if abs(_cross(a, b)) < 1e-12:  # a degenerate cone (no lever): the box moves with the blade
+        return np.array([sign, 0.0, 0.0])
     inside = _cross(a, pusher) * _cross(a, b) >= 0.0 and _cross(pusher, b) * _cross(a, b) >= 0.0
     if inside:  # sticking: the contact point moves with the blade; the force in the cone that does it
         m = np.column_stack([a, b])
@@ -118,6 +120,8 @@ def push_pose(fp: Footprint, sign: float, d: float, y_lo: float, y_hi: float,
         step = min(STEP, d - travelled)
         corners = Footprint(fp.shape, centre[0], centre[1], yaw, fp.half_x, fp.half_y).corners()
         points, gap = _contacts(corners, x_b, sign, y_lo, y_hi)
+        if len(points) == 0 or gap > STEP:  # turned off the blade's end: the blade passes it, it stays
+            break
         offsets = points - centre
         if len(points) >= 2 and np.ptp(points[:, 1]) > TOUCH:
             lo, hi = float(points[:, 1].min()), float(points[:, 1].max())

@@ -135,3 +135,15 @@ def test_a_turned_box_pushed_in_drake_ends_where_the_quasi_static_model_puts_it(
     assert math.hypot(end["x"] - predicted.center[0], end["y"] - predicted.center[1]) < 0.02
     assert abs(_turn_deg(end["yaw"], predicted.yaw)) < 10.0 and end["tilt_deg"] < 5.0
     assert abs(_turn_deg(end["yaw"], box.yaw)) > 10.0
+
+
+def test_a_box_that_turns_off_the_blades_end_stays_where_it_was_left():
+    """A 5 cm box turned 24.5 deg, met at its corner by a blade whose tip is 1 cm past it: it turns a quarter turn
+    and leaves the blade's end (found by a seeded search over small boxes); the rest of the blade's travel does
+    not move it."""
+    fp = Footprint("box", 0.0, 0.0, -0.4277, 0.0253, 0.0234)
+    corner = fp.corners()[np.argmin(fp.corners()[:, 0])]
+    tip = corner[1] + 0.01
+    left = push_pose(fp, 1.0, 0.20, tip - BLADE, tip)
+    assert push_pose(fp, 1.0, 0.30, tip - BLADE, tip) == pytest.approx(left)
+    assert left[0] < 0.20 and abs(_turn_deg(left[2], fp.yaw)) > 45.0
