@@ -314,3 +314,9 @@ def test_push_contact_refuses_bad_arguments_before_any_drake_run(capsys, argv):
     with pytest.raises(SystemExit) as e:
         script("push_contact").main(argv)
     assert e.value.code == 2 and "error:" in capsys.readouterr().err
+
+
+def test_push_matches_refuses_a_folder_that_is_no_physics_run(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        script("push_matches").main([str(tmp_path)])
+    assert e.value.code == 2 and "no physics run with trial files" in capsys.readouterr().err
