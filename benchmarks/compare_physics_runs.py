@@ -106,7 +106,7 @@ def main(argv=None) -> int:
             fail(f"scene {key} has seed {old[key]['seed']} in {args.old} and {new[key]['seed']} in {args.new}")
     policies = args.policy if new_policy == args.policy else f"{args.policy} (old) against {new_policy} (new)"
     print(f"{policies}, the {len(common)} scenes both runs hold; counts of scenes (shelf simulator and Drake "
-          f"successes), actions matching the first-order prediction, candidate motions the planner refused before "
+          f"successes), actions matching the prediction, candidate motions the planner refused before "
           f"the executed actions, and Drake's endings. Made by `python benchmarks/compare_physics_runs.py "
           f"{args.old} {args.new} --policy {args.policy}"
           + (f" --new-policy {new_policy}" if new_policy != args.policy else "")

@@ -13,7 +13,7 @@ read from the Drake record at that step:
 - "planner refused": the motion planner rejected one or more candidates before the executed action (the policy
   decided again without them; the shelf simulator has no motion planner), with the refusals' kinds and waypoints
   where the run recorded them (``rejected``, since the physics records keep them);
-- "last action off prediction (KIND)": the Drake action before it ended off the first-order prediction (slid,
+- "last action off prediction (KIND)": the Drake action before it ended off the action model's prediction (slid,
   turned, put back, ...), so the two simulators decide on different shelves;
 - "first decision differs": step 0 with no rejection: the two frames of the same scene led to another choice;
 - "same predicted state, other decision": every action so far matched its prediction, yet the policy chose

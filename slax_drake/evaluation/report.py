@@ -8,7 +8,7 @@ typed by hand. What a folder feeds is read from its files:
   a privileged folder and a camera folder of the same protocol (seed, scenes per density, profile, distribution
   model) also give a row per shared non-oracle policy of the observation-modes comparison.
 - ``physics.json`` (``slax-drake benchmark --physics``): a section of the physics-benchmark page (success in the
-  shelf simulator and in Drake, the actions whose physical outcome matched the first-order prediction, Drake's
+  shelf simulator and in Drake, the actions whose physical outcome matched the action model's prediction, Drake's
   trial endings); a run of the Table II protocol (scenario ``table2.yaml``) also gives the Table II page, beside
   the paper's real-Fetch figures.
 
@@ -491,7 +491,7 @@ def render_pages(folders: list[ResultFolder], command: str) -> dict[str, str]:
                  "`camera` (a rendered frame, segmented, the estimator's hypotheses, P_t from the frame).",
         "physics": "`slax-drake benchmark --physics`: the Table I protocol through full Drake trials beside the "
                    "shelf simulator on the same scenes. An action matches when its physical outcome is within "
-                   "2 cm and 10 deg of the first-order prediction.",
+                   "2 cm and 10 deg of the action model's prediction (each run says which push model).",
         "table2": "The paper's Table II protocol (8, 10 and 12 objects on the physical shelf) run as full Drake "
                   "trials, beside the paper's real-Fetch successes.",
     }

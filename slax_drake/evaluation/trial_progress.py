@@ -12,7 +12,7 @@ trial) shows where the object went::
 What a line says is what the trial knows at that moment: the policy's action on a camera segment, for a policy that
 keeps a decision log the share of its belief the plan it took reveals (or that no plan reveals anything), the planner's
 seconds, and the referee's view of the outcome (the true object behind the segment, its pose at the next decision
-against the first-order prediction, within the physics benchmark's tolerances: 2 cm and 10 deg; lost when it
+against the action model's prediction, within the physics benchmark's tolerances: 2 cm and 10 deg; lost when it
 toppled or left the bay). A segment that no true object stood behind has no judged outcome ("executed").
 """
 
