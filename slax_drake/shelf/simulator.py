@@ -266,12 +266,14 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
                     return scene, f"blade blocked by {name}"
         n = max(1, int(math.ceil(abs(action.d) / t.grid.cell)))
         s = np.linspace(0.0, action.d, n + 1)[1:]
-        # the object at each step: translated, or turning as the quasi-static model has it (``turns``)
-        steps = [pushed(obj, dataclasses.replace(action, d=float(v))) for v in s]
+        # the true object at each step: translated, or turning as the quasi-static model has it when the model's
+        # push_turn rule says pushed boxes turn (whatever shape the policy took the object for)
+        turning = t.rules.push_turn == "quasi-static"
+        steps = [pushed(obj, dataclasses.replace(action, d=float(v), turns=turning)) for v in s]
         ok = np.array([abs(float(o.center[0])) + Footprint.of(o).extents()[0] <= shelf.width / 2 - t.physics.clearance
                        + 1e-12 for o in steps])  # within the side walls
         for _, other in obstacles:
-            if action.turns:
+            if turning:
                 ok &= np.array([footprints_clear(Footprint.of(o), other, t.physics.clearance) for o in steps])
             else:
                 centers = np.array([o.center[:2] for o in steps])

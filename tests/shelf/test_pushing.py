@@ -147,3 +147,16 @@ def test_a_box_that_turns_off_the_blades_end_stays_where_it_was_left():
     left = push_pose(fp, 1.0, 0.20, tip - BLADE, tip)
     assert push_pose(fp, 1.0, 0.30, tip - BLADE, tip) == pytest.approx(left)
     assert left[0] < 0.20 and abs(_turn_deg(left[2], fp.yaw)) > 45.0
+
+
+def test_the_shelf_simulator_turns_a_true_box_the_policy_took_for_a_disc(sim_scenario):
+    """The world's physics do not follow the policy's belief: a push planned on a cylinder hypothesis (no turn)
+    turns the true box under the push_turn rule."""
+    box = _box("object_0", -0.10, -0.05, (0.14, 0.14, 0.12), yaw_deg=15.0)
+    model = _station_model(sim_scenario, push_turn="quasi-static")
+    push = next(a for a in model.enumerate((box,)).feasible if isinstance(a, Push) and a.d > 0.05)
+    planned_on_a_disc = Push(push.name, push.q, push.d, turns=False)
+    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (box,), None)
+    moved, note = execute(scene, planned_on_a_disc, model)
+    assert note == "" and np.allclose(moved.objects[0].X_SO, pushed(box, push).X_SO)
+    assert abs(_turn_deg(moved.objects[0].yaw, box.yaw)) > 5.0
