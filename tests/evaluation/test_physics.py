@@ -76,9 +76,10 @@ def test_shelf_side_is_the_shelf_benchmarks_scene(tiny):
     scenario = load_scenario(CONFIG)
     scene = sample_scene(scenario, 2, scene_seed(3, 2, 0), target_size=tuple(scenario.target.sizes[0]))
     saved = json.loads(trial_path(out, "bluction-dar", 2, 0).read_text())
-    # Both simulators plan under the station's limits and guarded placement (sim_configs/station_sim_shelf.yaml).
+    # Both simulators plan under the station's limits, guarded placement and push model
+    # (sim_configs/station_sim_shelf.yaml).
     assert saved["tool_rules"] == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0, "reach_map": "models/reach/station_sim_shelf.json",
-                                   "suction_hidden_rule": "guarded"}
+                                   "suction_hidden_rule": "guarded", "push_turn": "quasi-static"}
     expected = run_trial(scene, make_policy("bluction-dar", scenario, perception="ground-truth", horizon=4,
                                             tool_overrides=saved["tool_rules"]), 4)
     shelf = saved["shelf"]

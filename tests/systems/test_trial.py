@@ -93,9 +93,9 @@ def test_short_trial_reveals_the_target(short_trial):
         assert z["depth"].shape == (len(d["steps_log"]), 120, 160) and z["depth"].dtype == np.float32
     for a in d["actions"]:  # chosen on a hypothesis, executed on the object its segment shows
         assert a["object"].startswith("track_") and a["true_object"] in d["final_objects"]
-    # the station cup's limits, its reach map and its guarded placement
+    # the station cup's limits, its reach map, its guarded placement and its push model
     assert d["tool_rules"] == {"max_suction_moment": 0.4, "max_drag_pull": 42.412, "max_drag_twist": 0.6362, "max_seal_angle_deg": 10.0, "reach_map": "models/reach/station_sim_shelf.json",
-                               "suction_hidden_rule": "guarded"}
+                               "suction_hidden_rule": "guarded", "push_turn": "quasi-static"}
 
 
 @pytest.mark.slow
