@@ -431,7 +431,7 @@ class ActionModel:
                 blocker = self._turned_end_blocker(ctx, i, push)
                 if blocker is not None:
                     rejected.append(refused(f"{what} by {d:.3f}", f"{obj.name} would turn into {blocker}",
-                                            distance=push.d, kind=RefusalKind.BLOCKED))
+                                            distance=push.d, kind=_STOPPER_KIND.get(blocker, RefusalKind.BLOCKED)))
                     continue
             feasible.append(push)
         d = (int(d_max / step + 1e-9) + 1) * step
@@ -937,14 +937,19 @@ class ActionModel:
         return memo(self._push_rects_cache, (fp, sign), compute, PAIR_CACHE_SIZE)
 
     def _turned_end_blocker(self, ctx, i: int, push: Push) -> str | None:
-        """What the box of ``ctx.objects[i]``, turned where ``push`` leaves it, would meet (a known object, within
-        ``clearance``, or "the wall"), or None."""
+        """What the box of ``ctx.objects[i]``, turned where ``push`` leaves it, would meet: a known object (within
+        ``clearance``), "the wall", or, under ``push_hidden_check``, "hidden space" (a cell it newly covers is
+        hidden by the other objects, as the straight push's check reads it); None when nothing."""
         end = Footprint.of(pushed(ctx.objects[i], push))
         if not inside_shelf(end, self.shelf, self.tool.physics.clearance):
             return "the wall"
         for j, other in enumerate(ctx.all_fps):
             if j != i and not footprints_clear(end, other, self.tool.physics.clearance):
                 return ctx.all_names[j]
+        if self.tool.rules.push_hidden_check:
+            newly = self.grid.footprint_mask(end) & ~ctx.masks[i]
+            if (newly & ctx.hidden_others(i)).any():
+                return "hidden space"
         return None
 
     def push_tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:

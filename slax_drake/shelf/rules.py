@@ -184,9 +184,10 @@ class PushTurn(Rule):
     "quasi-static": it turns as a box standing on its corners turns under the blade's flat face until a face lies
     flush against it (:mod:`slax_drake.shelf.pushing`; a box met at a corner, or along only the front of a deep
     side, turns 10-40 deg and shifts 1-3 cm along y over a 0.10 m push in the Drake station); the pushed box must
-    end clear of the known objects and the walls; discs translate. The stations set it (``push_turn`` in the
-    station YAML): the first-order translation matched 20 of 58 lone-box pushes in Drake, this model 50
-    (research/push_contact.py). The hidden-space check still follows the straight sweep."""
+    end clear of the known objects and the walls and, with ``push_hidden_check``, newly cover no hidden cell where
+    it ends; discs translate. The stations set it (``push_turn`` in the station YAML): the first-order translation
+    matched 20 of 58 lone-box pushes in Drake, this model 50 (research/push_contact.py). The hidden-space check of
+    the way there still follows the straight sweep."""
 
     name, type, paper, station, choices = "push_turn", str, "none", "none", ("none", "quasi-static")
 

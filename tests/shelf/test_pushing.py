@@ -160,3 +160,27 @@ def test_the_shelf_simulator_turns_a_true_box_the_policy_took_for_a_disc(sim_sce
     moved, note = execute(scene, planned_on_a_disc, model)
     assert note == "" and np.allclose(moved.objects[0].X_SO, pushed(box, push).X_SO)
     assert abs(_turn_deg(moved.objects[0].yaw, box.yaw)) > 5.0
+
+
+def test_a_turned_end_newly_covering_hidden_space_is_refused_under_the_hidden_space_check():
+    """Table I household scene (6 objects, seed 10; found by a search over 80 sampled scenes, 2 of which have
+    such a push): pushing object_2 2.5 cm left turns it onto cells the other objects hide; the straight sweep
+    covers none of them. With push_hidden_check off the same push is offered."""
+    from slax_drake.config import load_scenario
+    from slax_drake.scene.sampling import sample_scene
+    from slax_drake.shelf.actions import RefusalKind
+
+    scenario = load_scenario("sim_configs/table1_household.yaml")
+    scene = sample_scene(scenario, 6, 10)
+
+    def enumerate_with(**rules):
+        model = ActionModel(scene.shelf, scene.camera.position,
+                            tool_config(scenario, "station", push_turn="quasi-static", **rules))
+        return model.enumerate(scene.objects)
+
+    found = enumerate_with()
+    refusal = next(r for r in found.rejected if r.what == "push object_2 -x by 0.025")
+    assert refusal.reason == "object_2 would turn into hidden space" and refusal.kind == RefusalKind.HIDDEN_SPACE
+    assert not any(isinstance(a, Push) and a.name == "object_2" and a.d == -0.025 for a in found.feasible)
+    unchecked = enumerate_with(push_hidden_check=False)
+    assert any(isinstance(a, Push) and a.name == "object_2" and a.d == -0.025 for a in unchecked.feasible)
