@@ -222,7 +222,7 @@ def pushed(obj: SceneObject, action: Push) -> SceneObject:
     x, y = float(obj.center[0]), float(obj.center[1])
     if not action.turns or obj.shape == "cylinder":
         return obj.moved_to(x + action.d, y)
-    tip = action.q[1]
+    tip = action.q[1]  # the blade spans the physical blade's length (the URDF's, as the planner's waypoints) back from it
     x, y, yaw = push_pose(Footprint.of(obj), 1.0 if action.d > 0 else -1.0, abs(action.d),
                           tip - ToolGeometry.blade_width, tip)
     return obj.moved_to(x, y, yaw)
@@ -430,8 +430,9 @@ class ActionModel:
             if turns:  # the box turns on its way: where it ends must be clear of the walls and the known objects
                 blocker = self._turned_end_blocker(ctx, i, push)
                 if blocker is not None:
-                    rejected.append(refused(f"{what} by {d:.3f}", f"{obj.name} would turn into {blocker}",
-                                            distance=push.d, kind=_STOPPER_KIND.get(blocker, RefusalKind.BLOCKED)))
+                    into, kind = blocker
+                    rejected.append(refused(f"{what} by {d:.3f}", f"{obj.name} would turn into {into}",
+                                            distance=push.d, kind=kind))
                     continue
             feasible.append(push)
         d = (int(d_max / step + 1e-9) + 1) * step
@@ -936,20 +937,21 @@ class ActionModel:
 
         return memo(self._push_rects_cache, (fp, sign), compute, PAIR_CACHE_SIZE)
 
-    def _turned_end_blocker(self, ctx, i: int, push: Push) -> str | None:
-        """What the box of ``ctx.objects[i]``, turned where ``push`` leaves it, would meet: a known object (within
-        ``clearance``), "the wall", or, under ``push_hidden_check``, "hidden space" (a cell it newly covers is
-        hidden by the other objects, as the straight push's check reads it); None when nothing."""
+    def _turned_end_blocker(self, ctx, i: int, push: Push) -> tuple[str, "RefusalKind"] | None:
+        """What the box of ``ctx.objects[i]``, turned where ``push`` leaves it, would meet, and the refusal's kind:
+        a known object (within ``clearance``) or "the wall" (BLOCKED), or, under ``push_hidden_check``, "hidden
+        space" (HIDDEN_SPACE: a cell it newly covers is hidden by the other objects, as the straight push's check
+        reads it); None when nothing."""
         end = Footprint.of(pushed(ctx.objects[i], push))
         if not inside_shelf(end, self.shelf, self.tool.physics.clearance):
-            return "the wall"
+            return "the wall", RefusalKind.BLOCKED
         for j, other in enumerate(ctx.all_fps):
             if j != i and not footprints_clear(end, other, self.tool.physics.clearance):
-                return ctx.all_names[j]
+                return ctx.all_names[j], RefusalKind.BLOCKED
         if self.tool.rules.push_hidden_check:
             newly = self.grid.footprint_mask(end) & ~ctx.masks[i]
             if (newly & ctx.hidden_others(i)).any():
-                return "hidden space"
+                return "hidden space", RefusalKind.HIDDEN_SPACE
         return None
 
     def push_tool_rects(self, fp: Footprint, sign: int) -> list[tuple[float, float, float, float]]:

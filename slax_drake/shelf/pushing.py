@@ -110,15 +110,15 @@ def push_pose(fp: Footprint, sign: float, d: float, y_lo: float, y_hi: float,
         return fp.x + sign * d, fp.y, fp.yaw
     c2 = characteristic_length(fp.half_x, fp.half_y) ** 2
     centre, yaw = np.array([fp.x, fp.y]), fp.yaw
-    # the blade's face starts where it first meets the box
-    in_range, _ = _contacts(fp.corners(), 0.0, sign, y_lo, y_hi)
+    corners = fp.corners()
+    # the blade's face starts at the box's point nearest to it within its span (the contacts with the face at 0)
+    in_range, _ = _contacts(corners, 0.0, sign, y_lo, y_hi)
     if len(in_range) == 0:
         return fp.x + sign * d, fp.y, fp.yaw  # the blade misses the box: the model's straight push
     x_b = float(in_range[0][0])
     travelled = 0.0
     while travelled < d - 1e-12:
         step = min(STEP, d - travelled)
-        corners = Footprint(fp.shape, centre[0], centre[1], yaw, fp.half_x, fp.half_y).corners()
         points, gap = _contacts(corners, x_b, sign, y_lo, y_hi)
         if len(points) == 0 or gap > STEP:  # turned off the blade's end: the blade passes it, it stays
             break
@@ -136,9 +136,10 @@ def push_pose(fp: Footprint, sign: float, d: float, y_lo: float, y_hi: float,
         yaw += twist[2] * step
         x_b += sign * step
         # keep the box on the blade's face (the integration's drift, and a corner turned into it)
-        _, gap = _contacts(Footprint(fp.shape, centre[0], centre[1], yaw, fp.half_x, fp.half_y).corners(),
-                           x_b, sign, y_lo, y_hi)
+        corners = Footprint(fp.shape, centre[0], centre[1], yaw, fp.half_x, fp.half_y).corners()
+        _, gap = _contacts(corners, x_b, sign, y_lo, y_hi)
         if gap < 0.0:
             centre[0] -= sign * gap
+            corners = Footprint(fp.shape, centre[0], centre[1], yaw, fp.half_x, fp.half_y).corners()
         travelled += step
     return float(centre[0]), float(centre[1]), float(yaw)

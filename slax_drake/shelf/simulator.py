@@ -269,14 +269,19 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         # the true object at each step: translated, or turning as the quasi-static model has it when the model's
         # push_turn rule says pushed boxes turn (whatever shape the policy took the object for)
         turning = t.rules.push_turn == "quasi-static"
-        steps = [pushed(obj, dataclasses.replace(action, d=float(v), turns=turning)) for v in s]
-        ok = np.array([abs(float(o.center[0])) + Footprint.of(o).extents()[0] <= shelf.width / 2 - t.physics.clearance
-                       + 1e-12 for o in steps])  # within the side walls
+        if turning:
+            steps = [pushed(obj, dataclasses.replace(action, d=float(v), turns=True)) for v in s]
+            step_fps = [Footprint.of(o) for o in steps]
+            ok = np.array([abs(f.x) + f.extents()[0] <= shelf.width / 2 - t.physics.clearance + 1e-12
+                           for f in step_fps])  # within the side walls
+        else:
+            xs = fp.x + s
+            ok = np.abs(xs) + ex <= shelf.width / 2 - t.physics.clearance + 1e-12
+            centers = np.column_stack([xs, np.full(n, fp.y)])
         for _, other in obstacles:
             if turning:
-                ok &= np.array([footprints_clear(Footprint.of(o), other, t.physics.clearance) for o in steps])
+                ok &= np.array([footprints_clear(f, other, t.physics.clearance) for f in step_fps])
             else:
-                centers = np.array([o.center[:2] for o in steps])
                 ok &= clear_of(fp.shape, centers, fp.yaw, half, other, t.physics.clearance)
             for rx, ry, hx, hy in rects:
                 ok &= clear_of("box", np.column_stack([rx + s, np.full(n, ry)]), 0.0, (hx, hy), other,
@@ -285,7 +290,7 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         k = int(bad[0]) if len(bad) else n
         if k == 0:
             return scene, "pushed object blocked at once"
-        moved = steps[k - 1]
+        moved = steps[k - 1] if turning else obj.moved_to(float(xs[k - 1]), fp.y)
         note = "" if k == n else f"push stopped after {s[k - 1]:+.3f} m by an unseen obstacle"
         return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
 
