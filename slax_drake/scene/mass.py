@@ -38,8 +38,14 @@ def mass_range(shape: str, size, physics) -> tuple[float, float]:
 def median_mass(shape: str, size, physics) -> float:
     """The median of the log-uniform class distribution (kg): what a planner that does not know the object
     expects it to weigh."""
+    return quantile_mass(shape, size, physics, 0.5)
+
+
+def quantile_mass(shape: str, size, physics, quantile: float) -> float:
+    """The mass (kg) that a share ``quantile`` (0-1) of the log-uniform class distribution does not exceed:
+    lightest x (heaviest / lightest) ** quantile (0.5: the median, the geometric mean of the range)."""
     lo, hi = mass_range(shape, size, physics)
-    return math.sqrt(lo * hi)
+    return math.sqrt(lo * hi) if quantile == 0.5 else lo * (hi / lo) ** quantile
 
 
 def sample_masses(objects, physics, seed: int) -> tuple:
@@ -56,12 +62,12 @@ def sample_masses(objects, physics, seed: int) -> tuple:
     return tuple(out)
 
 
-def object_mass(obj, density: float, physics=None) -> float:
+def object_mass(obj, density: float, physics=None, quantile: float = 0.5) -> float:
     """The mass (kg) of ``obj``: its recorded ``mass``; else, with a household ``physics`` (PhysicsConfig), its
-    class's median; else ``density`` (kg/m^3) x volume."""
+    class's ``quantile`` (:func:`quantile_mass`; 0.5: the median); else ``density`` (kg/m^3) x volume."""
     recorded = getattr(obj, "mass", None)
     if recorded is not None:
         return float(recorded)
     if physics is not None and physics.mass_model == "household":
-        return median_mass(obj.shape, obj.size, physics)
+        return quantile_mass(obj.shape, obj.size, physics, quantile)
     return density * volume(obj.shape, obj.size)

@@ -202,10 +202,10 @@ class Candidates:
     rejected: list
 
 
-def object_mass(obj: SceneObject, density: float, physics=None) -> float:
-    """The object's mass (kg): its recorded mass, else what ``physics`` (ObjectPhysics) expects, else density x
-    volume (:func:`slax_drake.scene.mass.object_mass`)."""
-    return scene_mass.object_mass(obj, density, physics)
+def object_mass(obj: SceneObject, density: float, physics=None, quantile: float = 0.5) -> float:
+    """The object's mass (kg): its recorded mass, else what ``physics`` (ObjectPhysics) expects at ``quantile``
+    of its class, else density x volume (:func:`slax_drake.scene.mass.object_mass`)."""
+    return scene_mass.object_mass(obj, density, physics, quantile)
 
 
 def weighed_mass(weight_n: float, moment_nm: float, lever: float) -> float:
@@ -720,7 +720,7 @@ class ActionModel:
 
     def _make_suction_lattice(self, obj: SceneObject, fp: Footprint, mask: np.ndarray) -> "SuctionLattice":
         t, shelf = self.tool, self.shelf
-        mass = object_mass(obj, t.physics.object_density, t.physics)
+        mass = self.planning_mass(obj)
         if RULES["max_suction_mass"].refuses(t.rules.max_suction_mass, mass):
             return SuctionLattice.refused(f"{obj.name} weighs {mass:.2f} kg > {t.rules.max_suction_mass:.2f} kg",
                                           RefusalKind.TOO_HEAVY)
@@ -805,11 +805,16 @@ class ActionModel:
                               y_placed=fp.y + b_all * res, steps=steps, shifted_cols=shifted_cols, inside=inside,
                               base=base, name=obj.name, res=res, **common)
 
+    def planning_mass(self, obj: SceneObject) -> float:
+        """The mass (kg) the model plans ``obj``'s suction with: its recorded (or weighed) mass, else its household
+        class's ``mass_quantile`` (the rule), else the scenario's density x its volume (:func:`object_mass`)."""
+        t = self.tool
+        return object_mass(obj, t.physics.object_density, t.physics, t.rules.mass_quantile)
+
     def held_moment(self, obj: SceneObject, contact_xy) -> float:
-        """N m: the moment ``obj``'s weight (:func:`object_mass`: its recorded mass, else its class's median)
-        hangs off a cup sealed at ``contact_xy`` (S, m): the weight times the horizontal distance from the contact to
-        the object's centre."""
-        mass = object_mass(obj, self.tool.physics.object_density, self.tool.physics)
+        """N m: the moment ``obj``'s weight (:meth:`planning_mass`) hangs off a cup sealed at ``contact_xy`` (S,
+        m): the weight times the horizontal distance from the contact to the object's centre."""
+        mass = self.planning_mass(obj)
         return mass * GRAVITY * math.hypot(float(obj.center[0]) - float(contact_xy[0]),
                                            float(obj.center[1]) - float(contact_xy[1]))
 
@@ -823,7 +828,7 @@ class ActionModel:
         needs ``DRAG_MIN_SEAL_Z``. The seal height is the lower of ``seal_z`` and b / mu'."""
         r = self.tool.rules
         mu = r.drag_safety_factor * r.drag_friction
-        mass = object_mass(obj, self.tool.physics.object_density, self.tool.physics)
+        mass = self.planning_mass(obj)
         pull = mu * mass * GRAVITY
         ex, ey = Footprint.of(obj).extents()
         b = min(ex, ey)

@@ -276,6 +276,20 @@ class MaxSuctionMass(Rule):
 
 
 @register
+class MassQuantile(Rule):
+    """Which mass the action model reckons an object with whose mass it does not know (a perceived hypothesis,
+    not yet weighed), under the household mass model: the ``mass_quantile`` of its class's log-uniform
+    distribution (:func:`slax_drake.scene.mass.quantile_mass`). Both profiles: 0.5, the median; higher plans
+    lifts and sideways drags only for objects that are likely light enough (at 0.5 half of them weigh more
+    than planned). No effect under the density model or on objects with a recorded or weighed mass."""
+
+    name, paper, station = "mass_quantile", 0.5, 0.5
+
+    def problem(self, value) -> str | None:
+        return None if 0.0 <= value <= 1.0 else "must be between 0 and 1"
+
+
+@register
 class MinSealRadius(Rule):
     """A cylinder of smaller radius (m) curves more than the cup can seal on. ``station``: 1.5 cm (half the
     cup). ``paper``: 0, any camera-facing side is graspable."""
