@@ -45,7 +45,7 @@ import numpy as np
 from slax_drake.shelf.actions import (APPROACH_MARGINS, BLADE_LIFT, CARRY_YAWS_DEG, DRAG_FRONT_MARGIN, LIFT, LIFT_CLEARANCE,
                                       OUT_MARGIN, PULL_STEP, SEAL_PRESS, TUBE_STANDOFF, Push, Suction)
 from slax_drake.shelf.rules import ToolConfig
-from slax_drake.scene.footprint import Footprint
+from slax_drake.scene.footprint import TOUCH_ALLOWANCE, Footprint, touch_overlap
 from slax_drake.scene.model import SceneObject, Shelf
 from slax_drake.station import robot as robot_model
 
@@ -322,12 +322,25 @@ def carry_lift(obj: SceneObject, objects, offsets, pivot=None) -> float:
     """How high (m) to lift ``obj`` for its carried way: the polyline ``offsets`` of :func:`carried_sweep`
     ((dx, dy) of its centre, or (dx, dy, dyaw) of the cup at ``pivot``), in S. ``LIFT``, or ``LIFT_CLEARANCE``
     above the tallest other object whose footprint the swept footprint (``SWEEP_STEP`` apart, no clearance)
-    overlaps."""
+    overlaps. A neighbour whose estimate overlaps ``obj``'s where it stands (two objects physics left touching,
+    :func:`~slax_drake.scene.footprint.touch_overlap`) is one it slides out along, as the planning world lets it
+    (:meth:`~slax_drake.planning.world.PlanningWorld.carry`): the sweep is tested against it with ``obj``'s
+    footprint shrunk by that overlap and ``TOUCH_ALLOWANCE``, so only a way that goes deeper into it lifts over it."""
     sweep = carried_sweep(obj, offsets, pivot)
     tallest = 0.0
     for other in objects:
-        if other.name == obj.name:
+        if other.name == obj.name or sweep_clear_of(obj, sweep, other):
             continue
-        if not sweep_clear_of(obj, sweep, other):
-            tallest = max(tallest, float(other.size[2]))
+        depth = touch_overlap(obj, other)
+        if depth > 0.0:
+            slim = _shrunk(obj, depth + TOUCH_ALLOWANCE)
+            if sweep_clear_of(slim, carried_sweep(slim, offsets, pivot), other):
+                continue
+        tallest = max(tallest, float(other.size[2]))
     return LIFT if tallest == 0.0 else max(LIFT, tallest + LIFT_CLEARANCE)
+
+
+def _shrunk(obj: SceneObject, by: float) -> SceneObject:
+    """``obj`` with its footprint shrunk by ``by`` (m) on every side (its height kept)."""
+    sx, sy, sz = obj.size
+    return dataclasses.replace(obj, size=(max(1e-4, sx - 2.0 * by), max(1e-4, sy - 2.0 * by), sz))

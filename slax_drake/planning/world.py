@@ -30,6 +30,7 @@ import functools
 
 import numpy as np
 
+from slax_drake.scene.footprint import MAX_TOUCH_OVERLAP, TOUCH_ALLOWANCE
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
 from slax_drake.station.plant import PlantPurpose, make_station_plant
@@ -46,8 +47,8 @@ TOOL_RIGID_BODIES = ("wrist_roll_link", "bluction_mount_link", "camera_link", "t
 EDGE_STEP = 0.005  # rad (weighted joint distance) between checked configurations along a segment
 CARRIED_GROUP = "carried_object"
 # An object resting closer than CARRIED_MARGIN to a wall or neighbour may press this far into it while it slides
-# out along it (the planner keeps the tool within 1 mm of its straight segments while carrying).
-REST_CONTACT_ALLOWANCE = 0.0012  # m
+# out along it (m; the carry's lift reckons touching neighbours with the same allowance).
+REST_CONTACT_ALLOWANCE = TOUCH_ALLOWANCE
 CARRIED_MARGIN = 0.001  # m, the carried object's margin to everything else (the action model places objects
 # 2 mm clear of neighbours, so the environment padding of 2 mm would reject exact placements)
 
@@ -289,8 +290,9 @@ def rest_gap(obj, scene: Scene) -> float:
     """The smallest horizontal gap (m; negative when overlapping) between ``obj``'s footprint and the side and
     back walls or another object's footprint, as they stand. An overlap with another footprint (two estimates of
     objects that physics left touching) counts as minus how far ``obj``'s footprint must shrink on every side to
-    clear it (to 0.1 mm, at most ``MAX_REST_OVERLAP``: a deeper overlap counts as that)."""
-    from slax_drake.scene.footprint import Footprint
+    clear it (:func:`~slax_drake.scene.footprint.touch_overlap`: to 0.1 mm, at most ``MAX_REST_OVERLAP``; a
+    deeper overlap counts as that)."""
+    from slax_drake.scene.footprint import Footprint, touch_overlap
 
     poly = Footprint.of(obj).polygon()
     shelf = scene.shelf
@@ -299,27 +301,12 @@ def rest_gap(obj, scene: Scene) -> float:
     for other in scene.objects:
         if other.name == obj.name:
             continue
-        other_poly = Footprint.of(other).polygon()
-        d = poly.distance(other_poly)
-        if d == 0.0 and poly.intersects(other_poly):
-            d = -_overlap_depth(poly, other_poly)
-        gaps.append(d)
+        depth = touch_overlap(obj, other)
+        gaps.append(-depth if depth > 0.0 else poly.distance(Footprint.of(other).polygon()))
     return float(min(gaps))
 
 
-MAX_REST_OVERLAP = 0.005  # m: rest_gap's deepest overlap of two footprints; deeper estimates are not trusted
-
-
-def _overlap_depth(poly, other) -> float:
-    """How far (m) ``poly`` must shrink on every side (mitred) to stop meeting ``other``, by bisection to 0.1 mm;
-    ``MAX_REST_OVERLAP`` when it still meets it shrunk that far."""
-    if poly.buffer(-MAX_REST_OVERLAP, join_style=2).intersects(other):
-        return MAX_REST_OVERLAP
-    lo, hi = 0.0, MAX_REST_OVERLAP
-    while hi - lo > 1e-4:
-        mid = (lo + hi) / 2.0
-        lo, hi = (mid, hi) if poly.buffer(-mid, join_style=2).intersects(other) else (lo, mid)
-    return hi
+MAX_REST_OVERLAP = MAX_TOUCH_OVERLAP  # m: rest_gap's deepest overlap of two footprints; deeper estimates are not trusted
 
 
 def _body_index(i: int):
