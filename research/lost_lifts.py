@@ -75,7 +75,8 @@ def main(argv=None) -> int:
         print(f"error: no {args.policy} trials in {args.physics}/physics_trials", file=sys.stderr)
         return 2
     scenario = load_scenario(config)
-    station = load_station_scenario(settings.get("station") or station_for(config))
+    recorded = settings.get("station")  # an absolute path where the run was made; this checkout's when it is gone
+    station = load_station_scenario(recorded if recorded and Path(recorded).is_file() else station_for(config))
     limit = float((settings.get("tool_rules") or {}).get("max_suction_moment", station.suction.max_held_moment))
     lip = station.suction.lip_moment
     model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position,
