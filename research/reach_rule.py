@@ -111,7 +111,7 @@ def main(argv=None) -> int:
                     else:
                         failed.append(action)
                 if args.stances:
-                    for action, shifts in _from_stances(checker, failed, args.stances):
+                    for action, shifts in plan_from_stances(checker, failed, args.stances):
                         row["stance_tried"] += 1
                         row["stance_planned"] += bool(shifts)
                         for dx in shifts:
@@ -175,7 +175,7 @@ def main(argv=None) -> int:
     return 0
 
 
-def _from_stances(checker, actions, shifts):
+def plan_from_stances(checker, actions, shifts):
     """(action, [the base shifts (m, along S x) from which the planner plans it]) per action: each planned with a
     fresh planner in the checker's scene whose camera (on the robot, at the observation pose) is moved by the
     shift along S x, so the shelf stands shifted the other way relative to the base."""

@@ -320,3 +320,12 @@ def test_push_matches_refuses_a_folder_that_is_no_physics_run(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         script("push_matches").main([str(tmp_path)])
     assert e.value.code == 2 and "no physics run with trial files" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, start", [(["no/such/trial"], "error: no/such/trial: not a trial folder"),
+                                         (["."] + ["--stances", "0", "0.1"], "error: --stances: 0 is where")])
+def test_ending_stances_refuses_bad_arguments(capsys, monkeypatch, argv, start):
+    monkeypatch.syspath_prepend(str(RESEARCH))  # the script imports its sibling reach_rule
+    assert script("ending_stances").main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(start)

@@ -1,0 +1,114 @@
+"""Would the robot standing elsewhere along the shelf have made the motions that ended its Drake trials "no feasible
+motion"? For each trial folder (``slax-drake trial --out DIR``, e.g. ``--benchmark-scene 8:13``) whose trial ended
+"no feasible motion": the candidates the motion planner refused at its last decision, planned again on that
+decision's believed scene (its estimated objects, as the planner saw them) from the observation pose with the robot's
+base moved DX along the shelf's x (the scene camera moved with the base, so the shelf and the objects stand shifted
+the other way relative to the arm; :func:`reach_rule.plan_from_stances`). Prints Markdown: per trial, each refused
+candidate, why, whether this code's planner plans it where the robot stood (a control: "yes" means the planner
+changed since the trial was run) and the base shifts from which it plans.
+
+    python research/ending_stances.py TRIAL_DIR [TRIAL_DIR ...] [--stances -0.2 -0.1 0.1 0.2]
+
+A trial that ended otherwise is listed and skipped. Candidates are found again among the action model's feasible
+actions on the decision's hypotheses by their description; one it no longer offers is said so.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+from pathlib import Path
+
+from reach_rule import plan_from_stances
+
+
+def believed_scene(folder: Path, entry: dict):
+    """The scene the planner planned the decision ``entry`` (a trial.json ``steps_log`` entry) in: the trial's
+    initial scene (shelf, camera) with the decision's hypotheses as its objects and no target."""
+    from slax_drake.scene.io import load_scene
+    from slax_drake.scene.model import SceneObject, planar_pose
+
+    scene = load_scene(folder / "scene.json")
+    objects = tuple(SceneObject(name, h["shape"], tuple(h["size"]), planar_pose(h["x"], h["y"], h["size"][2] / 2.0,
+                                                                                  h["yaw"]))
+                    for name, h in entry["hypotheses"].items())
+    return dataclasses.replace(scene, objects=objects, target=None)
+
+
+def trial_checker(scene, data: dict):
+    """The action model and motion planner the trial planned with (its scenario's masses, its profile and recorded
+    rules, its station) for ``scene``."""
+    from slax_drake.config import load_scenario
+    from slax_drake.hardware.check_action import Checker
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.shelf.actions import ActionModel
+    from slax_drake.shelf.tool import tool_config
+    from slax_drake.station.scenario import load_station_scenario
+
+    tool = tool_config(load_scenario(data["config"]), data.get("profile", "station"), **data.get("tool_rules", {}))
+    model = ActionModel(scene.shelf, scene.camera.position[:2], tool)
+    return Checker(scene, model, MotionPlanner(load_station_scenario(data["station"]), tool), data["station"])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("trials", nargs="+", help="trial folders (each holds trial.json and scene.json)")
+    parser.add_argument("--stances", type=float, nargs="+", default=[-0.2, -0.1, 0.1, 0.2],
+                        help="base shifts along the shelf's x to try (m; not 0)")
+    args = parser.parse_args(argv)
+    if 0.0 in args.stances:
+        print("error: --stances: 0 is where the robot stood, always tried; give the shifts", file=sys.stderr)
+        return 2
+    records = []
+    for folder in map(Path, args.trials):
+        try:
+            data = json.loads((folder / "trial.json").read_text())
+            entry = data["steps_log"][-1]
+            entry["hypotheses"], (folder / "scene.json").stat()
+        except (OSError, ValueError, KeyError, IndexError) as e:
+            print(f"error: {folder}: not a trial folder with trial.json and scene.json ({e})", file=sys.stderr)
+            return 2
+        records.append((folder, data, entry))
+
+    print("| trial | refused candidate | why | plans where the robot stood (this code) | plans from base shifts (m) |\n"
+          "|---|---|---|---|---|")
+    planned = planned_here = refused_total = trials_rescued = not_offered = 0
+    for folder, data, entry in records:
+        if data.get("result") != "no feasible motion":
+            print(f"| {folder.name} | (ended \"{data.get('result')}\") | | | |")
+            continue
+        checker = trial_checker(believed_scene(folder, entry), data)
+        offered = {a.describe(): a for a in checker.model.enumerate(checker.scene.objects).feasible}
+        rescued = False
+        for rejected in entry.get("rejected", []):
+            refused_total += 1
+            action = offered.get(rejected["action"])
+            why = f"{rejected.get('kind')} at the {rejected.get('waypoint')}"
+            if action is None:
+                not_offered += 1
+                print(f"| {folder.name} | {rejected['action']} | {why} | (not offered on the hypotheses again) | |")
+                continue
+            (_, shifts), = plan_from_stances(checker, [action], [0.0, *args.stances])
+            here = 0.0 in shifts
+            shifts = [dx for dx in shifts if dx != 0.0]
+            planned_here += here
+            if not here:  # the refusal reproduced: does another stance plan it?
+                planned += bool(shifts)
+                rescued |= bool(shifts)
+            print(f"| {folder.name} | {rejected['action']} | {why} | {'yes' if here else 'no'} | "
+                  f"{', '.join(f'{dx:+.2f}' for dx in shifts) or 'none'} |")
+        trials_rescued += rescued
+    reproduced = refused_total - planned_here - not_offered
+    print(f"\nOf {refused_total} refused candidates, {not_offered} are not offered on the hypotheses again and "
+          f"{planned_here} plan where the robot stood with this code (the trial's refusal not reproduced: the planner "
+          f"changed since, or its start state or the recorded rounding of the hypotheses matters); of the "
+          f"{reproduced} refusals reproduced, {planned} plan from some base shift "
+          f"({', '.join(f'{dx:+.2f}' for dx in args.stances)} m). {trials_rescued} of the trials would have had a "
+          "motion from another stance.")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
