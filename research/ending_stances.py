@@ -10,7 +10,9 @@ changed since the trial was run) and the base shifts from which it plans.
     python research/ending_stances.py TRIAL_DIR [TRIAL_DIR ...] [--stances -0.2 -0.1 0.1 0.2]
 
 A trial that ended otherwise is listed and skipped. Candidates are found again among the action model's feasible
-actions on the decision's hypotheses by their description; one it no longer offers is said so.
+actions on the decision's hypotheses by their description, else as check-action matches a move, else so without the
+hidden-space rules (the trial's hidden space came from its frame, which the record does not keep; the planner does not
+read it); one still not found is said so, with the model's reason.
 """
 
 from __future__ import annotations
@@ -37,9 +39,18 @@ def believed_scene(folder: Path, entry: dict):
     return dataclasses.replace(scene, objects=objects, target=None)
 
 
-def trial_checker(scene, data: dict):
+def spec_of(description: str) -> tuple:
+    """A candidate's description ("push NAME d=D", "suction NAME dx=DX dz=DZ ...") as a check-action spec."""
+    words = description.split()
+    values = {k: float(v) for k, v in (w.split("=") for w in words[2:] if "=" in w and w[0] in "dz")}
+    if words[0] == "push":
+        return "push", words[1], values["d"]
+    return "suction", words[1], values["dx"], values["dz"]
+
+
+def trial_checker(scene, data: dict, **rules):
     """The action model and motion planner the trial planned with (its scenario's masses, its profile and recorded
-    rules, its station) for ``scene``."""
+    rules, its station) for ``scene``; ``rules`` override the recorded ones."""
     from slax_drake.config import load_scenario
     from slax_drake.hardware.check_action import Checker
     from slax_drake.planning.planner import MotionPlanner
@@ -47,7 +58,8 @@ def trial_checker(scene, data: dict):
     from slax_drake.shelf.tool import tool_config
     from slax_drake.station.scenario import load_station_scenario
 
-    tool = tool_config(load_scenario(data["config"]), data.get("profile", "station"), **data.get("tool_rules", {}))
+    tool = tool_config(load_scenario(data["config"]), data.get("profile", "station"),
+                       **{**data.get("tool_rules", {}), **rules})
     model = ActionModel(scene.shelf, scene.camera.position[:2], tool)
     return Checker(scene, model, MotionPlanner(load_station_scenario(data["station"]), tool), data["station"])
 
@@ -80,15 +92,21 @@ def main(argv=None) -> int:
             print(f"| {folder.name} | (ended \"{data.get('result')}\") | | | |")
             continue
         checker = trial_checker(believed_scene(folder, entry), data)
+        unhidden = trial_checker(checker.scene, data, push_hidden_check=False, suction_hidden_rule="none")
         offered = {a.describe(): a for a in checker.model.enumerate(checker.scene.objects).feasible}
         rescued = False
         for rejected in entry.get("rejected", []):
             refused_total += 1
-            action = offered.get(rejected["action"])
             why = f"{rejected.get('kind')} at the {rejected.get('waypoint')}"
+            action, missing = offered.get(rejected["action"]), ""
+            if action is None:  # the same move as check-action matches it (a push of that length, a placement within 1 cm)
+                action, missing = checker.resolve(spec_of(rejected["action"]))
+            if action is None:  # the trial's hidden space came from its frame, not from the hypotheses' shadows: the
+                # move's geometry without the hidden-space rules (the planner does not read them)
+                action, missing = unhidden.resolve(spec_of(rejected["action"]))
             if action is None:
                 not_offered += 1
-                print(f"| {folder.name} | {rejected['action']} | {why} | (not offered on the hypotheses again) | |")
+                print(f"| {folder.name} | {rejected['action']} | {why} | not offered on the hypotheses: {missing} | |")
                 continue
             (_, shifts), = plan_from_stances(checker, [action], [0.0, *args.stances])
             here = 0.0 in shifts

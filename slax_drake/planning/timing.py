@@ -26,7 +26,7 @@ def time_segment(q0, q1, velocity, acceleration, jerk, dt: float = SAMPLE_PERIOD
     profile, silently falls back to time synchronisation, off the line, when it cannot synchronise). The last
     sample lies exactly at the segment's end (duration rounded up to a multiple of dt, where the profile holds at
     rest)."""
-    from ruckig import InputParameter, Result, Ruckig, Trajectory
+    from ruckig import InputParameter, Ruckig, Trajectory
 
     q0 = np.asarray(q0, float)
     q1 = np.asarray(q1, float)
@@ -43,10 +43,7 @@ def time_segment(q0, q1, velocity, acceleration, jerk, dt: float = SAMPLE_PERIOD
     inp.max_velocity = [float(np.min(np.asarray(velocity, float)[moving] / travel))]
     inp.max_acceleration = [float(np.min(np.asarray(acceleration, float)[moving] / travel))]
     inp.max_jerk = [float(np.min(np.asarray(jerk, float)[moving] / travel))]
-    traj = Trajectory(1)
-    result = otg.calculate(inp, traj)
-    if result not in (Result.Working, Result.Finished):
-        raise TimingError(f"Ruckig failed to time a segment: {result}")
+    traj = _calculate(otg, inp, Trajectory(1))
     duration = traj.duration
     steps = int(np.ceil(duration / dt - 1e-9))
     t = np.arange(steps + 1) * dt
@@ -56,6 +53,30 @@ def time_segment(q0, q1, velocity, acceleration, jerk, dt: float = SAMPLE_PERIOD
     a = sv[:, 2:3] * d
     q[-1], v[-1], a[-1] = q1, 0.0, 0.0
     return t, q, v, a
+
+
+LIMIT_BACKOFF = 0.999  # the limits' share Ruckig is asked again with when it fails on the exact ones
+
+
+def _calculate(otg, inp, traj):
+    """Ruckig's offline ``calculate`` of ``inp`` into ``traj``. Where the limits put the profile exactly on the
+    boundary between two of its shapes (the acceleration reached at the very moment the velocity is: seen with a
+    joint travel that made the path's limits 72.7, 50 and 500), rounding can make Ruckig 0.19 fail or raise
+    ("error in step 1"); it is asked once more with every limit at ``LIMIT_BACKOFF`` of its value, off the
+    boundary and within the joints' limits (the segment takes 0.1 % longer). TimingError when that fails too."""
+    from ruckig import Result, RuckigError
+
+    for attempt in range(2):
+        try:
+            result = otg.calculate(inp, traj)
+        except RuckigError as e:
+            result = e
+        if result in (Result.Working, Result.Finished):
+            return traj
+        inp.max_velocity = [v * LIMIT_BACKOFF for v in inp.max_velocity]
+        inp.max_acceleration = [a * LIMIT_BACKOFF for a in inp.max_acceleration]
+        inp.max_jerk = [j * LIMIT_BACKOFF for j in inp.max_jerk]
+    raise TimingError(f"Ruckig failed to time a segment: {' '.join(str(result).split())[:200]}")
 
 
 def _sample_profile(traj, times) -> np.ndarray:

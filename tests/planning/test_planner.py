@@ -268,6 +268,25 @@ def test_timed_segment_stays_on_its_straight_line():
         assert np.all(np.abs(v) <= lim.velocity * (1 + 1e-9)) and np.all(np.abs(a) <= lim.acceleration * (1 + 1e-9))
 
 
+def test_a_segment_on_the_boundary_of_ruckigs_profile_shapes_is_timed():
+    """Path limits of 72.7, 50 and 500 (as a replayed plan's segment gave them, rounded just under) make Ruckig
+    0.19 raise "error in step 1": the segment is timed with the limits backed off by 0.1 %, within every limit."""
+    from ruckig import InputParameter, Ruckig, RuckigError, Trajectory
+
+    from slax_drake.planning.timing import time_segment
+
+    v, a, j = 72.69999999999993, 49.99999999999996, 499.9999999999995
+    inp = InputParameter(1)
+    inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
+    inp.target_position, inp.target_velocity, inp.target_acceleration = [1.0], [0.0], [0.0]
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = [v], [a], [j]
+    with pytest.raises(RuckigError):  # the case itself: Ruckig's own failure on these limits
+        Ruckig(1).calculate(inp, Trajectory(1))
+    t, q, vel, acc = time_segment([0.0], [1.0], [v], [a], [j])
+    assert q[0, 0] == 0.0 and q[-1, 0] == 1.0 and 0.4 < t[-1] < 0.402
+    assert np.all(np.abs(vel) <= v) and np.all(np.abs(acc) <= a)
+
+
 def test_a_segment_is_sampled_as_ruckigs_own_evaluation_gives_it():
     """The samples evaluated from the profile's seven constant-jerk phases at once are Ruckig's ``at_time`` at
     each sample time: position, velocity and acceleration, on profiles that reach the velocity limit, the
