@@ -10,7 +10,8 @@
    solved again with a minimum-distance constraint, unless the tool itself (the bodies rigid with the tool
    frame) meets the environment, which no other solution of that pose avoids: then the action is rejected at
    once. A waypoint the warm start cannot reach is solved from the seed library and the waypoints before it
-   are solved again backward from there (at most ``MAX_REANCHORS`` times);
+   are solved again backward from there (at most ``MAX_REANCHORS`` times); where IK from the warm start finds no
+   solution, the pose halfway along the segment is solved first and the waypoint from there (continuation);
 3. each straight tool segment is refined: where the joint-space straight line between two solutions moves the
    tool more than ``deviation_tolerance`` (``CARRIED_DEVIATION_TOLERANCE`` while carrying an object) from the
    Cartesian segment, the midpoint is solved (warm-started from the joint-space midpoint, else from either end)
@@ -456,6 +457,33 @@ class MotionPlanner:
             raise _Reject(PlanningFailure(FailureKind.EVERY_SOLUTION_COLLIDES, wp.label, hits=hits))
         raise _Reject(PlanningFailure(FailureKind.NO_IK_SOLUTION, wp.label))
 
+    def _solve_next(self, world, wp_from: ToolWaypoint, q_from, wp: ToolWaypoint, name, timings):
+        """The next waypoint of a chain, warm-started from ``q_from`` (the solution at ``wp_from``). IK from a good
+        warm start can fail to converge where the pose is reachable (a replayed push's 2.5 cm segment failed from the
+        insert's solution, and planned with its inputs 10 um apart): when no guess gives a solution, the pose
+        halfway along the segment is solved first and the waypoint from there (continuation); the first failure is
+        raised when that fails too."""
+        try:
+            return self._solve_waypoint(world, wp, [q_from], name, timings)
+        except _PoseReject:
+            raise
+        except _Reject as e:
+            if e.failures[0].kind is not FailureKind.NO_IK_SOLUTION:
+                raise
+            first = e
+        X = np.eye(4)
+        X[:3, :3] = _midway_rotation(wp_from.X_SF[:3, :3], wp.X_SF[:3, :3])
+        X[:3, 3] = (wp_from.X_SF[:3, 3] + wp.X_SF[:3, 3]) / 2.0
+        q_mid = self._ik(world, dataclasses.replace(wp, X_SF=X), q_from, timings)
+        if q_mid is None:
+            raise first
+        try:
+            return self._solve_waypoint(world, wp, [q_mid], name, timings)
+        except _PoseReject:
+            raise
+        except _Reject:
+            raise first from None
+
     def _seeds(self, q_start):
         """Initial guesses for the first waypoint: the start, the observation pose with the torso low, mid and
         high, then a fixed set of pseudo-random configurations (seeded: the planner is deterministic)."""
@@ -532,7 +560,7 @@ class MotionPlanner:
         anchors = 0
         for k in range(1, len(waypoints)):
             try:
-                qs.append(self._solve_waypoint(world, waypoints[k], [qs[-1]], name, timings))
+                qs.append(self._solve_next(world, waypoints[k - 1], qs[-1], waypoints[k], name, timings))
                 continue
             except _PoseReject:
                 raise
@@ -546,7 +574,7 @@ class MotionPlanner:
                 q_k = self._solve_waypoint(world, waypoints[k], self._seeds(qs[-1]), name, timings)
                 back = [q_k]
                 for j in range(k - 1, -1, -1):
-                    back.append(self._solve_waypoint(world, waypoints[j], [back[-1]], name, timings))
+                    back.append(self._solve_next(world, waypoints[j + 1], back[-1], waypoints[j], name, timings))
             except _Reject:
                 raise first_error
             qs = back[::-1]

@@ -456,3 +456,42 @@ def test_the_first_waypoint_keeps_every_roll_joint_within_half_a_turn_of_the_sta
     q_first = motion.trajectory.value(t_first)[0]
     turning = [PLANNED_JOINTS.index(n) for n in ("upperarm_roll_joint", "forearm_roll_joint", "wrist_roll_joint")]
     assert np.all(np.abs(q_first[turning] - planner.q_observation[turning]) <= np.pi + 1e-9)
+
+
+def test_a_waypoint_the_warm_start_does_not_converge_to_is_solved_through_the_segments_midpoint(setup, monkeypatch):
+    """IK warm-started from the previous waypoint can fail to converge on a reachable pose (a replayed push's 2.5 cm
+    segment did, and planned with its inputs 10 um apart): the next waypoint is solved from the solution at the
+    segment's midpoint; when the midpoint fails too, the warm start's own failure is raised. A stand-in IK fails
+    from the previous solution and solves from anything else; no collision check."""
+    from slax_drake.planning import planner as planner_module
+    from slax_drake.planning.waypoints import ToolWaypoint
+
+    planner = MotionPlanner(setup[0], setup[1].tool)
+    q_from = np.zeros(9)
+    start = ToolWaypoint("insert", "blade_face", np.eye(4), 0.0)
+    end_pose = np.eye(4)
+    end_pose[:3, 3] = (0.025, 0.0, 0.0)
+    end = ToolWaypoint("push", "blade_face", end_pose, 0.0, contact=True)
+    solved_at = []
+
+    def ik(world, wp, guess, timings, min_distance=None, tight=False):
+        if np.array_equal(guess, q_from):  # from the previous solution only the midpoint converges (unless stuck)
+            midway = np.allclose(wp.X_SF[:3, 3], (0.0125, 0.0, 0.0))
+            return np.full(9, 0.5) if midway and not stuck_midway else None
+        solved_at.append(wp.X_SF[:3, 3].copy())
+        return np.full(9, 1.0)
+
+    class World:
+        def allow_tool_contact(self, name, on):
+            pass
+
+    monkeypatch.setattr(planner, "_ik", ik)
+    monkeypatch.setattr(planner, "_free", lambda world, q, timings: True)
+    timings = {"ik_s": 0.0, "check_s": 0.0, "ik_solves": 0}
+    stuck_midway = False
+    q = planner._solve_next(World(), start, q_from, end, "object_0", timings)
+    assert np.array_equal(q, np.full(9, 1.0)) and np.allclose(solved_at[-1], (0.025, 0.0, 0.0))
+    stuck_midway = True
+    with pytest.raises(planner_module._Reject) as failed:
+        planner._solve_next(World(), start, q_from, end, "object_0", timings)
+    assert failed.value.failures[0].kind is FailureKind.NO_IK_SOLUTION and failed.value.failures[0].waypoint == "push"
