@@ -56,12 +56,14 @@ def trial_checker(scene, data: dict, **rules):
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.shelf.actions import ActionModel
     from slax_drake.shelf.tool import tool_config
-    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.station.scenario import load_station_scenario, station_for
 
     tool = tool_config(load_scenario(data["config"]), data.get("profile", "station"),
                        **{**data.get("tool_rules", {}), **rules})
     model = ActionModel(scene.shelf, scene.camera.position[:2], tool)
-    return Checker(scene, model, MotionPlanner(load_station_scenario(data["station"]), tool), data["station"])
+    station = data["station"]  # an absolute path where the trial ran; this checkout's when it is gone
+    station = station if Path(station).is_file() else station_for(data["config"])
+    return Checker(scene, model, MotionPlanner(load_station_scenario(station), tool), station)
 
 
 def main(argv=None) -> int:
