@@ -66,7 +66,7 @@ def _calculate(otg, inp, traj):
     boundary and within the joints' limits (the segment takes 0.1 % longer). TimingError when that fails too."""
     from ruckig import Result, RuckigError
 
-    for attempt in range(2):
+    for _ in range(2):
         try:
             result = otg.calculate(inp, traj)
         except RuckigError as e:
