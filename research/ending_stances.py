@@ -23,6 +23,7 @@ import json
 import sys
 from pathlib import Path
 
+from drake_divergence import shelf_step
 from reach_rule import plan_from_stances
 
 
@@ -39,31 +40,25 @@ def believed_scene(folder: Path, entry: dict):
     return dataclasses.replace(scene, objects=objects, target=None)
 
 
-def spec_of(description: str) -> tuple:
-    """A candidate's description ("push NAME d=D", "suction NAME dx=DX dz=DZ ...") as a check-action spec."""
-    words = description.split()
-    values = {k: float(v) for k, v in (w.split("=") for w in words[2:] if "=" in w and w[0] in "dz")}
-    if words[0] == "push":
-        return "push", words[1], values["d"]
-    return "suction", words[1], values["dx"], values["dz"]
+def check_spec(described: str) -> tuple:
+    """A candidate's description ("push NAME d=D", "suction NAME dx=DX dz=DZ ...") as check-action's spec
+    (:func:`slax_drake.hardware.check_action.parse_action`), read by :func:`drake_divergence.shelf_step`."""
+    kind, name, d, dz = shelf_step(described)
+    return ("push", name, d) if kind == "push" else ("suction", name, d, dz)
 
 
 def trial_checker(scene, data: dict, **rules):
     """The action model and motion planner the trial planned with (its scenario's masses, its profile and recorded
     rules, its station) for ``scene``; ``rules`` override the recorded ones."""
     from slax_drake.config import load_scenario
-    from slax_drake.hardware.check_action import Checker
-    from slax_drake.planning.planner import MotionPlanner
-    from slax_drake.shelf.actions import ActionModel
+    from slax_drake.hardware.check_action import make_checker
     from slax_drake.shelf.tool import tool_config
-    from slax_drake.station.scenario import load_station_scenario, station_for
+    from slax_drake.station.scenario import station_for
 
     tool = tool_config(load_scenario(data["config"]), data.get("profile", "station"),
                        **{**data.get("tool_rules", {}), **rules})
-    model = ActionModel(scene.shelf, scene.camera.position[:2], tool)
     station = data["station"]  # an absolute path where the trial ran; this checkout's when it is gone
-    station = station if Path(station).is_file() else station_for(data["config"])
-    return Checker(scene, model, MotionPlanner(load_station_scenario(station), tool), station)
+    return make_checker(scene, station if Path(station).is_file() else station_for(data["config"]), tool=tool)
 
 
 def main(argv=None) -> int:
@@ -102,10 +97,10 @@ def main(argv=None) -> int:
             why = f"{rejected.get('kind')} at the {rejected.get('waypoint')}"
             action, missing = offered.get(rejected["action"]), ""
             if action is None:  # the same move as check-action matches it (a push of that length, a placement within 1 cm)
-                action, missing = checker.resolve(spec_of(rejected["action"]))
+                action, missing = checker.resolve(check_spec(rejected["action"]))
             if action is None:  # the trial's hidden space came from its frame, not from the hypotheses' shadows: the
                 # move's geometry without the hidden-space rules (the planner does not read them)
-                action, missing = unhidden.resolve(spec_of(rejected["action"]))
+                action, missing = unhidden.resolve(check_spec(rejected["action"]))
             if action is None:
                 not_offered += 1
                 print(f"| {folder.name} | {rejected['action']} | {why} | not offered on the hypotheses: {missing} | |")

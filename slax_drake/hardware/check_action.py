@@ -142,9 +142,9 @@ def spec_of(action) -> str:
     return f"suction:{action.name}:{action.dx:+.4f}:{action.dz:+.4f}"
 
 
-def make_checker(scene, station_path: str | None = None) -> Checker:
+def make_checker(scene, station_path: str | None = None, tool=None) -> Checker:
     """The station's action model (``station`` profile, the station cup's limits, the station's scene scenario's
-    geometry and masses) and motion planner for ``scene``."""
+    geometry and masses; ``tool``, a ToolConfig, instead when given) and motion planner for ``scene``."""
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.shelf.actions import ActionModel
@@ -156,8 +156,8 @@ def make_checker(scene, station_path: str | None = None) -> Checker:
     station_path = station_path or station_for(shelf=scene.shelf)
     station = load_station_scenario(station_path)
     scene_camera(station, scene)  # SceneMismatchError when the station serves another shelf
-    scenario = load_scenario(station.scene_config)
-    tool = tool_config(scenario, "station", **station_tool_rules(station))
+    if tool is None:
+        tool = tool_config(load_scenario(station.scene_config), "station", **station_tool_rules(station))
     model = ActionModel(scene.shelf, scene.camera.position[:2], tool)
     known = dataclasses.replace(scene, target=None)
     return Checker(known, model, MotionPlanner(station, tool), str(station_path))
