@@ -61,34 +61,17 @@ def trial_checker(scene, data: dict, **rules):
     return make_checker(scene, station if Path(station).is_file() else station_for(data["config"]), tool=tool)
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("trials", nargs="+", help="trial folders (each holds trial.json and scene.json)")
-    parser.add_argument("--stances", type=float, nargs="+", default=[-0.2, -0.1, 0.1, 0.2],
-                        help="base shifts along the shelf's x to try (m; not 0)")
-    args = parser.parse_args(argv)
-    if 0.0 in args.stances:
-        print("error: --stances: 0 is where the robot stood, always tried; give the shifts", file=sys.stderr)
-        return 2
-    records = []
-    for folder in map(Path, args.trials):
-        try:
-            data = json.loads((folder / "trial.json").read_text())
-            entry = data["steps_log"][-1]
-            entry["hypotheses"], (folder / "scene.json").stat()
-        except (OSError, ValueError, KeyError, IndexError) as e:
-            print(f"error: {folder}: not a trial folder with trial.json and scene.json ({e})", file=sys.stderr)
-            return 2
-        records.append((folder, data, entry))
-
+def _table(records, stances) -> None:
+    """Prints the Markdown table and its summary for the trial ``records`` (folder, trial.json data, its last
+    decision's entry, the believed scene of that decision)."""
     print("| trial | refused candidate | why | plans where the robot stood (this code) | plans from base shifts (m) |\n"
           "|---|---|---|---|---|")
     planned = planned_here = refused_total = trials_rescued = not_offered = 0
-    for folder, data, entry in records:
+    for folder, data, entry, scene in records:
         if data.get("result") != "no feasible motion":
             print(f"| {folder.name} | (ended \"{data.get('result')}\") | | | |")
             continue
-        checker = trial_checker(believed_scene(folder, entry), data)
+        checker = trial_checker(scene, data)
         unhidden = trial_checker(checker.scene, data, push_hidden_check=False, suction_hidden_rule="none")
         offered = {a.describe(): a for a in checker.model.enumerate(checker.scene.objects).feasible}
         rescued = False
@@ -105,7 +88,7 @@ def main(argv=None) -> int:
                 not_offered += 1
                 print(f"| {folder.name} | {rejected['action']} | {why} | not offered on the hypotheses: {missing} | |")
                 continue
-            (_, shifts), = plan_from_stances(checker, [action], [0.0, *args.stances])
+            (_, shifts), = plan_from_stances(checker, [action], [0.0, *stances])
             here = 0.0 in shifts
             shifts = [dx for dx in shifts if dx != 0.0]
             planned_here += here
@@ -120,8 +103,39 @@ def main(argv=None) -> int:
           f"{planned_here} plan where the robot stood with this code (the trial's refusal not reproduced: the planner "
           f"changed since, or its start state or the recorded rounding of the hypotheses matters); of the "
           f"{reproduced} refusals reproduced, {planned} plan from some base shift "
-          f"({', '.join(f'{dx:+.2f}' for dx in args.stances)} m). {trials_rescued} of the trials would have had a "
+          f"({', '.join(f'{dx:+.2f}' for dx in stances)} m). {trials_rescued} of the trials would have had a "
           "motion from another stance.")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("trials", nargs="+", help="trial folders (each holds trial.json and scene.json)")
+    parser.add_argument("--stances", type=float, nargs="+", default=[-0.2, -0.1, 0.1, 0.2],
+                        help="base shifts along the shelf's x to try (m; not 0)")
+    args = parser.parse_args(argv)
+    if 0.0 in args.stances:
+        print("error: --stances: 0 is where the robot stood, always tried; give the shifts", file=sys.stderr)
+        return 2
+    from slax_drake.errors import UserError
+
+    records = []
+    for folder in map(Path, args.trials):
+        try:
+            data = json.loads((folder / "trial.json").read_text())
+            entry = data["steps_log"][-1]
+            records.append((folder, data, entry, believed_scene(folder, entry)))
+        except (OSError, ValueError, KeyError, IndexError) as e:
+            print(f"error: {folder}: not a trial folder with trial.json and scene.json ({e})", file=sys.stderr)
+            return 2
+        except UserError as e:  # its scene file cannot be read
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+
+    try:
+        _table(records, args.stances)
+    except UserError as e:  # a scenario or station the trial names that cannot be read
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     return 0
 
 
