@@ -9,8 +9,10 @@ command from it on.
 Push (q, d) of ``slax_drake.shelf.actions``: q = (x of the blade lane's centre, y of the blade's tip,
 blade_height / 2). The blade (``blade_face_frame``, its faces normal to S x, hanging below the tube, the tube
 pointing along S +y) goes ``PUSH_STANDOFF`` beside the object's extreme x (so that the 3 cm tube above the blade
-clears a tall object) instead of the lane's centre, and pushes d + standoff, so the object moves by d: pre-approach in front of the opening (``APPROACH_MARGIN``), insert along +y to the tip
-depth, push d + standoff along x, back off the standoff, retract along -y.
+clears a tall object) instead of the lane's centre, and pushes d plus the gap between the object and the tool's
+surface that meets it (the blade's face, or the tube's side for an object reaching the tube, :func:`push_lead`),
+so the object moves by d: pre-approach in front of the opening (``APPROACH_MARGIN``), insert along +y to the tip
+depth, push along x, back off that gap (the surface as far from the object as at the insert), retract along -y.
 
 Suction (q, d_x, d_z, yaw): q = the contact point on the camera-facing side. The blade is turned up
 (``SHAFT_BLADE_UP``), the cup (``cup_tip_frame``, its axis along S +y turned by the action's yaw about S z, so
@@ -57,6 +59,11 @@ BLADE_HALF_LENGTH = 0.0325  # blade_face_frame to the blade's tip along the tube
 BLADE_HALF_THICKNESS = 0.002  # m (URDF)
 TUBE_RADIUS = 0.015  # m (URDF); the tube runs along the blade's upper edge, centred on the blade's plane
 PUSH_STANDOFF = TUBE_RADIUS + TUBE_STANDOFF - BLADE_HALF_THICKNESS  # blade face to the object's extreme (m): the tube clears it
+# The tube, not the blade, pushes an object whose top reaches the tube's side: where its surface's normal is within
+# TUBE_PUSH_ANGLE of horizontal (measured in Drake, research/push_contact.py --heights: boxes 8-20 cm tall went
+# 8.5-11.9 mm farther than a push planned for the blade; a 7.5 cm box, meeting the tube 32 deg below its axis, as
+# far as planned).
+TUBE_PUSH_ANGLE = np.radians(20.0)
 # BLADE_LIFT (the blade's lower edge above the support, m) is the action model's, whose push_tube_check reads it
 # SEAL_PRESS (the action model's): the cup pressed this far into the face (m)
 CUP_STANDOFF = 0.01  # m before the face, then the cup moves in with suction on
@@ -75,6 +82,18 @@ DWELL = 0.3  # s at rest after sealing and after releasing
 WEIGH_DWELL = 0.3  # s at rest at a lifted suction's lift, where the arm weighs what the cup holds (the arm settles in
 # about 0.2 s after the lift on the sim station: slax_drake.systems.guard.weigh_time); a lift higher than LIFT (over
 # a tall object on the way) rests at LIFT first ("weigh"), so that an object the cup cannot hold falls from 1 cm
+
+
+def push_lead(top_z: float, tool: ToolConfig = ToolConfig()) -> float:
+    """How far in front of the blade's plane (m, along the push) the tool surface stands that meets an object whose
+    top is at ``top_z`` (m above the support): the blade's face (``BLADE_HALF_THICKNESS``), or the tube's side at
+    the object's top where it reaches lower than ``TUBE_PUSH_ANGLE`` below the tube's axis (at the blade's upper
+    edge), up to ``TUBE_RADIUS`` for an object as tall as the axis or taller. A push moves the tool d plus the
+    gap between that surface and the object, so that the object moves d."""
+    below_axis = max(0.0, tool.geometry.blade_height + BLADE_LIFT - top_z)
+    if below_axis > TUBE_RADIUS * np.sin(TUBE_PUSH_ANGLE):
+        return BLADE_HALF_THICKNESS
+    return max(BLADE_HALF_THICKNESS, float(np.sqrt(TUBE_RADIUS ** 2 - below_axis ** 2)))
 
 
 def push_rotation() -> np.ndarray:
@@ -135,14 +154,15 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         y = action.q[1] - BLADE_HALF_LENGTH
         z = tool.geometry.blade_height / 2.0 + BLADE_LIFT
         y_pre = y_open - approach_margin - BLADE_HALF_LENGTH
-        x_end = x + action.d + sign * PUSH_STANDOFF
+        gap = BLADE_HALF_THICKNESS + PUSH_STANDOFF - push_lead(float(obj.center[2]) + obj.size[2] / 2.0, tool)
+        x_end = x + action.d + sign * gap
         R, f, s = push_rotation(), robot_model.BLADE_FACE_FRAME, robot_model.SHAFT_BLADE_DOWN
         return [
             ToolWaypoint("pre-approach", f, _pose(R, (x, y_pre, z)), s),
             ToolWaypoint("insert", f, _pose(R, (x, y, z)), s),
             ToolWaypoint("push", f, _pose(R, (x_end, y, z)), s, contact=True),
-            ToolWaypoint("back off", f, _pose(R, (x_end - sign * PUSH_STANDOFF, y, z)), s, contact=True),
-            ToolWaypoint("retract", f, _pose(R, (x_end - sign * PUSH_STANDOFF, y_pre, z)), s, contact=True),
+            ToolWaypoint("back off", f, _pose(R, (x_end - sign * gap, y, z)), s, contact=True),
+            ToolWaypoint("retract", f, _pose(R, (x_end - sign * gap, y_pre, z)), s, contact=True),
         ]
     if isinstance(action, Suction):
         cx, cy, cz = action.q

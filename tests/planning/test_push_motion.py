@@ -1,0 +1,61 @@
+"""A push's waypoints move the object by d: the tool travels d plus the gap between the object and the surface
+that meets it first, the blade's face for an object lower than the tube, the tube's side for one that reaches it
+(measured in Drake: a push planned for the blade moved boxes taller than the tube 8.5-11.9 mm too far,
+research/push_contact.py --heights)."""
+
+import numpy as np
+import pytest
+
+from slax_drake.planning.waypoints import (BLADE_HALF_THICKNESS, TUBE_PUSH_ANGLE, TUBE_RADIUS, action_waypoints,
+                                           push_lead)
+from slax_drake.shelf.actions import BLADE_LIFT, ActionModel, Push, ToolConfig
+from slax_drake.scene.model import SceneObject, Shelf, planar_pose
+
+SHELF = Shelf(0.60, 0.60, 0.60, 0.02)
+EYE = np.array([0.0, -0.75, 0.20])
+TOOL = ToolConfig.build()
+TUBE_AXIS_Z = TOOL.geometry.blade_height + BLADE_LIFT  # the tube's axis runs along the blade's upper edge
+
+
+def box(height, x=0.0, y=0.05, sx=0.08, sy=0.08):
+    return SceneObject("a", "box", (sx, sy, height), planar_pose(x, y, height / 2, 0.0))
+
+
+def leading_surface_travel(height: float, sign: int, d: float) -> tuple[float, float, float]:
+    """Where the surface that meets the object stands at the insert, at the push's end and after backing off, as
+    x in S along the push (sign times x), for the push of ``d`` the action model offers."""
+    a = box(height)
+    push = next(p for p in ActionModel(SHELF, EYE, TOOL).enumerate((a,), suctions=False).feasible
+                if isinstance(p, Push) and abs(p.d - sign * d) < 1e-9)
+    wps = {w.label: w for w in action_waypoints(push, (a,), SHELF, TOOL)}
+    lead = push_lead(height, TOOL)
+    start = sign * wps["insert"].position[0] + lead
+    end = sign * wps["push"].position[0] + lead
+    back = sign * wps["back off"].position[0] + lead
+    assert wps["retract"].position[0] == wps["back off"].position[0]
+    return start, end, back
+
+
+@pytest.mark.parametrize("sign", [+1, -1])
+@pytest.mark.parametrize("height", [0.05, 0.12, 0.25])
+def test_the_surface_that_meets_the_object_ends_d_past_the_objects_extreme(sign, height):
+    """The leading surface starts clear of the object and ends exactly d past the object's extreme on its side,
+    so the object moves by d, whether the blade (a 5 cm box) or the tube (12 and 25 cm) pushes it; backing off,
+    it leaves the object as far behind as it stood before the push."""
+    extreme = sign * (0.0 - sign * 0.04)  # the box's extreme x on the blade's side, along the push
+    start, end, back = leading_surface_travel(height, sign, 0.10)
+    assert start < extreme - 1e-3
+    assert end == pytest.approx(extreme + 0.10, abs=1e-9)
+    assert end - back == pytest.approx(extreme - start, abs=1e-9)
+
+
+def test_which_surface_leads():
+    """Below the tube (or meeting it steeper than TUBE_PUSH_ANGLE below its axis) the blade's face leads; at and
+    above the tube's axis the tube's full radius; in between, the tube's side at the object's top."""
+    steep = TUBE_RADIUS * np.sin(TUBE_PUSH_ANGLE)
+    assert push_lead(0.05, TOOL) == BLADE_HALF_THICKNESS
+    assert push_lead(TUBE_AXIS_Z - steep - 1e-4, TOOL) == BLADE_HALF_THICKNESS
+    assert push_lead(TUBE_AXIS_Z, TOOL) == pytest.approx(TUBE_RADIUS)
+    assert push_lead(0.30, TOOL) == pytest.approx(TUBE_RADIUS)
+    below = steep / 2
+    assert push_lead(TUBE_AXIS_Z - below, TOOL) == pytest.approx(np.sqrt(TUBE_RADIUS ** 2 - below ** 2))
