@@ -92,6 +92,12 @@ LIFT_CLEARANCE = 0.01  # m
 OUT_MARGIN = 0.01  # m
 PULL_STEP = 0.04  # m
 CARRY_YAWS_DEG = (30.0,)  # deg
+# A turned suction's tube passes the side walls' front edges (at the opening) with its surface at least this far
+# from them (m): the planner's 2 mm collision padding, and how far the tube strays there between IK's tolerance on
+# its direction (0.01 rad over the 0.3 m from the cup to the opening) and the joint-space segments. The boxes turned
+# toward a wall of research/tube_wall.py: with none, 4 of 8 refused for the tube meeting the shelf; 6 mm, 1 of 6;
+# 10 mm, none (the 3 refused by the left wall are out of the arm's reach).
+TUBE_WALL_CLEARANCE = 0.010
 TUBE_CHECK_SLACK = 0.004  # m: how far the planned tool may stray from its straight segment (the planner's
 # DEVIATION_TOLERANCE); the push_tube_check corridor is narrowed and lowered by it, so it refuses only sure hits
 
@@ -1099,19 +1105,25 @@ class ActionModel:
 
     def tool_yaw(self, obj: SceneObject, contact_xy) -> float:
         """The tool's yaw (rad) for a suction of ``obj`` at ``contact_xy`` (S): the face's yaw clamped to
-        ``max_tool_yaw_deg`` and to the turns whose tube axis, from the contact out to the opening, stays a tube
-        radius inside the side walls there (0 when the contact itself is that close to a wall)."""
+        ``max_tool_yaw_deg`` and to the turns whose tube, on its axis from the contact out through the opening,
+        passes the side walls' front edges with ``TUBE_WALL_CLEARANCE`` to spare (0 when the contact itself is
+        that close to a wall)."""
         limit = math.radians(self.tool.rules.max_tool_yaw_deg)
         if limit == 0.0:
             return 0.0
         yaw = min(limit, max(-limit, self.face_yaw(obj)))
         cx, cy = float(contact_xy[0]), float(contact_xy[1])
         depth = cy + self.shelf.depth / 2  # behind the opening
-        x_max = self.shelf.width / 2 - self.tool.geometry.tube_diameter / 2
-        if depth <= 1e-9 or abs(cx) >= x_max:
+        half_width = self.shelf.width / 2
+        reach = self.tool.geometry.tube_diameter / 2 + TUBE_WALL_CLEARANCE  # from the axis to an edge, at least
+        if depth <= 1e-9 or abs(cx) >= half_width - reach:
             return 0.0
-        # the axis meets the opening at x = cx + tan(yaw) * depth
-        lo, hi = math.atan((-x_max - cx) / depth), math.atan((x_max - cx) / depth)
+        # The axis leaves along (sin yaw, -cos yaw); its distance from the right wall's edge (half_width, opening)
+        # is (half_width - cx) cos yaw - depth sin yaw = R cos(yaw + phi), from the left one's (half_width + cx)
+        # cos yaw + depth sin yaw = R' cos(yaw - phi'): each at least ``reach`` bounds the turn.
+        right, left = half_width - cx, half_width + cx
+        hi = math.acos(reach / math.hypot(right, depth)) - math.atan2(depth, right)
+        lo = math.atan2(depth, left) - math.acos(reach / math.hypot(left, depth))
         return min(hi, max(lo, yaw))
 
 

@@ -49,17 +49,25 @@ def test_the_turn_is_the_faces_clamped_and_the_seal_rule_takes_the_rest(sim_scen
     assert bool(model.enumerate((box,), pushes=False).feasible) is sealed
 
 
-def test_a_side_wall_limits_the_turn(sim_scenario):
-    """A deep box by the left wall whose face looks toward that wall: turned fully, the tube's axis would leave
-    the bay through the wall; the turn stops where the axis meets the opening a tube radius inside it."""
+@pytest.mark.parametrize("side", [-1, +1])
+def test_a_side_wall_limits_the_turn(sim_scenario, side):
+    """A deep box by a side wall whose face looks toward that wall: turned fully, the tube would leave the bay
+    through the wall; the turn stops where the tube's surface passes the wall's front edge (at the opening)
+    ``TUBE_WALL_CLEARANCE`` from it, measured square to the turned axis (before, the axis met the opening a tube
+    radius inside the wall, and a 27 deg turn left the tube 1.6 mm into the edge)."""
+    from slax_drake.shelf.actions import TUBE_WALL_CLEARANCE
+
     model = _model(sim_scenario)
     shelf = shelf_of(sim_scenario)
-    box = _turned_box(-30.0, x=-shelf.width / 2 + 0.10, y=0.10)
+    box = _turned_box(side * 30.0, x=side * (shelf.width / 2 - 0.10), y=0.10)
     cx, cy, _ = model.suction_contact(box)
     yaw = model.tool_yaw(box, (cx, cy))
-    assert -math.radians(30.0) < yaw < 0.0
-    x_open = cx + math.tan(yaw) * (cy + shelf.depth / 2)
-    assert x_open == pytest.approx(-shelf.width / 2 + 0.015)
+    assert 0.0 < side * yaw < math.radians(30.0)
+    edge = np.array([side * shelf.width / 2, -shelf.depth / 2])
+    axis_out = np.array([math.sin(yaw), -math.cos(yaw)])
+    to_edge = edge - np.array([cx, cy])
+    square = abs(to_edge[0] * axis_out[1] - to_edge[1] * axis_out[0])  # the edge's distance from the axis
+    assert square == pytest.approx(0.015 + TUBE_WALL_CLEARANCE, abs=1e-9)
 
 
 def test_waypoints_approach_and_seal_along_the_turned_axis(sim_scenario):
@@ -105,3 +113,28 @@ def test_a_box_turned_30_deg_is_sealed_carried_and_placed_in_drake(sim_scenario)
     expected = {"x": float(predicted.center[0]), "y": float(predicted.center[1]), "yaw": float(predicted.yaw)}
     assert action_matches(expected, end), (end, expected)
     assert end["tilt_deg"] < 5.0 and abs(end["z"] - box.size[2] / 2) < 0.005
+
+
+@pytest.mark.slow
+def test_a_turn_the_side_wall_allows_is_one_the_planner_plans(sim_scenario):
+    """A box by the right wall turned 33 deg: its face sealed with the tool turned as far as the wall allows (24
+    deg, the seal angle within the station's 10) is planned; the turn the old clamp allowed (the axis a tube radius
+    inside the wall at the opening, 26 deg) puts the tube against the wall's edge and the planner refuses it."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.station.scenario import load_station_scenario
+
+    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    shelf = shelf_of(sim_scenario)
+    box = _turned_box(33.0, x=0.14, y=-0.02, size=(0.10, 0.08, 0.10))
+    scene = Scene(shelf, Camera.from_config(sim_scenario.camera), (box,), None, 0)
+    action = next(a for a in _model(sim_scenario).enumerate((box,), pushes=False).feasible
+                  if not a.drag and abs(a.dx + 0.05) < 1e-9)
+    assert 20.0 < math.degrees(action.yaw) < 25.0
+    planner = MotionPlanner(station, tool_config(sim_scenario, "station", **CUP_LIMITS))
+    motion = planner.plan(action, scene)
+    assert motion.feasible, motion.reason
+    cx, cy, _ = action.q
+    old_yaw = math.atan((shelf.width / 2 - 0.015 - cx) / (cy + shelf.depth / 2))
+    assert old_yaw > action.yaw + math.radians(1.0)
+    refused = planner.plan(Suction(action.name, action.q, action.dx, action.dz, yaw=old_yaw), scene)
+    assert not refused.feasible and "with the shelf" in refused.reason
