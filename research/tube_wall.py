@@ -4,7 +4,7 @@
 
 A box (0.10 x 0.08 x 0.10 m) stands alone on the sim shelf near a side wall, turned so that its camera-facing side
 looks toward that wall; at 33-37 deg the action model (``station`` profile, the station cup's 10 deg seal limit)
-turns the tool as far as the wall lets the tube pass its front edge, ``TUBE_WALL_CLEARANCE`` to spare
+turns the tool as far as the wall lets the tube pass its front edge, ``TUBE_CLEARANCE`` to spare
 (:meth:`slax_drake.shelf.actions.ActionModel.tool_yaw`). For each clearance, the suction that moves the box 5 cm
 toward the middle is planned by the motion planner; a row per case where the wall limits the turn (the tool turned
 less than the face and than ``max_tool_yaw_deg``), and a count per clearance of the cases planned and of those
@@ -31,7 +31,7 @@ XS, YS = (0.10, 0.14, 0.18), (-0.12, -0.02, 0.08)  # |x| from the middle, y (m, 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--clearances", default="0,0.006,0.01,0.015", help="TUBE_WALL_CLEARANCE values (m)")
+    parser.add_argument("--clearances", default="0,0.006,0.01,0.015", help="TUBE_CLEARANCE values (m)")
     parser.add_argument("--angles", default="33,37", help="the boxes' turns toward the wall (deg)")
     args = parser.parse_args(argv)
     try:
@@ -46,13 +46,13 @@ def main(argv=None):
     tool = tool_config(scenario, "station", max_seal_angle_deg=10.0, max_suction_moment=0.4)
     shelf, camera = shelf_of(scenario), Camera.from_config(scenario.camera)
     planner = MotionPlanner(station, tool)
-    default = actions.TUBE_WALL_CLEARANCE
+    default = actions.TUBE_CLEARANCE
     print("| clearance (m) | box x, y (m) | face turn (deg) | tool turn (deg) | planned | why not |")
     print("|---|---|---|---|---|---|")
     counts = {}
     try:
         for clearance in clearances:
-            actions.TUBE_WALL_CLEARANCE = clearance
+            actions.TUBE_CLEARANCE = clearance
             model = actions.ActionModel(shelf, camera.position[:2], tool)
             for x, y, angle, side in itertools.product(XS, YS, angles, (1, -1)):
                 box = SceneObject("object_0", "box", SIZE, planar_pose(side * x, y, SIZE[2] / 2,
@@ -75,7 +75,7 @@ def main(argv=None):
                 print(f"| {clearance:.3f} | {side * x:+.2f}, {y:+.2f} | {math.degrees(face_yaw):+.1f} | "
                       f"{math.degrees(tool_yaw):+.1f} | {'yes' if motion.feasible else 'no'} | {reason} |", flush=True)
     finally:
-        actions.TUBE_WALL_CLEARANCE = default
+        actions.TUBE_CLEARANCE = default
     print("\n| clearance (m) | cases the wall limits | planned | refused: the tube meets the shelf |")
     print("|---|---|---|---|")
     for clearance, (n, planned, shelf_hits) in counts.items():

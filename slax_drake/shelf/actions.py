@@ -92,12 +92,13 @@ LIFT_CLEARANCE = 0.01  # m
 OUT_MARGIN = 0.01  # m
 PULL_STEP = 0.04  # m
 CARRY_YAWS_DEG = (30.0,)  # deg
-# A turned suction's tube passes the side walls' front edges (at the opening) with its surface at least this far
-# from them (m): the planner's 2 mm collision padding, and how far the tube strays there between IK's tolerance on
+# A turned suction's tube passes the side walls' front edges (at the opening), and the objects beside its way out
+# where it puts its object down, with its surface at least this far from them (m): the planner's 2 mm collision
+# padding, and how far the tube strays there between IK's tolerance on
 # its direction (0.01 rad over the 0.3 m from the cup to the opening) and the joint-space segments. The boxes turned
 # toward a wall of research/tube_wall.py: with none, 4 of 8 refused for the tube meeting the shelf; 6 mm, 1 of 6;
 # 10 mm, none (the 3 refused by the left wall are out of the arm's reach).
-TUBE_WALL_CLEARANCE = 0.010
+TUBE_CLEARANCE = 0.010
 TUBE_CHECK_SLACK = 0.004  # m: how far the planned tool may stray from its straight segment (the planner's
 # DEVIATION_TOLERANCE); the push_tube_check corridor is narrowed and lowered by it, so it refuses only sure hits
 
@@ -531,6 +532,13 @@ class ActionModel:
             if j not in blocking:
                 ok &= self._pair(("placed", ctx.ids[i], ctx.ids[j]), lambda: self._placements_clear_of(
                     lat, fp, ctx.all_fps[j]))
+        if t.rules.tube_approach_check and abs(lat.yaw) > 1e-9:
+            # turned, the tube leaves the object's lane: where the object is put down, the tube's way out along its
+            # axis must be clear of every object it cannot pass over, as its way in was
+            for j in ctx.others(i):
+                if ctx.all_heights[j] > cz - tube_r:
+                    ok &= self._pair(("release tube", ctx.ids[i], tuple(obj.size), ctx.ids[j]),
+                                     lambda: self._release_tube_clear(lat, obj, ctx.all_fps[j]))
         guarded = None  # (A, B) bool: placements reaching into hidden space, made as guarded moves
         if t.rules.suction_hidden_rule == "guarded" and ok.any():
             guarded = ~self._suction_hidden_ok(ctx, i, lat, False)
@@ -910,6 +918,22 @@ class ActionModel:
                            np.where(first_bad == 0, -np.inf, lat.steps[np.maximum(first_bad - 1, 0)]))
         return lat.y_placed[None, :] <= y_reach[:, None] + 1e-9
 
+    def _release_tube_clear(self, lat: "SuctionLattice", obj: SceneObject, other: Footprint) -> np.ndarray:
+        """(A, B) bool: whether the tube of a turned suction, where the object is put down at each lattice point
+        (the contact moved with it), keeps ``TUBE_CLEARANCE`` from ``other`` on its axis from the cup out to in
+        front of the opening (the approach's corridor, moved to the placement)."""
+        cx, cy = float(lat.q[0]), float(lat.q[1])
+        sin, cos = math.sin(lat.yaw), math.cos(lat.yaw)
+        tube_r = self.tool.geometry.tube_diameter / 2
+        cups_x = cx + np.asarray(lat.xs, float) - float(obj.center[0])
+        out = np.ones((len(lat.xs), len(lat.y_placed)), bool)
+        for b, y_placed in enumerate(lat.y_placed):
+            cup_y = cy + float(y_placed) - float(obj.center[1])
+            length = (cup_y - self.y_front) / cos
+            centres = np.column_stack([cups_x + sin * length / 2, np.full(len(cups_x), cup_y - cos * length / 2)])
+            out[:, b] = clear_of("box", centres, lat.yaw, (tube_r, length / 2), other, TUBE_CLEARANCE)
+        return out
+
     def _placements_clear_of(self, lat: "SuctionLattice", fp: Footprint, other: Footprint) -> np.ndarray:
         """(A, B) bool: whether the object placed at each lattice point keeps :attr:`placement_clearance` from
         ``other``."""
@@ -1106,7 +1130,7 @@ class ActionModel:
     def tool_yaw(self, obj: SceneObject, contact_xy) -> float:
         """The tool's yaw (rad) for a suction of ``obj`` at ``contact_xy`` (S): the face's yaw clamped to
         ``max_tool_yaw_deg`` and to the turns whose tube, on its axis from the contact out through the opening,
-        passes the side walls' front edges with ``TUBE_WALL_CLEARANCE`` to spare (0 when the contact itself is
+        passes the side walls' front edges with ``TUBE_CLEARANCE`` to spare (0 when the contact itself is
         that close to a wall)."""
         limit = math.radians(self.tool.rules.max_tool_yaw_deg)
         if limit == 0.0:
@@ -1115,7 +1139,7 @@ class ActionModel:
         cx, cy = float(contact_xy[0]), float(contact_xy[1])
         depth = cy + self.shelf.depth / 2  # behind the opening
         half_width = self.shelf.width / 2
-        reach = self.tool.geometry.tube_diameter / 2 + TUBE_WALL_CLEARANCE  # from the axis to an edge, at least
+        reach = self.tool.geometry.tube_diameter / 2 + TUBE_CLEARANCE  # from the axis to an edge, at least
         if depth <= 1e-9 or abs(cx) >= half_width - reach:
             return 0.0
         # The axis leaves along (sin yaw, -cos yaw); its distance from the right wall's edge (half_width, opening)
