@@ -21,7 +21,8 @@ along a turned face's normal) approaches along its axis to 1 cm before the face,
 toward the camera (by default until its back is out of the shelf; the planner may carry it across shallower,
 :func:`pull_out_options`, or turned about the cup's vertical axis on the way out and back on the way in,
 :func:`carry_options`), translates d_x, pushes in until the object's centre is at y = d_z, lowers, releases
-(suction off), backs off along its axis and retracts. The lift is ``LIFT`` unless the carried object's way
+(suction off), backs off along its axis and retracts along it out of the shelf (a turned tool leaves as it
+came). The lift is ``LIFT`` unless the carried object's way
 (its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above the
 tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones); the lift on the
 way out clears the ways out and across, the height at which it is pushed in the ways across and in, and the
@@ -200,7 +201,7 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
                 ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz)), s, **slide),
                 ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),
                 ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
-                ToolWaypoint("retract", f, _pose(R, (x_off, y_pre, cz)), s, contact=True),
+                ToolWaypoint("retract", f, _pose(R, (x_off - (y_off - y_pre) / ay * ax, y_pre, cz)), s, contact=True),
             ]
         # the arm weighs the object resting LIFT up (a "weigh" waypoint below a higher lift), before lifting it higher
         weigh = ([ToolWaypoint("weigh", f, _pose(R, (px, py, cz + LIFT)), s, carried="resting", dwell=WEIGH_DWELL, **on)]
@@ -218,7 +219,7 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
             ToolWaypoint("lower", f, _pose(R, (x2, y_in, cz)), s, carried="resting", **on),
             ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),
             ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
-            ToolWaypoint("retract", f, _pose(R, (x_off, y_pre, cz)), s, contact=True),
+            ToolWaypoint("retract", f, _pose(R, (x_off - (y_off - y_pre) / ay * ax, y_pre, cz)), s, contact=True),
         ]
     raise TypeError(f"not an action: {action!r}")
 

@@ -53,9 +53,9 @@ def test_the_turn_is_the_faces_clamped_and_the_seal_rule_takes_the_rest(sim_scen
 def test_a_side_wall_limits_the_turn(sim_scenario, side):
     """A deep box by a side wall whose face looks toward that wall: turned fully, the tube would leave the bay
     through the wall; the turn stops where the tube's surface passes the wall's front edge (at the opening)
-    ``TUBE_WALL_CLEARANCE`` from it, measured square to the turned axis (before, the axis met the opening a tube
+    ``TUBE_CLEARANCE`` from it, measured square to the turned axis (before, the axis met the opening a tube
     radius inside the wall, and a 27 deg turn left the tube 1.6 mm into the edge)."""
-    from slax_drake.shelf.actions import TUBE_WALL_CLEARANCE
+    from slax_drake.shelf.actions import TUBE_CLEARANCE
 
     model = _model(sim_scenario)
     shelf = shelf_of(sim_scenario)
@@ -67,7 +67,7 @@ def test_a_side_wall_limits_the_turn(sim_scenario, side):
     axis_out = np.array([math.sin(yaw), -math.cos(yaw)])
     to_edge = edge - np.array([cx, cy])
     square = abs(to_edge[0] * axis_out[1] - to_edge[1] * axis_out[0])  # the edge's distance from the axis
-    assert square == pytest.approx(0.015 + TUBE_WALL_CLEARANCE, abs=1e-9)
+    assert square == pytest.approx(0.015 + TUBE_CLEARANCE, abs=1e-9)
 
 
 def test_waypoints_approach_and_seal_along_the_turned_axis(sim_scenario):
@@ -83,6 +83,10 @@ def test_waypoints_approach_and_seal_along_the_turned_axis(sim_scenario):
     assert np.allclose(np.cross(way_in, axis), 0.0, atol=1e-9) and way_in @ axis > 0
     for w in wps.values():  # the cup's axis (cup_tip_frame x) stays turned with the tool all the way
         assert np.allclose(w.X_SF[:3, 0], axis)
+    # it leaves as it came: backs off and retracts along the axis, out to the pre-approach's depth
+    way_out = wps["retract"].position - wps["back off"].position
+    assert np.allclose(np.cross(way_out, axis), 0.0, atol=1e-9) and way_out @ axis < 0
+    assert wps["retract"].position[1] == pytest.approx(wps["pre-approach"].position[1])
     # unturned, the waypoints are the tube-along-y ones
     straight = Suction(action.name, action.q, action.dx, action.dz)
     assert np.allclose(action_waypoints(straight, (box,), shelf)[2].position, q + [0.0, SEAL_PRESS, 0.0])
