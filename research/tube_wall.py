@@ -71,7 +71,8 @@ def main(argv=None):
                 motion = planner.plan(offered[0], scene)
                 reason = "" if motion.feasible else motion.reason.split(" [")[0]
                 n, planned, shelf_hits = counts.get(clearance, (0, 0, 0))
-                counts[clearance] = (n + 1, planned + motion.feasible, shelf_hits + ("with the shelf" in reason))
+                meets_shelf = not motion.feasible and "the shelf" in motion.failure.hits
+                counts[clearance] = (n + 1, planned + motion.feasible, shelf_hits + meets_shelf)
                 print(f"| {clearance:.3f} | {side * x:+.2f}, {y:+.2f} | {math.degrees(face_yaw):+.1f} | "
                       f"{math.degrees(tool_yaw):+.1f} | {'yes' if motion.feasible else 'no'} | {reason} |", flush=True)
     finally:

@@ -189,6 +189,7 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         R_across = suction_rotation(action.yaw + carry_yaw)
         on = dict(contact=True, suction=True)
         x_off, y_off = x2 - (RELEASE_BACKOFF + SEAL_PRESS) * ax, y_in - (RELEASE_BACKOFF + SEAL_PRESS) * ay
+        x_out = x_off - (y_off - y_pre) / ay * ax  # the retract, back along the axis to the pre-approach's depth
         if action.drag:  # on the floor all the way, at the seal's height
             slide = dict(carried="resting", **on)
             y_pull = drag_pull_cup_y(action, obj, shelf) + SEAL_PRESS * ay
@@ -201,7 +202,7 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
                 ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz)), s, **slide),
                 ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),
                 ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
-                ToolWaypoint("retract", f, _pose(R, (x_off - (y_off - y_pre) / ay * ax, y_pre, cz)), s, contact=True),
+                ToolWaypoint("retract", f, _pose(R, (x_out, y_pre, cz)), s, contact=True),
             ]
         # the arm weighs the object resting LIFT up (a "weigh" waypoint below a higher lift), before lifting it higher
         weigh = ([ToolWaypoint("weigh", f, _pose(R, (px, py, cz + LIFT)), s, carried="resting", dwell=WEIGH_DWELL, **on)]
@@ -219,7 +220,7 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
             ToolWaypoint("lower", f, _pose(R, (x2, y_in, cz)), s, carried="resting", **on),
             ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),
             ToolWaypoint("back off", f, _pose(R, (x_off, y_off, cz)), s, contact=True),
-            ToolWaypoint("retract", f, _pose(R, (x_off - (y_off - y_pre) / ay * ax, y_pre, cz)), s, contact=True),
+            ToolWaypoint("retract", f, _pose(R, (x_out, y_pre, cz)), s, contact=True),
         ]
     raise TypeError(f"not an action: {action!r}")
 

@@ -774,10 +774,8 @@ class ActionModel:
             turned = f" turned {math.degrees(yaw):+.0f} deg" if yaw else ""
             return SuctionLattice.refused(f"the arm cannot hold the cup{turned} in front of the opening on its way to "
                                           f"{obj.name}'s face (reach map)", RefusalKind.REACH_MAP)
-        tube_r = t.geometry.tube_diameter / 2
         # the tube's straight way in along its (turned) axis, from in front of the opening to the contact
-        length = (cy - self.y_front) / math.cos(yaw)
-        corridor = np.array([[cx + math.sin(yaw) * length / 2, cy - math.cos(yaw) * length / 2]])
+        corridor, corridor_half = self.tube_corridor(np.array([cx]), cy, yaw)
         ex, ey = fp.extents()
         y_out = -shelf.depth / 2 - ey - t.grid.cell
         if drag:  # pulled along the floor until its front is DRAG_FRONT_MARGIN inside the opening
@@ -796,7 +794,7 @@ class ActionModel:
         a_all = np.arange(int(math.floor((-x_lim - fp.x) / res + 1e-9)), int(math.floor((x_lim - fp.x) / res + 1e-9)) + 1)
         a_all = a_all[np.abs(fp.x + a_all * res) <= x_lim + 1e-12]
         b_all = np.arange(int(math.ceil((-y_lim - fp.y) / res - 1e-9)), int(math.floor((y_lim - fp.y) / res + 1e-9)) + 1)
-        common = dict(q=q, yaw=yaw, corridor=corridor, corridor_half=(tube_r, length / 2), path_out=path_out,
+        common = dict(q=q, yaw=yaw, corridor=corridor, corridor_half=corridor_half, path_out=path_out,
                       cols=cols, first_rows=first_rows, last_rows=last_rows, cells_per=cells_per, drag=drag,
                       y_pull=y_out)
         if len(a_all) == 0 or len(b_all) == 0:
@@ -918,20 +916,25 @@ class ActionModel:
                            np.where(first_bad == 0, -np.inf, lat.steps[np.maximum(first_bad - 1, 0)]))
         return lat.y_placed[None, :] <= y_reach[:, None] + 1e-9
 
+    def tube_corridor(self, cups_x: np.ndarray, cup_y: float, yaw: float) -> tuple[np.ndarray, tuple[float, float]]:
+        """The floor rectangle the tube covers on its axis, turned ``yaw`` (rad), from a cup at (x, ``cup_y``) (S,
+        m) for each x of ``cups_x`` out to in front of the opening: (centres (K, 2), (half width, half length)) in
+        the rectangle's own axes, turned by ``yaw``."""
+        length = (cup_y - self.y_front) / math.cos(yaw)
+        centres = np.column_stack([cups_x + math.sin(yaw) * length / 2,
+                                   np.full(len(cups_x), cup_y - math.cos(yaw) * length / 2)])
+        return centres, (self.tool.geometry.tube_diameter / 2, length / 2)
+
     def _release_tube_clear(self, lat: "SuctionLattice", obj: SceneObject, other: Footprint) -> np.ndarray:
         """(A, B) bool: whether the tube of a turned suction, where the object is put down at each lattice point
         (the contact moved with it), keeps ``TUBE_CLEARANCE`` from ``other`` on its axis from the cup out to in
-        front of the opening (the approach's corridor, moved to the placement)."""
+        front of the opening (the approach's :meth:`tube_corridor`, moved to the placement)."""
         cx, cy = float(lat.q[0]), float(lat.q[1])
-        sin, cos = math.sin(lat.yaw), math.cos(lat.yaw)
-        tube_r = self.tool.geometry.tube_diameter / 2
         cups_x = cx + np.asarray(lat.xs, float) - float(obj.center[0])
         out = np.ones((len(lat.xs), len(lat.y_placed)), bool)
         for b, y_placed in enumerate(lat.y_placed):
-            cup_y = cy + float(y_placed) - float(obj.center[1])
-            length = (cup_y - self.y_front) / cos
-            centres = np.column_stack([cups_x + sin * length / 2, np.full(len(cups_x), cup_y - cos * length / 2)])
-            out[:, b] = clear_of("box", centres, lat.yaw, (tube_r, length / 2), other, TUBE_CLEARANCE)
+            centres, half = self.tube_corridor(cups_x, cy + float(y_placed) - float(obj.center[1]), lat.yaw)
+            out[:, b] = clear_of("box", centres, lat.yaw, half, other, TUBE_CLEARANCE)
         return out
 
     def _placements_clear_of(self, lat: "SuctionLattice", fp: Footprint, other: Footprint) -> np.ndarray:
