@@ -59,6 +59,7 @@ APPROACH_MARGIN = APPROACH_MARGINS[0]
 BLADE_HALF_LENGTH = 0.0325  # blade_face_frame to the blade's tip along the tube (m, URDF)
 BLADE_HALF_THICKNESS = 0.002  # m (URDF)
 TUBE_RADIUS = 0.015  # m (URDF); the tube runs along the blade's upper edge, centred on the blade's plane
+TUBE_END_PAST_BLADE_FACE = 0.0525  # m along the tube, blade_face_frame to the cup's tip (URDF: 0.3675 and 0.42)
 PUSH_STANDOFF = TUBE_RADIUS + TUBE_STANDOFF - BLADE_HALF_THICKNESS  # blade face to the object's extreme (m): the tube clears it
 # The tube, not the blade, pushes an object whose top reaches the tube's side: where its surface's normal is within
 # TUBE_PUSH_ANGLE of horizontal (measured in Drake, research/push_contact.py --heights: boxes 8-20 cm tall went
@@ -95,6 +96,33 @@ def push_lead(top_z: float, tool: ToolConfig = ToolConfig()) -> float:
     if below_axis > TUBE_RADIUS * np.sin(TUBE_PUSH_ANGLE):
         return BLADE_HALF_THICKNESS
     return max(BLADE_HALF_THICKNESS, float(np.sqrt(TUBE_RADIUS ** 2 - below_axis ** 2)))
+
+
+def push_lane_shift(obj: SceneObject, objects: tuple[SceneObject, ...], sign: float, plane_x: float, y_from: float,
+                    y_to: float, tool: ToolConfig = ToolConfig()) -> float:
+    """How far (m, toward the pushed object ``obj``) to move the blade's plane from ``plane_x`` (S x) so that the
+    tube, coming in along S +y on that plane from ``y_from`` to ``y_to`` (its end), stands as far from the pushed
+    object as from the nearest neighbour on its other side that reaches the tube's underside: half the difference
+    of the two clearances when the neighbour's is the smaller, else 0 (the tube keeps ``TUBE_STANDOFF`` from the
+    object). ``sign``: the push's direction along x (the neighbour is on the far side, +x of the tube for a push
+    toward -x)."""
+    from shapely.geometry import LineString, Point
+
+    axis = LineString([(plane_x, y_from), (plane_x, y_to)])
+    underside = tool.geometry.blade_height + BLADE_LIFT - TUBE_RADIUS
+
+    def clearance(o: SceneObject) -> float:  # the tube's surface to the object's outline on the floor (m)
+        fp = Footprint.of(o)
+        if fp.shape == "cylinder":
+            return float(Point(fp.x, fp.y).distance(axis)) - fp.half_x - TUBE_RADIUS
+        return float(fp.polygon().distance(axis)) - TUBE_RADIUS
+
+    own = clearance(obj)
+    beyond = [clearance(o) for o in objects if o.name != obj.name and o.size[2] > underside
+              and sign * (float(o.center[0]) - plane_x) < 0.0]
+    if not beyond or min(beyond) >= own:
+        return 0.0
+    return (own - min(beyond)) / 2.0
 
 
 def push_rotation() -> np.ndarray:
@@ -155,7 +183,9 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         y = action.q[1] - BLADE_HALF_LENGTH
         z = tool.geometry.blade_height / 2.0 + BLADE_LIFT
         y_pre = y_open - approach_margin - BLADE_HALF_LENGTH
-        gap = BLADE_HALF_THICKNESS + PUSH_STANDOFF - push_lead(float(obj.center[2]) + obj.size[2] / 2.0, tool)
+        shift = push_lane_shift(obj, objects, sign, x, y_pre, y + TUBE_END_PAST_BLADE_FACE, tool)
+        x += sign * shift
+        gap = BLADE_HALF_THICKNESS + PUSH_STANDOFF - shift - push_lead(float(obj.center[2]) + obj.size[2] / 2.0, tool)
         x_end = x + action.d + sign * gap
         R, f, s = push_rotation(), robot_model.BLADE_FACE_FRAME, robot_model.SHAFT_BLADE_DOWN
         return [

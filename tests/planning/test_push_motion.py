@@ -8,6 +8,7 @@ import pytest
 
 from slax_drake.planning.waypoints import (BLADE_HALF_THICKNESS, TUBE_PUSH_ANGLE, TUBE_RADIUS, action_waypoints,
                                            push_lead)
+from slax_drake.shelf.actions import TUBE_STANDOFF
 from slax_drake.shelf.actions import BLADE_LIFT, ActionModel, Push, ToolConfig
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
 
@@ -21,13 +22,14 @@ def box(height, x=0.0, y=0.05, sx=0.08, sy=0.08):
     return SceneObject("a", "box", (sx, sy, height), planar_pose(x, y, height / 2, 0.0))
 
 
-def leading_surface_travel(height: float, sign: int, d: float) -> tuple[float, float, float]:
+def leading_surface_travel(height: float, sign: int, d: float, others=()) -> tuple[float, float, float]:
     """Where the surface that meets the object stands at the insert, at the push's end and after backing off, as
-    x in S along the push (sign times x), for the push of ``d`` the action model offers."""
+    x in S along the push (sign times x), for the push of ``d`` the action model offers the box alone, planned with
+    ``others`` beside it."""
     a = box(height)
     push = next(p for p in ActionModel(SHELF, EYE, TOOL).enumerate((a,), suctions=False).feasible
                 if isinstance(p, Push) and abs(p.d - sign * d) < 1e-9)
-    wps = {w.label: w for w in action_waypoints(push, (a,), SHELF, TOOL)}
+    wps = {w.label: w for w in action_waypoints(push, (a, *others), SHELF, TOOL)}
     lead = push_lead(height, TOOL)
     start = sign * wps["insert"].position[0] + lead
     end = sign * wps["push"].position[0] + lead
@@ -59,3 +61,48 @@ def test_which_surface_leads():
     assert push_lead(0.30, TOOL) == pytest.approx(TUBE_RADIUS)
     below = steep / 2
     assert push_lead(TUBE_AXIS_Z - below, TOOL) == pytest.approx(np.sqrt(TUBE_RADIUS ** 2 - below ** 2))
+
+
+def tube_plane(sign: int, others=()) -> float:
+    """The blade's plane (S x) at the insert of box "a"'s push of 0.10 m toward ``sign`` x (the push the action
+    model offers the box alone), planned with ``others`` beside it."""
+    a = box(0.12)
+    push = next(p for p in ActionModel(SHELF, EYE, TOOL).enumerate((a,), suctions=False).feasible
+                if isinstance(p, Push) and abs(p.d - sign * 0.10) < 1e-9)
+    return float({w.label: w for w in action_waypoints(push, (a, *others), SHELF, TOOL)}["insert"].position[0])
+
+
+@pytest.mark.parametrize("sign", [+1, -1])
+def test_the_tube_stands_midway_in_a_narrow_gap(sign):
+    """A tall neighbour closer to the tube's far side than TUBE_STANDOFF moves the tube toward the pushed object
+    until both stand equally far from it (measured on the plane's x from the outlines, not from the code's
+    formula); the push still ends d past the object's extreme."""
+    plane = tube_plane(sign)
+    far_side = plane - sign * TUBE_RADIUS  # the tube's surface away from the pushed box
+    near_side = plane + sign * TUBE_RADIUS
+    own = sign * ((0.0 - sign * 0.04) - near_side)  # the box's extreme on the blade's side
+    assert own == pytest.approx(TUBE_STANDOFF)
+    gap = 0.001  # a tall box 1 mm beyond the tube, standing from the front of the bay to past the tube's end
+    wall = SceneObject("b", "box", (0.04, 0.55, 0.20), planar_pose(far_side - sign * (gap + 0.02), 0.0, 0.10, 0.0))
+    shifted = tube_plane(sign, (wall,))
+    assert sign * (shifted - plane) == pytest.approx((TUBE_STANDOFF - gap) / 2, abs=1e-9)
+    # both sides now equally clear
+    own_now = sign * ((0.0 - sign * 0.04) - (shifted + sign * TUBE_RADIUS))
+    far_now = sign * ((shifted - sign * TUBE_RADIUS) - (far_side - sign * gap))
+    assert own_now == pytest.approx(far_now, abs=1e-9)
+    start, end, back = leading_surface_travel(0.12, sign, 0.10, (wall,))
+    assert end == pytest.approx(-0.04 + 0.10, abs=1e-9)  # the extreme along the push is -0.04 either way
+    assert end - back == pytest.approx(-0.04 - start, abs=1e-9)
+
+
+@pytest.mark.parametrize("sign", [+1, -1])
+def test_the_tube_keeps_its_standoff_beside_low_or_distant_neighbours(sign):
+    """A neighbour under the tube's underside, one farther than TUBE_STANDOFF, and one on the pushed object's side
+    leave the tube where it was."""
+    plane = tube_plane(sign)
+    far_side = plane - sign * TUBE_RADIUS
+    low = SceneObject("b", "box", (0.04, 0.20, 0.04), planar_pose(far_side - sign * 0.021, -0.15, 0.02, 0.0))
+    distant = SceneObject("b", "box", (0.04, 0.20, 0.20), planar_pose(far_side - sign * 0.030, -0.15, 0.10, 0.0))
+    behind = SceneObject("b", "box", (0.04, 0.08, 0.20), planar_pose(sign * 0.20, 0.05, 0.10, 0.0))
+    for other in (low, distant, behind):
+        assert tube_plane(sign, (other,)) == pytest.approx(plane, abs=1e-12)
