@@ -84,6 +84,10 @@ MARGIN_DEPENDENT_KINDS = frozenset({FailureKind.NO_WAY_BACK})
 # Rejections that carrying a suctioned object across at another depth (hence, perhaps, lifted less) may avoid: at
 # the carrying waypoints or the joint segments arriving at them
 PULL_DEPENDENT = frozenset({"lift", "pull out", "translate", "push in", "lower"})
+# ... and a pose after the placement with no IK solution: IK solves it from the configuration the carry left the arm
+# in (one branch of the arm's solutions), so after another carry it may have one (Table I household scene 4:7: a
+# carry 0.30 m across whose retract had none after the straight carries, planned carried across turned 30 deg)
+PULL_DEPENDENT_AFTER = frozenset({"release", "back off", "retract"})
 # Rejections of a straight tool segment (the joint-space line between two IK solutions leaves it and the midpoints
 # cannot bring it back: the solutions lie on different branches; PlanningFailure.straight_segment) depend on the
 # solutions the chain took, which another carrying depth or approach margin changes: they let the next variant be
@@ -223,7 +227,7 @@ class MotionPlanner:
                                                                         if len(pulls) > 1 else "") + (
                         f" turned {np.degrees(carry_yaw):+.0f} deg" if carry_yaw else "")
                     reasons.append((where, e.failures))
-                    if not _may_differ(e.failures, PULL_DEPENDENT):
+                    if not _another_carry_may_differ(e.failures):
                         break
             if motion is not None or not _may_differ(reasons[-1][1], MARGIN_DEPENDENT, MARGIN_DEPENDENT_KINDS):
                 break
@@ -717,6 +721,14 @@ def _near_miss(failures) -> bool:
     :meth:`MotionPlanner._plan_tight` may avoid; a pose the tool meets is decided within the hold tolerances
     already, :meth:`MotionPlanner._tight_or_reject`)."""
     return failures[0].kind is FailureKind.SEGMENT_COLLIDES and failures[0].tool
+
+
+def _another_carry_may_differ(failures) -> bool:
+    """Whether a suction carried across at another depth or turned may avoid a variant's ``failures``: those at the
+    carrying waypoints (``PULL_DEPENDENT``), straight-segment failures, and a pose after the placement with no IK
+    solution (``PULL_DEPENDENT_AFTER``)."""
+    return _may_differ(failures, PULL_DEPENDENT) or (failures[0].kind is FailureKind.NO_IK_SOLUTION
+                                                     and failures[0].names_any(PULL_DEPENDENT_AFTER))
 
 
 def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) -> bool:
