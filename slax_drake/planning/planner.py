@@ -217,7 +217,8 @@ class MotionPlanner:
                 self._anchor_failed = set()
                 try:
                     waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool, approach_margin=margin,
-                                                 pull_to=pull, carry_yaw=carry_yaw)
+                                                 pull_to=pull, carry_yaw=carry_yaw,
+                                                 push_compliance=self.scenario.push_compliance)
                     _reject_a_lifted_guarded_push_in(action, waypoints)
                     motion = self._plan(world, action, waypoints, q_start, timings)
                     break
@@ -256,7 +257,8 @@ class MotionPlanner:
         self._tight, self._anchor_failed = True, set()
         try:
             waypoints = action_waypoints(action, scene.objects, scene.shelf, self.tool,
-                                         approach_margin=APPROACH_MARGINS[0])
+                                         approach_margin=APPROACH_MARGINS[0],
+                                         push_compliance=self.scenario.push_compliance)
             return self._plan(world, action, waypoints, q_start, timings)
         except _Reject as e:
             world.allow_tool_contact(action.name, False)

@@ -125,6 +125,19 @@ def push_lane_shift(obj: SceneObject, objects: tuple[SceneObject, ...], sign: fl
     return (own - min(beyond)) / 2.0
 
 
+def push_give(obj: SceneObject, compliance: float, tool: ToolConfig = ToolConfig()) -> float:
+    """How far (m) the tool gives way at the end of a push of ``obj``: the station's ``compliance`` (m/N) times
+    the force the object resists with while it slides, ``drag_friction`` x m g, m as the action model reckons it
+    (its weighed or recorded mass, else its class's ``mass_quantile``: :func:`slax_drake.scene.mass.object_mass`).
+    The push travels this much farther so that it ends where planned, and backs off by as much more."""
+    if compliance <= 0.0:
+        return 0.0
+    from slax_drake.scene.mass import object_mass
+
+    mass = object_mass(obj, tool.physics.object_density, tool.physics, tool.rules.mass_quantile)
+    return compliance * tool.rules.drag_friction * mass * 9.81
+
+
 def push_rotation() -> np.ndarray:
     """R_SB of ``blade_face_frame`` when pushing: tube (x) along S +y, face normal (y) along S -x, z up."""
     return np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
@@ -165,13 +178,15 @@ def _pose(R: np.ndarray, p) -> np.ndarray:
 
 
 def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, tool: ToolConfig = ToolConfig(),
-                     approach_margin: float = APPROACH_MARGIN, pull_to: float | None = None, carry_yaw: float = 0.0):
+                     approach_margin: float = APPROACH_MARGIN, pull_to: float | None = None, carry_yaw: float = 0.0,
+                     push_compliance: float = 0.0):
     """The tool waypoints of ``action`` (Push or Suction) on the objects as they stand; the tool's tip is
     ``approach_margin`` in front of the opening at the pre-approach and retract waypoints. ``pull_to``: the
     cup's y (S) while a suctioned object is carried across (default :func:`full_pull_out`). ``carry_yaw`` (rad,
     about S z): the tool, and the object with it, turns by this much about the cup's vertical axis on the way
     out (lift to pull out) and back on the way in (push in), so it is carried across turned; the seal, the
-    lowering and the release keep the action's yaw, so the object ends where the action puts it."""
+    lowering and the release keep the action's yaw, so the object ends where the action puts it.
+    ``push_compliance`` (m/N, the station's): a push travels :func:`push_give` farther, and backs off as much."""
     obj = next((o for o in objects if o.name == action.name), None)
     if obj is None:
         raise ValueError(f"no object named {action.name!r}")
@@ -186,14 +201,15 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         shift = push_lane_shift(obj, objects, sign, x, y_pre, y + TUBE_END_PAST_BLADE_FACE, tool)
         x += sign * shift
         gap = BLADE_HALF_THICKNESS + PUSH_STANDOFF - shift - push_lead(float(obj.center[2]) + obj.size[2] / 2.0, tool)
-        x_end = x + action.d + sign * gap
+        give = push_give(obj, push_compliance, tool)
+        x_end = x + action.d + sign * (gap + give)
         R, f, s = push_rotation(), robot_model.BLADE_FACE_FRAME, robot_model.SHAFT_BLADE_DOWN
         return [
             ToolWaypoint("pre-approach", f, _pose(R, (x, y_pre, z)), s),
             ToolWaypoint("insert", f, _pose(R, (x, y, z)), s),
             ToolWaypoint("push", f, _pose(R, (x_end, y, z)), s, contact=True),
-            ToolWaypoint("back off", f, _pose(R, (x_end - sign * gap, y, z)), s, contact=True),
-            ToolWaypoint("retract", f, _pose(R, (x_end - sign * gap, y_pre, z)), s, contact=True),
+            ToolWaypoint("back off", f, _pose(R, (x_end - sign * (gap + give), y, z)), s, contact=True),
+            ToolWaypoint("retract", f, _pose(R, (x_end - sign * (gap + give), y_pre, z)), s, contact=True),
         ]
     if isinstance(action, Suction):
         cx, cy, cz = action.q

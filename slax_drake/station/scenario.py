@@ -93,6 +93,11 @@ class StationScenario:
     # it turns as a box standing on its corners does under the blade (slax_drake.shelf.pushing); "none", it
     # translates (the paper's first-order model).
     push_turn: str = "none"
+    # How far the tool gives way along a push per newton that the pushed object resists with (m/N): the arm's
+    # joint servos hold the commanded pose against a load only up to an error that grows with it, so a push ends
+    # short by about this times the object's sliding friction, and the planner pushes that much farther
+    # (slax_drake.planning.waypoints.push_give). 0: a stiff arm.
+    push_compliance: float = 0.0
 
 
 def load_station_scenario(path: str | Path = DEFAULT_STATION) -> StationScenario:
@@ -167,6 +172,9 @@ def _validate(scenario: StationScenario, source: str) -> None:
     if scenario.push_turn not in PUSH_TURNS:
         raise ConfigError(f"{source}: key 'push_turn' = {scenario.push_turn!r}: must be one of "
                           f"{', '.join(map(repr, PUSH_TURNS))}")
+    if not (math.isfinite(scenario.push_compliance) and scenario.push_compliance >= 0):
+        raise ConfigError(f"{source}: key 'push_compliance' = {scenario.push_compliance!r}: must be a non-negative "
+                          "number (m/N; 0 for a stiff arm)")
     p = scenario.suction
     for name in ("vacuum_pressure", "cup_radius", "max_distance", "max_angle_deg"):
         if not getattr(p, name) > 0:

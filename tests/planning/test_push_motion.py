@@ -106,3 +106,40 @@ def test_the_tube_keeps_its_standoff_beside_low_or_distant_neighbours(sign):
     behind = SceneObject("b", "box", (0.04, 0.08, 0.20), planar_pose(sign * 0.20, 0.05, 0.10, 0.0))
     for other in (low, distant, behind):
         assert tube_plane(sign, (other,)) == pytest.approx(plane, abs=1e-12)
+
+
+@pytest.mark.parametrize("sign", [+1, -1])
+@pytest.mark.parametrize("mass", [0.3, 2.0])
+def test_a_push_travels_farther_by_the_arms_give_under_the_objects_friction(sign, mass):
+    """With the station's compliance c (m/N), the push's end and back-off move by c x drag_friction x m g along the
+    push (the arm gives way by that much against the sliding object: research/push_contact.py), the insert does not
+    move, and the tool backs off to where it would have without the give; with no compliance nothing changes."""
+    from slax_drake.planning.waypoints import push_give
+
+    a = SceneObject("a", "box", (0.08, 0.08, 0.05), planar_pose(0.0, 0.05, 0.025, 0.0), mass=mass)
+    push = next(p for p in ActionModel(SHELF, EYE, TOOL).enumerate((a,), suctions=False).feasible
+                if isinstance(p, Push) and abs(p.d - sign * 0.10) < 1e-9)
+    stiff = {w.label: w.position for w in action_waypoints(push, (a,), SHELF, TOOL)}
+    zero = {w.label: w.position for w in action_waypoints(push, (a,), SHELF, TOOL, push_compliance=0.0)}
+    assert all(np.array_equal(zero[k], stiff[k]) for k in stiff)
+    c = 0.0011
+    give = c * TOOL.rules.drag_friction * mass * 9.81
+    assert push_give(a, c, TOOL) == pytest.approx(give)
+    soft = {w.label: w.position for w in action_waypoints(push, (a,), SHELF, TOOL, push_compliance=c)}
+    assert soft["insert"] == pytest.approx(stiff["insert"], abs=1e-12)
+    assert sign * (soft["push"][0] - stiff["push"][0]) == pytest.approx(give, abs=1e-12)
+    assert soft["back off"] == pytest.approx(stiff["back off"], abs=1e-12)
+    assert soft["retract"] == pytest.approx(stiff["retract"], abs=1e-12)
+
+
+def test_an_unweighed_object_gives_as_its_class_median_weighs():
+    """A hypothesis without a mass gives as much as the action model reckons it weighs (household: its class's
+    median), and a density-model object as its density times its volume."""
+    from slax_drake.planning.waypoints import push_give
+    from slax_drake.scene.mass import object_mass
+
+    a = SceneObject("a", "box", (0.08, 0.08, 0.05), planar_pose(0.0, 0.05, 0.025, 0.0))
+    expected = object_mass(a, TOOL.physics.object_density, TOOL.physics, TOOL.rules.mass_quantile)
+    assert expected > 0
+    assert push_give(a, 0.001, TOOL) == pytest.approx(0.001 * TOOL.rules.drag_friction * expected * 9.81)
+    assert push_give(a, 0.0, TOOL) == 0.0

@@ -200,3 +200,13 @@ def test_a_station_names_a_push_model_the_action_model_knows(tmp_path):
     bad.write_text(DEFAULT_STATION_PATH.read_text().replace("push_turn: quasi-static", "push_turn: spin"))
     with pytest.raises(ConfigError, match="push_turn"):
         load_station_scenario(bad)
+
+
+@pytest.mark.parametrize("value", ["-0.001", ".nan", ".inf"])
+def test_a_station_push_compliance_is_a_non_negative_number(tmp_path, value):
+    bad = tmp_path / "station.yaml"
+    text = DEFAULT_STATION_PATH.read_text()
+    assert "push_compliance: 0.0011" in text
+    bad.write_text(text.replace("push_compliance: 0.0011", f"push_compliance: {value}"))
+    with pytest.raises(ConfigError, match="push_compliance"):
+        load_station_scenario(bad)
