@@ -159,14 +159,18 @@ def test_unreachable_action_is_rejected_with_a_reason(setup):
 
 
 @pytest.mark.parametrize("sign", [-1, +1])
-@pytest.mark.parametrize("gap, plans", [(0.003, True), (0.001, False)])
+@pytest.mark.parametrize("gap, plans", [(0.003, True), (0.001, {-1: True, +1: False}), (-0.001, False)])
 def test_a_tube_passing_a_tall_object_beyond_the_padding_plans_and_within_it_does_not(setup, sign, gap, plans):
-    """A tall box stands ``gap`` from the tube's surface on its way in to push ``a`` toward ``sign`` x. IK's
-    default tolerances let the tube's far end turn by up to 3 mm (0.01 rad) and the straight segments stray 4 mm,
-    so at 3 mm the planner rejected both pushes (-x: "insert: the tool collides at its pose"; +x: "segment to
-    insert collides") before a colliding pose was solved again within the hold tolerances and a push whose tool
-    met an object on a segment was planned once more with every waypoint that tight (``_plan_tight``); 1 mm is
-    within the collision checker's 2 mm padding at the exact pose, and is still rejected."""
+    """A tall box stands ``gap`` from the tube's surface on its way in to push ``a`` toward ``sign`` x, the tube
+    placed TUBE_STANDOFF (4 mm) from ``a``. IK's default tolerances let the tube's far end turn by up to 3 mm
+    (0.01 rad) and the straight segments stray 4 mm, so at 3 mm the planner rejected both pushes (-x: "insert: the
+    tool collides at its pose"; +x: "segment to insert collides") before a colliding pose was solved again within
+    the hold tolerances and a push whose tool met an object on a segment was planned once more with every waypoint
+    that tight (``_plan_tight``). At 1 mm (within the collision checker's 2 mm padding) it was rejected until the
+    tube stood midway between ``a`` and a neighbour nearer than the standoff (2.5 mm from each,
+    ``waypoints.push_lane_shift``): toward -x it plans now (Table I 6:1's first push was this case); toward +x the
+    segment to the insert, held within 1 mm, still comes within the padding of ``a`` or ``c``. 1 mm into the
+    tube's lane, midway is 1.5 mm, within the padding at the exact pose, and both are rejected."""
     import dataclasses
 
     from slax_drake.planning.world import PADDING
@@ -186,6 +190,7 @@ def test_a_tube_passing_a_tall_object_beyond_the_padding_plans_and_within_it_doe
     push = next(p for p in model.enumerate(world.objects, suctions=False).feasible
                 if p.name == "a" and np.sign(p.d) == sign)
     result = planner.plan(push, world)
+    plans = plans[sign] if isinstance(plans, dict) else plans
     assert result.feasible is plans, getattr(result, "reason", None)
     if not plans:
         assert result.failure.kind in (FailureKind.TOOL_COLLIDES, FailureKind.SEGMENT_COLLIDES)
