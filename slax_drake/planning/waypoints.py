@@ -45,8 +45,8 @@ import dataclasses
 
 import numpy as np
 
-from slax_drake.shelf.actions import (APPROACH_MARGINS, BLADE_LIFT, CARRY_YAWS_DEG, DRAG_FRONT_MARGIN, LIFT, LIFT_CLEARANCE,
-                                      OUT_MARGIN, PULL_STEP, SEAL_PRESS, TUBE_STANDOFF, Push, Suction)
+from slax_drake.shelf.actions import (APPROACH_MARGINS, BLADE_LIFT, CARRY_YAWS_DEG, DRAG_FRONT_MARGIN, GRAVITY, LIFT,
+                                      LIFT_CLEARANCE, OUT_MARGIN, PULL_STEP, SEAL_PRESS, TUBE_STANDOFF, Push, Suction)
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.footprint import TOUCH_ALLOWANCE, Footprint, touch_overlap
 from slax_drake.scene.model import SceneObject, Shelf
@@ -135,7 +135,7 @@ def push_give(obj: SceneObject, compliance: float, tool: ToolConfig = ToolConfig
     from slax_drake.scene.mass import object_mass
 
     mass = object_mass(obj, tool.physics.object_density, tool.physics, tool.rules.mass_quantile)
-    return compliance * tool.rules.drag_friction * mass * 9.81
+    return compliance * tool.rules.drag_friction * mass * GRAVITY
 
 
 def push_rotation() -> np.ndarray:
