@@ -206,7 +206,7 @@ def test_a_station_names_a_push_model_the_action_model_knows(tmp_path):
 def test_a_station_push_compliance_is_a_non_negative_number(tmp_path, value):
     bad = tmp_path / "station.yaml"
     text = DEFAULT_STATION_PATH.read_text()
-    assert "push_compliance: 0.0011" in text
-    bad.write_text(text.replace("push_compliance: 0.0011", f"push_compliance: {value}"))
+    assert "\npush_compliance: 0.0 " in text
+    bad.write_text(text.replace("\npush_compliance: 0.0 ", f"\npush_compliance: {value} "))
     with pytest.raises(ConfigError, match="push_compliance"):
         load_station_scenario(bad)
