@@ -59,7 +59,7 @@ APPROACH_MARGIN = APPROACH_MARGINS[0]
 BLADE_HALF_LENGTH = 0.0325  # blade_face_frame to the blade's tip along the tube (m, URDF)
 BLADE_HALF_THICKNESS = 0.002  # m (URDF)
 TUBE_RADIUS = 0.015  # m (URDF); the tube runs along the blade's upper edge, centred on the blade's plane
-TUBE_END_PAST_BLADE_FACE = 0.0525  # m along the tube, blade_face_frame to the cup's tip (URDF: 0.3675 and 0.42)
+TUBE_END_PAST_BLADE_FACE = 0.0465  # m along the tube, blade_face_frame to the end of the cup's body (URDF: 0.3675, 0.414)
 PUSH_STANDOFF = TUBE_RADIUS + TUBE_STANDOFF - BLADE_HALF_THICKNESS  # blade face to the object's extreme (m): the tube clears it
 # The tube, not the blade, pushes an object whose top reaches the tube's side: where its surface's normal is within
 # TUBE_PUSH_ANGLE of horizontal (measured in Drake, research/push_contact.py --heights: boxes 8-20 cm tall went
