@@ -49,6 +49,7 @@ from slax_drake.shelf.actions import (APPROACH_MARGINS, BLADE_LIFT, CARRY_YAWS_D
                                       LIFT_CLEARANCE, OUT_MARGIN, PULL_STEP, SEAL_PRESS, TUBE_STANDOFF, Push, Suction)
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.footprint import TOUCH_ALLOWANCE, Footprint, touch_overlap
+from slax_drake.scene.mass import object_mass
 from slax_drake.scene.model import SceneObject, Shelf
 from slax_drake.station import robot as robot_model
 
@@ -132,8 +133,6 @@ def push_give(obj: SceneObject, compliance: float, tool: ToolConfig = ToolConfig
     The push travels this much farther so that it ends where planned, and backs off by as much more."""
     if compliance <= 0.0:
         return 0.0
-    from slax_drake.scene.mass import object_mass
-
     mass = object_mass(obj, tool.physics.object_density, tool.physics, tool.rules.mass_quantile)
     return compliance * tool.rules.drag_friction * mass * GRAVITY
 
