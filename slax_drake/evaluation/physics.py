@@ -41,6 +41,7 @@ from slax_drake.errors import PhysicsBenchmarkError
 from slax_drake.io import figure_png, plural, write_bytes_atomic, write_text_atomic
 from slax_drake.policies.protocol import Reversal
 from slax_drake.policies.trial_memory import last_move_by_axis
+from slax_drake.systems.guard import dragged_after_weighing
 from slax_drake.systems.trial_summary import TARGET_MOVED
 
 MATCH_DISTANCE = 0.02  # m, planar distance between predicted and physical final object position
@@ -142,7 +143,7 @@ def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str |
     if action.get("lost_after"):
         inside = abs(out["x"]) < shelf_width / 2 and abs(out["y"]) < shelf_depth / 2
         return "toppled" if inside else "dropped"
-    if (action.get("weighed") or {}).get("put_back"):
+    if (action.get("weighed") or {}).get("put_back") and not dragged_after_weighing(action):
         return "put back"  # weighed at the lift and undone: lowered where it stood and released
     if action["type"] == "suction" and before is not None:
         moved = math.hypot(out["x"] - before["x"], out["y"] - before["y"])
@@ -202,7 +203,8 @@ def _run_scene(job) -> dict:
                   "motion_timings": {k: timings[k] for k in ("ik_s", "check_s", "timing_s") if k in timings}}
         if isinstance(a.get("weighed"), dict):  # a lift weighed at the cup: its moment, whether it was put back
             record["weighed"] = {k: a["weighed"][k] for k in ("weight_n", "moment_nm", "lever_m", "least_lever_m",
-                                                               "limit_nm", "put_back", "why", "mass_kg")
+                                                               "limit_nm", "put_back", "why", "mass_kg",
+                                                               "drag_after_weighing")
                                  if k in a["weighed"]}
         if isinstance(a.get("guard"), dict):  # a guarded placement: whether it stopped on contact, where
             record["guard"] = {k: a["guard"][k] for k in ("stopped", "pushed_in_m", "short_m", "peak_force_n",
@@ -442,9 +444,11 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
         if "stall_step" in d:  # the policy's search stalled at this step (None: never); actions from it on
             stalled = d["stall_step"]
             summary["trials"][-1]["stall"] = [stalled, 0 if stalled is None else len(d["actions"][stalled:])]
-        if any("weighed" in a for a in d["actions"]):  # lifts weighed at the cup, and how many were put back
+        if any("weighed" in a for a in d["actions"]):  # lifts weighed at the cup, how many were put back, and of
+            # those how many were then dragged to the same placement (drag_after_weighing)
             summary["trials"][-1]["weighed"] = [sum(1 for a in d["actions"] if "weighed" in a),
-                                                sum(1 for a in d["actions"] if (a.get("weighed") or {}).get("put_back"))]
+                                                sum(1 for a in d["actions"] if (a.get("weighed") or {}).get("put_back")),
+                                                sum(1 for a in d["actions"] if dragged_after_weighing(a))]
             summary["trials"][-1]["put_back_why"] = dict(collections.Counter(
                 put_back_why(a["weighed"]) for a in d["actions"] if (a.get("weighed") or {}).get("put_back")))
     for p in policies:
@@ -473,7 +477,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                     sum(1 for t in sel if (t["target_moved_m"] or 0.0) >= TARGET_MOVED),
                     sum(1 for t in sel if (t["target_moved_m"] or 0.0) >= TARGET_MOVED and t["drake_success"])],
                 **({"weighed_lifts": [sum(t["weighed"][0] for t in sel if "weighed" in t),
-                                      sum(t["weighed"][1] for t in sel if "weighed" in t)],
+                                      sum(t["weighed"][1] for t in sel if "weighed" in t),
+                                      sum(t["weighed"][2] for t in sel if len(t.get("weighed", ())) > 2)],
                     "put_back_why": dict(sorted(sum((collections.Counter(t.get("put_back_why", {})) for t in sel),
                                                     collections.Counter()).items()))}
                    if any("weighed" in t for t in sel) else {}),
@@ -729,7 +734,9 @@ def markdown_table(summary: dict) -> str:
         if weighed and weighed[0]:
             why = per["all"].get("put_back_why") or {}
             lines[-1] += (f" Lifts weighed at the cup: {weighed[0]}, put back {weighed[1]}"
-                          + (" (" + ", ".join(f"{k} {v}" for k, v in why.items()) + ")" if why else "") + ".")
+                          + (" (" + ", ".join(f"{k} {v}" for k, v in why.items()) + ")" if why else "")
+                          + (f", {weighed[2]} of them then dragged to the same placement"
+                             if len(weighed) > 2 and weighed[2] else "") + ".")
     lines += ["", "Physics fidelity per action kind (actions matching the prediction) and the mismatches by "
               "kind (dropped: lost out of the bay; toppled: lost inside it; put back: a lift the arm weighed and "
               "undid; seal never formed: a suction that left its "

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from slax_drake.systems.guard import dragged_after_weighing
 from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions  # noqa: F401  (the runner's options)
 
 
@@ -167,6 +168,8 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
             a["guard"] = entry.get("guarded")
             if "weighed" in entry:  # a lift weighed by the cup, and whether it was put back (too heavy)
                 a["weighed"] = entry["weighed"]
+                if dragged_after_weighing(a):  # then dragged to the same placement: executed as a drag
+                    a["grip"] = "drag"
         a["predicted"] = pred
         segment = entry.get("segment_of", {}).get(a["object"], a["object"])  # the tracked object's segment
         a["true_object"] = entry.get("segments", {}).get(segment)  # the object the hypothesis was

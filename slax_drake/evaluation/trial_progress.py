@@ -111,14 +111,18 @@ class DecisionPrinter:
 
     def _close(self, poses: dict | None, lost) -> None:
         from slax_drake.evaluation.physics import action_matches
+        from slax_drake.systems.guard import dragged_after_weighing
 
         entry, snap = self.open
         self.open = None
         weighed = entry.get("weighed")
-        if weighed and weighed.get("put_back"):  # weighed at the lift: undone, and nothing more to judge
+        if weighed and weighed.get("put_back"):  # weighed at the lift: undone, and then dragged or nothing more
             self._write(f"weighed {weighed['weight_n']:.1f} N hanging {weighed['moment_nm']:.2f} N m off the cup, "
-                        f"{weighed['why']}: put back\n")
-            return
+                        f"{weighed['why']}: put back")
+            if not dragged_after_weighing(entry):
+                self._write("\n")
+                return
+            self._write(", dragged instead, ")
         guard = entry.get("guarded")
         if guard:
             self._write("guarded, " + (f"stopped on contact after {guard.get('pushed_in_m', 0.0):.3f} m, "

@@ -40,6 +40,7 @@ from slax_drake.hardware.fetch_limits import FETCH_JOINTS
 from slax_drake.hardware.interpolation import resample
 from slax_drake.hardware.trajectory_file import ExportedTrajectory, Motion
 from slax_drake.errors import TrialFileError
+from slax_drake.systems.guard import dragged_after_weighing
 
 TIME_EPS = 1e-6  # s: trial.json rounds its times to 1e-6
 
@@ -185,8 +186,24 @@ def _segments(entry: dict, action: dict, act: dict, source):
     if weighed and weighed.get("put_back"):  # weighed at the lift and put back: the motion up to there, then back
         t_back, back_duration, back_intervals, before = _replaced(
             weighed, "put_back_time", "put_back_motion", t0, duration, intervals, "a put-back lift", source)
-        return [(t0, t_back, before, {**act, "put_back_at_s": t_back}, False),
-                (t0 + t_back, back_duration, back_intervals, {**act, "put_back_motion": True}, True)]
+        segments = [(t0, t_back, before, {**act, "put_back_at_s": t_back}, False),
+                    (t0 + t_back, back_duration, back_intervals, {**act, "put_back_motion": True}, True)]
+        if dragged_after_weighing(action):  # then the drag to the same placement, from where the put-back ended
+            drag = weighed["drag_after_weighing"]
+            try:
+                t_drag, motion = float(drag["started_at"]), drag["motion"]
+                drag_duration = float(motion["duration_s"])
+                drag_intervals = [(float(on), float(off)) for on, off in motion.get("suction_intervals") or []]
+                drag_act = {k: drag["drag"][k] for k in ("type", "object", "dx", "dz", "yaw") if k in drag["drag"]}
+            except (KeyError, TypeError, ValueError) as e:
+                raise TrialFileError(f"{source or 'trial'}: a drag after a put-back lift's record is malformed ({e})"
+                                     ) from None
+            if t_drag < t0 + t_back + back_duration - TIME_EPS:
+                raise TrialFileError(f"{source or 'trial'}: a drag after a put-back lift starts at {t_drag:.3f} s, "
+                                     f"before the put-back ends at {t0 + t_back + back_duration:.3f} s")
+            segments.append((t_drag, drag_duration, drag_intervals,
+                             {**act, **drag_act, "grip": "drag", "dragged_after_weighing": True}, False))
+        return segments
     guard = action.get("guard") if isinstance(action.get("guard"), dict) else None
     window = guarded_window(action)
     if window is None:

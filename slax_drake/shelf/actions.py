@@ -299,6 +299,29 @@ class ActionModel:
                 self._suctions(ctx, i, feasible, rejected)
         return Candidates(feasible, rejected)
 
+    def drag_instead(self, objects, lift: Suction, mass: float) -> tuple[Suction | None, str]:
+        """(the drag, "") that puts the object of ``lift`` where ``lift`` would have (the same d_x and d_z), when this
+        model offers it among ``objects`` (the arrangement ``lift`` was chosen on) with that object reckoned at
+        ``mass`` (kg, what the arm weighed before putting it back; the ``drag_after_weighing`` rule); else (None, why
+        not): the object still liftable at that mass, not to be dragged at all (the model's reason: too heavy to
+        slide, it would tip, its way out blocked, ...), or no drag to that placement (on the floor the way the lift
+        passed over an object or crossed hidden space, the placement in front of the drag's pull-out depth, or a
+        guarded one, reaching into hidden space: left to the next decision, which sees the shelf again)."""
+        weighed = tuple(dataclasses.replace(o, mass=float(mass)) if o.name == lift.name else o for o in objects)
+        found = self.enumerate(weighed, pushes=False, only={lift.name})
+        drags = [c for c in found.feasible if c.drag]
+        for c in drags:
+            if not c.guarded and abs(c.dx - lift.dx) < 1e-6 and abs(c.dz - lift.dz) < 1e-6:
+                return c, ""
+        if found.feasible and not drags:
+            return None, f"still lifted at {mass:.2f} kg"
+        if not found.feasible:
+            reasons = "; ".join(r.reason for r in found.rejected) or "no candidate"
+            return None, f"no drag of it: {reasons}"
+        same = [c for c in drags if abs(c.dx - lift.dx) < 1e-6 and abs(c.dz - lift.dz) < 1e-6]
+        return None, ("the drag to that placement reaches into hidden space (guarded)" if same else
+                      f"no drag to that placement ({len(drags)} to others)")
+
     # ----------------------------------------------------------------------------------------------------
     def object_geometry(self, objects, rasters: bool = True, fixed=()) -> list["ObjectGeometry"]:
         """Each object's :class:`ObjectGeometry`, cached by identity (a search passes the same unmoved object

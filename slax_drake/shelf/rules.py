@@ -330,6 +330,19 @@ class DragGrasp(Rule):
 
 
 @register
+class DragAfterWeighing(Rule):
+    """A lift the arm weighed and put back as too heavy or not hanging free (its seal peeling) becomes, in the same
+    action, the drag that puts the object where the lift would have (the same d_x and d_z), when the action model
+    offers that drag on the arrangement the lift was chosen on with the object reckoned at its weighed mass
+    (:meth:`ActionModel.drag_instead`): what a robot does that has just learned its load is too heavy to carry but
+    not to slide. Off: the put-back ends the action and the next decision knows the mass. Both executors read it
+    (the shelf simulator's camera mode and the Drake trial's planner system); privileged policies know the true
+    masses and never lift what they must put back. Both profiles: off."""
+
+    name, type, paper, station = "drag_after_weighing", bool, False, False
+
+
+@register
 class MaxDragPull(Rule):
     """The cup's pull (N) a drag may use: vacuum pressure x cup area. Unlimited in both profiles' defaults; the
     Drake station's cup sets it (``suction.vacuum_pressure`` and ``suction.cup_radius`` in the station YAML:

@@ -126,17 +126,18 @@ class CameraObserver:
         """The action (named by a hypothesis of the last frame) executed since the last frame."""
         self._executed = action
 
-    def weighed(self, action, hypotheses, true_object, model: ActionModel) -> None:
+    def weighed(self, action, hypotheses, true_object, model: ActionModel) -> float:
         """The lift ``action`` (named by a hypothesis among ``hypotheses``) was weighed on ``true_object`` and put
-        back: its track carries, from the next frame on, the mass that explains the true held moment at the
-        hypothesis's lever (:func:`~slax_drake.shelf.actions.weighed_mass`), as the Drake trial's planner records
-        what its arm weighed."""
-        if self.tracker is None:
-            return
+        back: returns the mass (kg) that explains the true held moment at the hypothesis's lever
+        (:func:`~slax_drake.shelf.actions.weighed_mass`), which its track carries from the next frame on, as the
+        Drake trial's planner records what its arm weighed."""
         hyp = next(o for o in hypotheses if o.name == action.name)
         weight = object_mass(true_object, model.tool.physics.object_density, model.tool.physics) * GRAVITY
         lever = math.hypot(float(hyp.center[0]) - action.q[0], float(hyp.center[1]) - action.q[1])
-        self.tracker.weighed(action.name, weighed_mass(weight, model.held_moment(true_object, action.q[:2]), lever))
+        mass = weighed_mass(weight, model.held_moment(true_object, action.q[:2]), lever)
+        if self.tracker is not None:
+            self.tracker.weighed(action.name, mass)
+        return mass
 
     def observe(self, scene: Scene) -> tuple[PolicyObservation, dict]:
         from slax_drake.perception.belief import ObservedBelief
@@ -218,6 +219,24 @@ def lift_over_limit(obj, action, model: ActionModel) -> float | None:
         return None
     moment = model.held_moment(obj, action.q[:2])
     return moment if RULES["max_suction_moment"].refuses(model.tool.rules.max_suction_moment, moment) else None
+
+
+DRAGGED_INSTEAD = "dragged instead"  # the note's part after a put-back lift that became a drag (drag_after_weighing)
+
+
+def drag_after_weighing(scene: Scene, note: str, model: ActionModel, hypotheses, lift: Suction, mass: float,
+                        true_name: str) -> tuple[Scene, str]:
+    """After the lift ``lift`` (named by a hypothesis among ``hypotheses``) was weighed at ``mass`` kg and put back
+    (``note``), the same action goes on as the drag to the same placement when the ``drag_after_weighing`` rule
+    is on and the action model offers it on ``hypotheses`` (:meth:`ActionModel.drag_instead`), executed on the
+    true object ``true_name``; returns the scene and the note (``note; dragged instead[: the drag's note]``)."""
+    if not model.tool.rules.drag_after_weighing:
+        return scene, note
+    drag, _ = model.drag_instead(hypotheses, lift, mass)
+    if drag is None:
+        return scene, note
+    scene, drag_note = execute(scene, on_true_object(drag, hypotheses, scene, true_name), model)
+    return scene, f"{note}; {DRAGGED_INSTEAD}" + (f": {drag_note}" if drag_note else "")
 
 
 def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
@@ -451,10 +470,14 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
             chosen = action
             action = on_true_object(action, observation.known, scene, true_name)
         true_object = next((o for o in scene.objects if o.name == action.name), None)
+        mass = None  # kg: what the arm weighed of a lift it puts back (camera mode)
         if names is not None and true_object is not None and lift_over_limit(true_object, action,
                                                                               policy.action_model) is not None:
-            observer.weighed(chosen, observation.known, true_object, policy.action_model)  # its track takes the mass
+            mass = observer.weighed(chosen, observation.known, true_object, policy.action_model)  # its track's mass
         scene, note = execute(scene, action, policy.action_model)
+        if mass is not None and note.startswith(WEIGHED_PUT_BACK):
+            scene, note = drag_after_weighing(scene, note, policy.action_model, observation.known, chosen, mass,
+                                              true_name)
         actions.append(action.describe())
         if note:
             notes.append(step_note(len(actions), note))

@@ -187,6 +187,13 @@ def least_lever(hypothesis, contact_xy) -> float:
     return lever * min(1.0, max(0.0, float(uncertainty.depth[0])) / float(extent))
 
 
+def dragged_after_weighing(action: dict) -> bool:
+    """Whether a trial record's action is a lift weighed, put back and then dragged to the same placement in the
+    same action (the ``drag_after_weighing`` rule; its ``weighed.drag_after_weighing.started_at``)."""
+    weighed = action.get("weighed") if isinstance(action.get("weighed"), dict) else {}
+    return bool(weighed.get("put_back")) and "started_at" in (weighed.get("drag_after_weighing") or {})
+
+
 def weigh_time(motion) -> float | None:
     """s from the motion's start at which a lifted suction's object is weighed: at the end of the rest at the lift
     (``WEIGH_DWELL`` after the "weigh" waypoint, or the "lift" waypoint of a lift no higher than ``LIFT``, is

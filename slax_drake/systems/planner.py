@@ -82,6 +82,8 @@ class TrialState:
     weigh_at: float | None = None  # s from the motion's start at which its lifted object is weighed; None: not
     least_lever: float = 0.0  # m, the lifted object's least lever as the camera allows it (guard.least_lever)
     believed: object = None  # the believed Scene the running motion was planned in
+    then: tuple | None = None  # (action, PlannedMotion) to start when the running motion ends, in the same action:
+    # the drag after a lift weighed and put back (the ``drag_after_weighing`` rule)
 
     def __deepcopy__(self, memo):
         return self
@@ -170,7 +172,7 @@ class PlannerSystem(LeafSystem):
     # decisions -------------------------------------------------------------------------------------------
     def _idle(self, s: TrialState, now: float) -> bool:
         """Whether the planner decides at ``now``: the trial runs and the robot settled after its last motion."""
-        if s.done:
+        if s.done or s.then is not None:
             return False
         if s.motion is not None:
             return now >= s.t_start + s.motion.trajectory.duration + self.settle_time
@@ -179,8 +181,32 @@ class PlannerSystem(LeafSystem):
     def _update(self, context, state):
         s = self._plan_state(context)
         now = context.get_time()
-        if self._idle(s, now):
+        if s.then is not None and now >= s.t_start + s.motion.trajectory.duration + self.settle_time:
+            state.get_mutable_abstract_state(0).set_value(self._start_then(s, now))
+        elif self._idle(s, now):
             state.get_mutable_abstract_state(0).set_value(self._decide(context, s, now))
+
+    def _start_then(self, s: TrialState, now: float) -> TrialState:
+        """Starts ``s.then`` (the drag after a put-back lift) at ``now``, within the same action: no new decision,
+        no step counted; its start time goes into the action's ``weighed`` record."""
+        action, motion = s.then
+        self._last_action = action  # the tracker reads where the object went from the executed action
+        weighed = s.log[-1]["weighed"]
+        record = {**weighed, "drag_after_weighing": {**weighed["drag_after_weighing"], "started_at": round(now, 4)}}
+        obj = next((o for o in s.believed.objects if o.name == action.name), None)
+        guard = self._start_guard(action, obj, s.believed, motion)
+        return dataclasses.replace(
+            s, motion=motion, t_start=now, then=None, guard=guard, weigh_at=None, motions=s.motions + ((now, motion),),
+            log=s.log[:-1] + ({**s.log[-1], "weighed": record},))
+
+    def _start_guard(self, action, obj, believed, motion):
+        """The guard's run over ``motion`` (None without a guard): a suction's push-in forces from ``obj``, the
+        believed object it moves."""
+        if self.guard is None:
+            return None
+        stop, expected = push_in_forces(action, obj, self.policy.action_model, self.guard.threshold,
+                                        self.guard.lip_moment) if isinstance(action, Suction) else (None, 0.0)
+        return self.guard.start(motion, self._cup_y(believed, motion), expected, stop)
 
     def _decide(self, context, s: TrialState, now: float) -> TrialState:
         frame = self._observation.Eval(context)
@@ -259,12 +285,8 @@ class PlannerSystem(LeafSystem):
                            "max_deviation_m": round(motion.max_deviation, 5),
                            "waypoint_times": motion.waypoint_times, "suction_intervals": motion.suction_intervals}
         entry["predicted_objects"] = _predicted(belief.known, action)
-        guard = None
-        if self.guard is not None:
-            obj = next((o for o in belief.known if o.name == action.name), None)
-            stop, expected = push_in_forces(action, obj, self.policy.action_model, self.guard.threshold,
-                                            self.guard.lip_moment) if isinstance(action, Suction) else (None, 0.0)
-            guard = self.guard.start(motion, self._cup_y(believed, motion), expected, stop)
+        guard = self._start_guard(action, next((o for o in belief.known if o.name == action.name), None), believed,
+                                  motion)
         if self.on_step is not None:
             self.on_step(entry, depth, labels, frame.target_mask, history, obs.p1d)
         return dataclasses.replace(
@@ -316,9 +338,38 @@ class PlannerSystem(LeafSystem):
         record["put_back_time"] = round(now, 4)
         record["put_back_motion"] = {"duration_s": round(back.trajectory.duration, 3),
                                      "waypoint_times": back.waypoint_times, "suction_intervals": back.suction_intervals}
+        then = None
+        if why is not PutBack.NOTHING_HELD and self.policy.action_model.tool.rules.drag_after_weighing:
+            then, record["drag_after_weighing"] = self._drag_after_weighing(action, s.believed, back,
+                                                                            record["mass_kg"])
+        believed = s.believed
+        if then is not None:  # the drag is planned and guarded on the object at its weighed mass
+            believed = s.believed.with_objects(tuple(
+                dataclasses.replace(o, mass=record["mass_kg"]) if o.name == action.name else o
+                for o in s.believed.objects))
         state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
-            s, motion=back, t_start=now, guard=None, weigh_at=None, motions=s.motions + ((now, back),),
-            log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
+            s, motion=back, t_start=now, guard=None, weigh_at=None, motions=s.motions + ((now, back),), then=then,
+            believed=believed, log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
+
+    def _drag_after_weighing(self, lift, believed, back, mass: float) -> tuple[tuple | None, dict]:
+        """The drag that puts the object of the put-back ``lift`` where the lift would have, planned from where the
+        put-back motion ``back`` ends (the ``drag_after_weighing`` rule): ((drag, PlannedMotion) or None, its
+        record). The action model must offer it on the arrangement the lift was planned in (``believed``) with the
+        object at its weighed ``mass`` (kg; :meth:`ActionModel.drag_instead`), and the planner must plan it."""
+        drag, why = self.policy.action_model.drag_instead(believed.objects, lift, mass)
+        if drag is None:
+            return None, {"drag": None, "why": why}
+        weighed = believed.with_objects(tuple(dataclasses.replace(o, mass=mass) if o.name == lift.name else o
+                                              for o in believed.objects))
+        c0 = time.process_time()
+        q_end = back.trajectory.value(back.trajectory.duration)[0]
+        result = self.planner.plan(drag, weighed, q_start=q_end)
+        record = {"drag": _describe(drag), "planning_cpu_s": round(time.process_time() - c0, 4)}
+        if not result.feasible:
+            return None, {**record, "why": result.reason}
+        record["motion"] = {"duration_s": round(result.trajectory.duration, 3), "timings": result.timings,
+                            "waypoint_times": result.waypoint_times, "suction_intervals": result.suction_intervals}
+        return (drag, result), record
 
     # the guarded push-in ---------------------------------------------------------------------------------
     def _cup_y(self, believed, motion):

@@ -374,19 +374,24 @@ def test_the_summary_counts_the_lifts_weighed_and_put_back_and_why():
                 "predicted": {"x": 0.1, "y": -0.2, "yaw": 0.0}, "outcome": {"x": moved, "y": -0.2, "yaw": 0.0},
                 "weighed": weighed}
 
-    drake = {"success": True, "result": "revealed", "steps": 3, "toppled": [], "dropped": [],
+    dragged = {"put_back": True, "why": "too heavy", "drag_after_weighing": {"drag": {}, "started_at": 12.0}}
+    offered_none = {"put_back": True, "why": "too heavy", "drag_after_weighing": {"drag": None, "why": "x"}}
+    drake = {"success": True, "result": "revealed", "steps": 5, "toppled": [], "dropped": [],
              "real_time_factor": 1.0, "wall_s": 1.0,
              "actions": [lift({"put_back": False}), lift({"put_back": True, "why": "too heavy"}, 0.0),
-                         lift({"put_back": True, "why": "not hanging free"}, 0.0)]}
+                         lift({"put_back": True, "why": "not hanging free"}, 0.0),
+                         {**lift(dragged), "grip": "drag"}, lift(offered_none, 0.0)]}
     results = [{"policy": "p", "density": 4, "index": 0, "seed": 0, "shelf": {"success": True, "steps": 2},
                 "drake": drake}]
     summary = summarise(results, ["p"], [4])
-    assert summary["trials"][0]["weighed"] == [3, 2]
+    assert summary["trials"][0]["weighed"] == [5, 4, 1]
     e = summary["policies"]["p"]["all"]
-    assert e["weighed_lifts"] == [3, 2] and e["put_back_why"] == {"not hanging free": 1, "too heavy": 1}
-    assert e["mismatch_kinds"]["put back"] == 2
+    assert e["weighed_lifts"] == [5, 4, 1] and e["put_back_why"] == {"not hanging free": 1, "too heavy": 3}
+    # the lift dragged to its placement after the put-back is judged where the drag left its object: as predicted
+    assert e["mismatch_kinds"]["put back"] == 3
     md = markdown_table(summary)
-    assert "Lifts weighed at the cup: 3, put back 2 (not hanging free 1, too heavy 1)." in md
+    assert ("Lifts weighed at the cup: 5, put back 4 (not hanging free 1, too heavy 3), 1 of them then dragged to "
+            "the same placement.") in md
 
 
 def test_why_a_lift_was_put_back_is_read_from_the_values_of_a_record_that_kept_no_reason():
