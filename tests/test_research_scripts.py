@@ -329,3 +329,11 @@ def test_ending_stances_refuses_bad_arguments(capsys, monkeypatch, argv, start):
     assert script("ending_stances").main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(start)
+
+
+def test_drag_twist_refuses_a_folder_that_is_no_physics_run_and_quantiles_outside_0_1(tmp_path, capsys):
+    drag_twist = script("drag_twist")
+    assert drag_twist.main([str(tmp_path)]) == 2
+    assert "no physics benchmark folder" in capsys.readouterr().err
+    assert drag_twist.main([str(tmp_path), "--quantiles", "0.5,1.5"]) == 2
+    assert "outside 0-1" in capsys.readouterr().err

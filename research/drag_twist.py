@@ -1,0 +1,106 @@
+"""Which sideways drags of a physics benchmark's Drake trials held their object, against the twist the action model
+checks (``max_drag_twist``) reckoned with the object's true mass and with quantiles of its class's mass. Prints
+Markdown.
+
+    python research/drag_twist.py PHYSICS_FOLDER [--policy slax-belief] [--quantiles 0.5,0.75,0.9]
+
+For every drag with d_x != 0 (``grip`` "drag": translated along x on the shelf floor) of the folder's Drake trials:
+the true object (the record's ``true_object``), its lever (the horizontal distance from the contact the action model
+picks on it where it stood, ``before``, to its centre), the twist the model checks, ``drag_safety_factor`` x
+``drag_friction`` x m g x lever, with m its true mass and with m at each quantile of its class's log-uniform
+distribution (what the model reckons an unweighed hypothesis with: the ``mass_quantile`` rule, 0.5 by default), and
+whether the drag matched the prediction (the record's ``mismatch``). Then, per mass, how many of the failed and of
+the held drags a check against the run's ``max_drag_twist`` would have refused.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+from pathlib import Path
+
+from slax_drake.config import load_scenario
+from slax_drake.evaluation.table1 import protocol_scene, scene_seed
+from slax_drake.scene.camera import Camera
+from slax_drake.scene.mass import quantile_mass
+from slax_drake.scene.model import planar_pose
+from slax_drake.scene.sampling import shelf_of
+from slax_drake.shelf.actions import GRAVITY, ActionModel
+from slax_drake.shelf.tool import tool_config
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("physics", type=Path, help="a physics benchmark's result folder")
+    parser.add_argument("--policy", default="slax-belief")
+    parser.add_argument("--quantiles", default="0.5,0.75,0.9", help="class-mass quantiles to reckon with (0-1)")
+    args = parser.parse_args(argv)
+    try:
+        quantiles = [float(q) for q in args.quantiles.split(",")]
+        if not all(0.0 <= q <= 1.0 for q in quantiles):
+            raise ValueError("a quantile outside 0-1")
+    except ValueError as e:
+        print(f"error: --quantiles {args.quantiles!r}: {e}", file=sys.stderr)
+        return 2
+    try:
+        settings = json.loads((args.physics / "physics_settings.json").read_text())
+        config, seed = settings["config"], settings["seed"]
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        print(f"error: {args.physics} is no physics benchmark folder with its settings ({type(e).__name__}: {e})",
+              file=sys.stderr)
+        return 2
+    trials = sorted((args.physics / "physics_trials" / args.policy).glob("*.json"))
+    if not trials:
+        print(f"error: no {args.policy} trials in {args.physics}/physics_trials", file=sys.stderr)
+        return 2
+    scenario = load_scenario(config)
+    tool = tool_config(scenario, settings.get("profile", "station"), **(settings.get("tool_rules") or {}))
+    model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position, tool)
+    rules = tool.rules
+    mu = rules.drag_safety_factor * rules.drag_friction
+    limit = rules.max_drag_twist
+    rows = []
+    for path in trials:
+        record = json.loads(path.read_text())
+        scene = protocol_scene(scenario, record["density"], scene_seed(seed, record["density"], record["index"]))
+        objects = {o.name: o for o in scene.objects}
+        for k, a in enumerate(record["drake"]["actions"]):
+            if a.get("grip") != "drag" or abs(a.get("dx", 0.0)) < 1e-9 or a.get("outcome") is None:
+                continue
+            obj, before = objects.get(a.get("true_object")), a.get("before")
+            if obj is None or before is None:
+                continue
+            obj = dataclasses.replace(obj, X_SO=planar_pose(before["x"], before["y"], obj.size[2] / 2, before["yaw"]))
+            contact = model.suction_contact(obj)
+            if contact is None:
+                continue
+            lever = math.hypot(obj.center[0] - contact[0], obj.center[1] - contact[1])
+            twist = [mu * m * GRAVITY * lever for m in
+                     [obj.mass] + [quantile_mass(obj.shape, obj.size, scenario.physics, q) for q in quantiles]]
+            rows.append({"trial": path.stem, "step": k + 1, "object": obj.name, "shape": obj.shape, "mass": obj.mass,
+                         "dx": a["dx"], "held": not a.get("mismatch"), "mismatch": a.get("mismatch"), "twist": twist})
+    print(f"## Drags along x of `{args.physics}` ({args.policy}): {len(rows)}\n")
+    print(f"The check: {rules.drag_safety_factor:g} x {rules.drag_friction:g} x m g x lever <= {limit:.3f} N m "
+          "(`max_drag_twist`).\n")
+    names = ["true mass"] + [f"class q{q:g}" for q in quantiles]
+    print("| trial | step | object | shape | true mass (kg) | d_x (m) | outcome | "
+          + " | ".join(f"twist at {n} (N m)" for n in names) + " |")
+    print("|---|---|---|---|---|---|---|" + "---|" * len(names))
+    for r in rows:
+        print(f"| {r['trial']} | {r['step']} | {r['object']} | {r['shape']} | {r['mass']:.2f} | {r['dx']:+.2f} | "
+              f"{'held' if r['held'] else r['mismatch']} | " + " | ".join(f"{t:.2f}" for t in r["twist"]) + " |")
+    failed = [r for r in rows if not r["held"]]
+    held = [r for r in rows if r["held"]]
+    print(f"\n{len(failed)} failed, {len(held)} held. Refused by the check reckoned with each mass:\n")
+    print("| mass | failed drags refused | held drags refused |\n|---|---|---|")
+    for i, n in enumerate(names):
+        print(f"| {n} | {sum(r['twist'][i] > limit for r in failed)} of {len(failed)} | "
+              f"{sum(r['twist'][i] > limit for r in held)} of {len(held)} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
