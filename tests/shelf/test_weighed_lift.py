@@ -57,8 +57,7 @@ def test_the_camera_mode_tracker_takes_the_weighed_mass_and_the_lift_is_refused_
 
 @pytest.fixture(scope="module")
 def model_dragging(sim_scenario):
-    tool = tool_config(sim_scenario, "station", max_suction_moment=0.4, drag_grasp=True, max_drag_pull=42.412,
-                       drag_after_weighing=True)
+    tool = tool_config(sim_scenario, "station", max_suction_moment=0.4, drag_grasp=True, max_drag_pull=42.412)
     return ActionModel(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera).position, tool)
 
 
@@ -68,6 +67,7 @@ def _lift_to(model, objects, dx, dz):
 
 
 def test_the_drag_instead_of_a_put_back_lift_puts_the_object_where_the_lift_would_have(sim_scenario, model_dragging):
+    assert model_dragging.tool.rules.drag_after_weighing  # the station profile's default
     scene = _scene(sim_scenario, 0.4)
     lift = _lift_to(model_dragging, scene.objects, 0.10, -0.12)
     drag, why = model_dragging.drag_instead(scene.objects, lift, 0.6)
@@ -93,7 +93,7 @@ def test_no_drag_instead_where_the_lift_passed_over_an_object_the_drag_would_sli
         assert drag is None and why.startswith("no drag to that placement"), why
 
 
-def test_the_shelf_simulator_drags_after_weighing_only_under_the_rule(sim_scenario, model, model_dragging):
+def test_the_shelf_simulator_drags_after_weighing_only_under_the_rule(sim_scenario, model_dragging):
     from slax_drake.shelf.simulator import DRAGGED_INSTEAD, drag_after_weighing
 
     believed = _scene(sim_scenario, 0.4).objects  # what the lift was chosen on: liftable
@@ -104,5 +104,7 @@ def test_the_shelf_simulator_drags_after_weighing_only_under_the_rule(sim_scenar
     dragged, dragged_note = drag_after_weighing(after, note, model_dragging, believed, lift, 0.6, "object_0")
     assert dragged_note == f"{note}; {DRAGGED_INSTEAD}"
     assert tuple(dragged.objects[0].center[:2]) == pytest.approx((0.10, -0.12))
-    same, same_note = drag_after_weighing(after, note, model, believed, lift, 0.6, "object_0")  # rule off
+    rule_off = model_dragging.with_tool(dataclasses.replace(
+        model_dragging.tool, rules=dataclasses.replace(model_dragging.tool.rules, drag_after_weighing=False)))
+    same, same_note = drag_after_weighing(after, note, rule_off, believed, lift, 0.6, "object_0")
     assert same is after and same_note == note

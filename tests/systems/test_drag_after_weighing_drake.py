@@ -1,6 +1,6 @@
-"""A lift weighed, put back and dragged in the same action in a Drake trial (the ``drag_after_weighing`` rule): in
-Table I household scene 8:6 slax-belief's second action lifts a 0.94 kg cylinder that the floor still carries (its
-seal peeling: "not hanging free"); the arm puts it back, and the action model offers the drag to the same
+"""A lift weighed, put back and dragged in the same action in a Drake trial (the ``drag_after_weighing`` rule, on in
+the station profile): in Table I household scene 8:6 slax-belief's second action lifts a 0.94 kg cylinder that the
+floor still carries (its seal peeling: "not hanging free"); the arm puts it back, and the action model offers the drag to the same
 placement at the weighed mass, so the planner plans it from where the put-back ended and the arm drags the
 cylinder there. The action is judged where the drag left it, and its export (the lift up to the weighing, the
 put-back, the drag) passes the independent checker. The logic on hand-built shelves: tests/shelf/test_weighed_lift.py."""
@@ -20,7 +20,7 @@ def trial(tmp_path_factory):
     # 60 s of simulated time: the first two actions and the start of the third (their outcomes are judged at its
     # decision, 52.6 s)
     assert main(["trial", "--config", "sim_configs/table1_household.yaml", "--benchmark-scene", "8:6",
-                 "--policy", "slax-belief", "--tool-rule", "drag_after_weighing=true", "--max-sim-time", "60",
+                 "--policy", "slax-belief", "--max-sim-time", "60",
                  "--out", str(folder), "--quiet"]) == 0
     return folder
 
