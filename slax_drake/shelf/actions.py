@@ -310,17 +310,17 @@ class ActionModel:
         weighed = tuple(dataclasses.replace(o, mass=float(mass)) if o.name == lift.name else o for o in objects)
         found = self.enumerate(weighed, pushes=False, only={lift.name})
         drags = [c for c in found.feasible if c.drag]
-        for c in drags:
-            if not c.guarded and abs(c.dx - lift.dx) < 1e-6 and abs(c.dz - lift.dz) < 1e-6:
-                return c, ""
-        if found.feasible and not drags:
-            return None, f"still lifted at {mass:.2f} kg"
-        if not found.feasible:
-            reasons = "; ".join(r.reason for r in found.rejected) or "no candidate"
-            return None, f"no drag of it: {reasons}"
         same = [c for c in drags if abs(c.dx - lift.dx) < 1e-6 and abs(c.dz - lift.dz) < 1e-6]
-        return None, ("the drag to that placement reaches into hidden space (guarded)" if same else
-                      f"no drag to that placement ({len(drags)} to others)")
+        unguarded = [c for c in same if not c.guarded]
+        if unguarded:
+            return unguarded[0], ""
+        if same:
+            return None, "the drag to that placement reaches into hidden space (guarded)"
+        if drags:
+            return None, f"no drag to that placement ({len(drags)} to others)"
+        if found.feasible:
+            return None, f"still lifted at {mass:.2f} kg"
+        return None, "no drag of it: " + ("; ".join(r.reason for r in found.rejected) or "no candidate")
 
     # ----------------------------------------------------------------------------------------------------
     def object_geometry(self, objects, rasters: bool = True, fixed=()) -> list["ObjectGeometry"]:

@@ -338,15 +338,14 @@ class PlannerSystem(LeafSystem):
         record["put_back_time"] = round(now, 4)
         record["put_back_motion"] = {"duration_s": round(back.trajectory.duration, 3),
                                      "waypoint_times": back.waypoint_times, "suction_intervals": back.suction_intervals}
-        then = None
-        if why is not PutBack.NOTHING_HELD and self.policy.action_model.tool.rules.drag_after_weighing:
-            then, record["drag_after_weighing"] = self._drag_after_weighing(action, s.believed, back,
-                                                                            record["mass_kg"])
-        believed = s.believed
-        if then is not None:  # the drag is planned and guarded on the object at its weighed mass
+        then, believed = None, s.believed
+        if why is not PutBack.NOTHING_HELD:  # from now on the object weighs what the arm weighed
             believed = s.believed.with_objects(tuple(
                 dataclasses.replace(o, mass=record["mass_kg"]) if o.name == action.name else o
                 for o in s.believed.objects))
+            if self.policy.action_model.tool.rules.drag_after_weighing:
+                then, record["drag_after_weighing"] = self._drag_after_weighing(action, believed, back,
+                                                                                record["mass_kg"])
         state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
             s, motion=back, t_start=now, guard=None, weigh_at=None, motions=s.motions + ((now, back),), then=then,
             believed=believed, log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
@@ -354,16 +353,14 @@ class PlannerSystem(LeafSystem):
     def _drag_after_weighing(self, lift, believed, back, mass: float) -> tuple[tuple | None, dict]:
         """The drag that puts the object of the put-back ``lift`` where the lift would have, planned from where the
         put-back motion ``back`` ends (the ``drag_after_weighing`` rule): ((drag, PlannedMotion) or None, its
-        record). The action model must offer it on the arrangement the lift was planned in (``believed``) with the
-        object at its weighed ``mass`` (kg; :meth:`ActionModel.drag_instead`), and the planner must plan it."""
+        record). The action model must offer it on the arrangement the lift was planned in (``believed``, the lifted
+        object at its weighed ``mass``, kg; :meth:`ActionModel.drag_instead`), and the planner must plan it."""
         drag, why = self.policy.action_model.drag_instead(believed.objects, lift, mass)
         if drag is None:
             return None, {"drag": None, "why": why}
-        weighed = believed.with_objects(tuple(dataclasses.replace(o, mass=mass) if o.name == lift.name else o
-                                              for o in believed.objects))
         c0 = time.process_time()
         q_end = back.trajectory.value(back.trajectory.duration)[0]
-        result = self.planner.plan(drag, weighed, q_start=q_end)
+        result = self.planner.plan(drag, believed, q_start=q_end)
         record = {"drag": _describe(drag), "planning_cpu_s": round(time.process_time() - c0, 4)}
         if not result.feasible:
             return None, {**record, "why": result.reason}
