@@ -23,6 +23,8 @@ import sys
 from pathlib import Path
 
 from slax_drake.config import load_scenario
+from slax_drake.errors import PhysicsBenchmarkError
+from slax_drake.evaluation.settings import physics_run
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.scene.camera import Camera
 from slax_drake.scene.mass import quantile_mass
@@ -46,16 +48,11 @@ def main(argv=None) -> int:
         print(f"error: --quantiles {args.quantiles!r}: {e}", file=sys.stderr)
         return 2
     try:
-        settings = json.loads((args.physics / "physics_settings.json").read_text())
-        config, seed = settings["config"], settings["seed"]
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        print(f"error: {args.physics} is no physics benchmark folder with its settings ({type(e).__name__}: {e})",
-              file=sys.stderr)
+        settings, trials = physics_run(args.physics, args.policy)
+    except PhysicsBenchmarkError as e:
+        print(f"error: {e}", file=sys.stderr)
         return 2
-    trials = sorted((args.physics / "physics_trials" / args.policy).glob("*.json"))
-    if not trials:
-        print(f"error: no {args.policy} trials in {args.physics}/physics_trials", file=sys.stderr)
-        return 2
+    config, seed = settings["config"], settings["seed"]
     scenario = load_scenario(config)
     tool = tool_config(scenario, settings.get("profile", "station"), **(settings.get("tool_rules") or {}))
     model = ActionModel(shelf_of(scenario), Camera.from_config(scenario.camera).position, tool)

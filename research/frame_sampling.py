@@ -24,6 +24,8 @@ import sys
 from pathlib import Path
 
 from slax_drake.config import load_scenario
+from slax_drake.errors import PhysicsBenchmarkError
+from slax_drake.evaluation.settings import physics_run
 from slax_drake.evaluation.table1 import protocol_scene, scene_seed
 from slax_drake.policies.registry import make_policy
 from slax_drake.shelf.simulator import CameraObserver
@@ -71,18 +73,12 @@ def main(argv=None) -> int:
     parser.add_argument("--policy", default="slax-belief")
     args = parser.parse_args(argv)
     try:
-        settings = json.loads((args.physics / "physics_settings.json").read_text())
-        settings["config"], settings["seed"]
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        print(f"error: {args.physics} is no physics benchmark folder with its settings ({type(e).__name__}: {e})",
-              file=sys.stderr)
+        settings, trials = physics_run(args.physics, args.policy)
+    except PhysicsBenchmarkError as e:
+        print(f"error: {e}", file=sys.stderr)
         return 2
     scenario = load_scenario(settings["config"])
     rules, profile, seed = settings.get("tool_rules") or {}, settings.get("profile", "station"), settings["seed"]
-    trials = sorted((args.physics / "physics_trials" / args.policy).glob("*.json"))
-    if not trials:
-        print(f"error: no {args.policy} trials in {args.physics}/physics_trials", file=sys.stderr)
-        return 2
     records = [json.loads(p.read_text()) for p in trials]
     if args.scenes_per_density is not None:
         records = [r for r in records if r["index"] < args.scenes_per_density]

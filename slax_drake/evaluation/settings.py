@@ -25,7 +25,7 @@ import json
 import subprocess
 from pathlib import Path
 
-from slax_drake.errors import SettingsMismatchError
+from slax_drake.errors import PhysicsBenchmarkError, SettingsMismatchError
 from slax_drake.io import write_text_atomic
 
 SETTINGS_FILE = "settings.json"  # the Table I benchmark's record
@@ -176,3 +176,20 @@ def _show(value) -> str:
     if isinstance(value, str) and len(value) == 64:
         return value[:12]  # a digest
     return json.dumps(value, sort_keys=True)
+
+
+def physics_run(folder: Path, policy: str) -> tuple[dict, list[Path]]:
+    """A physics benchmark's result folder, as the research scripts read it: (its recorded settings, with at least
+    ``config`` and ``seed``; the paths of ``policy``'s per-scene trial files, sorted). PhysicsBenchmarkError (one
+    line) when the folder holds no readable settings or no trial of ``policy``."""
+    folder = Path(folder)
+    try:
+        settings = json.loads((folder / PHYSICS_SETTINGS_FILE).read_text())
+        settings["config"], settings["seed"]
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise PhysicsBenchmarkError(f"{folder} is no physics benchmark folder with its settings "
+                                    f"({type(e).__name__}: {e})") from None
+    trials = sorted((folder / "physics_trials" / policy).glob("*.json"))
+    if not trials:
+        raise PhysicsBenchmarkError(f"no {policy} trials in {folder}/physics_trials")
+    return settings, trials

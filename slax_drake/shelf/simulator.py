@@ -475,7 +475,7 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
                                                                               policy.action_model) is not None:
             mass = observer.weighed(chosen, observation.known, true_object, policy.action_model)  # its track's mass
         scene, note = execute(scene, action, policy.action_model)
-        if mass is not None and note.startswith(WEIGHED_PUT_BACK):
+        if mass is not None:  # execute put it back (the same lift_over_limit), note WEIGHED_PUT_BACK
             scene, note = drag_after_weighing(scene, note, policy.action_model, observation.known, chosen, mass,
                                               true_name)
         actions.append(action.describe())
