@@ -133,7 +133,7 @@ def put_back_why(weighed: dict) -> str:
 def mismatch_kind(action: dict, shelf_width: float, shelf_depth: float) -> str | None:
     """Why an executed action did not match its prediction (None when it matched or has no outcome), the first
     of: "dropped" (the object was lost at the next decision, its centre out of the bay), "toppled" (lost, inside
-    the bay: tilted over 20 deg), "put back" (a lift the arm weighed at the cup and undid: too heavy, not hanging free or nothing held), "seal never formed" (a suction whose object moved less than ``SEAL_MOVE`` and
+    the bay: tilted over 20 deg), "put back" (a lift the arm weighed at the cup and undid: too heavy, not hanging free or nothing held; a drag weighed along its pull and pushed back), "seal never formed" (a suction whose object moved less than ``SEAL_MOVE`` and
     turned less than ``SEAL_TURN`` from where it stood), "slid" (its planar position more than ``MATCH_DISTANCE``
     from the prediction), "turned" (its position within it, its yaw more than ``MATCH_YAW`` off). ``action``: a
     physics record's action (``matched``, ``outcome``, ``before``, ``lost_after``, ``type``)."""
@@ -204,7 +204,8 @@ def _run_scene(job) -> dict:
         if isinstance(a.get("weighed"), dict):  # a lift weighed at the cup: its moment, whether it was put back
             record["weighed"] = {k: a["weighed"][k] for k in ("weight_n", "moment_nm", "lever_m", "least_lever_m",
                                                                "limit_nm", "put_back", "why", "mass_kg",
-                                                               "drag_after_weighing")
+                                                               "drag_after_weighing", "along", "friction_n",
+                                                               "twist_nm")
                                  if k in a["weighed"]}
         if isinstance(a.get("guard"), dict):  # a guarded placement: whether it stopped on contact, where
             record["guard"] = {k: a["guard"][k] for k in ("stopped", "pushed_in_m", "short_m", "peak_force_n",
@@ -444,13 +445,18 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
         if "stall_step" in d:  # the policy's search stalled at this step (None: never); actions from it on
             stalled = d["stall_step"]
             summary["trials"][-1]["stall"] = [stalled, 0 if stalled is None else len(d["actions"][stalled:])]
-        if any("weighed" in a for a in d["actions"]):  # lifts weighed at the cup, how many were put back, and of
-            # those how many were then dragged to the same placement (drag_after_weighing)
-            summary["trials"][-1]["weighed"] = [sum(1 for a in d["actions"] if "weighed" in a),
-                                                sum(1 for a in d["actions"] if (a.get("weighed") or {}).get("put_back")),
-                                                sum(1 for a in d["actions"] if dragged_after_weighing(a))]
+        lifts = [a for a in d["actions"] if "weighed" in a and a["weighed"].get("along") != "pull"]
+        pulls = [a["weighed"] for a in d["actions"] if "weighed" in a and a["weighed"].get("along") == "pull"]
+        if lifts:  # lifts weighed at the cup, how many were put back, and of those how many were then dragged to the
+            # same placement (drag_after_weighing)
+            summary["trials"][-1]["weighed"] = [len(lifts), sum(1 for a in lifts if a["weighed"].get("put_back")),
+                                                sum(1 for a in lifts if dragged_after_weighing(a))]
             summary["trials"][-1]["put_back_why"] = dict(collections.Counter(
-                put_back_why(a["weighed"]) for a in d["actions"] if (a.get("weighed") or {}).get("put_back")))
+                put_back_why(a["weighed"]) for a in lifts if a["weighed"].get("put_back")))
+        if pulls:  # sideways drags weighed along their pull (weigh_drag_pull): weighed (a friction measured),
+            # pushed back
+            summary["trials"][-1]["pulls"] = [sum(1 for w in pulls if w.get("friction_n") is not None),
+                                              sum(1 for w in pulls if w.get("put_back"))]
     for p in policies:
         per = {}
         for key in [str(n) for n in densities] + ["all"]:
@@ -482,6 +488,9 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                     "put_back_why": dict(sorted(sum((collections.Counter(t.get("put_back_why", {})) for t in sel),
                                                     collections.Counter()).items()))}
                    if any("weighed" in t for t in sel) else {}),
+                **({"weighed_pulls": [sum(t["pulls"][0] for t in sel if "pulls" in t),
+                                      sum(t["pulls"][1] for t in sel if "pulls" in t)]}
+                   if any("pulls" in t for t in sel) else {}),
                 # trials whose search stalled, of them revealed all the same, actions executed from the stall on,
                 # and all actions executed (where the records keep the policy's decision log)
                 **_stall_counts([t for t in sel if "stall" in t]),
@@ -737,9 +746,13 @@ def markdown_table(summary: dict) -> str:
                           + (" (" + ", ".join(f"{k} {v}" for k, v in why.items()) + ")" if why else "")
                           + (f", {weighed[2]} of them then dragged to the same placement"
                              if len(weighed) > 2 and weighed[2] else "") + ".")
+        pulls = per.get("all", {}).get("weighed_pulls")
+        if pulls and pulls[0]:
+            lines[-1] += (f" Sideways drags weighed along their pull: {pulls[0]}, pushed back as twisting off the cup "
+                          f"{pulls[1]}.")
     lines += ["", "Physics fidelity per action kind (actions matching the prediction) and the mismatches by "
               "kind (dropped: lost out of the bay; toppled: lost inside it; put back: a lift the arm weighed and "
-              "undid; seal never formed: a suction that left its "
+              "undid, or a drag it weighed along its pull and pushed back; seal never formed: a suction that left its "
               f"object within {100 * SEAL_MOVE:.0f} cm and {math.degrees(SEAL_TURN):.0f} deg of where it stood; slid: "
               f"more than {100 * MATCH_DISTANCE:.0f} cm from the prediction; turned: within it, yaw off):", "",
               "| Policy | Objects | Pushes matching | Suctions matching (lifted) | Drags matching | " + " | ".join(

@@ -7,6 +7,7 @@ trial) shows where the object went::
     step 4/12: suction track_1 by +0.050 m to y = -0.190 m, planned in 1.2 s, executed, object_1 ended 3.4 cm from the prediction
     step 5/12: suction track_3 by -0.100 m to y = +0.150 m, planned in 0.9 s, guarded, stopped on contact after 0.212 m, executed, object_2 ended 6.1 cm from the prediction
     step 6/12: suction track_4 by -0.050 m to y = -0.220 m, planned in 0.7 s, weighed 7.8 N hanging 0.37 N m off the cup, not hanging free: put back
+    step 7/12: suction track_0 by -0.200 m to y = -0.050 m, planned in 0.3 s, weighed along the pull: 7.9 N of friction, a twist of 0.72 N m across > 0.64, twists off the cup: pushed back
     done after 4 actions: target revealed (96% of it visible)
 
 What a line says is what the trial knows at that moment: the policy's action on a camera segment, for a policy that
@@ -116,6 +117,11 @@ class DecisionPrinter:
         entry, snap = self.open
         self.open = None
         weighed = entry.get("weighed")
+        if weighed and weighed.get("put_back") and weighed.get("along") == "pull":  # a drag weighed along its pull
+            self._write(f"weighed along the pull: {weighed['friction_n']:.1f} N of friction, a twist of "
+                        f"{weighed['twist_nm']:.2f} N m across > {weighed['limit_nm']:.2f}, {weighed['why']}: "
+                        "pushed back\n")
+            return
         if weighed and weighed.get("put_back"):  # weighed at the lift: undone, and then dragged or nothing more
             self._write(f"weighed {weighed['weight_n']:.1f} N hanging {weighed['moment_nm']:.2f} N m off the cup, "
                         f"{weighed['why']}: put back")

@@ -82,6 +82,8 @@ SWEEP_STEP = 0.005  # m between footprints of the carried object's sweep when lo
 # OUT_MARGIN (the action model's): the carried object's back this far in front of the opening (m)
 RELEASE_BACKOFF = 0.02  # m
 DWELL = 0.3  # s at rest after sealing and after releasing
+PULL_DWELL = 0.1  # s at rest at the end of a sideways drag's pull when it is weighed there (the weigh_drag_pull rule:
+# slax_drake.systems.drag_weigh): the arm decides there whether to slide the object across or push it back
 WEIGH_DWELL = 0.3  # s at rest at a lifted suction's lift, where the arm weighs what the cup holds (the arm settles in
 # about 0.2 s after the lift on the sim station: slax_drake.systems.guard.weigh_time); a lift higher than LIFT (over
 # a tall object on the way) rests at LIFT first ("weigh"), so that an object the cup cannot hold falls from 1 cm
@@ -238,11 +240,12 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         if action.drag:  # on the floor all the way, at the seal's height
             slide = dict(carried="resting", **on)
             y_pull = drag_pull_cup_y(action, obj, shelf) + SEAL_PRESS * ay
+            weighed = tool.rules.weigh_drag_pull and abs(action.dx) > 1e-9  # rests where the pull is weighed
             return [
                 ToolWaypoint("pre-approach", f, _pose(R, (cx - back * ax, y_pre, cz)), s),
                 ToolWaypoint("approach", f, _pose(R, (cx - CUP_STANDOFF * ax, cy - CUP_STANDOFF * ay, cz)), s),
                 ToolWaypoint("seal", f, _pose(R, (px, py, cz)), s, contact=True, suction=True, dwell=DWELL),
-                ToolWaypoint("pull", f, _pose(R, (px, y_pull, cz)), s, **slide),
+                ToolWaypoint("pull", f, _pose(R, (px, y_pull, cz)), s, dwell=PULL_DWELL if weighed else 0.0, **slide),
                 ToolWaypoint("drag across", f, _pose(R, (x2, y_pull, cz)), s, **slide),
                 ToolWaypoint("push in", f, _pose(R, (x2, y_in, cz)), s, **slide),
                 ToolWaypoint("release", f, _pose(R, (x2, y_in, cz)), s, contact=True, dwell=DWELL),

@@ -345,6 +345,19 @@ class DragAfterWeighing(Rule):
 
 
 @register
+class WeighDragPull(Rule):
+    """A drag that slides its object across (d_x != 0) is weighed along its pull toward the opening: the floor's
+    sliding friction, measured from the arm's joint efforts while the object slides out, takes the place of
+    ``drag_friction`` x m g in the twist check (``max_drag_twist``), and a drag over the limit is pushed straight
+    back and released where it was sealed, the object reckoned from then on with the mass that friction implies
+    (:mod:`slax_drake.systems.drag_weigh`): what a robot does that can feel its load before it slides it sideways.
+    Both executors read it (the Drake trial's planner system from the efforts; the shelf simulator with the true
+    object's mass). Off in both profiles' defaults (measured as a variant first)."""
+
+    name, type, paper, station = "weigh_drag_pull", bool, False, False
+
+
+@register
 class MaxDragPull(Rule):
     """The cup's pull (N) a drag may use: vacuum pressure x cup area. Unlimited in both profiles' defaults; the
     Drake station's cup sets it (``suction.vacuum_pressure`` and ``suction.cup_radius`` in the station YAML:

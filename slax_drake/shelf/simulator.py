@@ -139,6 +139,16 @@ class CameraObserver:
             self.tracker.weighed(action.name, mass)
         return mass
 
+    def weighed_pull(self, action, true_object, model: ActionModel) -> float:
+        """The sideways drag ``action`` (named by a hypothesis) was weighed along its pull on ``true_object`` and
+        pushed back: returns the mass (kg) its friction implies, the true mass (the floor's friction is the action
+        model's ``drag_friction`` here), which its track carries from the next frame on, as the Drake trial's
+        planner records what its arm felt (:mod:`slax_drake.systems.drag_weigh`)."""
+        mass = object_mass(true_object, model.tool.physics.object_density, model.tool.physics)
+        if self.tracker is not None:
+            self.tracker.weighed(action.name, mass)
+        return mass
+
     def observe(self, scene: Scene) -> tuple[PolicyObservation, dict]:
         from slax_drake.perception.belief import ObservedBelief
         from slax_drake.perception.observation import Observation as Frame
@@ -219,6 +229,21 @@ def lift_over_limit(obj, action, model: ActionModel) -> float | None:
         return None
     moment = model.held_moment(obj, action.q[:2])
     return moment if RULES["max_suction_moment"].refuses(model.tool.rules.max_suction_moment, moment) else None
+
+
+PULL_PUT_BACK = "weighed along the pull and pushed back"  # the note that opens a drag undone as twisting off the cup
+
+
+def drag_over_twist(obj, action, model: ActionModel) -> float | None:
+    """The twist (N m) a drag ``action`` that slides the true object ``obj`` across (d_x != 0) asks of the seal,
+    ``drag_safety_factor`` x ``drag_friction`` x its true weight x the lever (the held moment: :meth:`held_moment`),
+    when the ``weigh_drag_pull`` rule is on and that twist exceeds ``max_drag_twist`` (what the arm feels along the
+    pull and pushes back; :mod:`slax_drake.systems.drag_weigh`), else None."""
+    rules = model.tool.rules
+    if not rules.weigh_drag_pull or not isinstance(action, Suction) or not action.drag or abs(action.dx) < 1e-9:
+        return None
+    twist = rules.drag_safety_factor * rules.drag_friction * model.held_moment(obj, action.q[:2])
+    return twist if twist > rules.max_drag_twist else None
 
 
 DRAGGED_INSTEAD = "dragged instead"  # the note's part after a put-back lift that became a drag (drag_after_weighing)
@@ -314,6 +339,10 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
 
     if isinstance(action, Suction) and action.drag:
+        twist = drag_over_twist(obj, action, model)
+        if twist is not None:  # felt along the pull (as the Drake trial's planner does) and pushed straight back
+            return scene, (f"{PULL_PUT_BACK}: sliding {obj.name} across would twist it {twist:.2f} N m > "
+                           f"{t.rules.max_drag_twist:.2f} N m")
         return _execute_drag(scene, i, action, model, clear_at)
 
     if isinstance(action, Suction):
@@ -475,6 +504,9 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
                                                                               policy.action_model) is not None:
             mass = observer.weighed(chosen, observation.known, true_object, policy.action_model)  # its track's mass
         scene, note = execute(scene, action, policy.action_model)
+        if names is not None and true_object is not None and drag_over_twist(true_object, action,
+                                                                              policy.action_model) is not None:
+            observer.weighed_pull(chosen, true_object, policy.action_model)  # execute pushes it back
         if mass is not None:  # execute put it back (the same lift_over_limit), note WEIGHED_PUT_BACK
             scene, note = drag_after_weighing(scene, note, policy.action_model, observation.known, chosen, mass,
                                               true_name)

@@ -151,11 +151,14 @@ FREE_HANG_SHARE = 0.8
 
 
 class PutBack(str, enum.Enum):
-    """Why a weighed lift is put back (:func:`weigh_verdict`); the value is the trial record's ``why``."""
+    """Why a weighed lift (:func:`weigh_verdict`) or drag (:func:`slax_drake.systems.drag_weigh.pull_record`) is put
+    back; the value is the trial record's ``why``."""
 
     NOTHING_HELD = "nothing held"  # under MIN_HELD_WEIGHT: the seal let go
     TOO_HEAVY = "too heavy"  # its moment over the limit the lift was planned under
     NOT_HANGING_FREE = "not hanging free"  # its lever under FREE_HANG_SHARE of the least lever: the floor carries part
+    TWISTS_OFF = "twists off the cup"  # a drag weighed along its pull: the slide across would twist it off the cup
+    # (slax_drake.systems.drag_weigh)
 
 
 def weigh_verdict(payload: Payload, limit: float, least_lever: float) -> PutBack | None:

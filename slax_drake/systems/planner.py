@@ -60,6 +60,7 @@ from slax_drake.shelf.distribution import support
 from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
+from slax_drake.systems.drag_weigh import observe_pull, pull_record, start_pull
 from slax_drake.systems.guard import PutBack, guard_record, least_lever, push_in_forces, weigh_time, weigh_verdict
 
 MAX_PLAN_ATTEMPTS = 25
@@ -84,6 +85,7 @@ class TrialState:
     believed: object = None  # the believed Scene the running motion was planned in
     then: tuple | None = None  # (action, PlannedMotion) to start when the running motion ends, in the same action:
     # the drag after a lift weighed and put back (the ``drag_after_weighing`` rule)
+    pull: object = None  # PullRun of the running sideways drag weighed along its pull (the ``weigh_drag_pull`` rule)
 
     def __deepcopy__(self, memo):
         return self
@@ -197,7 +199,7 @@ class PlannerSystem(LeafSystem):
         guard = self._start_guard(action, obj, s.believed, motion)
         return dataclasses.replace(
             s, motion=motion, t_start=now, then=None, guard=guard, weigh_at=None, motions=s.motions + ((now, motion),),
-            log=s.log[:-1] + ({**s.log[-1], "weighed": record},))
+            pull=self._start_pull(motion), log=s.log[:-1] + ({**s.log[-1], "weighed": record},))
 
     def _start_guard(self, action, obj, believed, motion):
         """The guard's run over ``motion`` (None without a guard): a suction's push-in forces from ``obj``, the
@@ -207,6 +209,13 @@ class PlannerSystem(LeafSystem):
         stop, expected = push_in_forces(action, obj, self.policy.action_model, self.guard.threshold,
                                         self.guard.lip_moment) if isinstance(action, Suction) else (None, 0.0)
         return self.guard.start(motion, self._cup_y(believed, motion), expected, stop)
+
+    def _start_pull(self, motion):
+        """The weighing of ``motion``'s pull when it is a sideways drag and the ``weigh_drag_pull`` rule is on (the
+        efforts need the guard's input), else None."""
+        if self.guard is None or not self.policy.action_model.tool.rules.weigh_drag_pull:
+            return None
+        return start_pull(self.guard, motion)
 
     def _decide(self, context, s: TrialState, now: float) -> TrialState:
         frame = self._observation.Eval(context)
@@ -292,7 +301,7 @@ class PlannerSystem(LeafSystem):
         return dataclasses.replace(
             s, motion=motion, t_start=now, steps=s.steps + 1, log=s.log + (entry,), motions=s.motions + ((now, motion),),
             cost=s.cost + (1.0 if isinstance(action, Push) else self.suction_cost), guard=guard, believed=believed,
-            weigh_at=weigh_time(motion) if self.guard is not None else None,
+            weigh_at=weigh_time(motion) if self.guard is not None else None, pull=self._start_pull(motion),
             least_lever=next((least_lever(h, action.q[:2]) for h in belief.hypotheses
                               if getattr(h, "object", h).name == action.name), 0.0) if isinstance(action, Suction)
             else 0.0)
@@ -386,6 +395,9 @@ class PlannerSystem(LeafSystem):
             if t >= s.weigh_at:
                 self._weigh(context, state, s, t)
             return
+        if s.motion is not None and s.pull is not None:  # a drag's pull comes before its push-in
+            self._watch_pull(context, state, s)
+            return
         run = s.guard
         if run is None or s.motion is None:
             return
@@ -413,6 +425,42 @@ class PlannerSystem(LeafSystem):
         state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
             s, motion=stop, t_start=now, guard=None, motions=s.motions + ((now, stop),),
             log=s.log[:-1] + ({**s.log[-1], "guarded": record},)))
+
+    # weighing a drag along its pull ----------------------------------------------------------------------
+    def _watch_pull(self, context, state, s: TrialState):
+        """One joint-state sample of a sideways drag's pull (:mod:`slax_drake.systems.drag_weigh`); at the pull's
+        end, the twist the slide across would ask of the seal with the friction measured: over the action model's
+        ``max_drag_twist`` the drag is undone from there (:meth:`MotionPlanner.put_back`: pushed back to where it
+        was sealed, released) and the object reckoned from then on with the mass the friction implies (its track,
+        :meth:`ObjectTracker.weighed`: the action model drags it straight out and in only). The record goes into
+        the action's log entry as ``weighed`` (``along`` "pull")."""
+        t = context.get_time() - s.t_start
+        run = s.pull
+        if t < run.t_base:
+            return
+        n = len(self._q_obs)
+        if t < run.t_decide:
+            x = self._measured.Eval(context)
+            run = observe_pull(self.guard, run, s.motion, t, x[:n], x[n:], self._efforts.Eval(context))
+            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, pull=run))
+            return
+        action = s.motion.action
+        obj = next((o for o in s.believed.objects if o.name == action.name), None) if s.believed else None
+        lever = 0.0 if obj is None else float(np.hypot(obj.center[0] - action.q[0], obj.center[1] - action.q[1]))
+        record = pull_record(run, lever, self.policy.action_model.tool.rules)
+        log = s.log[:-1] + ({**s.log[-1], "weighed": record},)
+        if not record["put_back"]:
+            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, pull=None, log=log))
+            return
+        self.tracker.weighed(action.name, record["mass_kg"])
+        back = self.planner.put_back(s.motion, t)
+        now = context.get_time()
+        record["put_back_time"] = round(now, 4)
+        record["put_back_motion"] = {"duration_s": round(back.trajectory.duration, 3),
+                                     "waypoint_times": back.waypoint_times, "suction_intervals": back.suction_intervals}
+        state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
+            s, motion=back, t_start=now, guard=None, pull=None, motions=s.motions + ((now, back),),
+            log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
 
     def _finish(self, s: TrialState, result: str, entry: dict, frame, hold: bool = False) -> TrialState:
         """The trial ends with ``result``; ``hold``: no motion runs now (the robot holds the last motion's end
