@@ -394,6 +394,37 @@ def test_the_summary_counts_the_lifts_weighed_and_put_back_and_why():
             "the same placement.") in md
 
 
+def test_the_summary_counts_the_drags_weighed_along_their_pull_apart_from_the_lifts():
+    from slax_drake.evaluation.physics import markdown_table, summarise
+
+    before = {"x": 0.0, "y": -0.2, "yaw": 0.0}
+
+    def action(grip, weighed, moved=0.1):
+        return {"type": "suction", "grip": grip, "planning_s": 0.1, "lost_after": False, "before": before,
+                "predicted": {"x": 0.1, "y": -0.2, "yaw": 0.0}, "outcome": {"x": moved, "y": -0.2, "yaw": 0.0},
+                "weighed": weighed}
+
+    pushed_back = {"along": "pull", "friction_n": 8.5, "twist_nm": 1.02, "limit_nm": 0.64, "put_back": True,
+                   "why": "twists off the cup", "mass_kg": 1.97}
+    slid = {"along": "pull", "friction_n": 4.0, "twist_nm": 0.48, "limit_nm": 0.64, "put_back": False}
+    short = {"along": "pull", "friction_n": None, "limit_nm": 0.64, "put_back": False}
+    drake = {"success": True, "result": "revealed", "steps": 4, "toppled": [], "dropped": [],
+             "real_time_factor": 1.0, "wall_s": 1.0,
+             "actions": [action("drag", pushed_back, 0.0), action("drag", slid), action("drag", short),
+                         action("lift", {"put_back": True, "why": "too heavy"}, 0.0)]}
+    results = [{"policy": "p", "density": 4, "index": 0, "seed": 0, "shelf": {"success": True, "steps": 2},
+                "drake": drake}]
+    summary = summarise(results, ["p"], [4])
+    assert summary["trials"][0]["weighed"] == [1, 1, 0]  # the lift alone
+    assert summary["trials"][0]["pulls"] == [2, 1]  # a friction measured twice (one pull too short), pushed back once
+    e = summary["policies"]["p"]["all"]
+    assert e["weighed_pulls"] == [2, 1] and e["put_back_why"] == {"too heavy": 1}
+    assert e["mismatch_kinds"]["put back"] == 2  # the pushed-back drag did not go where predicted either
+    md = markdown_table(summary)
+    assert "Lifts weighed at the cup: 1, put back 1 (too heavy 1)." in md
+    assert "Sideways drags weighed along their pull: 2, pushed back as twisting off the cup 1." in md
+
+
 def test_why_a_lift_was_put_back_is_read_from_the_values_of_a_record_that_kept_no_reason():
     from slax_drake.evaluation.physics import put_back_why
 

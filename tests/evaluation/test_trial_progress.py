@@ -138,6 +138,17 @@ def test_a_lift_weighed_and_put_back_says_so():
         "planned in 0.4 s, weighed 7.8 N hanging 0.37 N m off the cup, not hanging free: put back")
 
 
+def test_a_drag_weighed_along_its_pull_and_pushed_back_says_so():
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    drag = {**_decision(0, 0.5), "weighed": {"along": "pull", "friction_n": 8.497, "twist_nm": 1.0677,
+                                             "limit_nm": 0.6362, "put_back": True, "why": "twists off the cup"}}
+    printer.update((drag, _decision(1, 20.0)), (_snap(0.5, 0.05), _snap(20.0, 0.05)))
+    assert out.getvalue().splitlines()[0].endswith(
+        "planned in 0.4 s, weighed along the pull: 8.5 N of friction, a twist of 1.07 N m across > 0.64, "
+        "twists off the cup: pushed back")
+
+
 def test_a_belief_policys_line_says_what_its_plan_reveals_or_that_it_found_none():
     out = io.StringIO()
     printer = DecisionPrinter(8, out)
