@@ -31,8 +31,10 @@ scene is embedded for its collision check), with ``metadata.plan_step``: the cho
 hypotheses, the check report, timings and the updated history, and ``guarded_push_in``: for a guarded suction (a
 placement reaching into space the camera cannot see, on a station with ``guarded_placement``) the push-in's time
 window and stop force (also in the motion's ``action``, where the checker reads it), which the arm's controller
-must run as a guarded move; None for any other action. When no
-action is left it still writes the file, with no motion and the reason.
+must run as a guarded move; None for any other action; and ``weigh``: what the controller weighs and when it undoes
+the action, for a lift at its lift (the load the cup holds) and, under the ``weigh_drag_pull`` rule, for a sideways
+drag along its pull (the floor's friction, against the most the cup's twist limit allows); None for any other
+action. When no action is left it still writes the file, with no motion and the reason.
 """
 
 from __future__ import annotations
@@ -411,7 +413,7 @@ class StepPlanner:
                 guarded = self._guarded_push_in(action, motion, belief.known)
                 if guarded is not None:  # the checker reads it from the motion (hardware.check)
                     traj.motions[0].action["guarded_push_in"] = dict(guarded)
-                weigh = self._weigh_at_lift(action, motion, belief)
+                weigh = self._weigh_at_lift(action, motion, belief) or self._weigh_along_pull(action, motion, belief)
                 world = world or CollisionWorld(self.station, believed)
                 report = check_trajectory(traj, world, collision_step=collision_step)
                 if report.ok:
@@ -515,6 +517,32 @@ class StepPlanner:
         return {"t_s": round(t, 4), "limit_nm": limit, "min_weight_n": MIN_HELD_WEIGHT,
                 "least_lever_m": round(least_lever(hyp, action.q[:2]), 4) if hyp is not None else 0.0,
                 "free_hang_share": FREE_HANG_SHARE}
+
+    def _weigh_along_pull(self, action, motion, belief) -> dict | None:
+        """What the arm's controller must do on a sideways drag's pull under the ``weigh_drag_pull`` rule (None for
+        any other action; :mod:`slax_drake.systems.drag_weigh`): fit the effort baseline at ``t_base_s`` (the
+        "approach", the free arm at rest), estimate the force resisting the cup along the pull (S -y) from the joint
+        efforts between ``t_start_s`` and ``t_end_s``, counting the samples once the cup has pulled
+        ``sliding_after_m`` and until ``end_margin_m`` before the pull's end, and at ``t_decide_s`` (at rest at the
+        pull's end) compare their median with ``max_friction_n`` (the twist limit over the safety factor and the
+        believed lever); over it, play the trajectory backward from there to its start, switching the suction off
+        where it came on back at the seal (``MotionPlanner.put_back`` in a Drake trial). The trajectory after
+        ``t_decide_s`` is what follows when the friction is within it."""
+        from slax_drake.systems.drag_weigh import END_MARGIN, SLIDING_TRAVEL, pull_window
+
+        rules = self.policy.action_model.tool.rules
+        window = pull_window(motion) if rules.weigh_drag_pull else None
+        if window is None:
+            return None
+        obj = next((o for o in belief.known if o.name == action.name), None)
+        lever = 0.0 if obj is None else math.hypot(float(obj.center[0]) - action.q[0], float(obj.center[1]) - action.q[1])
+        t_base, t0, t1, t_decide = window
+        return {"along": "pull", "t_base_s": round(t_base, 4), "t_start_s": round(t0, 4), "t_end_s": round(t1, 4),
+                "t_decide_s": round(t_decide, 4), "sliding_after_m": SLIDING_TRAVEL, "end_margin_m": END_MARGIN,
+                "lever_m": round(lever, 4), "limit_nm": float(rules.max_drag_twist),
+                "safety_factor": float(rules.drag_safety_factor),
+                "max_friction_n": round(rules.max_drag_twist / (rules.drag_safety_factor * lever), 3)
+                if lever > 0.0 else None}
 
     def _record(self, action, belief, observation, rejected, report, history, timings, reason=None,
                 visibility=None, frame=None) -> dict:

@@ -28,7 +28,10 @@ exceeds the stop force (the station's ``guarded_stop_force``; for a lift at most
 lever, :meth:`~slax_drake.systems.guard.Guard.stop_force`; for a drag plus its floor friction), the motion is replaced, from that instant, by the planner's stop
 motion from the measured joint positions (:meth:`slax_drake.planning.planner.MotionPlanner.guarded_stop`: hold,
 lower, release, back off, the planned way back). The record (stopped or completed, how far it pushed in, the
-peak force) is added to the action's log entry as ``guarded``. It reads joint states and efforts only.
+peak force) is added to the action's log entry as ``guarded``. A lifted object is weighed at its lift
+(:meth:`PlannerSystem._weigh`) and, under the ``weigh_drag_pull`` rule, a sideways drag along its pull
+(:mod:`slax_drake.systems.drag_weigh`); each may be undone from there (``weighed``). It reads joint states and
+efforts only.
 
 Outputs: ``desired_state`` (18: q and v of ``PLANNED_JOINTS``, sampled from the running motion, else holding
 the last pose), ``suction_command`` (1) and ``deciding`` (1: 1.0 at a tick where it decides; the evaluator records
