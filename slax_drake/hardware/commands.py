@@ -367,7 +367,15 @@ def run_plan_step(args: argparse.Namespace) -> int:
               f"{guarded['stop_force_n']:.1f} N{drag}, then releases and backs out "
               "(metadata.plan_step.guarded_push_in)")
     weigh = result.trajectory.metadata["plan_step"].get("weigh")
-    if weigh:
+    if weigh and weigh.get("along") == "pull":
+        limit = (f"over {weigh['max_friction_n']:.1f} N" if weigh["max_friction_n"] is not None
+                 else "(no lever believed: never)")
+        print(f"WEIGH: from {weigh['t_start_s']:.2f} to {weigh['t_end_s']:.2f} s the cup pulls its object out sliding: "
+              f"measure the force resisting the pull from the joint efforts (baseline at {weigh['t_base_s']:.2f} s, "
+              f"the free arm at rest) and at {weigh['t_decide_s']:.2f} s play the motion back to its start (suction "
+              f"off at the seal) when its median is {limit}: sliding it across would twist it off the cup "
+              "(metadata.plan_step.weigh)")
+    elif weigh:
         print(f"WEIGH: at {weigh['t_s']:.2f} s the cup holds its object 1 cm up: weigh it from the joint efforts and "
               f"play the motion back to its start (suction off at the seal) when it weighs under "
               f"{weigh['min_weight_n']:.1f} N, hangs over {weigh['limit_nm']:.2f} N m off the cup or its lever is under "

@@ -10,7 +10,8 @@ purpose         plant                     shelf and scene objects               
 ==============  ========================  ==========================================  =======================
 SIMULATION      ``plant_config`` (5 ms    shelf welded at X_WS; objects (and target)  ``systems.station``'s
                 discrete), SceneGraph     as free bodies with mass, contact spheres   ``MakeStation``
-                                          and visuals (``scene_world``)
+                                          and visuals; the room's floor at W z = 0
+                                          (``scene_world``)
 PLANNING        continuous, SceneGraph,   shelf welded at X_WS; objects (target if    ``planning.world``'s
                 in a RobotDiagramBuilder  asked) welded where they stand, primitive   ``PlanningWorld``
                                           box/cylinder collision shapes only
@@ -175,9 +176,10 @@ def make_station_plant(scenario: StationScenario, scene: Scene | None = None,
         objects = {}
     else:
         from slax_drake.config import load_scenario
-        from slax_drake.station.scene_world import add_scene_objects
+        from slax_drake.station.scene_world import add_floor, add_scene_objects
 
         scene_scenario = load_scenario(scenario.scene_config)
+        add_floor(plant)
         scene_bodies = add_scene_objects(plant, scene, scene_scenario.objects.density, include_target=with_target,
                                          friction=scene_scenario.physics.object_friction)
         objects = {name: plant.get_body(index) for name, index in zip(scene_bodies.names, scene_bodies.all())}

@@ -43,6 +43,7 @@ CORNER_SPHERE_RADIUS = 0.001  # m
 CYLINDER_RIM_SPHERES = 6  # contact spheres around each rim of a cylinder (see the module docstring)
 SHELF_PANEL_NAMES = ("support", "left_wall", "right_wall", "top", "back")
 SHELF_COLOR = (0.76, 0.60, 0.42, 1.0)
+FLOOR_SIZE = 20.0  # m, the floor's width and length about the robot (add_floor)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,6 +56,25 @@ class SceneBodies:
 
     def all(self) -> tuple:
         return self.objects + ((self.target,) if self.target is not None else ())
+
+
+def add_floor(plant) -> None:
+    """The room's floor under the robot: a slab ``FLOOR_SIZE`` wide whose top is the world's z = 0 (W: the robot's base
+    stands on it; a box, as Drake warns of every rigid half-space that deformable contact does not support it),
+    collision geometry only (not drawn, not seen by the camera), with the shelf's friction and the objects' point
+    contact. An object that falls off the shelf lands on it and rests there, as on a real floor; without it, it
+    fell for the rest of the trial, spinning ever faster, until the plant's state was no longer finite (the Drake
+    trial 10:7 of the physics benchmark, "simulation diverged" 78 s after a lifted box fell off the shelf). Collisions
+    with the robot's base, welded to the world, are filtered by the plant. Call before ``plant.Finalize()``."""
+    from pydrake.geometry import AddContactMaterial, Box, ProximityProperties
+    from pydrake.math import RigidTransform
+    from pydrake.multibody.plant import CoulombFriction
+
+    props = ProximityProperties()
+    AddContactMaterial(dissipation=HUNT_CROSSLEY_DISSIPATION, point_stiffness=POINT_STIFFNESS,
+                       friction=CoulombFriction(SHELF_FRICTION, SHELF_FRICTION), properties=props)
+    plant.RegisterCollisionGeometry(plant.world_body(), RigidTransform([0.0, 0.0, -0.5]),
+                                    Box(FLOOR_SIZE, FLOOR_SIZE, 1.0), "floor", props)
 
 
 def shelf_urdf(shelf: Shelf) -> str:

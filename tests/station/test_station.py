@@ -210,3 +210,29 @@ def test_a_station_push_compliance_is_a_non_negative_number(tmp_path, value):
     bad.write_text(text.replace("\npush_compliance: 0.0 ", f"\npush_compliance: {value} "))
     with pytest.raises(ConfigError, match="push_compliance"):
         load_station_scenario(bad)
+
+
+def test_an_object_off_the_shelf_lands_on_the_floor_and_rests_there(sim_scenario):
+    """A box placed in front of the shelf's opening, in the air, falls onto the room's floor (world z = 0) and rests
+    there, as a dropped object does (without the floor it fell until the plant's state was no longer finite); the
+    robot, welded to the world, does not touch the floor."""
+    from slax_drake.scene.model import Scene, SceneObject, planar_pose
+
+    scenario = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    shelf = sample_scene(sim_scenario, 1, seed=0)
+    box = SceneObject("object_0", "box", (0.08, 0.08, 0.12), planar_pose(0.0, -shelf.shelf.depth / 2 - 0.25, 0.06,
+                                                                         0.0), mass=0.5)
+    scene = Scene(shelf.shelf, shelf.camera, (box,), None, 0)
+    diagram = MakeStation(scenario, scene, camera=False)
+    simulator = _simulator(diagram, 1.5)
+    plant = diagram.GetSubsystemByName("plant")
+    plant_context = plant.GetMyContextFromRoot(simulator.get_context())
+    body = plant.GetBodyByName("object_0")
+    X_WO = plant.EvalBodyPoseInWorld(plant_context, body)
+    assert X_WO.translation()[2] == pytest.approx(0.06, abs=2e-3)  # its centre half its height above the floor
+    assert np.linalg.norm(plant.EvalBodySpatialVelocityInWorld(plant_context, body).translational()) < 1e-2
+    contacts = plant.get_contact_results_output_port().Eval(plant_context)
+    touching = {plant.get_body(i).name() for k in range(contacts.num_point_pair_contacts())
+                for i in (contacts.point_pair_contact_info(k).bodyA_index(),
+                          contacts.point_pair_contact_info(k).bodyB_index())}
+    assert touching == {"world", "object_0"}
