@@ -260,14 +260,17 @@ def drag_after_weighing(scene: Scene, note: str, model: ActionModel, hypotheses,
     drag, _ = model.drag_instead(hypotheses, lift, mass)
     if drag is None:
         return scene, note
-    scene, drag_note = execute(scene, on_true_object(drag, hypotheses, scene, true_name), model)
+    # its mass weighed at the lift, the drag's twist was checked with it: the arm does not weigh its pull again
+    scene, drag_note = execute(scene, on_true_object(drag, hypotheses, scene, true_name), model, weigh_pull=False)
     return scene, f"{note}; {DRAGGED_INSTEAD}" + (f": {drag_note}" if drag_note else "")
 
 
-def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
+def execute(scene: Scene, action, model: ActionModel, weigh_pull: bool = True) -> tuple[Scene, str]:
     """Applies ``action`` to the true scene; returns the new scene and a note ("" when it went as planned). A lifted
     suction whose true object hangs more off the cup than the action model's ``max_suction_moment`` (its true mass:
-    what the arm weighs at the lift) is put back where it stood (note ``WEIGHED_PUT_BACK``)."""
+    what the arm weighs at the lift) is put back where it stood (note ``WEIGHED_PUT_BACK``); under the
+    ``weigh_drag_pull`` rule, unless ``weigh_pull`` is False (the drag after a weighed lift: its mass is known), so is
+    a sideways drag whose slide would twist its true object off the cup (note ``PULL_PUT_BACK``)."""
     t = model.tool
     shelf = scene.shelf
     names = [o.name for o in scene.objects]
@@ -339,7 +342,7 @@ def execute(scene: Scene, action, model: ActionModel) -> tuple[Scene, str]:
         return scene.with_objects(scene.objects[:i] + (moved,) + scene.objects[i + 1:]), note
 
     if isinstance(action, Suction) and action.drag:
-        twist = drag_over_twist(obj, action, model)
+        twist = drag_over_twist(obj, action, model) if weigh_pull else None
         if twist is not None:  # felt along the pull (as the Drake trial's planner does) and pushed straight back
             return scene, (f"{PULL_PUT_BACK}: sliding {obj.name} across would twist it {twist:.2f} N m > "
                            f"{t.rules.max_drag_twist:.2f} N m")

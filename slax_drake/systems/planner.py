@@ -193,7 +193,8 @@ class PlannerSystem(LeafSystem):
 
     def _start_then(self, s: TrialState, now: float) -> TrialState:
         """Starts ``s.then`` (the drag after a put-back lift) at ``now``, within the same action: no new decision,
-        no step counted; its start time goes into the action's ``weighed`` record."""
+        no step counted; its start time goes into the action's ``weighed`` record. Its pull is not weighed
+        (``weigh_drag_pull``): the action model checked its twist at the mass weighed at the lift."""
         action, motion = s.then
         self._last_action = action  # the tracker reads where the object went from the executed action
         weighed = s.log[-1]["weighed"]
@@ -202,7 +203,7 @@ class PlannerSystem(LeafSystem):
         guard = self._start_guard(action, obj, s.believed, motion)
         return dataclasses.replace(
             s, motion=motion, t_start=now, then=None, guard=guard, weigh_at=None, motions=s.motions + ((now, motion),),
-            pull=self._start_pull(motion), log=s.log[:-1] + ({**s.log[-1], "weighed": record},))
+            pull=None, log=s.log[:-1] + ({**s.log[-1], "weighed": record},))  # its twist checked at the weighed mass
 
     def _start_guard(self, action, obj, believed, motion):
         """The guard's run over ``motion`` (None without a guard): a suction's push-in forces from ``obj``, the

@@ -53,6 +53,9 @@ def test_a_straight_drag_and_a_drag_without_the_rule_are_not_weighed(sim_scenari
     assert drag_over_twist(heavy.objects[0], _drag(0.0), model) is None  # out and back in: no twist
     after, note = execute(heavy, dataclasses.replace(_drag(0.0), dz=-0.15), model)
     assert note == "" and after.objects[0].center[1] == pytest.approx(-0.15)
+    # the drag after a weighed lift: its mass known, its pull is not weighed again
+    after, note = execute(heavy, _drag(0.15), model, weigh_pull=False)
+    assert note == "" and after.objects[0].center[0] == pytest.approx(0.15)
     rule_off = _model(sim_scenario)
     assert not rule_off.tool.rules.weigh_drag_pull  # off in the station profile's default
     after, note = execute(heavy, _drag(0.15), rule_off)
