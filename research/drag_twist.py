@@ -77,8 +77,10 @@ def main(argv=None) -> int:
             lever = math.hypot(obj.center[0] - contact[0], obj.center[1] - contact[1])
             twist = [mu * m * GRAVITY * lever for m in
                      [obj.mass] + [quantile_mass(obj.shape, obj.size, scenario.physics, q) for q in quantiles]]
+            weighed = a.get("weighed") if (a.get("weighed") or {}).get("along") == "pull" else None
             rows.append({"trial": path.stem, "step": k + 1, "object": obj.name, "shape": obj.shape, "mass": obj.mass,
-                         "dx": a["dx"], "held": not a.get("mismatch"), "mismatch": a.get("mismatch"), "twist": twist})
+                         "dx": a["dx"], "held": not a.get("mismatch"), "mismatch": a.get("mismatch"), "twist": twist,
+                         "pull": weighed, "true_friction": rules.drag_friction * obj.mass * GRAVITY, "lever": lever})
     print(f"## Drags along x of `{args.physics}` ({args.policy}): {len(rows)}\n")
     print(f"The check: {rules.drag_safety_factor:g} x {rules.drag_friction:g} x m g x lever <= {limit:.3f} N m "
           "(`max_drag_twist`).\n")
@@ -96,6 +98,27 @@ def main(argv=None) -> int:
     for i, n in enumerate(names):
         print(f"| {n} | {sum(r['twist'][i] > limit for r in failed)} of {len(failed)} | "
               f"{sum(r['twist'][i] > limit for r in held)} of {len(held)} |")
+    pulled = [r for r in rows if r["pull"] is not None and r["pull"].get("friction_n") is not None]
+    if pulled:  # the weigh_drag_pull rule: the friction the arm felt along the pull against the true mass's
+        print(f"\n### Weighed along the pull (`weigh_drag_pull`): {len(pulled)}\n")
+        print("The friction the arm measured while pulling the object out, against the action model's "
+              f"{rules.drag_friction:g} x m g with the true mass, and the twist with each, against {limit:.3f} N m. "
+              "A drag pushed back counts as \"put back\" (it did not go where predicted).\n")
+        print("| trial | step | object | shape | true mass (kg) | measured friction (N) | mu m g, true mass (N) | ratio | "
+              "twist measured (N m) | twist at true mass (N m) | pushed back | outcome |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for r in pulled:
+            w = r["pull"]
+            print(f"| {r['trial']} | {r['step']} | {r['object']} | {r['shape']} | {r['mass']:.2f} | "
+                  f"{w['friction_n']:.2f} | {r['true_friction']:.2f} | {w['friction_n'] / r['true_friction']:.2f} | "
+                  f"{w['twist_nm']:.2f} | {r['twist'][0]:.2f} | {'yes' if w['put_back'] else 'no'} | "
+                  f"{'held' if r['held'] else r['mismatch']} |")
+        ratios = sorted(r["pull"]["friction_n"] / r["true_friction"] for r in pulled)
+        back = [r for r in pulled if r["pull"]["put_back"]]
+        print(f"\nMeasured over true friction: median {ratios[len(ratios) // 2]:.2f}, range {ratios[0]:.2f}-"
+              f"{ratios[-1]:.2f}. Pushed back {len(back)}, of which the true mass's twist was over the limit in "
+              f"{sum(r['twist'][0] > limit for r in back)}; slid across {len(pulled) - len(back)}, of which it was "
+              f"over the limit in {sum(r['twist'][0] > limit for r in pulled if not r['pull']['put_back'])}.")
     return 0
 
 
