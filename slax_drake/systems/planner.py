@@ -326,8 +326,7 @@ class PlannerSystem(LeafSystem):
         payload = self.guard.weigh(t, s.motion, x[:n], x[n:], self._efforts.Eval(context))
         limit = float(self.policy.action_model.tool.rules.max_suction_moment)
         action = s.motion.action
-        obj = next((o for o in s.believed.objects if o.name == action.name), None) if s.believed else None
-        lever = 0.0 if obj is None else float(np.hypot(obj.center[0] - action.q[0], obj.center[1] - action.q[1]))
+        lever = self._believed_lever(s)
         why = weigh_verdict(payload, limit, s.least_lever)
         record = {"weight_n": round(payload.weight_n, 3), "moment_nm": round(payload.moment_nm, 4),
                   "lever_m": round(payload.moment_nm / payload.weight_n, 4) if payload.weight_n > 0 else None,
@@ -449,22 +448,27 @@ class PlannerSystem(LeafSystem):
             state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, pull=run))
             return
         action = s.motion.action
-        obj = next((o for o in s.believed.objects if o.name == action.name), None) if s.believed else None
-        lever = 0.0 if obj is None else float(np.hypot(obj.center[0] - action.q[0], obj.center[1] - action.q[1]))
-        record = pull_record(run, lever, self.policy.action_model.tool.rules)
-        log = s.log[:-1] + ({**s.log[-1], "weighed": record},)
-        if not record["put_back"]:
-            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, pull=None, log=log))
-            return
-        self.tracker.weighed(action.name, record["mass_kg"])
-        back = self.planner.put_back(s.motion, t)
-        now = context.get_time()
-        record["put_back_time"] = round(now, 4)
-        record["put_back_motion"] = {"duration_s": round(back.trajectory.duration, 3),
-                                     "waypoint_times": back.waypoint_times, "suction_intervals": back.suction_intervals}
+        record = pull_record(run, self._believed_lever(s), self.policy.action_model.tool.rules)
+        after = s
+        if record["put_back"]:
+            self.tracker.weighed(action.name, record["mass_kg"])
+            back = self.planner.put_back(s.motion, t)
+            now = context.get_time()
+            record["put_back_time"] = round(now, 4)
+            record["put_back_motion"] = {"duration_s": round(back.trajectory.duration, 3),
+                                         "waypoint_times": back.waypoint_times,
+                                         "suction_intervals": back.suction_intervals}
+            after = dataclasses.replace(s, motion=back, t_start=now, guard=None, motions=s.motions + ((now, back),))
         state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
-            s, motion=back, t_start=now, guard=None, pull=None, motions=s.motions + ((now, back),),
-            log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
+            after, pull=None, log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
+
+    @staticmethod
+    def _believed_lever(s: TrialState) -> float:
+        """m: the floor-plane distance from the running suction's contact to its object's believed centre (0 when
+        the believed scene does not hold it)."""
+        action = s.motion.action
+        obj = next((o for o in s.believed.objects if o.name == action.name), None) if s.believed else None
+        return 0.0 if obj is None else float(np.hypot(obj.center[0] - action.q[0], obj.center[1] - action.q[1]))
 
     def _finish(self, s: TrialState, result: str, entry: dict, frame, hold: bool = False) -> TrialState:
         """The trial ends with ``result``; ``hold``: no motion runs now (the robot holds the last motion's end
