@@ -34,11 +34,12 @@ WIDTH = 0.12
 
 
 def drag_case(scenario, station, tool, mass: float, height: float, depth: float, y: float, dx: float,
-              yaw_deg: float = 0.0) -> dict:
+              yaw_deg: float = 0.0, shape: str = "box") -> dict:
     """Plans and executes one drag; returns what happened (``grip``, ``outcome``: "as predicted", "off",
-    "toppled", "no motion" or the action model's refusal; the end offset in m and yaw/tilt in deg)."""
-    size = (WIDTH, depth, height)
-    box = SceneObject("object_0", "box", size, planar_pose(X, y, height / 2, math.radians(yaw_deg)), mass=mass)
+    "toppled", "no motion" or the action model's refusal; the end offset in m and yaw/tilt in deg). ``shape``
+    "cylinder": a cylinder ``depth`` in diameter instead of the box."""
+    size = (WIDTH, depth, height) if shape == "box" else (depth, depth, height)
+    box = SceneObject("object_0", shape, size, planar_pose(X, y, height / 2, math.radians(yaw_deg)), mass=mass)
     scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (box,), None, 0)
     model = ActionModel(scene.shelf, scene.camera.position, tool)
     found = model.enumerate((box,), pushes=False)
@@ -46,7 +47,8 @@ def drag_case(scenario, station, tool, mass: float, height: float, depth: float,
     if action is None:  # a drag that would twist the box off the cup goes straight out and back in
         action = next((a for a in found.feasible if abs(a.dx) < 1e-9 and abs(a.dz - (y - 0.05)) < 1e-9), None)
     row = dict(mass=mass, height=height, depth=depth, moment=mass * GRAVITY * depth / 2,
-               dx=action.dx if action is not None else None)
+               dx=action.dx if action is not None else None,
+               twist=tool.rules.drag_safety_factor * tool.rules.drag_friction * mass * GRAVITY * depth / 2)
     if action is None:
         return dict(row, grip="-", outcome=(found.rejected[0].reason if found.rejected else "no such placement"))
     row.update(grip=action.grip, seal_z=action.q[2], tool_yaw_deg=math.degrees(action.yaw))
@@ -77,6 +79,11 @@ def main():
     parser.add_argument("--seal-friction", type=float, default=None,
                         help="plan with this drag_friction (a variant: a low value seals high, to show tipping)")
     parser.add_argument("--yaw", type=float, default=0.0, help="the box's yaw about the shelf's z (deg)")
+    parser.add_argument("--shape", choices=("box", "cylinder"), default="box",
+                        help="cylinder: one --depth in diameter (its curved face to the cup)")
+    parser.add_argument("--twist-limit", type=float, default=None,
+                        help="plan with this max_drag_twist (N m; a large value slides every drag across, to "
+                             "measure where the seal slips)")
     args = parser.parse_args()
     scenario = load_scenario("sim_configs/sim_shelf.yaml")
     station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
@@ -84,23 +91,25 @@ def main():
     rules.pop("reach_map", None)  # the planner decides what the arm reaches
     if args.seal_friction is not None:
         rules["drag_friction"] = args.seal_friction
+    if args.twist_limit is not None:
+        rules["max_drag_twist"] = args.twist_limit
     tool = tool_config(scenario, "station", **rules)
     print(f"rules: {rules}\n")
-    print("| mass (kg) | height (m) | held moment (N m) | grip | dx (m) | seal z (cm) | outcome | offset (cm), yaw, "
-          "tilt (deg) |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| mass (kg) | height (m) | held moment (N m) | twist asked (N m) | grip | dx (m) | seal z (cm) | outcome | "
+          "offset (cm), yaw, tilt (deg) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     t0 = time.perf_counter()
     counts = {}
     for h in (float(v) for v in args.heights.split(",")):
         for m in (float(v) for v in args.masses.split(",")):
-            r = drag_case(scenario, station, tool, m, h, args.depth, args.y, args.dx, args.yaw)
+            r = drag_case(scenario, station, tool, m, h, args.depth, args.y, args.dx, args.yaw, args.shape)
             band = "<= 0.4 N m" if r["moment"] <= 0.4 else "> 0.4 N m"
             counts.setdefault((band, r["grip"], r["outcome"]), 0)
             counts[(band, r["grip"], r["outcome"])] += 1
             end = (f"{r['off_cm']:.1f}, {r['dyaw_deg']:.1f}, {r['tilt_deg']:.1f}" if "off_cm" in r else "")
             seal = f"{100 * r['seal_z']:.1f}" if "seal_z" in r else ""
             moved = f"{r['dx']:+.2f}" if r["dx"] is not None else ""
-            print(f"| {m:.2f} | {h:.2f} | {r['moment']:.2f} | {r['grip']} | {moved} | {seal} | {r['outcome']} | {end} |",
+            print(f"| {m:.2f} | {h:.2f} | {r['moment']:.2f} | {r['twist']:.2f} | {r['grip']} | {moved} | {seal} | {r['outcome']} | {end} |",
                   flush=True)
     print("\n| band | grip | outcome | cases |\n|---|---|---|---|")
     for (band, grip, outcome), n in sorted(counts.items()):

@@ -528,6 +528,7 @@ class StepPlanner:
         believed lever); over it, play the trajectory backward from there to its start, switching the suction off
         where it came on back at the seal (``MotionPlanner.put_back`` in a Drake trial). The trajectory after
         ``t_decide_s`` is what follows when the friction is within it."""
+        from slax_drake.shelf.rules import drag_twist_limit
         from slax_drake.systems.drag_weigh import END_MARGIN, SLIDING_TRAVEL, pull_window
 
         rules = self.policy.action_model.tool.rules
@@ -536,13 +537,13 @@ class StepPlanner:
             return None
         obj = next((o for o in belief.known if o.name == action.name), None)
         lever = 0.0 if obj is None else math.hypot(float(obj.center[0]) - action.q[0], float(obj.center[1]) - action.q[1])
+        limit = drag_twist_limit(rules, obj.shape if obj is not None else "cylinder")
         t_base, t0, t1, t_decide = window
         return {"along": "pull", "t_base_s": round(t_base, 4), "t_start_s": round(t0, 4), "t_end_s": round(t1, 4),
                 "t_decide_s": round(t_decide, 4), "sliding_after_m": SLIDING_TRAVEL, "end_margin_m": END_MARGIN,
-                "lever_m": round(lever, 4), "limit_nm": float(rules.max_drag_twist),
+                "lever_m": round(lever, 4), "limit_nm": round(limit, 4),
                 "safety_factor": float(rules.drag_safety_factor),
-                "max_friction_n": round(rules.max_drag_twist / (rules.drag_safety_factor * lever), 3)
-                if lever > 0.0 else None}
+                "max_friction_n": round(limit / (rules.drag_safety_factor * lever), 3) if lever > 0.0 else None}
 
     def _record(self, action, belief, observation, rejected, report, history, timings, reason=None,
                 visibility=None, frame=None) -> dict:

@@ -52,7 +52,7 @@ import numpy as np
 
 from slax_drake.caches import memo
 from slax_drake.shelf.pushing import push_pose
-from slax_drake.shelf.rules import RULES, ToolConfig, ToolGeometry, tool_config_problem
+from slax_drake.shelf.rules import RULES, ToolConfig, ToolGeometry, drag_twist_limit, tool_config_problem
 from slax_drake.shelf.floor import (
     NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
     push_end_hidden,
@@ -786,7 +786,7 @@ class ActionModel:
                 return SuctionLattice.refused(f"{lifted}, and no drag: {limits.refusal}", RefusalKind.SUCTION_MOMENT)
             drag, cz = True, limits.seal_z
             r = t.rules
-            drag_across = r.drag_safety_factor * r.drag_friction * moment <= r.max_drag_twist
+            drag_across = r.drag_safety_factor * r.drag_friction * moment <= drag_twist_limit(r, obj.shape)
         if RULES["max_suction_depth"].refuses(t.rules.max_suction_depth, (cy - (-shelf.depth / 2)) / math.cos(yaw)):
             return SuctionLattice.refused(f"{obj.name}'s face is beyond the tube's reach", RefusalKind.TUBE_DEPTH)
         if self.reach is not None and self.reach.refuses_cup(cx, cy, cz, yaw, REACH_MARGIN):

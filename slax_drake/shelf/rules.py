@@ -383,6 +383,24 @@ class MaxDragTwist(Rule):
 
 
 @register
+class DragTwistFlatFactor(Rule):
+    """How much more twist than ``max_drag_twist`` a drag sealed on a flat face (a box's) may ask of the seal: the
+    cup's lip lies on a flat face all round and holds more than on a curved one. Measured in the Drake station
+    (``research/drag_hold.py --shape box|cylinder --depth 0.16 --dx 0.10 --twist-limit 100``, 8 cm from the contact
+    to the centre, heights 0.12 and 0.20 m): boxes slid across as predicted up to 0.78 N m asked (1.5 kg) and slipped
+    round at 0.88 (1.7 kg); cylinders held 0.62 (1.2 kg) and slipped at 0.67 (1.3 kg): about 1.2 for a flat face.
+    1.0 in both profiles (one limit for every face; ``docs/research/weighing.md``)."""
+
+    name, paper, station = "drag_twist_flat_factor", 1.0, 1.0
+
+
+def drag_twist_limit(rules, shape: str) -> float:
+    """N m: the twist a drag of an object of ``shape`` ("box": a flat face to the cup; "cylinder": a curved one) may
+    ask of the seal (``max_drag_twist``, times ``drag_twist_flat_factor`` for a box)."""
+    return float(rules.max_drag_twist) * (float(rules.drag_twist_flat_factor) if shape == "box" else 1.0)
+
+
+@register
 class DragFriction(Rule):
     """The Coulomb friction coefficient between a dragged object and the shelf floor. Both profiles: 0.44, what
     the Drake station combines from the objects' 0.5 (``physics.object_friction``) and the shelf's 0.4 (Drake's

@@ -25,7 +25,7 @@ import numpy as np
 from slax_drake.shelf.actions import (
     BLADE_CONTACT_CLEARANCE, GRAVITY, ActionModel, Push, Suction, apply_action, object_mass, pushed, weighed_mass,
 )
-from slax_drake.shelf.rules import RULES
+from slax_drake.shelf.rules import RULES, drag_twist_limit
 from slax_drake.scene.footprint import Footprint, clear_of, footprints_clear
 from slax_drake.scene.model import Scene
 from slax_drake.scene.raycast import SceneRaycaster
@@ -243,7 +243,7 @@ def drag_over_twist(obj, action, model: ActionModel) -> float | None:
     if not rules.weigh_drag_pull or not isinstance(action, Suction) or not action.drag or abs(action.dx) < 1e-9:
         return None
     twist = rules.drag_safety_factor * rules.drag_friction * model.held_moment(obj, action.q[:2])
-    return twist if twist > rules.max_drag_twist else None
+    return twist if twist > drag_twist_limit(rules, obj.shape) else None
 
 
 DRAGGED_INSTEAD = "dragged instead"  # the note's part after a put-back lift that became a drag (drag_after_weighing)
@@ -345,7 +345,7 @@ def execute(scene: Scene, action, model: ActionModel, weigh_pull: bool = True) -
         twist = drag_over_twist(obj, action, model) if weigh_pull else None
         if twist is not None:  # felt along the pull (as the Drake trial's planner does) and pushed straight back
             return scene, (f"{PULL_PUT_BACK}: sliding {obj.name} across would twist it {twist:.2f} N m > "
-                           f"{t.rules.max_drag_twist:.2f} N m")
+                           f"{drag_twist_limit(t.rules, obj.shape):.2f} N m")
         return _execute_drag(scene, i, action, model, clear_at)
 
     if isinstance(action, Suction):

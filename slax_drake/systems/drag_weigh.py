@@ -121,23 +121,25 @@ def pull_twist(friction: float, lever: float, safety_factor: float) -> float:
     return float(safety_factor) * float(friction) * float(lever)
 
 
-def pull_record(run: PullRun, lever: float, rules) -> dict:
+def pull_record(run: PullRun, lever: float, rules, shape: str = "cylinder") -> dict:
     """The trial record (the action's ``weighed``, ``along`` "pull") of a drag weighed along its pull: the friction
-    (N; None when the pull was too short to weigh), the samples, the lever (m), the twist and the limit (N m) and
-    whether it is put back (``why`` "twists off the cup") with the mass (kg) that friction implies at the action
-    model's ``drag_friction``."""
+    (N; None when the pull was too short to weigh), the samples, the lever (m), the twist and the limit (N m; for the
+    believed ``shape``'s face: :func:`~slax_drake.shelf.rules.drag_twist_limit`) and whether it is put back (``why``
+    "twists off the cup") with the mass (kg) that friction implies at the action model's ``drag_friction``."""
     from slax_drake.shelf.actions import GRAVITY
+    from slax_drake.shelf.rules import drag_twist_limit
     from slax_drake.systems.guard import PutBack
 
     friction = run.friction
+    limit = drag_twist_limit(rules, shape)
     out = {"along": "pull", "friction_n": None if friction is None else round(friction, 3),
            "samples": len(run.forces), "pull_m": round(run.length, 4), "lever_m": round(float(lever), 4),
-           "limit_nm": float(rules.max_drag_twist), "put_back": False}
+           "limit_nm": round(limit, 4), "put_back": False}
     if friction is None:
         return out
     twist = pull_twist(friction, lever, rules.drag_safety_factor)
     out["twist_nm"] = round(twist, 4)
-    if twist > rules.max_drag_twist:
+    if twist > limit:
         out.update(put_back=True, why=PutBack.TWISTS_OFF.value,
                    mass_kg=round(friction / (rules.drag_friction * GRAVITY), 4))
     return out

@@ -448,7 +448,9 @@ class PlannerSystem(LeafSystem):
             state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, pull=run))
             return
         action = s.motion.action
-        record = pull_record(run, self._believed_lever(s), self.policy.action_model.tool.rules)
+        obj = self._believed_object(s)
+        record = pull_record(run, self._believed_lever(s), self.policy.action_model.tool.rules,
+                             obj.shape if obj is not None else "cylinder")
         after = s
         if record["put_back"]:
             self.tracker.weighed(action.name, record["mass_kg"])
@@ -463,12 +465,17 @@ class PlannerSystem(LeafSystem):
             after, pull=None, log=s.log[:-1] + ({**s.log[-1], "weighed": record},)))
 
     @staticmethod
-    def _believed_lever(s: TrialState) -> float:
+    def _believed_object(s: TrialState):
+        """The running action's object in the believed scene it was planned in (None when that does not hold it)."""
+        name = s.motion.action.name
+        return next((o for o in s.believed.objects if o.name == name), None) if s.believed else None
+
+    @classmethod
+    def _believed_lever(cls, s: TrialState) -> float:
         """m: the floor-plane distance from the running suction's contact to its object's believed centre (0 when
         the believed scene does not hold it)."""
-        action = s.motion.action
-        obj = next((o for o in s.believed.objects if o.name == action.name), None) if s.believed else None
-        return 0.0 if obj is None else float(np.hypot(obj.center[0] - action.q[0], obj.center[1] - action.q[1]))
+        obj, q = cls._believed_object(s), s.motion.action.q
+        return 0.0 if obj is None else float(np.hypot(obj.center[0] - q[0], obj.center[1] - q[1]))
 
     def _finish(self, s: TrialState, result: str, entry: dict, frame, hold: bool = False) -> TrialState:
         """The trial ends with ``result``; ``hold``: no motion runs now (the robot holds the last motion's end

@@ -79,3 +79,21 @@ def test_the_camera_mode_tracker_takes_the_mass_and_the_model_drags_it_straight_
     assert weighed.mass == pytest.approx(2.0)
     drags = [a for a in model.enumerate(again.known, pushes=False).feasible if a.drag]
     assert drags and all(a.dx == 0.0 for a in drags)
+
+
+def test_a_flat_face_may_be_asked_more_twist_under_the_flat_factor(sim_scenario):
+    """``drag_twist_flat_factor``: a box (a flat face to the cup) may be slid across up to that factor times
+    ``max_drag_twist``; a cylinder's curved face keeps the limit."""
+    from slax_drake.shelf.rules import drag_twist_limit
+
+    flat = _model(sim_scenario, weigh_drag_pull=True, drag_twist_flat_factor=1.2)
+    assert drag_twist_limit(flat.tool.rules, "box") == pytest.approx(1.2 * 0.6362)
+    assert drag_twist_limit(flat.tool.rules, "cylinder") == pytest.approx(0.6362)
+    box = _scene(sim_scenario, 1.4)  # 1.5 x 0.44 x 1.4 x 9.81 x 0.08 = 0.73 N m: over 0.64, under 0.76
+    assert drag_over_twist(box.objects[0], _drag(0.15), _model(sim_scenario, weigh_drag_pull=True)) is not None
+    assert drag_over_twist(box.objects[0], _drag(0.15), flat) is None
+
+    def sideways(model):
+        return [a for a in model.enumerate(box.objects, pushes=False).feasible if a.drag and a.dx != 0.0]
+
+    assert sideways(flat) and not sideways(_model(sim_scenario))

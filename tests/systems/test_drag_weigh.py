@@ -93,6 +93,7 @@ class _Rules:
     max_drag_twist = 0.6362
     drag_safety_factor = 1.5
     drag_friction = 0.44
+    drag_twist_flat_factor = 1.2
 
 
 def test_the_verdict_is_the_action_models_twist_check_with_the_measured_force():
@@ -104,3 +105,10 @@ def test_the_verdict_is_the_action_models_twist_check_with_the_measured_force():
     assert not under["put_back"] and "mass_kg" not in under and under["twist_nm"] == pytest.approx(0.48)
     short = pull_record(_weigh(8.5, t_end=2.1), 0.08, _Rules())
     assert short["friction_n"] is None and not short["put_back"] and "twist_nm" not in short
+
+
+def test_a_box_s_flat_face_is_held_to_the_flat_factor_s_limit():
+    run = _weigh(5.8)  # 1.5 x 5.8 x 0.08 = 0.70 N m: over a curved face's 0.64, under a flat one's 0.76
+    assert pull_record(run, 0.08, _Rules(), "cylinder")["put_back"]
+    box = pull_record(run, 0.08, _Rules(), "box")
+    assert not box["put_back"] and box["limit_nm"] == pytest.approx(1.2 * 0.6362, abs=1e-4)
