@@ -237,8 +237,9 @@ PULL_PUT_BACK = "weighed along the pull and pushed back"  # the note that opens 
 def drag_over_twist(obj, action, model: ActionModel) -> float | None:
     """The twist (N m) a drag ``action`` that slides the true object ``obj`` across (d_x != 0) asks of the seal,
     ``drag_safety_factor`` x ``drag_friction`` x its true weight x the lever (the held moment: :meth:`held_moment`),
-    when the ``weigh_drag_pull`` rule is on and that twist exceeds ``max_drag_twist`` (what the arm feels along the
-    pull and pushes back; :mod:`slax_drake.systems.drag_weigh`), else None."""
+    when the ``weigh_drag_pull`` rule is on and that twist exceeds its face's limit (``max_drag_twist``, times
+    ``drag_twist_flat_factor`` for a box: :func:`~slax_drake.shelf.rules.drag_twist_limit`; what the arm feels along
+    the pull and pushes back, :mod:`slax_drake.systems.drag_weigh`), else None."""
     rules = model.tool.rules
     if not rules.weigh_drag_pull or not isinstance(action, Suction) or not action.drag or abs(action.dx) < 1e-9:
         return None
