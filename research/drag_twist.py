@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -30,8 +29,9 @@ from slax_drake.scene.camera import Camera
 from slax_drake.scene.mass import quantile_mass
 from slax_drake.scene.model import planar_pose
 from slax_drake.scene.sampling import shelf_of
-from slax_drake.shelf.actions import GRAVITY, ActionModel
+from slax_drake.shelf.actions import GRAVITY, ActionModel, contact_lever
 from slax_drake.shelf.tool import tool_config
+from slax_drake.systems.drag_weigh import is_pull_record
 
 
 def main(argv=None) -> int:
@@ -74,10 +74,10 @@ def main(argv=None) -> int:
             contact = model.suction_contact(obj)
             if contact is None:
                 continue
-            lever = math.hypot(obj.center[0] - contact[0], obj.center[1] - contact[1])
+            lever = contact_lever(obj, contact)
             twist = [mu * m * GRAVITY * lever for m in
                      [obj.mass] + [quantile_mass(obj.shape, obj.size, scenario.physics, q) for q in quantiles]]
-            weighed = a.get("weighed") if (a.get("weighed") or {}).get("along") == "pull" else None
+            weighed = a.get("weighed") if is_pull_record(a.get("weighed")) else None
             rows.append({"trial": path.stem, "step": k + 1, "object": obj.name, "shape": obj.shape, "mass": obj.mass,
                          "dx": a["dx"], "held": not a.get("mismatch"), "mismatch": a.get("mismatch"), "twist": twist,
                          "pull": weighed, "true_friction": rules.drag_friction * obj.mass * GRAVITY, "lever": lever})

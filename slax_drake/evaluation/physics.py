@@ -41,6 +41,7 @@ from slax_drake.errors import PhysicsBenchmarkError
 from slax_drake.io import figure_png, plural, write_bytes_atomic, write_text_atomic
 from slax_drake.policies.protocol import Reversal
 from slax_drake.policies.trial_memory import last_move_by_axis
+from slax_drake.systems.drag_weigh import is_pull_record
 from slax_drake.systems.guard import dragged_after_weighing
 from slax_drake.systems.trial_summary import TARGET_MOVED
 
@@ -445,8 +446,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
         if "stall_step" in d:  # the policy's search stalled at this step (None: never); actions from it on
             stalled = d["stall_step"]
             summary["trials"][-1]["stall"] = [stalled, 0 if stalled is None else len(d["actions"][stalled:])]
-        lifts = [a for a in d["actions"] if "weighed" in a and a["weighed"].get("along") != "pull"]
-        pulls = [a["weighed"] for a in d["actions"] if "weighed" in a and a["weighed"].get("along") == "pull"]
+        lifts = [a for a in d["actions"] if "weighed" in a and not is_pull_record(a["weighed"])]
+        pulls = [a["weighed"] for a in d["actions"] if is_pull_record(a.get("weighed"))]
         if lifts:  # lifts weighed at the cup, how many were put back, and of those how many were then dragged to the
             # same placement (drag_after_weighing)
             summary["trials"][-1]["weighed"] = [len(lifts), sum(1 for a in lifts if a["weighed"].get("put_back")),

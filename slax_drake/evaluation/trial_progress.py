@@ -112,12 +112,13 @@ class DecisionPrinter:
 
     def _close(self, poses: dict | None, lost) -> None:
         from slax_drake.evaluation.physics import action_matches
+        from slax_drake.systems.drag_weigh import is_pull_record
         from slax_drake.systems.guard import dragged_after_weighing
 
         entry, snap = self.open
         self.open = None
         weighed = entry.get("weighed")
-        if weighed and weighed.get("put_back") and weighed.get("along") == "pull":  # a drag weighed along its pull
+        if is_pull_record(weighed) and weighed.get("put_back"):  # a drag weighed along its pull
             self._write(f"weighed along the pull: {weighed['friction_n']:.1f} N of friction, a twist of "
                         f"{weighed['twist_nm']:.2f} N m across > {weighed['limit_nm']:.2f}, {weighed['why']}: "
                         "pushed back\n")

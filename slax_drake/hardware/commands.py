@@ -366,8 +366,10 @@ def run_plan_step(args: argparse.Namespace) -> int:
               f"the camera cannot see: run it as a guarded move that stops when the push meets more than "
               f"{guarded['stop_force_n']:.1f} N{drag}, then releases and backs out "
               "(metadata.plan_step.guarded_push_in)")
+    from slax_drake.systems.drag_weigh import is_pull_record
+
     weigh = result.trajectory.metadata["plan_step"].get("weigh")
-    if weigh and weigh.get("along") == "pull":
+    if is_pull_record(weigh):
         limit = (f"over {weigh['max_friction_n']:.1f} N" if weigh["max_friction_n"] is not None
                  else "(no lever believed: never)")
         print(f"WEIGH: from {weigh['t_start_s']:.2f} to {weigh['t_end_s']:.2f} s the cup pulls its object out sliding: "

@@ -529,17 +529,16 @@ class StepPlanner:
         where it came on back at the seal (``MotionPlanner.put_back`` in a Drake trial). The trajectory after
         ``t_decide_s`` is what follows when the friction is within it."""
         from slax_drake.shelf.rules import drag_twist_limit
-        from slax_drake.systems.drag_weigh import END_MARGIN, SLIDING_TRAVEL, pull_window
+        from slax_drake.systems.drag_weigh import ALONG_PULL, END_MARGIN, SLIDING_TRAVEL, believed_pull, pull_window
 
         rules = self.policy.action_model.tool.rules
         window = pull_window(motion) if rules.weigh_drag_pull else None
         if window is None:
             return None
-        obj = next((o for o in belief.known if o.name == action.name), None)
-        lever = 0.0 if obj is None else math.hypot(float(obj.center[0]) - action.q[0], float(obj.center[1]) - action.q[1])
-        limit = drag_twist_limit(rules, obj.shape if obj is not None else "cylinder")
+        lever, shape = believed_pull(next((o for o in belief.known if o.name == action.name), None), action.q[:2])
+        limit = drag_twist_limit(rules, shape)
         t_base, t0, t1, t_decide = window
-        return {"along": "pull", "t_base_s": round(t_base, 4), "t_start_s": round(t0, 4), "t_end_s": round(t1, 4),
+        return {"along": ALONG_PULL, "t_base_s": round(t_base, 4), "t_start_s": round(t0, 4), "t_end_s": round(t1, 4),
                 "t_decide_s": round(t_decide, 4), "sliding_after_m": SLIDING_TRAVEL, "end_margin_m": END_MARGIN,
                 "lever_m": round(lever, 4), "limit_nm": round(limit, 4),
                 "safety_factor": float(rules.drag_safety_factor),

@@ -245,6 +245,12 @@ def apply_action(objects: tuple[SceneObject, ...], action) -> tuple[SceneObject,
     return tuple(out)
 
 
+def contact_lever(obj: SceneObject, contact_xy) -> float:
+    """m: the floor-plane distance from a cup's contact ``contact_xy`` (S) to ``obj``'s centre, the lever of the
+    object's weight off the cup (:meth:`ActionModel.held_moment`) and of the floor's friction on a drag."""
+    return math.hypot(float(obj.center[0]) - float(contact_xy[0]), float(obj.center[1]) - float(contact_xy[1]))
+
+
 class ActionModel:
     """Enumerates feasible pushes and suctions for a set of known objects (plus known immovable obstacles)."""
 
@@ -849,9 +855,7 @@ class ActionModel:
     def held_moment(self, obj: SceneObject, contact_xy) -> float:
         """N m: the moment ``obj``'s weight (:meth:`planning_mass`) hangs off a cup sealed at ``contact_xy`` (S,
         m): the weight times the horizontal distance from the contact to the object's centre."""
-        mass = self.planning_mass(obj)
-        return mass * GRAVITY * math.hypot(float(obj.center[0]) - float(contact_xy[0]),
-                                           float(obj.center[1]) - float(contact_xy[1]))
+        return self.planning_mass(obj) * GRAVITY * contact_lever(obj, contact_xy)
 
     def drag_limits(self, obj: SceneObject, seal_z: float) -> "DragLimits":
         """The limits of dragging ``obj`` on the shelf floor (the ``drag_grasp`` rule), the cup sealing on its

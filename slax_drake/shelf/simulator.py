@@ -23,7 +23,8 @@ import time
 import numpy as np
 
 from slax_drake.shelf.actions import (
-    BLADE_CONTACT_CLEARANCE, GRAVITY, ActionModel, Push, Suction, apply_action, object_mass, pushed, weighed_mass,
+    BLADE_CONTACT_CLEARANCE, GRAVITY, ActionModel, Push, Suction, apply_action, contact_lever, object_mass, pushed,
+    weighed_mass,
 )
 from slax_drake.shelf.rules import RULES, drag_twist_limit
 from slax_drake.scene.footprint import Footprint, clear_of, footprints_clear
@@ -133,8 +134,7 @@ class CameraObserver:
         Drake trial's planner records what its arm weighed."""
         hyp = next(o for o in hypotheses if o.name == action.name)
         weight = object_mass(true_object, model.tool.physics.object_density, model.tool.physics) * GRAVITY
-        lever = math.hypot(float(hyp.center[0]) - action.q[0], float(hyp.center[1]) - action.q[1])
-        mass = weighed_mass(weight, model.held_moment(true_object, action.q[:2]), lever)
+        mass = weighed_mass(weight, model.held_moment(true_object, action.q[:2]), contact_lever(hyp, action.q[:2]))
         if self.tracker is not None:
             self.tracker.weighed(action.name, mass)
         return mass
@@ -504,13 +504,12 @@ def run_trial(scene: Scene, policy, horizon: int, threshold: float = 0.80, sucti
             action = on_true_object(action, observation.known, scene, true_name)
         true_object = next((o for o in scene.objects if o.name == action.name), None)
         mass = None  # kg: what the arm weighed of a lift it puts back (camera mode)
-        if names is not None and true_object is not None and lift_over_limit(true_object, action,
-                                                                              policy.action_model) is not None:
-            mass = observer.weighed(chosen, observation.known, true_object, policy.action_model)  # its track's mass
+        if names is not None and true_object is not None:  # what the arm weighs goes on the object's track
+            if lift_over_limit(true_object, action, policy.action_model) is not None:  # execute puts it back
+                mass = observer.weighed(chosen, observation.known, true_object, policy.action_model)
+            elif drag_over_twist(true_object, action, policy.action_model) is not None:  # execute pushes it back
+                observer.weighed_pull(chosen, true_object, policy.action_model)
         scene, note = execute(scene, action, policy.action_model)
-        if names is not None and true_object is not None and drag_over_twist(true_object, action,
-                                                                              policy.action_model) is not None:
-            observer.weighed_pull(chosen, true_object, policy.action_model)  # execute pushes it back
         if mass is not None:  # execute put it back (the same lift_over_limit), note WEIGHED_PUT_BACK
             scene, note = drag_after_weighing(scene, note, policy.action_model, observation.known, chosen, mass,
                                               true_name)

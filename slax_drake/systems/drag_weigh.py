@@ -35,6 +35,7 @@ import numpy as np
 
 from slax_drake.systems.guard import ContactMonitor, planned_acceleration
 
+ALONG_PULL = "pull"  # the ``along`` of a drag's ``weighed`` record (a lift's has none)
 SLIDING_TRAVEL = 0.01  # m the cup pulls before its samples count (the object has broken loose and slides)
 END_MARGIN = 0.005  # m before the pull's planned end after which samples no longer count (the arm slows to rest)
 MIN_SAMPLES = 3  # samples the friction needs; fewer: the pull weighs nothing
@@ -59,6 +60,20 @@ class PullRun:
     def friction(self) -> float | None:
         """N: the median of the sampled forces, None under ``MIN_SAMPLES``."""
         return float(np.median(self.forces)) if len(self.forces) >= MIN_SAMPLES else None
+
+
+def is_pull_record(weighed) -> bool:
+    """Whether a trial record's ``weighed`` (a dict, or None) is a drag's weighing along its pull, not a lift's."""
+    return isinstance(weighed, dict) and weighed.get("along") == ALONG_PULL
+
+
+def believed_pull(obj, contact_xy) -> tuple[float, str]:
+    """(lever m, face shape) of a drag whose cup seals at ``contact_xy`` (S) on the believed object ``obj``: the
+    contact's distance to its centre and its shape; for an object the believed scene does not hold (None), no lever
+    and a curved face (the stricter limit: :func:`~slax_drake.shelf.rules.drag_twist_limit`)."""
+    from slax_drake.shelf.actions import contact_lever
+
+    return (0.0, "cylinder") if obj is None else (contact_lever(obj, contact_xy), obj.shape)
 
 
 def pull_window(motion) -> tuple[float, float, float, float] | None:
@@ -132,7 +147,7 @@ def pull_record(run: PullRun, lever: float, rules, shape: str = "cylinder") -> d
 
     friction = run.friction
     limit = drag_twist_limit(rules, shape)
-    out = {"along": "pull", "friction_n": None if friction is None else round(friction, 3),
+    out = {"along": ALONG_PULL, "friction_n": None if friction is None else round(friction, 3),
            "samples": len(run.forces), "pull_m": round(run.length, 4), "lever_m": round(float(lever), 4),
            "limit_nm": round(limit, 4), "put_back": False}
     if friction is None:

@@ -179,8 +179,10 @@ def least_lever(hypothesis, contact_xy) -> float:
     be, as far as the camera tells: a cylinder's fitted centre; a box's centre with its depth cut to the part the
     camera measured (:class:`~slax_drake.perception.estimator.Uncertainty` ``depth``), its front face kept; 0 when
     unknown."""
+    from slax_drake.shelf.actions import contact_lever
+
     obj = getattr(hypothesis, "object", hypothesis)
-    lever = float(np.hypot(obj.center[0] - contact_xy[0], obj.center[1] - contact_xy[1]))
+    lever = contact_lever(obj, contact_xy)
     uncertainty = getattr(hypothesis, "uncertainty", None)
     if obj.shape == "cylinder":
         return lever

@@ -58,12 +58,12 @@ from slax_drake.perception.belief import ObservedBelief
 from slax_drake.io import json_safe
 from slax_drake.planning.planner import MotionPlanner
 from slax_drake.policies.protocol import NO_REVEALING_PLAN
-from slax_drake.shelf.actions import GRAVITY, Push, Suction
+from slax_drake.shelf.actions import GRAVITY, Push, Suction, contact_lever
 from slax_drake.shelf.distribution import support
 from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
-from slax_drake.systems.drag_weigh import observe_pull, pull_record, start_pull
+from slax_drake.systems.drag_weigh import believed_pull, observe_pull, pull_record, start_pull
 from slax_drake.systems.guard import PutBack, guard_record, least_lever, push_in_forces, weigh_time, weigh_verdict
 
 MAX_PLAN_ATTEMPTS = 25
@@ -448,9 +448,8 @@ class PlannerSystem(LeafSystem):
             state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, pull=run))
             return
         action = s.motion.action
-        obj = self._believed_object(s)
-        record = pull_record(run, self._believed_lever(s), self.policy.action_model.tool.rules,
-                             obj.shape if obj is not None else "cylinder")
+        lever, shape = believed_pull(self._believed_object(s), action.q[:2])
+        record = pull_record(run, lever, self.policy.action_model.tool.rules, shape)
         after = s
         if record["put_back"]:
             self.tracker.weighed(action.name, record["mass_kg"])
@@ -474,8 +473,8 @@ class PlannerSystem(LeafSystem):
     def _believed_lever(cls, s: TrialState) -> float:
         """m: the floor-plane distance from the running suction's contact to its object's believed centre (0 when
         the believed scene does not hold it)."""
-        obj, q = cls._believed_object(s), s.motion.action.q
-        return 0.0 if obj is None else float(np.hypot(obj.center[0] - q[0], obj.center[1] - q[1]))
+        obj = cls._believed_object(s)
+        return 0.0 if obj is None else contact_lever(obj, s.motion.action.q[:2])
 
     def _finish(self, s: TrialState, result: str, entry: dict, frame, hold: bool = False) -> TrialState:
         """The trial ends with ``result``; ``hold``: no motion runs now (the robot holds the last motion's end
