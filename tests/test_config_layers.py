@@ -24,13 +24,22 @@ FLAT_DIGESTS = {
 }
 
 
+# What was changed on purpose since: the simulated shelves draw household masses (issue 27's decision on masses for
+# Drake trials); table1.yaml keeps the density model by naming it, so the Table I protocol is unchanged.
+MASS_MODEL_SINCE = {"sim_configs/sim_shelf.yaml": "household", "sim_configs/physical_shelf.yaml": "household"}
+
+
 def digest(scenario: Scenario) -> str:
     return hashlib.sha256(json.dumps(dataclasses.asdict(scenario), sort_keys=True).encode()).hexdigest()
 
 
 @pytest.mark.parametrize("path", sorted(FLAT_DIGESTS))
 def test_each_shipped_scenario_loads_to_what_it_loaded_before(path):
-    assert digest(load_scenario(path)) == FLAT_DIGESTS[path]
+    scenario = load_scenario(path)
+    if path in MASS_MODEL_SINCE:
+        assert scenario.physics.mass_model == MASS_MODEL_SINCE[path]
+        scenario = dataclasses.replace(scenario, physics=dataclasses.replace(scenario.physics, mass_model="density"))
+    assert digest(scenario) == FLAT_DIGESTS[path]
 
 
 def test_the_shipped_scenarios_are_covered():

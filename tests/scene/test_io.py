@@ -30,7 +30,9 @@ def test_round_trip(tmp_path, sim_scenario):
     assert data["schema_version"] == 1
     assert set(data["shelf"]) >= {"width", "height", "depth"}
     assert set(data["camera"]) >= {"X_SC", "width", "height", "fx", "fy", "cx", "cy"}
-    assert set(data["objects"][0]) == {"name", "shape", "size", "X_SO"}
+    # the default scenario draws household masses (kg), recorded per object
+    assert set(data["objects"][0]) == {"name", "shape", "size", "X_SO", "mass"}
+    assert all(0.0 < o["mass"] < 10.0 for o in data["objects"])
     assert set(data["target"]) == {"size", "X_ST"}
     assert np.asarray(data["camera"]["X_SC"]).shape == (4, 4)
 

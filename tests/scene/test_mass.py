@@ -1,5 +1,5 @@
-"""Object masses (issue 17 item 2): the density model stays the default (earlier runs reproducible); the
-household model draws each object's mass from its shape's volume class, deterministically per scene seed, kept in
+"""Object masses (issue 17 item 2; issue 27's decision): the density model is the dataclass's default and the
+Table I protocol's (earlier runs reproducible); the shipped simulated shelf uses the household model, which draws each object's mass from its shape's volume class, deterministically per scene seed, kept in
 scene JSON, weighed by the action model and the Drake world alike."""
 
 import dataclasses
@@ -18,25 +18,28 @@ from slax_drake.scene.sampling import sample_scene
 
 @pytest.fixture(scope="module")
 def household(sim_scenario):
-    return dataclasses.replace(sim_scenario, physics=dataclasses.replace(sim_scenario.physics, mass_model="household"))
+    assert sim_scenario.physics.mass_model == "household"  # the shipped simulated shelf's default
+    return sim_scenario
 
 
-def test_density_model_is_the_default_and_leaves_scenes_as_they_were(sim_scenario):
-    scene = sample_scene(sim_scenario, 6, seed=11)
-    assert sim_scenario.physics.mass_model == "density"
+def test_density_model_is_the_table1_default_and_leaves_scenes_as_they_were(paper, density_scenario):
+    from slax_drake.config import PhysicsConfig
+
+    assert PhysicsConfig().mass_model == "density" and paper.physics.mass_model == "density"
+    scene = sample_scene(density_scenario, 6, seed=11)
     assert all(o.mass is None for o in scene.objects)
     assert all("mass" not in d for d in scene_to_dict(scene)["objects"])
     o = scene.objects[0]
     assert object_mass(o, 400.0) == pytest.approx(400.0 * volume(o.shape, o.size))
 
 
-def test_household_masses_are_deterministic_per_seed_and_within_their_class(sim_scenario, household):
+def test_household_masses_are_deterministic_per_seed_and_within_their_class(density_scenario, household):
     a, b = sample_scene(household, 8, seed=21), sample_scene(household, 8, seed=21)
     c = sample_scene(household, 8, seed=22)
     assert [o.mass for o in a.objects] == [o.mass for o in b.objects]
     assert [o.mass for o in a.objects] != [o.mass for o in c.objects[:8]]
     # the geometry is the density model's scene for that seed: the masses come from a stream of their own
-    plain = sample_scene(sim_scenario, 8, seed=21)
+    plain = sample_scene(density_scenario, 8, seed=21)
     assert [(o.shape, o.size, o.X_SO.tolist()) for o in a.objects] == \
         [(o.shape, o.size, o.X_SO.tolist()) for o in plain.objects]
     for o in a.objects:

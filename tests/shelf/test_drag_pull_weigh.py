@@ -62,10 +62,10 @@ def test_a_straight_drag_and_a_drag_without_the_rule_are_not_weighed(sim_scenari
     assert note == "" and after.objects[0].center[0] == pytest.approx(0.15)
 
 
-def test_the_camera_mode_tracker_takes_the_mass_and_the_model_drags_it_straight_only(sim_scenario):
+def test_the_camera_mode_tracker_takes_the_mass_and_the_model_drags_it_straight_only(density_scenario):
     # a lower lift limit, so that the camera's hypothesis (its class's density mass, 0.5 kg) is dragged, not lifted
-    model = _model(sim_scenario, weigh_drag_pull=True, max_suction_moment=0.2)
-    scene = _scene(sim_scenario, 2.0)
+    model = _model(density_scenario, weigh_drag_pull=True, max_suction_moment=0.2)
+    scene = _scene(density_scenario, 2.0)
     observer = CameraObserver(scene.shelf, scene.camera, (0.05, 0.05, 0.10), source="depth", width=160)
     observer.start()
     observation, _ = observer.observe(scene)
