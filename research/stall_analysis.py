@@ -21,12 +21,16 @@ target read the scene's hidden state.
 
 ``--census FOLDER``: no trial is run; the trial files of a ``slax-drake benchmark`` folder (``--policy``, default
 slax-belief, which keeps a decision log) are read instead: per density, the trials that stalled, those revealed
-after their stall, and the actions taken from the stall on.
+after their stall, and the actions taken from the stall on. A ``--physics`` results folder (its ``physics.json``,
+as ``docs/results`` keeps it) is read for its Drake trials instead, with the nothing-lost reveals, and what a
+policy that stops at its stall (``stuck_select`` "stop", variant ``slax-belief-stall-stop``) would have done: it
+decides as the policy did up to the stall, so its trials are these trials cut there.
 
     python research/stall_analysis.py --trials 4:0-19,6:0-19,8:0-19,10:0-19 --config sim_configs/table1_household.yaml \\
         --profile station --tool-rule max_drag_pull=42.412 ... [--observation camera [--full-resolution]]
         [--oracle-seconds 5] [--variants] [--seed 0]
     python research/stall_analysis.py --census RESULTS_FOLDER [--policy slax-belief]
+    python research/stall_analysis.py --census docs/results/physics_belief_household_20580ad
 """
 
 import argparse
@@ -153,11 +157,57 @@ def oracle_from(scenario, scene, left: int, density: int, rules: dict, profile: 
                      suction_cost=scenario.protocol.suction_cost, density=density)
 
 
+def census_physics(path: Path, policy: str) -> int:
+    """``--census`` of a physics results folder's ``physics.json`` (``path``): the Drake trials' stalls (each
+    record's ``stall``: [the step of the stall or None, the actions from it on]) and the same trials cut at their
+    stall (see the module docstring)."""
+    import json
+
+    try:
+        trials = [t for t in json.loads(path.read_text())["trials"] if t["policy"] == policy]
+        records = [(int(t["density"]), t["stall"][0], int(t["stall"][1]), bool(t["drake_success"]),
+                    bool(t["drake_clean_success"]), int(t["drake_steps"])) for t in trials]
+    except (OSError, ValueError, KeyError, TypeError, IndexError) as e:
+        print(f"error: {path}: unreadable physics record ({type(e).__name__}: {e})", file=sys.stderr)
+        return 2
+    if not records:
+        print(f"error: {path}: no Drake trials of {policy}", file=sys.stderr)
+        return 2
+    rows = collections.defaultdict(collections.Counter)
+    for density, stalled_at, after, success, clean, steps in records:
+        stalled = stalled_at is not None
+        for key in (density, "all"):
+            row = rows[key]
+            row["trials"] += 1
+            row["revealed"] += success
+            row["nothing lost"] += clean
+            row["actions"] += steps
+            row["stalled"] += stalled
+            row["revealed after the stall"] += stalled and success
+            row["nothing lost after the stall"] += stalled and clean
+            row["actions from the stall on"] += after if stalled else 0
+    print(f"{path} ({policy}, Drake): per density, trials / revealed / nothing lost / stalled / revealed after the "
+          "stall (nothing lost) / actions / actions from the stall on; stopped at the stall: revealed / nothing lost "
+          "/ actions")
+    for key in sorted(rows, key=lambda k: (k == "all", k if k != "all" else 0)):
+        r = rows[key]
+        print(f"  {key}: {r['trials']} / {r['revealed']} / {r['nothing lost']} / {r['stalled']} / "
+              f"{r['revealed after the stall']} ({r['nothing lost after the stall']}) / {r['actions']} / "
+              f"{r['actions from the stall on']}; stopped: {r['revealed'] - r['revealed after the stall']} / "
+              f"{r['nothing lost'] - r['nothing lost after the stall']} / "
+              f"{r['actions'] - r['actions from the stall on']}")
+    return 0
+
+
 def census(folder: Path, policy: str) -> int:
-    """``--census``: the stalls of a benchmark folder's trial files (see the module docstring)."""
+    """``--census``: the stalls of a benchmark folder's trial files, or of a physics folder's ``physics.json``
+    (see the module docstring)."""
     import json
 
     from slax_drake.evaluation.physics import stall_step
+
+    if (folder / "physics.json").is_file():
+        return census_physics(folder / "physics.json", policy)
 
     files = sorted((folder / "trials" / policy).glob("*.json"))
     if not files:

@@ -287,6 +287,32 @@ def test_stall_analysis_census_counts_stalls_and_the_actions_from_them_on(tmp_pa
     assert capsys.readouterr().err.startswith(f"error: {trials / '10_0002.json'}: unreadable trial file")
 
 
+def test_stall_analysis_census_of_a_physics_folder_cuts_its_trials_at_the_stall(tmp_path, capsys):
+    def record(density, stall, success, clean, steps, policy="slax-belief"):
+        return {"policy": policy, "density": density, "stall": stall, "drake_success": success,
+                "drake_clean_success": clean, "drake_steps": steps}
+
+    run = tmp_path / "physics_run"
+    run.mkdir()
+    trials = [record(4, [None, 0], True, True, 2),  # never stalled: kept as it was
+              record(4, [1, 3], True, True, 4),  # revealed after its stall: stopping there loses it
+              record(6, [0, 5], False, False, 5),  # stalled at its first decision, lost an object
+              record(6, [None, 0], True, False, 3),  # revealed with an object lost
+              record(6, [2, 1], True, True, 3, policy="bluction-dar")]
+    (run / "physics.json").write_text(json.dumps({"meta": {}, "policies": {}, "trials": trials}))
+    module = script("stall_analysis")
+    assert module.main(["--census", str(run)]) == 0
+    out = capsys.readouterr().out
+    assert "  4: 2 / 2 / 2 / 1 / 1 (1) / 6 / 3; stopped: 1 / 1 / 3\n" in out
+    assert "  6: 2 / 1 / 0 / 1 / 0 (0) / 8 / 5; stopped: 1 / 0 / 3\n" in out
+    assert "  all: 4 / 3 / 2 / 2 / 1 (1) / 14 / 8; stopped: 2 / 1 / 6\n" in out
+    assert module.main(["--census", str(run), "--policy", "der-3"]) == 2
+    assert "no Drake trials of der-3" in capsys.readouterr().err
+    (run / "physics.json").write_text(json.dumps({"trials": [{"policy": "slax-belief"}]}))
+    assert module.main(["--census", str(run)]) == 2
+    assert capsys.readouterr().err.startswith(f"error: {run / 'physics.json'}: unreadable physics record")
+
+
 @pytest.mark.parametrize("argv", [[], ["--trials", "4:x"], ["--trials", "4:0", "--config", "nope.yaml"],
                                   ["--census", "nowhere"]])
 def test_stall_analysis_refuses_bad_arguments(capsys, argv):
