@@ -23,7 +23,7 @@ def register(subparsers) -> None:
         "are the trial's own records; with --rate they are resampled (quintic positions, linear accelerations). "
         "--format mcap writes a ROS 2 bag folder (MCAP storage) with /joint_states, /planned_trajectory, "
         "/suction_command, /tf, /tf_static and the depth camera per decision, stamped in simulation time.")
-    p.add_argument("trial", help="trial.json written by 'slax-drake trial'")
+    p.add_argument("trial", help="trial.json written by 'slax-drake trial' (or the trial's folder)")
     p.add_argument("--format", choices=tuple(FORMATS) + ("mcap",), default=None,
                    help="ros-json, ros-yaml (FollowJointTrajectory goals), csv (default: from --out's extension), "
                    "or mcap (a ROS 2 bag folder)")

@@ -46,7 +46,11 @@ TIME_EPS = 1e-6  # s: trial.json rounds its times to 1e-6
 
 
 def read_trial(path: str | Path) -> dict:
+    """The trial record ``path`` (a trial.json, or the folder 'slax-drake trial' wrote it to); a missing, corrupt or
+    foreign file is a TrialFileError."""
     path = Path(path)
+    if path.is_dir():
+        path = path / "trial.json"
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:

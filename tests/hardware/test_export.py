@@ -147,6 +147,14 @@ def test_cli_export_and_bad_input_exit_codes(trial, tmp_path, capsys):
         out = tmp_path / f"t.{ext}"
         assert main(["export", str(src), "--format", fmt, "--rate", "100", "--scene", str(scene), "--out", str(out)]) == 0
         assert len(load_trajectory(out).motions) == 2
+    # the trial's folder names its trial.json, as for view-trial
+    assert main(["export", str(tmp_path), "--scene", str(scene), "--out", str(tmp_path / "f.json")]) == 0
+    assert len(load_trajectory(tmp_path / "f.json").motions) == 2
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    capsys.readouterr()
+    assert main(["export", str(empty), "--out", str(tmp_path / "e.json")]) == 2
+    assert f"{empty / 'trial.json'}: no such file" in capsys.readouterr().err
     src.write_text(json.dumps(data)[:-200])
     capsys.readouterr()
     assert main(["export", str(src), "--out", str(tmp_path / "u.json")]) == 2
