@@ -277,13 +277,13 @@ def test_the_shelf_simulator_beside_can_see_through_its_camera_and_the_report_na
     # as the CLI makes it: the shelf simulator's frames rendered at the camera's resolution, as the station's
     summary = run_physics_benchmark(CONFIG, out=tmp_path, **{**TINY, "shelf_camera": CameraMode(full_resolution=True)})
     assert summary["meta"]["shelf_observation"] == "camera" and summary["meta"]["shelf_full_resolution"] is True
-    assert summary["meta"]["mass_model"] == "density"
+    assert summary["meta"]["mass_model"] == "household"  # the shipped simulated shelf's
     settings = json.loads((tmp_path / "physics_settings.json").read_text())
     assert settings["observation"] == "camera" and settings["camera"] == {"segmentation": "labels",
                                                                           "sensor_noise": False,
                                                                           "full_resolution": True}
     text = (tmp_path / "physics.md").read_text()
-    assert "with what its rendered camera sees" in text and "Object masses: objects.density x volume" in text
+    assert "with what its rendered camera sees" in text and "Object masses: household goods' masses" in text
     assert "resampled as the station's" in text
 
 

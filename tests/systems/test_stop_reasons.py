@@ -63,10 +63,12 @@ def test_summary_says_the_policy_stopped_when_no_plan_reveals_the_target():
 
 @pytest.mark.slow
 def test_trial_ending_with_no_feasible_action_records_its_reasons(tmp_path):
-    """The default station, six objects, seed 2: the policy has no feasible action at its first decision."""
+    """The default station, six objects, seed 2, the density masses (tests/scenarios): the policy has no feasible
+    action at its first decision."""
     from slax_drake.cli import main
 
-    assert main(["trial", "--objects", "6", "--seed", "2", "--out", str(tmp_path), "--quiet"]) == 0
+    assert main(["trial", "--config", "tests/scenarios/sim_shelf_density.yaml", "--objects", "6", "--seed", "2",
+                 "--out", str(tmp_path), "--quiet"]) == 0
     import json
 
     data = json.loads((tmp_path / "trial.json").read_text())
