@@ -110,6 +110,8 @@ class CheckReport:
                 else f"touches nothing ({entry.get('association')})"
             for name, m in (entry.get("guarded_met") or {}).items():  # pushed ahead of a guarded placement
                 what += f"; it pushed {name} {m['pushed_m'] * 1000:.0f} mm ahead from t = {m['time_s']:.3f} s"
+            for name, depth in (entry.get("seal_pressed") or {}).items():  # the seal's press against a neighbour
+                what += f"; the seal pressed it {depth * 1000:.1f} mm against {name}"
             offset = entry.get("objects_before_offset_m")
             if offset is not None and math.isfinite(offset) and offset > OBJECTS_BEFORE_NOTE:
                 what += f"; the file's objects_before lie up to {offset * 1000:.0f} mm from the checked world"

@@ -46,7 +46,13 @@ The object an action may touch (``touched`` below) rests on geometry:
   touching, which the cup's seal presses against each other again when the same object is taken next); the
   objects it met are reported (``guarded_met``). A
   plan-step file's guarded push-in has no stop: its first contact is where the guard stops it
-  (:func:`slax_drake.hardware.check._guarded_stop`).
+  (:func:`slax_drake.hardware.check._guarded_stop`);
+- the seal's press: the carry starts ``CUP_REACH`` before the cup meets the object, and the cup then presses on to
+  seal. An object the carried one stands within ``CUP_PRESS`` of when the cup takes it (a neighbour a guarded
+  placement left it touching, or one a moment's press reaches) may be pressed by it, by at most ``CUP_PRESS``, until
+  the two stand more than ``CUP_PRESS`` apart: there the cup's bellows give way, not the objects (the press is
+  reported, ``seal_pressed``). A deeper contact, a contact with any other object, or the same pair meeting again
+  after they parted is a collision.
 
 Self-collision: bodies joined by a joint are not checked (Drake's default); the model's primitive link shapes also
 overlap structurally at some joints: pairs that penetrate at the station's observation configuration (never a
@@ -413,6 +419,8 @@ class _Suction:
                        if guarded.get("stopped_at_s") is not None else None)
         self.previous_y = None
         self.met = {}  # name -> (first contact time s, shift m along the push)
+        self.pressing = set()  # neighbours the seal's press may press the carried object against until they part
+        self.pressed = {}  # name -> deepest press (m), for the report
 
     def resolve(self, t):
         w = self.w
@@ -420,6 +428,7 @@ class _Suction:
         if inside and self.X_TO is None and self._cup_distance() <= CUP_REACH:
             self.X_TO = w.tool_pose().inverse() @ w.pose(self.name)  # the cup holds it from here on
             self._filter(carried=True)
+            self.pressing = self._neighbours_within(CUP_PRESS)
         if inside and self.X_TO is not None:
             w.set_pose(self.name, w.tool_pose() @ self.X_TO)
             self.carried = True
@@ -427,16 +436,33 @@ class _Suction:
                 self._push_met(t)
         elif self.X_TO is not None:
             self._release()
+        if self.pressing:  # a neighbour the carried object has parted from is pressed no more
+            self.pressing = self._neighbours_within(CUP_PRESS, self.pressing)
         pens = w._penetrations()
         keep = []
         for a, b, depth, n in pens:
             if w.object_of_geometry.get(b) == self.name and a in w.tool_geometries:
                 if (inside and self.X_TO is not None) or (a in w.cup_geometries and depth <= CUP_PRESS):
                     continue
+            pair = {w.object_of_geometry.get(a), w.object_of_geometry.get(b)}
+            if self.X_TO is not None and self.name in pair:
+                other = next(iter(pair - {self.name}), None)
+                if other in self.pressing and depth <= CUP_PRESS:  # the seal's press (module docstring)
+                    self.pressed[other] = max(self.pressed.get(other, 0.0), depth)
+                    continue
             if a not in w.robot_geometries and w.object_of_geometry.get(b) == self.name:
                 a, b, n = b, a, -n  # the carried object first: "object_3 penetrates object_0"
             keep.append((a, b, depth, n))
         return keep
+
+    def _neighbours_within(self, reach: float, among=None) -> set:
+        """The other objects (of ``among``, default all) the touched object stands within ``reach`` (m) of (signed
+        distance)."""
+        w = self.w
+        query = w.scene_graph.get_query_output_port().Eval(w.sg_context)
+        mine = [g for g, n in w.object_of_geometry.items() if n == self.name]
+        return {n for g, n in w.object_of_geometry.items() if n != self.name and (among is None or n in among)
+                and any(query.ComputeSignedDistancePairClosestPoints(m, g).distance <= reach for m in mine)}
 
     def _push_met(self, t: float) -> None:
         """Inside a stopped guarded push-in's window: every object the carried one penetrates is moved along S's
@@ -510,3 +536,5 @@ class _Suction:
         if self.met:
             entry["guarded_met"] = {name: {"time_s": round(t, 4), "pushed_m": round(shift, 5)}
                                     for name, (t, shift) in self.met.items()}
+        if self.pressed:
+            entry["seal_pressed"] = {name: round(depth, 5) for name, depth in self.pressed.items()}

@@ -386,3 +386,71 @@ def test_only_a_motion_that_a_guard_stopped_inside_its_window_may_end_moving():
     assert not _stopped_by_guard(motion(stopped_at_s=4.5))  # the claimed stop is not where the motion ends
     assert not _stopped_by_guard(motion(stopped_at_s=5.0, t_start_s=5.5))  # nor inside the window
     assert not _stopped_by_guard(SimpleNamespace(duration=5.0, action={"type": "push", "object": "o", "d": 0.1}))
+
+
+def _press_world(scene, gap):
+    """object_0 standing 1.5 mm ahead of the cup's tip at the suction motion's first configuration (the cup holds it
+    from there, CUP_REACH), and object_1 ``gap`` m behind it along S's y; the tip's position as a function of q."""
+    from slax_drake.station.scenario import load_station_scenario
+
+    q0 = export_trial(fake_trial()).motions[1].q[0]
+    station = load_station_scenario(STATION)
+    probe = CollisionWorld(station, scene)
+
+    def tip(q):
+        probe.set_robot(q)
+        X = probe.X_WS.inverse() @ probe.tool_pose()
+        return X.translation() + X.rotation().matrix()[:, 0] * 0.42  # the cup's tip, 0.42 m along the shaft
+
+    p = tip(q0)
+    size = (0.05, 0.05, 2 * p[2] + 0.1)
+    objects = []
+    for o, y in zip(scene.objects, (p[1] + 0.0015 + 0.025, p[1] + 0.0015 + 0.05 + gap + 0.025)):
+        X = np.eye(4)
+        X[:3, 3] = (p[0], y, size[2] / 2)
+        objects.append(dataclasses.replace(o, X_SO=X, shape="box", size=size))
+    return CollisionWorld(station, scene.with_objects(objects)), q0, tip
+
+
+def _along_y(tip, q0, dys):
+    """Configurations moving the cup's tip from q0 by each of ``dys`` (m) along S's y (a finite-difference Jacobian's
+    least-squares step from the previous one)."""
+    qs, q = [], np.array(q0, dtype=float)
+    for dy in dys:
+        for _ in range(3):  # Newton steps toward the tip at q0's + (0, dy, 0)
+            err = tip(q0) + np.array([0.0, dy, 0.0]) - tip(q)
+            J = np.column_stack([(tip(q + e) - tip(q)) / 1e-6 for e in np.eye(len(q)) * 1e-6])
+            q = q + np.linalg.lstsq(J, err, rcond=None)[0]
+        qs.append(q.copy())
+    return qs
+
+
+@pytest.mark.parametrize("gap,press,refused", [(0.0, 0.003, False), (0.0, 0.008, True), (0.007, 0.009, True)])
+def test_the_seal_may_press_its_object_against_a_neighbour_by_at_most_the_cups_press(scene, gap, press, refused):
+    """The cup takes object_0 CUP_REACH before meeting it and presses on: object_0 is pressed against object_1, which
+    stands ``gap`` behind it (a guarded placement leaves them touching), then pulled 30 mm back. A press of up to
+    CUP_PRESS (5 mm) against a neighbour it stood within CUP_PRESS of is the cup's bellows giving way; a deeper one,
+    or one against an object that stood farther, is a collision."""
+    from types import SimpleNamespace
+
+    from slax_drake.hardware.collision import _Suction
+
+    world, q0, tip = _press_world(scene, gap)
+    path = [press * k / 10 for k in range(11)] + [press - 0.03 * k / 10 for k in range(1, 11)]
+    qs = _along_y(tip, q0, path)
+    moved = [tip(q)[1] - tip(q0)[1] for q in qs]
+    assert max(moved) == pytest.approx(press, abs=2e-4) and moved[-1] == pytest.approx(press - 0.03, abs=5e-4)
+    model = _Suction(world, "object_0", SimpleNamespace(suction_events=[(0.0, True)], duration=float(len(qs)),
+                                                        action={"type": "suction"}), 0, None, [])
+    hits = []
+    for t, q in enumerate(qs):
+        world.set_robot(q)
+        hits += [(world.body_name[a], world.body_name.get(b), depth) for a, b, depth, _ in model.resolve(float(t))]
+    entry = {}
+    model.finish(entry)
+    assert entry["carried"]
+    pairs = {(a, b) for a, b, _ in hits}
+    if refused:
+        assert pairs == {("object_0", "object_1")}, hits
+    else:
+        assert not hits and entry["seal_pressed"]["object_1"] == pytest.approx(press, abs=1e-3)
