@@ -104,6 +104,10 @@ def register(subparsers) -> None:
     s.add_argument("--history", default=None,
                    help="the previous step's OUT (its frames are replayed: the policy remembers its search)")
     s.add_argument("--policy", default="bluction-dar", help="a non-oracle policy name (default bluction-dar)")
+    s.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
+                   help="override an action-model rule of the station's, as for 'trial' (repeatable; with "
+                   "--from-trial the default is the rules the trial planned with; a --history must have been planned "
+                   "with the same rules)")
     s.add_argument("--out", required=True, help="output step JSON (the export format, ros-json)")
     s.set_defaults(func=run_plan_step)
 
@@ -313,8 +317,11 @@ def run_plan_step(args: argparse.Namespace) -> int:
     from slax_drake.errors import PlanStepError
     from slax_drake.hardware.plan_step import plan_step_files
 
+    from slax_drake.shelf.tool import parse_tool_rules
+
     frame_inputs = (args.depth, args.target_mask, args.joint_state)
     scenario = args.scenario
+    tool_rules = parse_tool_rules(args.tool_rule, "station") if args.tool_rule else None
     if args.from_trial is not None:
         from slax_drake.hardware.plan_step import inputs_from_trial
 
@@ -328,6 +335,8 @@ def run_plan_step(args: argparse.Namespace) -> int:
         frame_inputs = (str(inputs.depth), str(inputs.target_mask), str(inputs.joint_state))
         if args.history is None and inputs.history is not None:
             args.history = str(inputs.history)  # the objects the trial tracked, so they keep the trial's names
+        if tool_rules is None:
+            tool_rules = inputs.tool_rules  # the rules the trial planned with
         print(f"inputs of decision {args.step} (t = {inputs.time_s:.2f} s) of {args.from_trial}: "
               f"{', '.join(frame_inputs)}; station {scenario}")
     else:
@@ -341,7 +350,8 @@ def run_plan_step(args: argparse.Namespace) -> int:
     from slax_drake.evaluation.trial import drake_info_silenced
 
     with drake_info_silenced():
-        result = plan_step_files(scenario, *frame_inputs, args.out, history=args.history, policy=args.policy)
+        result = plan_step_files(scenario, *frame_inputs, args.out, history=args.history, policy=args.policy,
+                                 tool_rules=tool_rules)
     t = result.timings
     vis = result.visibility or {}
     if vis.get("share") is not None:

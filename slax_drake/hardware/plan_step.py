@@ -182,7 +182,8 @@ class StepPlanner:
     ``perceive`` and ``decide`` are the timed part of a step (benchmarks/bench_plan_step.py); ``plan_step`` adds
     motion planning, export and the check."""
 
-    def __init__(self, station_path: str | Path, policy: str = "bluction-dar", width: int = WORKING_WIDTH):
+    def __init__(self, station_path: str | Path, policy: str = "bluction-dar", width: int = WORKING_WIDTH,
+                 tool_rules: dict | None = None):
         from slax_drake.config import load_scenario
         from slax_drake.perception.belief import DepthDistribution, background_depth
         from slax_drake.policies.registry import make_policy
@@ -196,7 +197,8 @@ class StepPlanner:
         self.scenario = load_scenario(self.station.scene_config)
         self.camera = Camera.from_config(self.scenario.camera)
         self.shelf = shelf_of(self.scenario)
-        self.tool_rules = station_tool_rules(self.station)
+        # the rules it plans with: the station's, ``tool_rules`` (--tool-rule) on top
+        self.tool_rules = station_tool_rules(self.station, tool_rules)
         self.policy_name = policy
         self.policy = make_policy(policy, self.scenario, tool_overrides=self.tool_rules)
         if self.policy.needs_true_scene:
@@ -286,6 +288,13 @@ class StepPlanner:
         if history.get("policy") not in (None, self.policy_name):
             raise PlanStepError(f"the history was planned by policy '{history.get('policy')}', this step by "
                                 f"'{self.policy_name}': give the same --policy (or start a new history)")
+        recorded = history.get("tool_rules")  # None: a history written before plan-step recorded its rules
+        if recorded is not None and recorded != self.tool_rules:
+            differ = "; ".join(f"{k}: {recorded.get(k)!r} there, {self.tool_rules.get(k)!r} here"
+                               for k in sorted(set(recorded) | set(self.tool_rules))
+                               if recorded.get(k) != self.tool_rules.get(k))
+            raise PlanStepError(f"the history was planned with other action-model rules than this step ({differ}): "
+                                "give the same --tool-rule (or start a new history)")
         self.tracker, last = ObjectTracker(), None  # _perceive_working updates self.tracker
         for k, record in enumerate(frames, 1):
             depth, mask, q = decode_frame(record, k)
@@ -574,7 +583,9 @@ class StepPlanner:
             "rejected": rejected,
             "check": None if report is None else {"ok": report.ok, "checked": report.checked},
             "timings_s": {k: round(v, 4) for k, v in timings.items()},
-            "history": {"policy": self.policy_name, "steps": steps + (1 if action is not None else 0),
+            "tool_rules": dict(self.tool_rules),
+            "history": {"policy": self.policy_name, "tool_rules": dict(self.tool_rules),
+                        "steps": steps + (1 if action is not None else 0),
                         "history": [] if h is None else [float(v) for v in h],
                         "tracks": self.tracker.to_dict() if getattr(self, "tracker", None) is not None else None,
                         "action": None if action is None else _describe(action), "frames": frames},
@@ -609,8 +620,9 @@ def _action_of(doc):
 
 
 def plan_step_files(station: str, depth: str, mask: str, joint_state: str, out: str, history: str | None = None,
-                    policy: str = "bluction-dar") -> StepResult:
-    """``slax-drake plan-step``: reads the files, plans one step, writes ``out`` atomically (ros-json)."""
+                    policy: str = "bluction-dar", tool_rules: dict | None = None) -> StepResult:
+    """``slax-drake plan-step``: reads the files, plans one step, writes ``out`` atomically (ros-json).
+    ``tool_rules``: rule overrides on top of the station's (``--tool-rule``)."""
     from slax_drake.hardware.trajectory_file import dumps
     from slax_drake.io import write_text_atomic
 
@@ -618,7 +630,7 @@ def plan_step_files(station: str, depth: str, mask: str, joint_state: str, out: 
     previous = read_history(history)
     frame = read_depth(depth)
     target = read_mask(mask)
-    planner = StepPlanner(station, policy=policy)
+    planner = StepPlanner(station, policy=policy, tool_rules=tool_rules)
     planner.check_joint_state(q, joint_state)
     result = planner.plan_step(frame, target, q, previous, source=str(depth))
     write_text_atomic(Path(out), dumps(result.trajectory, "ros-json"))
@@ -635,6 +647,7 @@ class TrialStepInputs:
     joint_state: Path
     time_s: float  # the decision's simulated time
     history: Path | None = None  # the objects tracked up to the previous decision and its action (None: step 1)
+    tool_rules: dict | None = None  # the rules the trial planned with (its record's), as overrides of the station's
 
 
 def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> TrialStepInputs:
@@ -729,4 +742,21 @@ def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> 
             history = out_dir / "history.json"
             write_text_atomic(history, json.dumps(doc, indent=1))
     return TrialStepInputs(str(data.get("station") or ""), out_dir / "depth.npy", out_dir / "target_mask.png",
-                           out_dir / "joint_state.json", float(entry["time"]), history)
+                           out_dir / "joint_state.json", float(entry["time"]), history,
+                           recorded_rules(data.get("tool_rules"), str(data.get("station") or "")))
+
+
+def recorded_rules(recorded, station_path: str) -> dict | None:
+    """The overrides with which a StepPlanner on ``station_path`` plans with exactly a trial's recorded
+    ``tool_rules`` (the rules it planned with, less those at the station profile's values): the record, and the
+    profile's value for each rule of the station's that the record leaves out (overridden back to the profile's);
+    None when the trial recorded none."""
+    from slax_drake.shelf.tool import ToolConfig
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.trial import station_tool_rules
+
+    if not isinstance(recorded, dict) or not station_path:
+        return None
+    defaults = ToolConfig.build("station")
+    station = station_tool_rules(load_station_scenario(station_path))
+    return {**{k: defaults.value(k) for k in station if k not in recorded}, **recorded}

@@ -222,3 +222,47 @@ def test_a_history_that_does_not_replay_is_refused(tmp_path):
         expected = "policy 'dar'|replaying it chooses|corrupt|must be a record|expected a"
         with pytest.raises(PlanStepError, match=expected):
             StepPlanner(STATION).replay(history)
+
+
+def test_a_tool_rule_overrides_the_stations_and_a_history_must_share_the_rules(tmp_path, capsys):
+    """--tool-rule plans with a rule on top of the station's (as 'trial' does); the step records the rules it
+    planned with, and a history planned with other rules is refused (its replay would decide otherwise)."""
+    from slax_drake.errors import PlanStepError
+    from slax_drake.hardware.plan_step import StepPlanner
+
+    plain, ruled = StepPlanner(STATION), StepPlanner(STATION, tool_rules={"max_suction_moment": 0.2})
+    assert plain.tool_rules["max_suction_moment"] == 0.4 and ruled.tool_rules["max_suction_moment"] == 0.2
+    assert ruled.policy.action_model.tool.rules.max_suction_moment == 0.2
+    assert {k: v for k, v in ruled.tool_rules.items() if k != "max_suction_moment"} == \
+        {k: v for k, v in plain.tool_rules.items() if k != "max_suction_moment"}
+    history = {"policy": "bluction-dar", "tool_rules": plain.tool_rules, "frames": [{}]}
+    with pytest.raises(PlanStepError, match="max_suction_moment: 0.4 there, 0.2 here"):
+        ruled.replay(history)
+    # through the command: the rule is recorded with the step; a malformed rule is one line and exit code 2
+    _frame(tmp_path, objects=6, seed=23)
+    assert main(_args(tmp_path, "frame.npy", "step.json", "--policy", "der-3", "--tool-rule",
+                      "max_suction_moment=0.2")) == 0
+    record = json.loads((tmp_path / "step.json").read_text())["metadata"]["plan_step"]
+    assert record["tool_rules"] == ruled.tool_rules == record["history"]["tool_rules"]
+    capsys.readouterr()
+    assert main(_args(tmp_path, "frame.npy", "bad.json", "--tool-rule", "no_such_rule=1")) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--tool-rule takes FIELD=VALUE" in err and not (tmp_path / "bad.json").exists()
+
+
+def test_a_trials_recorded_rules_give_back_exactly_the_rules_it_planned_with():
+    """plan-step --from-trial plans with the rules the trial recorded, also where the trial set a station rule back
+    to the profile's value (the record leaves such a rule out)."""
+    from slax_drake.hardware.plan_step import StepPlanner, recorded_rules
+    from slax_drake.shelf.tool import ToolConfig
+    from slax_drake.station.scenario import load_station_scenario
+    from slax_drake.systems.trial import station_tool_rules
+
+    station = load_station_scenario(STATION)
+    back = {"suction_hidden_rule": ToolConfig.build("station").value("suction_hidden_rule")}
+    assert "suction_hidden_rule" in station_tool_rules(station)
+    for overrides in ({}, {"max_suction_moment": 0.2}, back):
+        record = json.loads(json.dumps(station_tool_rules(station, overrides)))  # as trial.json keeps it
+        assert StepPlanner(STATION, tool_rules=recorded_rules(record, STATION)).tool_rules == record
+    assert "suction_hidden_rule" not in station_tool_rules(station, back)
+    assert recorded_rules(None, STATION) is None
