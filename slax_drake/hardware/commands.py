@@ -316,7 +316,6 @@ def run_replay(args: argparse.Namespace) -> int:
 def run_plan_step(args: argparse.Namespace) -> int:
     from slax_drake.errors import PlanStepError
     from slax_drake.hardware.plan_step import plan_step_files
-
     from slax_drake.shelf.tool import parse_tool_rules
 
     frame_inputs = (args.depth, args.target_mask, args.joint_state)
