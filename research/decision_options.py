@@ -45,11 +45,10 @@ def rows(folder: Path, policy: str | None = None) -> list[str]:
         predicted = f" ({100 * matched / judged:.0f} %)" if judged else ""
         no_motion = sum(t.get("drake_result") == "no feasible motion" for t in mine)
         lost = sum(int(t.get("toppled", 0)) + int(t.get("dropped", 0)) for t in mine)
-        stalls = [t.get("stall") for t in mine if isinstance(t.get("stall"), list)]
-        stalled = [s for s, t in zip(stalls, mine) if s[0] is not None]
-        after = sum(bool(t.get("drake_success")) for t in mine
-                    if isinstance(t.get("stall"), list) and t["stall"][0] is not None)
-        stall_text = f"{len(stalled)} ({after})" if len(stalls) == n else "-"
+        stalled = [t for t in mine if isinstance(t.get("stall"), list) and t["stall"][0] is not None]
+        after = sum(bool(t.get("drake_success")) for t in stalled)
+        recorded = all(isinstance(t.get("stall"), list) for t in mine)  # runs before 2b8e52a recorded no stalls
+        stall_text = f"{len(stalled)} ({after})" if recorded else "-"
         out.append(f"| `{folder.name}` | `{name}` | {n} | **{clean}** ({100 * clean / n:.4g} %) | {revealed} | {shelf} | "
                    f"{actions}{predicted} | {no_motion} | {lost} | {stall_text} |")
     return out
