@@ -41,6 +41,7 @@ from slax_drake.errors import PhysicsBenchmarkError
 from slax_drake.io import figure_png, plural, write_bytes_atomic, write_text_atomic
 from slax_drake.policies.protocol import Reversal
 from slax_drake.policies.trial_memory import last_move_by_axis
+from slax_drake.scene.mass import mass_model_words
 from slax_drake.systems.drag_weigh import is_pull_record
 from slax_drake.systems.guard import dragged_after_weighing
 from slax_drake.systems.trial_summary import TARGET_MOVED
@@ -56,13 +57,6 @@ def drake_observation(sensor_noise: bool) -> str:
     return ("camera: rendered frames" + (" with the L515 depth-noise model" if sensor_noise else "")
             + ", the render's labels as segmentation, estimator hypotheses, P_t from the depth frame"
             + ("" if sensor_noise else ", no sensor noise"))
-
-
-def mass_model_words(mass_model: str | None) -> str:
-    """The report's words for a scenario's ``physics.mass_model`` (None: a run from before it was recorded)."""
-    return {"household": "household goods' masses by shape and volume (physics.mass_model: household)",
-            "density": "objects.density x volume (physics.mass_model: density)"}.get(
-        mass_model, "not recorded (a run from before the mass model was; see its scenario)")
 
 
 def trial_path(out: Path, policy: str, density: int, index: int) -> Path:

@@ -326,7 +326,8 @@ def _drake_mode(folder: ResultFolder) -> tuple[str, str]:
 def physics_section(folder: ResultFolder) -> str:
     """Markdown of one physics-benchmark folder: profile, the two simulators' observation modes, the command and
     per policy and density the success in both simulators, the matched actions and Drake's endings."""
-    from slax_drake.evaluation.physics import mass_model_words, planning_cell, stall_words
+    from slax_drake.evaluation.physics import planning_cell, stall_words
+    from slax_drake.scene.mass import mass_model_words
 
     meta = folder.meta
     rules = ", ".join(f"{k} = {v}" for k, v in (meta.get("tool_rules") or {}).items())

@@ -200,7 +200,7 @@ def run_trial(opts: TrialOptions, meshcat=None, progress=None, record_poses: boo
         "cost": round(n_push + scenario.protocol.suction_cost * n_suction, 6),
         "config": opts.config, "station": station_path, "objects": opts.objects, "seed": opts.seed,
         "policy": opts.policy, "perception": opts.perception, "horizon": horizon, "sleep": opts.sleep,
-        "profile": opts.profile, "tool_rules": tool_rules,
+        "profile": opts.profile, "tool_rules": tool_rules, "mass_model": scenario.physics.mass_model,
         "visible_fraction": round(snapshots[-1].visible_fraction, 4) if snapshots else 0.0,
         "lost_objects": list(snapshots[-1].lost) if snapshots else [],
         "sensor_noise": opts.sensor_noise, "segmentation": opts.segmentation,

@@ -71,3 +71,10 @@ def object_mass(obj, density: float, physics=None, quantile: float = 0.5) -> flo
     if physics is not None and physics.mass_model == "household":
         return quantile_mass(obj.shape, obj.size, physics, quantile)
     return density * volume(obj.shape, obj.size)
+
+
+def mass_model_words(mass_model: str | None) -> str:
+    """A report's words for a scenario's ``physics.mass_model`` (None: a record from before it was kept)."""
+    return {"household": "household goods' masses by shape and volume (physics.mass_model: household)",
+            "density": "objects.density x volume (physics.mass_model: density)"}.get(
+        mass_model, "not recorded (a run from before the mass model was; see its scenario)")

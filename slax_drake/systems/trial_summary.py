@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from slax_drake.io import plural
+from slax_drake.scene.mass import mass_model_words
 
 # What the trial's ``result`` means, as a user reads it.
 OUTCOMES = {
@@ -121,6 +122,8 @@ def trial_summary(data: dict, written: list[Path], html: str | Path | None = Non
                      + " (the station cup's limits and --tool-rule)")
     else:
         lines.append(f"rules:   {profile}")
+    if "mass_model" in data:  # a record from before it was kept names none
+        lines.append(f"masses:  {mass_model_words(data['mass_model'])}")
 
     written = [Path(p) for p in written]
     html_path = Path(html) if html else None

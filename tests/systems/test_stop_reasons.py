@@ -76,3 +76,14 @@ def test_trial_ending_with_no_feasible_action_records_its_reasons(tmp_path):
     last = data["steps_log"][-1]
     assert last["reasons"] and (last["refused"] or last["rejected"])
     assert all(r["kind"] for r in last["refused"] + last["rejected"])
+
+
+def test_the_trial_summary_names_the_mass_model_when_the_record_keeps_it():
+    """Issue 27's decision: every report names the mass model; a record from before it was kept names none."""
+    data = {"actions": [], "steps": 0, "horizon": 6, "result": "revealed", "visible_fraction": 1.0, "cost": 0.0,
+            "sim_time_s": 1.0, "wall_s": 1.0}
+    assert "masses:" not in trial_summary(data, [Path("out/trial.json")])
+    for model, words in (("household", "household goods' masses by shape and volume"),
+                         ("density", "objects.density x volume")):
+        text = trial_summary({**data, "mass_model": model}, [Path("out/trial.json")])
+        assert f"masses:  {words} (physics.mass_model: {model})" in text
