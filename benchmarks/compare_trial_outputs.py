@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from slax_drake.errors import UserError
-from slax_drake.evaluation.trial_records import read_trial_records
+from slax_drake.evaluation.trial_records import read_trial_records, without_keys
 
 TIMING_KEYS = frozenset({"trial_seconds", "decision_seconds", "seconds"})
 
@@ -30,15 +30,6 @@ def load(folder: Path, policies: list[str] | None) -> dict:
             records = read_trial_records(folder, root.name)
             out.update({f"{root.name}/{stem}": record for stem, record in records.items()})
     return out
-
-
-def without_timing(value):
-    """``value`` with every dict key in :data:`TIMING_KEYS` dropped, at any depth."""
-    if isinstance(value, dict):
-        return {k: without_timing(v) for k, v in value.items() if k not in TIMING_KEYS}
-    if isinstance(value, list):
-        return [without_timing(v) for v in value]
-    return value
 
 
 def first_difference(old, new, path: str = "") -> str | None:
@@ -99,7 +90,7 @@ def main(argv=None) -> int:
         return 2
     differ, capped = [], []
     for key in both:
-        o, n = without_timing(old[key]), without_timing(new[key])
+        o, n = without_keys(old[key], TIMING_KEYS), without_keys(new[key], TIMING_KEYS)
         found = first_difference(o, n)
         if found is None:
             continue

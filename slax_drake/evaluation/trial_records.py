@@ -40,3 +40,13 @@ def read_trial_records(folder, policy: str, kind: str = "trials", missing_ok: bo
             raise UserError(f"{path}: not a trial record (a JSON object)")
         records[path.stem] = record
     return records
+
+
+def without_keys(record, keys):
+    """``record`` (a trial record's JSON value) with every dict entry whose key is in ``keys`` dropped, at any depth
+    (e.g. the clock's readings, which differ between two runs of the same trial)."""
+    if isinstance(record, dict):
+        return {k: without_keys(v, keys) for k, v in record.items() if k not in keys}
+    if isinstance(record, list):
+        return [without_keys(v, keys) for v in record]
+    return record

@@ -10,6 +10,7 @@ import pytest
 
 import slax_drake
 from slax_drake.cli import main
+from slax_drake.evaluation.trial_records import without_keys
 
 CONFIG = "sim_configs/table1.yaml"
 TINY = ["--config", CONFIG, "--densities", "4", "--scenes-per-density", "1", "--no-progress"]
@@ -183,14 +184,6 @@ def test_ray_and_local_give_the_same_trial_files(tmp_path, capsys):
 TIMING_KEYS = {"wall_s", "total_s", "real_time_factor", "planning_s", "planning_cpu_s", "motion_timings", "timings"}
 
 
-def _without_timings(record):
-    if isinstance(record, dict):
-        return {k: _without_timings(v) for k, v in record.items() if k not in TIMING_KEYS}
-    if isinstance(record, list):
-        return [_without_timings(v) for v in record]
-    return record
-
-
 @pytest.mark.slow
 def test_physics_on_ray_gives_the_same_scene_files_as_local(tmp_path):
     pytest.importorskip("ray")
@@ -202,5 +195,5 @@ def test_physics_on_ray_gives_the_same_scene_files_as_local(tmp_path):
         out = tmp_path / backend
         run_physics_benchmark("sim_configs/sim_shelf.yaml", out=out, backend=backend, **tiny)
         (path,) = (out / "physics_trials").glob("*/*.json")
-        files[backend] = _without_timings(json.loads(path.read_text()))
+        files[backend] = without_keys(json.loads(path.read_text()), TIMING_KEYS)
     assert files["local"] == files["ray"]
