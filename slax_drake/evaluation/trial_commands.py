@@ -21,7 +21,7 @@ def register(subparsers) -> None:
         "target is revealed (v of it visible in the label image) or H = 2n actions are spent. With no arguments: "
         f"a short default trial ({DEFAULT_OBJECTS} objects, seed {DEFAULT_SEED}) that reveals the target.",
     )
-    p.add_argument("--config", default="sim_configs/sim_shelf.yaml", help="scene scenario YAML")
+    p.add_argument("--config", default=None, help=f"scene scenario YAML (default: {TrialOptions.config})")
     p.add_argument("--station", default=None, help="station YAML (default: sim_configs/station_<config stem>.yaml)")
     p.add_argument("--objects", type=int, default=None, help=f"occluding objects (default {DEFAULT_OBJECTS})")
     p.add_argument("--seed", type=arguments.seed, default=None, help=f"scene seed (default {DEFAULT_SEED})")
@@ -29,7 +29,12 @@ def register(subparsers) -> None:
                    help="the scene INDEX of N objects of the Table I protocol in --config (e.g. --config "
                    "sim_configs/table1.yaml --benchmark-scene 8:1): the scene seed, target size, horizon and station "
                    "that 'slax-drake benchmark' and the physics benchmark use; replaces --objects and --seed")
-    p.add_argument("--policy", default="bluction-dar", metavar="NAME",
+    p.add_argument("--from-benchmark", default=None, metavar="FOLDER",
+                   help="with --benchmark-scene: that scene's trial as the physics benchmark in FOLDER ran it (its "
+                   "--out, or a docs/results copy): the run's scenario, rule profile and rules, policy (--policy when "
+                   "it ran several), sensor noise and object sleep; --tool-rule adds rules on top. The summary says "
+                   "whether the trial did what the run recorded")
+    p.add_argument("--policy", default=None, metavar="NAME",
                    help=f"the search policy, one of: {', '.join(POLICY_NAMES)}. The oracles (oracle-p, oracle-p+s) "
                    "read the true scene and cannot run behind the camera; slax-belief is the project's own "
                    "(default: bluction-dar)")
@@ -91,10 +96,11 @@ def run_view(args: argparse.Namespace) -> int:
     return 0
 
 
-def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
+def benchmark_scene_options(opts: TrialOptions, spec: str, protocol_seed: int | None = None) -> TrialOptions:
     """``opts`` set to the protocol scene ``spec`` = "N:INDEX" of ``opts.config``: N objects, the scene seed
-    ``scene_seed(protocol seed, N, INDEX)``, the protocol's first target size, H = horizon_per_object * N and, unless
-    a station is given, the physics benchmark's default station: the very trial the physics benchmark runs."""
+    ``scene_seed(protocol seed, N, INDEX)`` (``protocol_seed``, default the scenario's: a benchmark's ``--seed``),
+    the protocol's first target size, H = horizon_per_object * N and, unless a station is given, the physics
+    benchmark's default station: the very trial the physics benchmark runs."""
     from slax_drake.config import load_scenario
     from slax_drake.evaluation.table1 import scene_seed
     from slax_drake.evaluation.physics import protocol_trial
@@ -106,18 +112,20 @@ def benchmark_scene_options(opts: TrialOptions, spec: str) -> TrialOptions:
     if density < 1 or index < 0:
         raise TrialError(f"--benchmark-scene needs N >= 1 objects and INDEX >= 0 (got {spec!r})")
     scenario = load_scenario(opts.config)
-    return protocol_trial(opts, scenario, density, scene_seed(scenario.protocol.seed, density, index))
+    seed = scenario.protocol.seed if protocol_seed is None else int(protocol_seed)
+    return protocol_trial(opts, scenario, density, scene_seed(seed, density, index))
 
 
 def run(args: argparse.Namespace) -> int:
     from slax_drake.shelf.tool import parse_tool_rules
-    from slax_drake.evaluation.trial import drake_info_silenced, run_trial, write_trial
     from slax_drake.systems.trial_summary import trial_summary
 
+    if args.from_benchmark is not None:
+        return run_from_benchmark(args)
     profile = args.profile or "station"  # Drake trials plan with the physical tool's rules unless told otherwise
 
-    opts = TrialOptions(config=args.config, objects=DEFAULT_OBJECTS if args.objects is None else args.objects,
-                        seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy,
+    opts = TrialOptions(config=args.config or TrialOptions.config,
+                        objects=DEFAULT_OBJECTS if args.objects is None else args.objects, seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy or TrialOptions.policy,
                         perception=args.perception, station=args.station, meshcat=args.meshcat, html=args.html,
                         out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep,
                         sensor_noise=args.sensor_noise, segmentation=args.segmentation,
@@ -126,6 +134,51 @@ def run(args: argparse.Namespace) -> int:
         if args.objects is not None or args.seed is not None:
             raise TrialError("--benchmark-scene replaces --objects and --seed: give one or the other")
         opts = benchmark_scene_options(opts, args.benchmark_scene)
+    record, written, meshcat_url = _run(opts, args)
+    print(trial_summary(record.data, written, html=args.html, meshcat_url=meshcat_url))
+    return 0
+
+
+# options --from-benchmark takes from the run's settings: given together, they are refused
+_SET_BY_THE_RUN = (("config", "--config"), ("profile", "--profile"), ("sensor_noise", "--sensor-noise"),
+                   ("sleep", "--sleep"), ("objects", "--objects"), ("seed", "--seed"))
+
+
+def run_from_benchmark(args: argparse.Namespace) -> int:
+    """``--from-benchmark FOLDER --benchmark-scene N:INDEX``: the run's trial of that scene (slax_drake.evaluation.
+    benchmark_trial), then the summary and one line on whether it did what the run recorded."""
+    from slax_drake.evaluation.benchmark_trial import agreement, benchmark_record, benchmark_trial_options
+    from slax_drake.systems.trial_summary import trial_summary
+
+    if args.benchmark_scene is None:
+        raise TrialError("--from-benchmark needs --benchmark-scene N:INDEX (the scene of that run to run again)")
+    given = [flag for field, flag in _SET_BY_THE_RUN if getattr(args, field) not in (None, False)]
+    if given:
+        raise TrialError(f"--from-benchmark sets {', '.join(given)} from the run's settings: give one or the other")
+    if (args.perception, args.segmentation) != ("ground-truth", "labels"):
+        raise TrialError("--from-benchmark: the physics benchmark's Drake trials perceive with --perception "
+                         "ground-truth and --segmentation labels")
+    opts, notes = benchmark_trial_options(args.from_benchmark, args.benchmark_scene, policy=args.policy,
+                                          station=args.station, extra_rules=args.tool_rule, meshcat=args.meshcat,
+                                          html=args.html, out=args.out, max_sim_time=args.max_sim_time)
+    density, index = (int(v) for v in args.benchmark_scene.split(":"))
+    print(f"the trial of scene {density}:{index} of the physics benchmark in {args.from_benchmark} "
+          f"({opts.policy}, the '{opts.profile}' profile with its recorded rules)", flush=True)
+    for note in notes:
+        print(f"note: {note}: the trial may differ from the run's", file=sys.stderr, flush=True)
+    source = {"folder": str(args.from_benchmark), "scene": f"{density}:{index}", "notes": notes}
+    record, written, meshcat_url = _run(opts, args, {"from_benchmark": source})
+    print(trial_summary(record.data, written, html=args.html, meshcat_url=meshcat_url))
+    print("benchmark: " + agreement(record.data, benchmark_record(args.from_benchmark, opts.policy, density, index),
+                                    args.from_benchmark))
+    return 0
+
+
+def _run(opts: TrialOptions, args: argparse.Namespace, extra: dict | None = None):
+    """Runs the trial of ``opts`` (a live Meshcat view with --meshcat) and writes its folder, ``extra`` entries
+    added to its record; returns (the record, the files written, the live view's URL or None)."""
+    from slax_drake.evaluation.trial import drake_info_silenced, run_trial, write_trial
+
     with drake_info_silenced():
         meshcat = None
         if args.meshcat or args.html:
@@ -135,7 +188,6 @@ def run(args: argparse.Namespace) -> int:
             if args.meshcat:
                 print(f"meshcat: {meshcat.web_url()} (a live view while this command runs)", flush=True)
         record = run_trial(opts, meshcat=meshcat, progress=None if args.quiet else sys.stderr, record_poses=True)
+    record.data.update(extra or {})
     written = write_trial(record, args.out, html=args.html)
-    print(trial_summary(record.data, written, html=args.html,
-                        meshcat_url=meshcat.web_url() if args.meshcat else None))
-    return 0
+    return record, written, meshcat.web_url() if args.meshcat else None
