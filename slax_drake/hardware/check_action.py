@@ -142,9 +142,10 @@ def spec_of(action) -> str:
     return f"suction:{action.name}:{action.dx:+.4f}:{action.dz:+.4f}"
 
 
-def make_checker(scene, station_path: str | None = None, tool=None) -> Checker:
-    """The station's action model (``station`` profile, the station cup's limits, the station's scene scenario's
-    geometry and masses; ``tool``, a ToolConfig, instead when given) and motion planner for ``scene``."""
+def make_checker(scene, station_path: str | None = None, tool=None, tool_rules: dict | None = None) -> Checker:
+    """The station's action model (``station`` profile, the station cup's limits with ``tool_rules`` on top, the
+    station's scene scenario's geometry and masses; ``tool``, a ToolConfig, instead when given) and motion planner
+    for ``scene``."""
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.shelf.actions import ActionModel
@@ -157,32 +158,37 @@ def make_checker(scene, station_path: str | None = None, tool=None) -> Checker:
     station = load_station_scenario(station_path)
     scene_camera(station, scene)  # SceneMismatchError when the station serves another shelf
     if tool is None:
-        tool = tool_config(load_scenario(station.scene_config), "station", **station_tool_rules(station))
+        tool = tool_config(load_scenario(station.scene_config), "station", **station_tool_rules(station, tool_rules))
     model = ActionModel(scene.shelf, scene.camera.position[:2], tool)
     known = dataclasses.replace(scene, target=None)
     return Checker(known, model, MotionPlanner(station, tool), str(station_path))
 
 
-def check_action(scene_path: str | Path, action: str, station: str | None = None) -> ActionCheck:
-    """The verdict on ``action`` (``push:OBJECT:D`` or ``suction:OBJECT:DX:DZ``) on the scene JSON at
-    ``scene_path`` with ``station`` (default: the shipped station with the scene's shelf, :func:`slax_drake.station.scenario.station_for`)."""
+def _scene(scene):
+    """A Scene, or the scene JSON at that path."""
     from slax_drake.scene.io import load_scene
 
+    return load_scene(scene) if isinstance(scene, (str, Path)) else scene
+
+
+def check_action(scene, action: str, station: str | None = None, tool_rules: dict | None = None) -> ActionCheck:
+    """The verdict on ``action`` (``push:OBJECT:D`` or ``suction:OBJECT:DX:DZ``) on ``scene`` (a Scene or the path
+    of a scene JSON) with ``station`` (default: the shipped station with the scene's shelf,
+    :func:`slax_drake.station.scenario.station_for`) and ``tool_rules`` over the station's."""
     spec = parse_action(action)
-    checker = make_checker(load_scene(scene_path), station)
+    checker = make_checker(_scene(scene), station, tool_rules=tool_rules)
     return checker.check(spec, action)
 
 
-def check_all(scene_path: str | Path, station: str | None = None,
-              progress: bool | None = False) -> tuple[Checker, list[ActionCheck]]:
-    """Every candidate action of the scene with its verdict: the action model's feasible candidates planned in
-    its order, then one line per candidate (group) it refuses, with its reason. ``progress``: a progress bar of
-    the candidates planned on stderr (None: when stderr is a terminal)."""
+def check_all(scene, station: str | None = None, progress: bool | None = False,
+              tool_rules: dict | None = None) -> tuple[Checker, list[ActionCheck]]:
+    """Every candidate action of ``scene`` (a Scene or the path of a scene JSON) with its verdict: the action
+    model's feasible candidates planned in its order, then one line per candidate (group) it refuses, with its
+    reason. ``progress``: a progress bar of the candidates planned on stderr (None: when stderr is a terminal);
+    ``tool_rules``: over the station's."""
     from tqdm import tqdm
 
-    from slax_drake.scene.io import load_scene
-
-    checker = make_checker(load_scene(scene_path), station)
+    checker = make_checker(_scene(scene), station, tool_rules=tool_rules)
     cands = checker.candidates()
     checks = [checker.plan(a) for a in tqdm(cands.feasible, desc="planning candidates", unit="candidate",
                                             disable=None if progress is None else not progress, leave=False)]

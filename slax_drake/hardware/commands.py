@@ -118,8 +118,17 @@ def register(subparsers) -> None:
         "observation pose and back. Prints feasible with the motion's duration and the IK / check / Ruckig times, "
         "or the first reason it is not. Exit code 0 when feasible, 1 when not. --all: every candidate action of "
         "the scene with its verdict (a table; --png: a top-down picture coloured by verdict).")
-    a.add_argument("--scene", required=True, help="scene JSON (slax-drake scene, or a trial's scene.json)")
-    a.add_argument("--station", default=None, help="station YAML (default: the shipped station of the scene's shelf)")
+    where = a.add_mutually_exclusive_group(required=True)
+    where.add_argument("--scene", default=None, help="scene JSON (slax-drake scene, or a trial's scene.json: its "
+                       "initial scene)")
+    where.add_argument("--from-trial", default=None, metavar="DIR",
+                       help="the scene of a trial's folder (slax-drake trial --out) as it stood at a decision "
+                       "(--step; default the last, where a trial that ended with no action stopped), each object "
+                       "where the trial recorded it; the trial's station and rules")
+    a.add_argument("--step", type=int, default=None, help="with --from-trial: the decision, 1-based as the trial's "
+                   "lines 'step N/H' count (default: the last)")
+    a.add_argument("--station", default=None, help="station YAML (default: the shipped station of the scene's "
+                   "shelf; with --from-trial the trial's)")
     what = a.add_mutually_exclusive_group(required=True)
     what.add_argument("--action", default=None,
                       help="push:OBJECT:D (blade push by D m along the shelf's x) or suction:OBJECT:DX:DZ (move by "
@@ -407,11 +416,22 @@ def run_check_action(args: argparse.Namespace) -> int:
 
     if args.png and not args.all:
         raise ActionSpecError("--png applies to --all only")
+    scene, station, rules = args.scene, args.station, None
+    if args.from_trial is not None:
+        from slax_drake.hardware.plan_step import recorded_rules, trial_decision
+
+        decision = trial_decision(args.from_trial, args.step)
+        scene, station = decision.scene, args.station or decision.data.get("station") or None
+        rules = recorded_rules(decision.data.get("tool_rules"), str(station or ""))
+        print(f"the scene of {args.from_trial} at decision {decision.step} of {len(decision.decisions)} (the true "
+              f"objects where the trial recorded them; the trial's station and rules)", flush=True)
+    elif args.step is not None:
+        raise ActionSpecError("--step applies to --from-trial only")
     with drake_info_silenced():
         if args.all:
-            checker, checks = check_all(args.scene, args.station, progress=None)
+            checker, checks = check_all(scene, station, progress=None, tool_rules=rules)
         else:
-            checks = [check_action(args.scene, args.action, args.station)]
+            checks = [check_action(scene, args.action, station, tool_rules=rules)]
     if args.all:
         print(table(checks), end="")
         if args.png:

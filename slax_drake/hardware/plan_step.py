@@ -638,6 +638,51 @@ def plan_step_files(station: str, depth: str, mask: str, joint_state: str, out: 
 
 
 @dataclasses.dataclass
+class TrialDecision:
+    """One decision of a recorded trial (:func:`trial_decision`): the trial's record ``data``, its decisions (the
+    ``steps_log`` entries made at a decision), this one's ``entry`` and 1-based ``step``, the trial's
+    ``initial_scene`` and the ``scene`` as it stood at this decision."""
+
+    data: dict
+    decisions: list
+    entry: dict
+    step: int
+    initial_scene: object
+    scene: object
+
+
+def trial_decision(trial_dir: str | Path, step: int | None = None) -> TrialDecision:
+    """Decision ``step`` (1-based, as the trial's lines "step N/H" count; default the last, where a trial that
+    ended with no action stopped) of the trial in ``trial_dir``, with its scene as it stood then: each object at the
+    planar pose (x, y, yaw in the shelf frame S) the trial recorded before that decision (``poses_before``; an
+    object that had toppled stands upright there). PlanStepError (exit 2) for a missing or unreadable trial.json or
+    scene.json, or a step the trial does not hold."""
+    from slax_drake.scene.io import load_scene
+
+    trial_dir = Path(trial_dir)
+    data = _load_json(_existing(trial_dir / "trial.json", "trial"), "trial")
+    scene = load_scene(_existing(trial_dir / "scene.json", "scene"))
+    decisions = [e for e in data.get("steps_log", []) if isinstance(e, dict) and "time" in e]
+    step = len(decisions) if step is None else int(step)
+    if not 1 <= step <= len(decisions):
+        raise PlanStepError(f"--step {step}: the trial in {trial_dir} has decisions 1 to {len(decisions)}")
+    entry = decisions[step - 1]
+    poses = entry.get("poses_before") or {}
+    objects = []
+    for o in scene.objects:
+        p = poses.get(o.name)
+        if p is not None:
+            turn = p["yaw"] - float(o.yaw)
+            c, s_ = np.cos(turn), np.sin(turn)
+            X = np.array(o.X_SO, float)
+            X[:3, :3] = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]]) @ X[:3, :3]
+            X[0, 3], X[1, 3] = p["x"], p["y"]
+            o = dataclasses.replace(o, X_SO=X)
+        objects.append(o)
+    return TrialDecision(data, decisions, entry, step, scene, dataclasses.replace(scene, objects=tuple(objects)))
+
+
+@dataclasses.dataclass
 class TrialStepInputs:
     """The files of plan-step's inputs built from a simulated trial's decision (:func:`inputs_from_trial`)."""
 
@@ -666,17 +711,13 @@ def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> 
 
     The station is the trial's."""
     from slax_drake.io import write_bytes_atomic, write_text_atomic
-    from slax_drake.scene.io import load_scene
     from slax_drake.scene.raycast import SceneRaycaster
     from slax_drake.station.robot import PLANNED_JOINTS
 
     trial_dir = Path(trial_dir)
-    data = _load_json(_existing(trial_dir / "trial.json", "trial"), "trial")
-    scene = load_scene(_existing(trial_dir / "scene.json", "scene"))
-    decisions = [e for e in data.get("steps_log", []) if isinstance(e, dict) and "time" in e]
-    if not 1 <= step <= len(decisions):
-        raise PlanStepError(f"--step {step}: the trial in {trial_dir} has decisions 1 to {len(decisions)}")
-    entry = decisions[step - 1]
+    decision = trial_decision(trial_dir, step)
+    data, entry, decisions, at_step, scene = (decision.data, decision.entry, decision.decisions, decision.scene,
+                                              decision.initial_scene)
     depth_file = _existing(trial_dir / "step_depth.npz", "step-depth")
     try:
         with np.load(depth_file) as f:
@@ -688,21 +729,8 @@ def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> 
         raise PlanStepError(f"{depth_file}: holds no depth image of decision {step} (t = {entry['time']} s)")
     depth = depths[k]
     h, w = depth.shape
-    poses = entry.get("poses_before") or {}
-    objects = []
-    for o in scene.objects:
-        p = poses.get(o.name)
-        if p is not None:
-            turn = p["yaw"] - float(o.yaw)
-            c, s_ = np.cos(turn), np.sin(turn)
-            X = np.array(o.X_SO, float)
-            X[:3, :3] = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]]) @ X[:3, :3]
-            X[0, 3], X[1, 3] = p["x"], p["y"]
-            o = dataclasses.replace(o, X_SO=X)
-        objects.append(o)
-    at_step = dataclasses.replace(scene, objects=tuple(objects))
     _, labels = SceneRaycaster(at_step, include_target=True).render(scene.camera.with_resolution(w, h))
-    mask = labels == len(objects) + 1
+    mask = labels == len(at_step.objects) + 1
     et = data.get("executed_trajectory") or {}
     try:
         t, q = np.asarray(et["times"], float), np.asarray(et["positions"], float)

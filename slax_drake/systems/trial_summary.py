@@ -83,10 +83,10 @@ def why_lines(data: dict, written) -> list[str]:
         top = reasons[0]
         lines.append(f"  most frequent: {top['stage']}: {top['kind']} ({_plural(top['count'], 'candidate')})"
                      + "".join(f"; then {r['stage']}: {r['kind']} ({r['count']})" for r in reasons[1:3]))
-    scene = next((Path(p) for p in written if Path(p).name == "scene.json"), None)
-    station = f" --station {data['station']}" if data.get("station") else ""
-    lines.append(f"  every candidate with its verdict (action model, then planner, on the true scene): slax-drake "
-                 f"check-action --scene {scene if scene is not None else 'OUT/scene.json'}{station} --all")
+    record = next((Path(p) for p in written if Path(p).name == "trial.json"), None)
+    lines.append(f"  every candidate with its verdict (action model, then planner, on the true scene as it stood at "
+                 f"the last decision): slax-drake check-action --from-trial "
+                 f"{record.parent if record is not None else 'OUT'} --all")
     return lines
 
 

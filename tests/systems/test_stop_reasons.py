@@ -47,7 +47,7 @@ def test_summary_names_the_most_frequent_reason_and_check_action():
     text = trial_summary(_ended("no feasible action", last), [Path("out/trial.json"), Path("out/scene.json")])
     assert "refused 3 candidates" in text
     assert "most frequent: action model: hidden space (3 candidates)" in text
-    assert "slax-drake check-action --scene out/scene.json --station sim_configs/station_sim_shelf.yaml --all" in text
+    assert "as it stood at the last decision): slax-drake check-action --from-trial out --all" in text
     revealed = trial_summary({**_ended("revealed", last)}, [Path("out/trial.json")])
     assert "check-action" not in revealed
 
