@@ -103,7 +103,8 @@ def register(subparsers) -> None:
                    help="with --from-trial: the decision, 1 to the trial's count (as its 'step N/H' lines count)")
     s.add_argument("--history", default=None,
                    help="the previous step's OUT (its frames are replayed: the policy remembers its search)")
-    s.add_argument("--policy", default="bluction-dar", help="a non-oracle policy name (default bluction-dar)")
+    s.add_argument("--policy", default=None, help="a non-oracle policy name (default bluction-dar; with --from-trial "
+                   "the trial's)")
     s.add_argument("--tool-rule", action="append", default=[], metavar="FIELD=VALUE",
                    help="override an action-model rule of the station's, as for 'trial' (repeatable; with "
                    "--from-trial the default is the rules the trial planned with; a --history must have been planned "
@@ -322,13 +323,16 @@ def run_replay(args: argparse.Namespace) -> int:
     return 0
 
 
+POLICY = "bluction-dar"  # plan-step's policy unless --policy or the trial of --from-trial names another
+
+
 def run_plan_step(args: argparse.Namespace) -> int:
     from slax_drake.errors import PlanStepError
     from slax_drake.hardware.plan_step import plan_step_files
     from slax_drake.shelf.tool import parse_tool_rules
 
     frame_inputs = (args.depth, args.target_mask, args.joint_state)
-    scenario = args.scenario
+    scenario, policy = args.scenario, args.policy or POLICY
     tool_rules = parse_tool_rules(args.tool_rule, "station") if args.tool_rule else None
     if args.from_trial is not None:
         from slax_drake.hardware.plan_step import inputs_from_trial
@@ -345,8 +349,9 @@ def run_plan_step(args: argparse.Namespace) -> int:
             args.history = str(inputs.history)  # the objects the trial tracked, so they keep the trial's names
         if tool_rules is None:
             tool_rules = inputs.tool_rules  # the rules the trial planned with
+        policy = args.policy or inputs.policy or POLICY  # the trial's unless told
         print(f"inputs of decision {args.step} (t = {inputs.time_s:.2f} s) of {args.from_trial}: "
-              f"{', '.join(frame_inputs)}; station {scenario}")
+              f"{', '.join(frame_inputs)}; station {scenario}; policy {policy}")
     else:
         if args.step is not None:
             raise PlanStepError("--step applies to --from-trial only")
@@ -358,7 +363,7 @@ def run_plan_step(args: argparse.Namespace) -> int:
     from slax_drake.evaluation.trial import drake_info_silenced
 
     with drake_info_silenced():
-        result = plan_step_files(scenario, *frame_inputs, args.out, history=args.history, policy=args.policy,
+        result = plan_step_files(scenario, *frame_inputs, args.out, history=args.history, policy=policy,
                                  tool_rules=tool_rules)
     t = result.timings
     vis = result.visibility or {}

@@ -693,6 +693,7 @@ class TrialStepInputs:
     time_s: float  # the decision's simulated time
     history: Path | None = None  # the objects tracked up to the previous decision and its action (None: step 1)
     tool_rules: dict | None = None  # the rules the trial planned with (its record's), as overrides of the station's
+    policy: str | None = None  # the policy the trial ran (None: a record without it)
 
 
 def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> TrialStepInputs:
@@ -771,7 +772,8 @@ def inputs_from_trial(trial_dir: str | Path, step: int, out_dir: str | Path) -> 
             write_text_atomic(history, json.dumps(doc, indent=1))
     return TrialStepInputs(str(data.get("station") or ""), out_dir / "depth.npy", out_dir / "target_mask.png",
                            out_dir / "joint_state.json", float(entry["time"]), history,
-                           recorded_rules(data.get("tool_rules"), str(data.get("station") or "")))
+                           recorded_rules(data.get("tool_rules"), str(data.get("station") or "")),
+                           data.get("policy") if isinstance(data.get("policy"), str) else None)
 
 
 def recorded_rules(recorded, station_path: str) -> dict | None:

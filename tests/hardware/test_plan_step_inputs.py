@@ -96,6 +96,19 @@ def test_from_trial_builds_the_inputs_and_plans(trial_folder, capsys):
     assert json.loads(out.read_text())["metadata"]["plan_step"]["policy"] == "bluction-dar"
 
 
+def test_from_trial_plans_with_the_trials_policy_unless_told(trial_folder, capsys):
+    record = json.loads((trial_folder / "trial.json").read_text())
+    (trial_folder / "trial.json").write_text(json.dumps({**record, "policy": "slax-belief"}))
+    out = trial_folder / "ps" / "step.json"
+    assert main(["plan-step", "--from-trial", str(trial_folder), "--step", "1", "--out", str(out)]) == 0
+    assert "policy slax-belief" in capsys.readouterr().out
+    assert json.loads(out.read_text())["metadata"]["plan_step"]["policy"] == "slax-belief"
+    told = trial_folder / "ps" / "told.json"
+    assert main(["plan-step", "--from-trial", str(trial_folder), "--step", "1", "--out", str(told), "--policy",
+                 "dar"]) == 0
+    assert json.loads(told.read_text())["metadata"]["plan_step"]["policy"] == "dar"
+
+
 @pytest.mark.parametrize("extra, message", [(["--step", "2"], "decisions 1 to 1"), ([], "needs --step"),
                                             (["--step", "1", "--depth", "x.npy"], "one or the other")])
 def test_from_trial_refuses_what_it_cannot_use(trial_folder, capsys, extra, message):
