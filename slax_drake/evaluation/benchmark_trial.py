@@ -40,7 +40,8 @@ def read_benchmark_settings(folder: str | Path) -> dict:
         raise TrialError(f"--from-benchmark: {path} is not a settings file ({e})") from None
     missing = [k for k in SETTINGS_KEYS if not isinstance(settings, dict) or k not in settings]
     if missing:
-        raise TrialError(f"--from-benchmark: {path} lacks {', '.join(missing)}: not a physics benchmark's settings")
+        raise TrialError(f"--from-benchmark: {path} lacks {', '.join(missing)}: not a physics benchmark's settings, "
+                         f"or one from before they were recorded")
     return settings
 
 
@@ -118,8 +119,9 @@ def benchmark_record(folder: str | Path, policy: str, density: int, index: int) 
     except (FileNotFoundError, json.JSONDecodeError, KeyError, TypeError):
         return None
     for t in trials:
-        if (t.get("policy"), t.get("density"), t.get("index")) == (policy, density, index):
-            return {"result": t["drake_result"], "actions_executed": t["actions_executed"]}
+        if (t.get("policy"), t.get("density"), t.get("index")) == (policy, density, index) and "drake_result" in t:
+            # a summary from before "actions_executed" was kept counts them as the trial's steps
+            return {"result": t["drake_result"], "actions_executed": t.get("actions_executed", t.get("drake_steps"))}
     return None
 
 
