@@ -1,4 +1,6 @@
-"""One scene of a finished physics benchmark run again as a ``slax-drake trial`` (``--from-benchmark FOLDER``).
+"""A physics benchmark's scene as a ``slax-drake trial``: ``--benchmark-scene N:INDEX``
+(:func:`benchmark_scene_options`: the protocol's scene, with the command line's options) and ``--from-benchmark FOLDER`` (the trial a finished run
+ran for it, with that run's recorded options).
 
 A physics benchmark's folder records what its Drake trials ran with (``physics_settings.json``: the scenario, the
 station and its digest, the rule profile and the rules in force, the policies, the sensor-noise model, object
@@ -21,6 +23,27 @@ from slax_drake.errors import TrialError
 
 SETTINGS_KEYS = ("config", "seed", "policies", "profile", "tool_rules", "station_sha256", "scenario_sha256",
                  "drake_observation", "sleep")
+
+
+def benchmark_scene_options(opts, spec: str, protocol_seed: int | None = None):
+    """``opts`` (TrialOptions) set to the protocol scene ``spec`` = "N:INDEX" of ``opts.config``: N objects, the
+    scene seed ``scene_seed(protocol seed, N, INDEX)`` (``protocol_seed``, default the scenario's: a benchmark's
+    ``--seed``),
+    the protocol's first target size, H = horizon_per_object * N and, unless a station is given, the physics
+    benchmark's default station: the very trial the physics benchmark runs."""
+    from slax_drake.config import load_scenario
+    from slax_drake.evaluation.table1 import scene_seed
+    from slax_drake.evaluation.physics import protocol_trial
+
+    try:
+        density, index = (int(v) for v in spec.split(":"))
+    except ValueError:
+        raise TrialError(f"--benchmark-scene takes N:INDEX, e.g. 8:1 (got {spec!r})") from None
+    if density < 1 or index < 0:
+        raise TrialError(f"--benchmark-scene needs N >= 1 objects and INDEX >= 0 (got {spec!r})")
+    scenario = load_scenario(opts.config)
+    seed = scenario.protocol.seed if protocol_seed is None else int(protocol_seed)
+    return protocol_trial(opts, scenario, density, scene_seed(seed, density, index))
 
 
 def read_benchmark_settings(folder: str | Path) -> dict:
@@ -56,7 +79,6 @@ def benchmark_trial_options(folder: str | Path, spec: str, policy: str | None = 
     from slax_drake.config import load_scenario
     from slax_drake.evaluation.physics import drake_observation
     from slax_drake.evaluation.settings import code_version, file_digest, scenario_digest
-    from slax_drake.evaluation.trial_commands import benchmark_scene_options
     from slax_drake.shelf.tool import parse_tool_rules
     from slax_drake.station.scenario import station_for
     from slax_drake.systems.trial import TrialOptions

@@ -96,26 +96,6 @@ def run_view(args: argparse.Namespace) -> int:
     return 0
 
 
-def benchmark_scene_options(opts: TrialOptions, spec: str, protocol_seed: int | None = None) -> TrialOptions:
-    """``opts`` set to the protocol scene ``spec`` = "N:INDEX" of ``opts.config``: N objects, the scene seed
-    ``scene_seed(protocol seed, N, INDEX)`` (``protocol_seed``, default the scenario's: a benchmark's ``--seed``),
-    the protocol's first target size, H = horizon_per_object * N and, unless a station is given, the physics
-    benchmark's default station: the very trial the physics benchmark runs."""
-    from slax_drake.config import load_scenario
-    from slax_drake.evaluation.table1 import scene_seed
-    from slax_drake.evaluation.physics import protocol_trial
-
-    try:
-        density, index = (int(v) for v in spec.split(":"))
-    except ValueError:
-        raise TrialError(f"--benchmark-scene takes N:INDEX, e.g. 8:1 (got {spec!r})") from None
-    if density < 1 or index < 0:
-        raise TrialError(f"--benchmark-scene needs N >= 1 objects and INDEX >= 0 (got {spec!r})")
-    scenario = load_scenario(opts.config)
-    seed = scenario.protocol.seed if protocol_seed is None else int(protocol_seed)
-    return protocol_trial(opts, scenario, density, scene_seed(seed, density, index))
-
-
 def run(args: argparse.Namespace) -> int:
     from slax_drake.shelf.tool import parse_tool_rules
     from slax_drake.systems.trial_summary import trial_summary
@@ -133,6 +113,8 @@ def run(args: argparse.Namespace) -> int:
     if args.benchmark_scene is not None:
         if args.objects is not None or args.seed is not None:
             raise TrialError("--benchmark-scene replaces --objects and --seed: give one or the other")
+        from slax_drake.evaluation.benchmark_trial import benchmark_scene_options
+
         opts = benchmark_scene_options(opts, args.benchmark_scene)
     record, written, meshcat_url = _run(opts, args)
     print(trial_summary(record.data, written, html=args.html, meshcat_url=meshcat_url))

@@ -8,7 +8,7 @@ import pytest
 from slax_drake.cli import main
 from slax_drake.evaluation.table1 import scene_seed
 from slax_drake.systems.trial import DEFAULT_OBJECTS, DEFAULT_SEED, TrialOptions
-from slax_drake.evaluation.trial_commands import benchmark_scene_options
+from slax_drake.evaluation.benchmark_trial import benchmark_scene_options
 
 
 def test_benchmark_scene_gives_the_protocols_seed_target_horizon_and_station():
