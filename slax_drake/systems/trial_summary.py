@@ -76,8 +76,9 @@ def why_lines(data: dict, written) -> list[str]:
         if last.get("screened"):
             head += " (" + ", ".join(f"{why}: {n}" for why, n in sorted(last["screened"].items(),
                                                                        key=lambda kv: (-kv[1], kv[0]))) + ")"
-    if last.get("stop_reason"):
-        head += f" (the policy: {last['stop_reason']})"
+    if last.get("stop_reason"):  # after a rejection: what the policy said when asked again without it
+        head += (f"; then the policy had none left ({last['stop_reason']})" if rejected
+                 else f" (the policy: {last['stop_reason']})")
     lines = [head]
     if reasons:
         top = reasons[0]

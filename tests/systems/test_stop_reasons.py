@@ -48,6 +48,9 @@ def test_summary_names_the_most_frequent_reason_and_check_action():
     assert "refused 3 candidates" in text
     assert "most frequent: action model: hidden space (3 candidates)" in text
     assert "as it stood at the last decision): slax-drake check-action --from-trial out --all" in text
+    motion = {**last, "rejected": [{"action": "push track_5 d=+0.030", "kind": "tool collides"}]}
+    assert ("the motion planner rejected 1; then the policy had none left (no feasible action)"
+            in trial_summary(_ended("no feasible motion", motion), [Path("out/trial.json")]))
     revealed = trial_summary({**_ended("revealed", last)}, [Path("out/trial.json")])
     assert "check-action" not in revealed
 
