@@ -7,7 +7,8 @@ Each argument is a folder written by ``slax-drake benchmark --physics`` (or kept
 ``FOLDER:POLICY`` for one of its policies (default: every policy it holds). A row counts, from the folder's trial
 records: the Drake trials revealed with nothing lost (no object toppled or dropped) and revealed at all, the shelf
 simulator's reveals beside them, the actions executed and the share that went as the action model predicted, the
-trials that ended "no feasible motion", the objects lost at the end (toppled + dropped) and the stalls (trials, and
+trials that ended "no feasible motion", the objects toppled and dropped at the end (the two counts summed: an
+object fallen out of the bay and lying tilted counts in both; the summary keeps counts, not names) and the stalls (trials, and
 of them revealed after the stall). It prints a Markdown table (docs/research/decisions.md holds its output).
 """
 
@@ -17,7 +18,7 @@ import sys
 from pathlib import Path
 
 HEADER = ("| folder | policy | trials | Drake: nothing lost | revealed | shelf simulator | actions (as predicted) | "
-          "no feasible motion | objects lost | stalled (revealed after) |")
+          "no feasible motion | toppled + dropped | stalled (revealed after) |")
 
 
 def rows(folder: Path, policy: str | None = None) -> list[str]:
