@@ -8,8 +8,8 @@ Each argument is a folder written by ``slax-drake benchmark --physics`` (or kept
 records: the Drake trials revealed with nothing lost (no object toppled or dropped) and revealed at all, the shelf
 simulator's reveals beside them, the actions executed and the share that went as the action model predicted, the
 trials that ended "no feasible motion", the objects toppled and dropped at the end (the two counts summed: an
-object fallen out of the bay and lying tilted counts in both; the summary keeps counts, not names) and the stalls (trials, and
-of them revealed after the stall). It prints a Markdown table (docs/research/decisions.md holds its output).
+object fallen out of the bay and lying tilted counts in both; the summary keeps counts, not names) and the stalls
+(trials, and of them revealed after the stall). It prints a Markdown table (docs/research/decisions.md holds its output).
 """
 
 import argparse

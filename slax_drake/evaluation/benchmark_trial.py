@@ -1,6 +1,6 @@
 """A physics benchmark's scene as a ``slax-drake trial``: ``--benchmark-scene N:INDEX``
-(:func:`benchmark_scene_options`: the protocol's scene, with the command line's options) and ``--from-benchmark FOLDER`` (the trial a finished run
-ran for it, with that run's recorded options).
+(:func:`benchmark_scene_options`: the protocol's scene, with the command line's options) and ``--from-benchmark
+FOLDER`` (the trial a finished run ran for it, with that run's recorded options).
 
 A physics benchmark's folder records what its Drake trials ran with (``physics_settings.json``: the scenario, the
 station and its digest, the rule profile and the rules in force, the policies, the sensor-noise model, object
@@ -28,9 +28,8 @@ SETTINGS_KEYS = ("config", "seed", "policies", "profile", "tool_rules", "station
 def benchmark_scene_options(opts, spec: str, protocol_seed: int | None = None):
     """``opts`` (TrialOptions) set to the protocol scene ``spec`` = "N:INDEX" of ``opts.config``: N objects, the
     scene seed ``scene_seed(protocol seed, N, INDEX)`` (``protocol_seed``, default the scenario's: a benchmark's
-    ``--seed``),
-    the protocol's first target size, H = horizon_per_object * N and, unless a station is given, the physics
-    benchmark's default station: the very trial the physics benchmark runs."""
+    ``--seed``), the protocol's first target size, H = horizon_per_object * N and, unless a station is given, the
+    physics benchmark's default station: the very trial the physics benchmark runs."""
     from slax_drake.config import load_scenario
     from slax_drake.evaluation.table1 import scene_seed
     from slax_drake.evaluation.physics import protocol_trial
@@ -71,8 +70,9 @@ def read_benchmark_settings(folder: str | Path) -> dict:
 def benchmark_trial_options(folder: str | Path, spec: str, policy: str | None = None, station: str | None = None,
                             extra_rules: list[str] | None = None, **trial_fields) -> tuple:
     """(TrialOptions, notes): the trial the physics benchmark in ``folder`` ran for its scene ``spec`` ("N:INDEX"),
-    with the run's scenario and protocol seed, rule profile, rules (``extra_rules``, ``--tool-rule`` items, on top), sensor-noise
-    model and object sleep, and ``policy`` (default: the run's one policy; required when it ran several).
+    with the run's scenario and protocol seed, rule profile, rules (``extra_rules``, ``--tool-rule`` items, on
+    top), sensor-noise model and object sleep, and ``policy`` (default: the run's one policy; required when it ran
+    several).
     ``station`` (default: the benchmark's default station for the scenario, the run's own path may be gone) is
     checked against the run's digest. ``notes``: one line per reason the trial may differ from the run's.
     ``trial_fields``: further TrialOptions fields (meshcat, html, out, max_sim_time)."""

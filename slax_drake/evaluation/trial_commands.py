@@ -37,7 +37,7 @@ def register(subparsers) -> None:
     p.add_argument("--policy", default=None, metavar="NAME",
                    help=f"the search policy, one of: {', '.join(POLICY_NAMES)}. The oracles (oracle-p, oracle-p+s) "
                    "read the true scene and cannot run behind the camera; slax-belief is the project's own "
-                   "(default: bluction-dar)")
+                   "(default: bluction-dar; with --from-benchmark the run's)")
     p.add_argument("--perception", default="ground-truth", choices=("ground-truth", "learned"),
                    help="how the policy turns its belief of the scene (the objects segmented in the camera frame) "
                    "into the target's occupancy distribution along the image's x: ground-truth computes every "
@@ -105,7 +105,9 @@ def run(args: argparse.Namespace) -> int:
     profile = args.profile or "station"  # Drake trials plan with the physical tool's rules unless told otherwise
 
     opts = TrialOptions(config=args.config or TrialOptions.config,
-                        objects=DEFAULT_OBJECTS if args.objects is None else args.objects, seed=DEFAULT_SEED if args.seed is None else args.seed, policy=args.policy or TrialOptions.policy,
+                        objects=DEFAULT_OBJECTS if args.objects is None else args.objects,
+                        seed=DEFAULT_SEED if args.seed is None else args.seed,
+                        policy=args.policy or TrialOptions.policy,
                         perception=args.perception, station=args.station, meshcat=args.meshcat, html=args.html,
                         out=args.out, max_sim_time=args.max_sim_time, sleep=args.sleep,
                         sensor_noise=args.sensor_noise, segmentation=args.segmentation,

@@ -74,14 +74,16 @@ def test_the_runs_record_of_the_scene_comes_from_its_trial_file_else_its_summary
                                                                   "dz": -0.2}]
     trial.write_text(json.dumps({"drake": {"result": "horizon", "actions": actions}}))
     assert benchmark_record(folder, "slax-belief", 8, 14) == {
-        "result": "horizon", "actions": [("push", "track_3", -0.08, None, None), ("suction", "track_4", None, 0.0, -0.2)]}
+        "result": "horizon",
+        "actions": [("push", "track_3", -0.08, None, None), ("suction", "track_4", None, 0.0, -0.2)]}
     assert benchmark_record(folder, "slax-belief", 8, 99) is None
     old = benchmark_record("docs/results/physics_bdar_household", "bluction-dar", 4, 1)  # a summary of ed09d30
     assert set(old) == {"result", "actions_executed"} and isinstance(old["actions_executed"], int)
 
 
 def test_the_agreement_line_says_where_the_trial_parted_from_the_run():
-    run = {"result": "horizon", "actions": [("push", "track_3", -0.08, None, None), ("push", "track_4", 0.05, None, None)]}
+    run = {"result": "horizon",
+           "actions": [("push", "track_3", -0.08, None, None), ("push", "track_4", 0.05, None, None)]}
     same = {"result": "horizon", "actions": [{"type": "push", "object": "track_3", "d": -0.08},
                                              {"type": "push", "object": "track_4", "d": 0.05}]}
     assert agreement(same, run, "F") == 'as the run in F: the same 2 actions, ended "horizon"'
