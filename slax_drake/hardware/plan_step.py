@@ -668,18 +668,9 @@ def trial_decision(trial_dir: str | Path, step: int | None = None) -> TrialDecis
         raise PlanStepError(f"--step {step}: the trial in {trial_dir} has decisions 1 to {len(decisions)}")
     entry = decisions[step - 1]
     poses = entry.get("poses_before") or {}
-    objects = []
-    for o in scene.objects:
-        p = poses.get(o.name)
-        if p is not None:
-            turn = p["yaw"] - float(o.yaw)
-            c, s_ = np.cos(turn), np.sin(turn)
-            X = np.array(o.X_SO, float)
-            X[:3, :3] = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]]) @ X[:3, :3]
-            X[0, 3], X[1, 3] = p["x"], p["y"]
-            o = dataclasses.replace(o, X_SO=X)
-        objects.append(o)
-    return TrialDecision(data, decisions, entry, step, scene, dataclasses.replace(scene, objects=tuple(objects)))
+    objects = tuple(o if poses.get(o.name) is None else o.moved_to(poses[o.name]["x"], poses[o.name]["y"],
+                                                                  poses[o.name]["yaw"]) for o in scene.objects)
+    return TrialDecision(data, decisions, entry, step, scene, dataclasses.replace(scene, objects=objects))
 
 
 @dataclasses.dataclass
