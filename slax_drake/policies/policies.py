@@ -123,6 +123,7 @@ class DistributionPolicy:
         self._history = history_min(obs.p1d, self._history)
         self._objects = obs.known
         self._exclusions.tolerant = getattr(obs, "belief", None) is not None  # camera mode: estimated poses
+        self.memory.estimated = self._exclusions.tolerant
         if self.corrected and self.shuttle_rule == "sight" and self._view is None:
             from slax_drake.policies.sight import DeepestView, SightDepths
 

@@ -12,7 +12,11 @@ redoes it, until the horizon. :class:`TrialMemory` holds the two facts the corre
   objects seen in both decide), and neither does a remembered one (``SceneObject.remembered``: hidden now, held
   where it was last estimated, an estimate that moves when a glimpse of the object updates it although nothing
   moved the object: a Table II trial in Drake cycled one object through the same four poses for 14 actions while
-  a remembered neighbour's estimate, 6.8 cm off, made each return look new);
+  a remembered neighbour's estimate, 6.8 cm off, made each return look new). On estimated poses (``estimated``,
+  camera mode) only the objects the robot acted on since the earlier arrangement was observed decide, and the one
+  the candidate moves: an object no action touched stands where it stood, and its estimate moves with what hides
+  it (a neighbour's partly seen box, 1.2 cm off, let another Drake trial return to an arrangement). An object
+  pushed along by an action on its neighbour is not seen as moved then;
 - the last proposed action, the objects it was chosen on and the pose the action model predicts for its object.
   :meth:`outcome` compares that prediction with the next observation: "moved nothing" (the object stands where
   it stood), "moved less than predicted" (it moved, but stands more than ``position_tolerance`` short of or away
@@ -89,10 +93,13 @@ class TrialMemory:
         self.position_tolerance = position_tolerance
         self.yaw_tolerance = yaw_tolerance
         self.by_axis = by_axis  # each axis keeps the last move along it (module docstring)
+        self.estimated = False  # set by a policy deciding on estimated poses (camera mode): module docstring
         self.reset()
 
     def reset(self) -> None:
         self.observed: list[tuple] = []
+        self.executed: list[str] = []  # the objects of the executed actions, in order
+        self.observed_after: list[int] = []  # per observed arrangement: how many actions were executed before it
         self.proposal: Proposal | None = None
         self.moves: dict[str, tuple[float, float]] = {}  # object name -> its last executed displacement (m)
 
@@ -149,7 +156,9 @@ class TrialMemory:
         the action model predicts: each arrangement along it observed, each action's displacement its object's last
         move. For a search that looks at what the corrections would leave at a plan's end; this one is unchanged."""
         out = TrialMemory(self.position_tolerance, self.yaw_tolerance, self.by_axis)
+        out.estimated = self.estimated
         out.observed, out.moves = list(self.observed), dict(self.moves)
+        out.executed, out.observed_after = list(self.executed), list(self.observed_after)
         state = tuple(objects)
         for a in plan:
             before = next((o for o in state if o.name == a.name), None)
@@ -159,6 +168,7 @@ class TrialMemory:
                 d = (float(after.center[0] - before.center[0]), float(after.center[1] - before.center[1]))
                 if math.hypot(*d) > self.position_tolerance:
                     out.record_move(a.name, d)
+            out.executed.append(a.name)
             out.observe(state)
         return out
 
@@ -172,10 +182,25 @@ class TrialMemory:
         objects = seen_objects(objects)
         if not self.observed or not _identical(objects, self.observed[-1]):
             self.observed.append(objects)
+            self.observed_after.append(len(self.executed))
 
-    def seen_before(self, objects) -> bool:
-        """Whether ``objects`` (an arrangement an action would lead to) equals one already observed."""
-        return any(self.same_arrangement(tuple(objects), seen) for seen in self.observed)
+    def acted_since(self, j: int) -> set | None:
+        """On estimated poses, the names of the objects acted on since observed arrangement ``j`` (the only ones,
+        with the candidate's object, that decide whether an arrangement returns to it); None on true poses (every
+        object decides)."""
+        if not self.estimated:
+            return None
+        return set(self.executed[self.observed_after[j]:])
+
+    def seen_before(self, objects, moved: str | None = None) -> bool:
+        """Whether ``objects`` (an arrangement an action on object ``moved`` would lead to) equals one already
+        observed."""
+        objects = tuple(objects)
+        for j, seen in enumerate(self.observed):
+            acted = self.acted_since(j)
+            if self.same_arrangement(objects, seen, None if acted is None else acted | {moved}):
+                return True
+        return False
 
     def leads_back(self, objects, actions) -> list[bool]:
         """Per action, whether it leads back to an observed arrangement: ``seen_before(apply_action(objects, a))``
@@ -187,7 +212,7 @@ class TrialMemory:
         names = [o.name for o in objects]
         out = [False] * len(actions)
         if len(set(names)) != len(names):
-            return [self.seen_before(apply_action(objects, a)) for a in actions]
+            return [self.seen_before(apply_action(objects, a), a.name) for a in actions]
         index = {name: k for k, name in enumerate(names)}
         moved: dict = {}  # action index -> the moved object, made once
 
@@ -197,16 +222,18 @@ class TrialMemory:
                 moved[k] = apply_action((objects[index[a.name]],), a)[0] if a.name in index else None
             return moved[k]
 
-        for seen in self.observed:
+        for j, seen in enumerate(self.observed):
             seen = seen_objects(seen)
             pending = [k for k, found in enumerate(out) if not found]
             if not pending:
                 break
+            acted = self.acted_since(j)
             by_name = {o.name: o for o in seen}
             shared = [name for name in names if name in by_name]
             if not objects or not seen or not shared or len(by_name) != len(seen):
                 for k in pending:  # the general comparison (it does not depend on the names matching)
-                    out[k] = self.same_arrangement(apply_action(objects, actions[k]), seen)
+                    out[k] = self.same_arrangement(apply_action(objects, actions[k]), seen,
+                                                   None if acted is None else acted | {actions[k].name})
                 continue
             ours_small = len(objects) <= len(seen)  # same_arrangement compares the smaller one's objects first
             if ours_small:
@@ -214,10 +241,12 @@ class TrialMemory:
             else:
                 mine = {o.name: o for o in objects}
                 differ = {o.name for o in seen if o.name in mine and not self._close(o, mine[o.name])}
+            if acted is not None:  # estimated poses: an object no action touched since does not decide
+                differ &= acted
             for k in pending:
                 name = actions[k].name
                 if name not in index:  # an action on none of the objects leaves them as they are
-                    out[k] = self.same_arrangement(objects, seen)
+                    out[k] = self.same_arrangement(objects, seen, acted)
                     continue
                 if differ - {name}:
                     continue  # an object the action leaves in place stands elsewhere there
@@ -239,10 +268,11 @@ class TrialMemory:
             return True
         return abs(box_yaw_difference(a.yaw, b.yaw)) <= self.yaw_tolerance
 
-    def same_arrangement(self, a: tuple, b: tuple) -> bool:
+    def same_arrangement(self, a: tuple, b: tuple, only: set | None = None) -> bool:
         """Whether ``a`` and ``b`` show the same shelf. When they share names: every object seen in both stands in
         both at the same pose (an object seen in only one of them is hidden in the other, and a hidden object is
-        never acted on, so it has not moved). Otherwise (camera-mode hypotheses may be renamed per frame): the
+        never acted on, so it has not moved); with ``only``, every such object named in it (the others are taken to
+        stand where they stood: :meth:`acted_since`). Otherwise (camera-mode hypotheses may be renamed per frame): the
         smaller arrangement's objects each stand where one of the other's stands, by shape and pose, one-to-one.
         Two empty arrangements are the same; an empty one and another are not. Remembered objects do not count
         (:func:`seen_objects`)."""
@@ -254,7 +284,7 @@ class TrialMemory:
         by_name = {o.name: o for o in b}
         common = [o for o in a if o.name in by_name]
         if common:
-            return all(self._close(o, by_name[o.name]) for o in common)
+            return all(self._close(o, by_name[o.name]) for o in common if only is None or o.name in only)
         free = list(b)
         for o in a:
             match = next((k for k, other in enumerate(free) if self._close(o, other)), None)
@@ -284,6 +314,7 @@ class TrialMemory:
         p, self.proposal = self.proposal, None
         if p is None:
             return None
+        self.executed.append(p.action.name)
         tol = self.position_tolerance
         predicted = math.dist(p.predicted_xy, p.before_xy)
         now = next((o for o in objects if o.name == p.action.name), None)
