@@ -406,3 +406,22 @@ def test_on_estimated_poses_only_the_objects_acted_on_decide_a_return():
         assert memory.seen_before(apply_action(later, taken), taken.name) is leads_back
         plan = memory.after_plan(later, [taken])  # what a search's dead-end test judges by: the same log
         assert plan.estimated is estimated and plan.executed == acted + ["track_12"]
+
+
+def test_a_box_named_with_its_sizes_swapped_and_turned_a_quarter_stands_the_same():
+    """The estimator names a box (0.13 x 0.07 m) at yaw 0.01 in one frame and, with its x and y sizes swapped, at
+    yaw 1.56 in another (Drake trial 12:6 of the Table II protocol): the trial memory takes both for the same pose; a
+    box whose sizes match as they stand, turned a quarter, is another footprint."""
+    import math
+
+    from slax_drake.policies.trial_memory import same_box_turn
+
+    seen = box("a", 0.117, -0.171, sx=0.0667, sy=0.1365, yaw=1.56207)
+    predicted = box("a", 0.119, -0.1716, sx=0.1348, sy=0.0659, yaw=-0.00106)
+    assert same_box_turn(seen, predicted, 0.05) and same_box_turn(predicted, seen, 0.05)
+    assert TrialMemory().same_arrangement((seen,), (predicted,))
+    turned = box("a", 0.117, -0.171, sx=0.0667, sy=0.1365, yaw=1.56207 - math.pi / 2)
+    assert not same_box_turn(seen, turned, 0.05)
+    assert same_box_turn(seen, box("a", 0.0, 0.0, sx=0.0667, sy=0.1365, yaw=1.56207 - math.pi), 0.05)
+    square = box("s", 0.0, 0.0, sx=0.08, sy=0.08, yaw=0.0)
+    assert same_box_turn(square, box("s", 0.0, 0.0, sx=0.08, sy=0.08, yaw=math.pi / 2), 0.05)
