@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 
 from slax_drake.errors import UserError
-from slax_drake.evaluation.trial_records import read_trial_records
+from slax_drake.evaluation.trial_records import analyse_trial_records
 
 YAW_TOLERANCE = 0.05  # rad, the trial memory's
 
@@ -74,14 +74,11 @@ def main(argv=None) -> int:
         print("error: --tolerance and --away take positive lengths in metres", file=sys.stderr)
         return 2
     try:
-        records = read_trial_records(args.physics, args.policy, kind="physics_trials")
-        found = {key: returns(r["drake"], args.tolerance, args.away) for key, r in records.items()}
-    except (UserError, KeyError, TypeError, ValueError) as e:
-        message = e if isinstance(e, UserError) else f"a trial record lacks what a physics trial holds ({e!r})"
-        print(f"error: {args.physics}: {message}", file=sys.stderr)
-        return 2
-    if not records:
-        print(f"error: {args.physics}: no trial files of {args.policy}", file=sys.stderr)
+        records, found = analyse_trial_records(
+            args.physics, args.policy, lambda record: returns(record["drake"], args.tolerance, args.away),
+            kind="physics_trials")
+    except UserError as e:
+        print(f"error: {args.physics}: {e}", file=sys.stderr)
         return 2
     cycled = {key: hits for key, hits in found.items() if hits}
     print(f"{args.policy}, {len(records)} Drake trials of `{args.physics}`: {len(cycled)} returned to an arrangement "

@@ -37,7 +37,7 @@ from pathlib import Path
 
 from slax_drake.errors import UserError
 from slax_drake.evaluation.physics import clean_success
-from slax_drake.evaluation.trial_records import read_trial_records
+from slax_drake.evaluation.trial_records import analyse_trial_records
 
 DX_TOLERANCE_M = 0.011  # 1 cm along x, and the rounding of the shelf record's 3 decimals
 DZ_TOLERANCE_M = 0.03  # the placement depth: Drake plans it on the estimated pose
@@ -120,14 +120,9 @@ def main(argv=None) -> int:
     parser.add_argument("--policy", default="slax-belief")
     args = parser.parse_args(argv)
     try:
-        records = read_trial_records(args.physics, args.policy, kind="physics_trials")
-        found = {key: find_divergence(r) for key, r in records.items()}
-    except (UserError, KeyError, TypeError, ValueError) as e:
-        message = e if isinstance(e, UserError) else f"a trial record lacks what a physics trial holds ({e!r})"
-        print(f"error: {args.physics}: {message}", file=sys.stderr)
-        return 2
-    if not records:
-        print(f"error: {args.physics}: no trial files of {args.policy}", file=sys.stderr)
+        records, found = analyse_trial_records(args.physics, args.policy, find_divergence, kind="physics_trials")
+    except UserError as e:
+        print(f"error: {args.physics}: {e}", file=sys.stderr)
         return 2
     print(f"{args.policy}, {len(records)} scenes of `{args.physics}`: where the Drake trial leaves the shelf "
           f"simulator's path, and why. Made by `python research/drake_divergence.py {args.physics} --policy "

@@ -42,6 +42,21 @@ def read_trial_records(folder, policy: str, kind: str = "trials", missing_ok: bo
     return records
 
 
+def analyse_trial_records(folder, policy: str, analyse, kind: str = "trials") -> tuple[dict, dict]:
+    """(the records of :func:`read_trial_records`, {file stem: ``analyse(record)``}). A record that lacks what
+    ``analyse`` reads (a KeyError, TypeError or ValueError from it) is a UserError saying so, and so is a folder with
+    no record of ``policy``."""
+    records = read_trial_records(folder, policy, kind)
+    try:
+        results = {key: analyse(record) for key, record in records.items()}
+    except (KeyError, TypeError, ValueError) as e:
+        trial = "a physics trial" if kind == "physics_trials" else "a trial"
+        raise UserError(f"a trial record lacks what {trial} holds ({e!r})") from None
+    if not records:
+        raise UserError(f"no trial files of {policy}")
+    return records, results
+
+
 def without_keys(record, keys):
     """``record`` (a trial record's JSON value) with every dict entry whose key is in ``keys`` dropped, at any depth
     (e.g. the clock's readings, which differ between two runs of the same trial)."""

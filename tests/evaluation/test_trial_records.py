@@ -6,7 +6,7 @@ import json
 import pytest
 
 from slax_drake.errors import UserError
-from slax_drake.evaluation.trial_records import read_trial_records
+from slax_drake.evaluation.trial_records import analyse_trial_records, read_trial_records
 
 
 def write_records(folder, kind, policy, records: dict) -> None:
@@ -59,3 +59,15 @@ def test_a_missing_policy_folder_is_a_user_error_or_no_records_when_allowed(tmp_
 def test_an_unknown_kind_is_refused(tmp_path):
     with pytest.raises(ValueError, match="kind"):
         read_trial_records(tmp_path, "dar", kind="table1")
+
+
+def test_analysing_records_names_a_record_that_lacks_what_the_analysis_reads(tmp_path):
+    write_records(tmp_path, "physics_trials", "p", {"04_0000": {"drake": {"steps": 3}}, "04_0001": {"drake": {}}})
+    with pytest.raises(UserError, match=r"a trial record lacks what a physics trial holds \(KeyError\('steps'\)\)"):
+        analyse_trial_records(tmp_path, "p", lambda record: record["drake"]["steps"], kind="physics_trials")
+    write_records(tmp_path, "trials", "p", {"04_0000": {"steps": 3}, "06_0000": {"steps": 5}})
+    records, found = analyse_trial_records(tmp_path, "p", lambda record: record["steps"] * 2)
+    assert list(records) == ["04_0000", "06_0000"] and found == {"04_0000": 6, "06_0000": 10}
+    (tmp_path / "trials" / "q").mkdir()
+    with pytest.raises(UserError, match="no trial files of q"):
+        analyse_trial_records(tmp_path, "q", len)
