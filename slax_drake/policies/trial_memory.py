@@ -198,7 +198,9 @@ class TrialMemory:
         objects = tuple(objects)
         for j, seen in enumerate(self.observed):
             acted = self.acted_since(j)
-            if self.same_arrangement(objects, seen, None if acted is None else acted | {moved}):
+            if acted is not None and moved is not None:
+                acted.add(moved)
+            if self.same_arrangement(objects, seen, acted):
                 return True
         return False
 
