@@ -61,7 +61,7 @@ from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import DWELL, LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
 from slax_drake.planning.world import TOOL_RIGID_BODIES, PlanningWorld, pairs_text
-from slax_drake.shelf.actions import Push, Suction
+from slax_drake.shelf.actions import ActionModel, Push, Suction
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.model import Scene, state_key
 from slax_drake.station import robot as robot_model
@@ -185,6 +185,20 @@ class MotionPlanner:
         self.keep_kinematic_ik = keep_kinematic_ik
         self._kinematic_ik = {}
         self._tight = False  # the near-miss variant: every waypoint and midpoint solved with the hold tolerances
+        self._hidden_model = None  # ((shelf, eye), ActionModel) that reckons hidden space (hidden_space)
+
+    def hidden_space(self, scene: Scene, name: str):
+        """(floor grid, bool (ny, nx) cells) of the space the objects of ``scene`` other than ``name`` hide from
+        its camera, as the action model reckons it (:meth:`ActionModel.hidden_by_others`), or None when the
+        ``carry_hidden_check`` rule is off: a suctioned object is not carried across it."""
+        if not self.tool.rules.carry_hidden_check:
+            return None
+        eye = tuple(float(v) for v in scene.camera.position)
+        key = (scene.shelf, eye)
+        if self._hidden_model is None or self._hidden_model[0] != key:
+            self._hidden_model = (key, ActionModel(scene.shelf, eye, self.tool))
+        model = self._hidden_model[1]
+        return model.grid, model.hidden_by_others(scene.objects, name)
 
     def world(self, scene: Scene) -> PlanningWorld:
         """The planning world of the scene's objects as they stand (built once per object state)."""
@@ -212,7 +226,7 @@ class MotionPlanner:
                 obj = next(o for o in scene.objects if o.name == action.name)
                 x_robot = world.X_WS.inverse().translation()[0]  # the robot's base (W origin) in S
                 pulls = carry_options(action, obj, scene.shelf, scene.target, margin,
-                                      wrist_side=action.q[0] - x_robot)
+                                      wrist_side=action.q[0] - x_robot, hidden=self.hidden_space(scene, action.name))
             for pull, carry_yaw in pulls:
                 self._anchor_failed = set()
                 try:

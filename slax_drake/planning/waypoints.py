@@ -293,22 +293,33 @@ def full_pull_out(action, obj: SceneObject, shelf: Shelf, approach_margin: float
 
 
 def pull_out_options(action, obj: SceneObject, shelf: Shelf, target=None,
-                     approach_margin: float = APPROACH_MARGIN) -> list[float]:
+                     approach_margin: float = APPROACH_MARGIN, hidden=None) -> list[float]:
     """Cup y values (S) at which to carry a suctioned object across, in the order to try: the full pull-out,
     then shallower ones ``PULL_STEP`` apart (the object crosses inside the shelf, which the planner's
     carried-object checks then clear against the known objects and the shelf) while the cup is pulled at least
     ``PULL_STEP`` back from its seal. A depth at which the carried object's way across would overlap the
-    target's footprint (which the planning world does not hold) is left out."""
+    target's footprint (which the planning world does not hold) is left out, and so is one whose way across
+    crosses space hidden from the camera, when ``hidden`` (a :class:`~slax_drake.shelf.floor.FloorGrid` and its
+    hidden cells, bool (ny, nx): the ``carry_hidden_check`` rule) is given: the bounding box of the object's
+    footprint swept along x at that depth meets a hidden cell (what stands there was never seen)."""
     from slax_drake.scene.footprint import clear_of
+    from slax_drake.shelf.floor import band_crosses_hidden
 
     y_full = full_pull_out(action, obj, shelf, approach_margin)
     cy = action.q[1]
     options = [y_full]
     y = y_full + PULL_STEP
     fp = Footprint.of(obj)
+    ex, ey = fp.extents()
+    ox = float(obj.center[0])
     while y <= cy - PULL_STEP + 1e-9:
         ok = True
-        if target is not None:
+        if hidden is not None:
+            grid, cells = hidden
+            y_centre = float(obj.center[1]) + (y - (cy + SEAL_PRESS * action.axis[1]))  # the cup seals SEAL_PRESS in
+            ok = not bool(band_crosses_hidden(grid, cells, y_centre - ey, y_centre + ey,
+                                              ox + min(0.0, action.dx) - ex, ox + max(0.0, action.dx) + ex))
+        if ok and target is not None:
             x0, y0 = float(obj.center[0]), float(obj.center[1]) + (y - cy)
             n = max(1, int(np.ceil(abs(action.dx) / SWEEP_STEP)))
             xs = x0 + np.linspace(0.0, action.dx, n + 1)
@@ -322,17 +333,18 @@ def pull_out_options(action, obj: SceneObject, shelf: Shelf, target=None,
 
 
 def carry_options(action, obj: SceneObject, shelf: Shelf, target=None, approach_margin: float = APPROACH_MARGIN,
-                  wrist_side: float = 1.0) -> list[tuple[float, float]]:
+                  wrist_side: float = 1.0, hidden=None) -> list[tuple[float, float]]:
     """(pull_to, carry_yaw) of the ways to carry a suctioned object across, in the order to try: the depths of
     :func:`pull_out_options` with the tool keeping its yaw, then the full pull-out with the tool turned by
     ``CARRY_YAWS`` about the cup's vertical axis while it carries (:func:`action_waypoints`), each magnitude with
     the sign that swings the wrist toward ``wrist_side`` (+1: S +x; the side away from the shoulder) first. Near
     the robot the arm cannot hold the tube straight along S y (the wrist folds into the shoulder: the elbow and
     the torso are at their limits), turned it can. A turned way is left out when its footprints, turning about
-    the cup, would come within ``TARGET_CLEARANCE`` of the target's (the planning world does not hold it)."""
+    the cup, would come within ``TARGET_CLEARANCE`` of the target's (the planning world does not hold it).
+    ``hidden``: as for :func:`pull_out_options`."""
     if getattr(action, "drag", False):
         return [(drag_pull_cup_y(action, obj, shelf), 0.0)]  # one way: action_waypoints drags it
-    options = [(y, 0.0) for y in pull_out_options(action, obj, shelf, target, approach_margin)]
+    options = [(y, 0.0) for y in pull_out_options(action, obj, shelf, target, approach_margin, hidden)]
     y_full = options[0][0]
     y_place = action.q[1] + (action.dz - float(obj.center[1]))
     first = 1.0 if wrist_side >= 0 else -1.0

@@ -54,8 +54,8 @@ from slax_drake.caches import memo
 from slax_drake.shelf.pushing import push_pose
 from slax_drake.shelf.rules import RULES, ToolConfig, ToolGeometry, drag_twist_limit, tool_config_problem
 from slax_drake.shelf.floor import (
-    NOT_FOUND, FloorGrid, column_extents, erode, first_hidden_row, free_push_cells, open_with_disc,
-    push_end_hidden,
+    NOT_FOUND, FloorGrid, band_crosses_hidden, column_extents, erode, first_hidden_row, free_push_cells,
+    open_with_disc, push_end_hidden,
 )
 from slax_drake.shelf.reach import hold_height_span, load_reach_map
 from slax_drake.scene import mass as scene_mass
@@ -304,6 +304,12 @@ class ActionModel:
             if suctions:
                 self._suctions(ctx, i, feasible, rejected)
         return Candidates(feasible, rejected)
+
+    def hidden_by_others(self, objects, name: str) -> np.ndarray:
+        """Cells (ny, nx) of :attr:`grid` that ``objects`` other than the one named ``name`` hide from the camera,
+        where an unseen object could stand: the hidden space the model's rules read for that object's moves."""
+        objects = tuple(objects)
+        return _StateContext(self, objects, ()).hidden_others([o.name for o in objects].index(name))
 
     def drag_instead(self, objects, lift: Suction, mass: float) -> tuple[Suction | None, str]:
         """(the drag, "") that puts the object of ``lift`` where ``lift`` would have (the same d_x and d_z), when this
@@ -688,6 +694,7 @@ class ActionModel:
         refused = pre["lowered"].copy()
         if lat.drag:
             return refused | pre["carry_at_seal"]
+        through_hidden = self._ways_through_hidden(ctx, i, pre, obj, fp)  # (A, O) or None
         # the tallest other object near each placement's way (A, B)
         ox, oy = float(obj.center[0]), float(obj.center[1])
         dxs, y_placed = pre["dxs"], lat.y_placed
@@ -710,8 +717,28 @@ class ActionModel:
             sel = np.isclose(z_top, zt, atol=1e-6)
             pushed_in = pre["at_placement"][..., lo:hi].all(-1)  # (A, B)
             ways = pre["pull_out"][None, :, lo:hi].all(-1) | pre["translate"][:, :, lo:hi].all(-1)  # (A, O)
+            if through_hidden is not None:
+                ways = ways | through_hidden
             refused[sel] |= (pushed_in | ways.all(-1)[:, None])[sel]
         return refused
+
+    def _ways_through_hidden(self, ctx, i: int, pre: dict, obj: SceneObject, fp: Footprint) -> np.ndarray | None:
+        """(A, O) bool: the ways across of :meth:`carry_cup_ys` (O) on which object i, carried across by each
+        placement's d_x (A), would cross space the other objects hide from the camera (the ``carry_hidden_check``
+        rule: :func:`slax_drake.shelf.floor.band_crosses_hidden`); None when the rule is off. The planner leaves
+        such ways out (:func:`slax_drake.planning.waypoints.pull_out_options`)."""
+        if not self.tool.rules.carry_hidden_check:
+            return None
+        hidden = ctx.hidden_others(i)
+        ex, ey = fp.extents()
+        ox, oy = float(obj.center[0]), float(obj.center[1])
+        dxs = pre["dxs"]
+        x_lo, x_hi = ox + np.minimum(0.0, dxs) - ex, ox + np.maximum(0.0, dxs) + ex
+        out = np.zeros((len(dxs), len(pre["way_ys"])), dtype=bool)
+        for k, y_way in enumerate(pre["way_ys"]):
+            y_centre = oy + (float(y_way) - pre["py"])
+            out[:, k] = band_crosses_hidden(self.grid, hidden, y_centre - ey, y_centre + ey, x_lo, x_hi)
+        return out
 
     def _hold_precompute(self, lat: "SuctionLattice", obj: SceneObject, fp: Footprint) -> dict:
         """The hold layers' verdicts (per height node, last axis) on the poses of object ``obj``'s suction that
@@ -736,7 +763,8 @@ class ActionModel:
             k = np.flatnonzero(turns == w)
             pull_out[k] = rmap.hold_refusals(np.full(len(k), px), way_ys[k], yaw + float(w), REACH_MARGIN)
             translate[:, k] = rmap.hold_refusals(x2[:, None], way_ys[k][None, :], yaw + float(w), REACH_MARGIN)
-        pre = dict(dxs=dxs, lowered=lowered, at_placement=at_placement, pull_out=pull_out, translate=translate)
+        pre = dict(dxs=dxs, lowered=lowered, at_placement=at_placement, pull_out=pull_out, translate=translate,
+                   way_ys=way_ys, turns=turns, py=py)
         if lat.drag:  # one way, at the seal's height: pulled, dragged across, pushed in
             if seal is None:
                 pre["carry_at_seal"] = np.zeros_like(lowered)

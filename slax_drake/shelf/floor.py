@@ -194,3 +194,20 @@ def open_with_disc(mask: np.ndarray, radius_cells: int) -> np.ndarray:
     if not centres.any():
         return np.zeros_like(mask)
     return cv2.dilate(centres, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0).astype(bool)
+
+
+def band_crosses_hidden(grid: FloorGrid, hidden: np.ndarray, y_lo: float, y_hi: float, x_lo, x_hi) -> np.ndarray:
+    """Whether the floor rectangle x_lo <= x <= x_hi, y_lo <= y <= y_hi (m, S) holds the centre of a ``hidden`` cell
+    (bool (ny, nx) on ``grid``), for each of the arrays ``x_lo`` and ``x_hi`` (same shape; the result has it): the
+    test of an object carried across the shelf at one depth, its bounding box swept along x (a carried way that
+    crosses space the camera has not seen). A band wholly in front of the bay holds no cell."""
+    x_lo, x_hi = np.asarray(x_lo, float), np.asarray(x_hi, float)
+    r0 = max(0, int(math.ceil((y_lo + grid.shelf.depth / 2.0) / grid.cell - 0.5 - 1e-9)))
+    r1 = min(grid.ny - 1, int(math.floor((y_hi + grid.shelf.depth / 2.0) / grid.cell - 0.5 + 1e-9)))
+    if r1 < r0:
+        return np.zeros(x_lo.shape, dtype=bool)
+    columns = hidden[r0:r1 + 1].any(axis=0)
+    counts = np.concatenate([[0], np.cumsum(columns)])
+    c0 = np.clip(np.ceil((x_lo + grid.shelf.width / 2.0) / grid.cell - 0.5 - 1e-9), 0, grid.nx).astype(int)
+    c1 = np.clip(np.floor((x_hi + grid.shelf.width / 2.0) / grid.cell - 0.5 + 1e-9), -1, grid.nx - 1).astype(int)
+    return (c1 >= c0) & (counts[np.maximum(c1 + 1, 0)] - counts[np.minimum(c0, grid.nx)] > 0)

@@ -244,6 +244,22 @@ class SuctionLift(Rule):
 
 
 @register
+class CarryHiddenCheck(Rule):
+    """A lifted object carried across inside the bay (the planner's shallower ways across, when the arm cannot
+    carry it pulled all the way out) must not cross space the camera has not seen: the bounding box of its
+    footprint, swept along x at that depth, meets no cell hidden by the other objects (the hidden space of
+    ``hidden_space``, ``hidden_probe_height`` and ``min_hidden_width``). Read by the motion planner, which leaves
+    such ways out (:func:`slax_drake.planning.waypoints.pull_out_options`), and by the action model's reach-map
+    check of the ways across (:meth:`slax_drake.shelf.actions.ActionModel.carry_cup_ys`), so that both refuse
+    the same carries. Behind an object's seen face stands its unseen depth, or an object never seen: in the Drake
+    trial 10:9 of the Table II protocol a cylinder carried across 4 cm in front of a box's estimated back, 7.8 cm
+    in front of its true one, knocked it over (docs/research/physics.md). A drag's way out and across stays out of
+    hidden space already. ``station``: on; ``paper``: off (no planner, no reach map)."""
+
+    name, type, paper, station = "carry_hidden_check", bool, False, True
+
+
+@register
 class TubeApproachCheck(Rule):
     """The tube's straight way in to the cup's contact touches no object taller than the tube's underside: a
     contact the horizontal tube cannot reach is no "reachable point". ``station`` only: off, 70 of 168 initial
