@@ -42,6 +42,11 @@ HUNT_CROSSLEY_DISSIPATION = 5.0  # s/m
 CORNER_SPHERE_RADIUS = 0.001  # m
 CYLINDER_RIM_SPHERES = 6  # contact spheres around each rim of a cylinder (see the module docstring)
 SHELF_PANEL_NAMES = ("support", "left_wall", "right_wall", "top", "back")
+# m: how far below the support surface the support board's collision box reaches (the panel, and its visual, is
+# the shelf's wall_thickness). With point contact an object's corner sphere pressed more than half a 2 cm board deep
+# meets the board's bottom face nearer than its top and is pushed out below it: in the Drake trial 8:5 of the Table II
+# protocol a carried box pressed 1.2 cm into the board fell through it and hung beneath the bay (docs/research/physics.md)
+SUPPORT_COLLISION_DEPTH = 0.10
 SHELF_COLOR = (0.76, 0.60, 0.42, 1.0)
 FLOOR_SIZE = 20.0  # m, the floor's width and length about the robot (add_floor)
 
@@ -79,7 +84,8 @@ def add_floor(plant) -> None:
 
 def shelf_urdf(shelf: Shelf) -> str:
     """URDF text of the shelf bay: one body ``shelf_body`` at the shelf frame S with five box panels, each a
-    collision box with Drake's point-contact properties and a visual box. URDF rather than SDFormat: Drake parses an
+    collision box with Drake's point-contact properties and a visual box (the support's collision box reaches
+    ``SUPPORT_COLLISION_DEPTH`` below the support surface, so that nothing pressed into the board passes through it). URDF rather than SDFormat: Drake parses an
     SDFormat file in about 65 ms whatever its content (a URDF this size in under 1 ms), and the planner builds a
     planning world, the shelf included, for every object state it plans in."""
     links = []
@@ -87,10 +93,17 @@ def shelf_urdf(shelf: Shelf) -> str:
         c, s = (lo + hi) / 2.0, hi - lo
         origin = f'<origin xyz="{c[0]:.6f} {c[1]:.6f} {c[2]:.6f}" rpy="0 0 0"/>'
         box = f'<geometry><box size="{s[0]:.6f} {s[1]:.6f} {s[2]:.6f}"/></geometry>'
+        if name == "support":  # the collision box reaches SUPPORT_COLLISION_DEPTH below the support surface
+            lo_c = np.array([lo[0], lo[1], hi[2] - SUPPORT_COLLISION_DEPTH])
+            c_c, s_c = (lo_c + hi) / 2.0, hi - lo_c
+            collision_origin = f'<origin xyz="{c_c[0]:.6f} {c_c[1]:.6f} {c_c[2]:.6f}" rpy="0 0 0"/>'
+            collision_box = f'<geometry><box size="{s_c[0]:.6f} {s_c[1]:.6f} {s_c[2]:.6f}"/></geometry>'
+        else:
+            collision_origin, collision_box = origin, box
         links.append(
             f"""    <collision name="{name}">
-      {origin}
-      {box}
+      {collision_origin}
+      {collision_box}
       <drake:proximity_properties>
         <drake:mu_dynamic value="{SHELF_FRICTION}"/>
         <drake:mu_static value="{SHELF_FRICTION}"/>

@@ -236,3 +236,28 @@ def test_an_object_off_the_shelf_lands_on_the_floor_and_rests_there(sim_scenario
                 for i in (contacts.point_pair_contact_info(k).bodyA_index(),
                           contacts.point_pair_contact_info(k).bodyB_index())}
     assert touching == {"world", "object_0"}
+
+
+@pytest.mark.parametrize("station_file, scenario_file", [("sim_configs/station_sim_shelf.yaml", "sim_configs/sim_shelf.yaml"),
+                                                          ("sim_configs/station_table2.yaml", "sim_configs/table2.yaml")])
+def test_an_object_pressed_deep_into_the_support_board_comes_back_up(station_file, scenario_file):
+    """A box whose bottom starts 1.5 cm inside the support board (as a carried object pressed into it) is pushed back
+    up onto the board and rests there. With a collision box as thin as the 2 cm panel its corner spheres, past the
+    board's middle, met the bottom face nearer than the top and the box fell through the board
+    (``SUPPORT_COLLISION_DEPTH``)."""
+    from slax_drake.config import load_scenario
+    from slax_drake.scene.model import Scene, SceneObject, planar_pose
+
+    scenario = load_station_scenario(station_file)
+    shelf = sample_scene(load_scenario(scenario_file), 1, seed=0)
+    box = SceneObject("object_0", "box", (0.08, 0.08, 0.12), planar_pose(0.0, 0.0, 0.06 - 0.015, 0.0), mass=0.3)
+    scene = Scene(shelf.shelf, shelf.camera, (box,), None, 0)
+    diagram = MakeStation(scenario, scene, camera=False)
+    simulator = _simulator(diagram, 1.0)
+    plant = diagram.GetSubsystemByName("plant")
+    plant_context = plant.GetMyContextFromRoot(simulator.get_context())
+    from slax_drake.station.plant import shelf_pose
+
+    X_SO = shelf_pose(scenario, scene.camera).inverse() @ plant.EvalBodyPoseInWorld(
+        plant_context, plant.GetBodyByName("object_0"))
+    assert X_SO.translation()[2] == pytest.approx(0.06, abs=3e-3)  # resting on the board, not beneath it
