@@ -418,3 +418,46 @@ def test_arrangement_returns_refuses_a_folder_without_trial_files(tmp_path, caps
     assert script("arrangement_returns").main([str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"error: {tmp_path}")
+
+
+def test_lost_objects_tells_collateral_losses_and_objects_beneath_the_bay():
+    lost_objects = script("lost_objects").lost_objects
+    drake = {"toppled": ["b"], "dropped": ["a", "c", "b"],
+             "final_objects": {"a": {"x": 0.0, "y": -0.29, "z": -0.09}, "b": {"x": 0.1, "y": 0.0, "z": 0.03},
+                               "c": {"x": 0.0, "y": -0.45, "z": -0.75}, "d": {"x": 0.2, "y": 0.1, "z": 0.05}},
+             "actions": [{"true_object": "b", "mismatch": None}, {"true_object": "d", "mismatch": None},
+                         {"true_object": "b", "mismatch": "toppled"}, {"true_object": "c", "mismatch": "dropped"}]}
+    rows = {r["object"]: r for r in lost_objects(drake, 0.6, 0.6)}
+    assert set(rows) == {"a", "b", "c"}  # d was moved and kept
+    assert rows["a"]["moved_by"] == [] and rows["a"]["beneath"]  # collateral, under the board at the front edge
+    assert rows["b"]["how"] == "toppled and dropped" and rows["b"]["moved_by"] == [(1, None), (3, "toppled")]
+    assert not rows["b"]["beneath"] and not rows["c"]["beneath"]  # on the board; on the room's floor
+
+
+def test_lost_objects_refuses_a_folder_without_settings(tmp_path, capsys):
+    assert script("lost_objects").main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: ") and str(tmp_path) in err[0]
+
+
+def test_object_motion_joins_samples_into_movements_and_names_the_waypoint():
+    module = script("object_motion")
+    still, moving = [0.0, 0.0, 0.1], 0.01
+    path = [still] * 3 + [[moving * k, 0.0, 0.1] for k in range(1, 4)] + [[0.03, 0.0, 0.1]] * 2 \
+        + [[0.04, 0.0, 0.1]] + [[0.04, 0.0, 0.1]] * 6 + [[0.05, 0.0, 0.1]]
+    times = [0.1 * k for k in range(len(path))]
+    # samples 2..4 move, 7 moves (2 samples later: joined), 14 moves alone (after a gap of 6)
+    assert module.movements(times, path, 0.002) == [(2, 7), (14, 14)]
+    assert module.tilt_deg((1.0, 0.0, 0.0, 0.0)) == pytest.approx(0.0)
+    assert module.tilt_deg((math.cos(math.pi / 8), math.sin(math.pi / 8), 0.0, 0.0)) == pytest.approx(45.0)
+    starts = [(1.0, [["approach", 0.5], ["seal", 1.0]]), (5.0, [["approach", 0.5]])]
+    assert module.during(0.5, starts) == "before the first action"
+    assert module.during(2.2, starts) == "action 0, after seal (+1.2 s)"
+    assert module.during(5.2, starts) == "action 1, before its first waypoint (+0.2 s)"
+
+
+def test_object_motion_refuses_a_folder_without_poses(tmp_path, capsys):
+    (tmp_path / "trial.json").write_text('{"steps_log": [], "actions": []}')
+    assert script("object_motion").main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: {tmp_path}")
