@@ -252,8 +252,8 @@ class CarryHiddenCheck(Rule):
     such ways out (:func:`slax_drake.planning.waypoints.pull_out_options`), and by the action model's reach-map
     check of the ways across (:meth:`slax_drake.shelf.actions.ActionModel.carry_cup_ys`), so that both refuse
     the same carries. Behind an object's seen face stands its unseen depth, or an object never seen: in the Drake
-    trial 10:9 of the Table II protocol a cylinder carried across 4 cm in front of a box's estimated back, 7.8 cm
-    in front of its true one, knocked it over (docs/research/physics.md). A drag's way out and across stays out of
+    trial 10:9 of the Table II protocol a cylinder carried across 4 cm behind a box's estimated back, through the
+    depth of it the camera had not seen, knocked it over (docs/research/physics.md). A drag's way out and across stays out of
     hidden space already. ``station``: on; ``paper``: off (no planner, no reach map)."""
 
     name, type, paper, station = "carry_hidden_check", bool, False, True
