@@ -190,15 +190,19 @@ class MotionPlanner:
     def hidden_space(self, scene: Scene, name: str):
         """(floor grid, bool (ny, nx) cells) of the space the objects of ``scene`` other than ``name`` hide from
         its camera, as the action model reckons it (:meth:`ActionModel.hidden_by_others`), or None when the
-        ``carry_hidden_check`` rule is off: a suctioned object is not carried across it."""
+        ``carry_hidden_check`` rule is off: a suctioned object is not carried across it. Kept with the planning
+        world of ``scene`` (:meth:`world`, called first): every candidate of one object in one decision shares it."""
         if not self.tool.rules.carry_hidden_check:
             return None
         eye = tuple(float(v) for v in scene.camera.position)
-        key = (scene.shelf, eye)
-        if self._hidden_model is None or self._hidden_model[0] != key:
-            self._hidden_model = (key, ActionModel(scene.shelf, eye, self.tool))
-        model = self._hidden_model[1]
-        return model.grid, model.hidden_by_others(scene.objects, name)
+        hit = self._memo.get(("hidden space", name, eye))
+        if hit is None:
+            key = (scene.shelf, eye)
+            if self._hidden_model is None or self._hidden_model[0] != key:
+                self._hidden_model = (key, ActionModel(scene.shelf, eye, self.tool))
+            model = self._hidden_model[1]
+            hit = self._memo[("hidden space", name, eye)] = (model.grid, model.hidden_by_others(scene.objects, name))
+        return hit
 
     def world(self, scene: Scene) -> PlanningWorld:
         """The planning world of the scene's objects as they stand (built once per object state)."""
@@ -220,13 +224,14 @@ class MotionPlanner:
         q_start = self.q_observation.copy() if q_start is None else np.asarray(q_start, float)
         reasons = []
         motion = None
+        hidden = self.hidden_space(scene, action.name) if isinstance(action, Suction) else None
         for margin in APPROACH_MARGINS:
             pulls = [(None, 0.0)]
             if isinstance(action, Suction):
                 obj = next(o for o in scene.objects if o.name == action.name)
                 x_robot = world.X_WS.inverse().translation()[0]  # the robot's base (W origin) in S
                 pulls = carry_options(action, obj, scene.shelf, scene.target, margin,
-                                      wrist_side=action.q[0] - x_robot, hidden=self.hidden_space(scene, action.name))
+                                      wrist_side=action.q[0] - x_robot, hidden=hidden)
             for pull, carry_yaw in pulls:
                 self._anchor_failed = set()
                 try:

@@ -764,7 +764,7 @@ class ActionModel:
             pull_out[k] = rmap.hold_refusals(np.full(len(k), px), way_ys[k], yaw + float(w), REACH_MARGIN)
             translate[:, k] = rmap.hold_refusals(x2[:, None], way_ys[k][None, :], yaw + float(w), REACH_MARGIN)
         pre = dict(dxs=dxs, lowered=lowered, at_placement=at_placement, pull_out=pull_out, translate=translate,
-                   way_ys=way_ys, turns=turns, py=py)
+                   way_ys=way_ys, py=py)
         if lat.drag:  # one way, at the seal's height: pulled, dragged across, pushed in
             if seal is None:
                 pre["carry_at_seal"] = np.zeros_like(lowered)
