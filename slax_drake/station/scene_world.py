@@ -16,7 +16,9 @@ Physics choices (documented numbers):
   therefore carries eight 1 mm spheres inset at its corners (tangent to its faces), and each cylinder
   ``CYLINDER_RIM_SPHERES`` (6) spheres around each rim, so a resting object stands on four or more points like
   a real one. The object's own shape does not touch the support board (``support_by_corner_spheres_only``):
-  with it, each resting object had one more, deepest-point contact that made it chatter at 1e-2 m/s.
+  with it, each resting object had one more, deepest-point contact that made it chatter at 1e-2 m/s. It does touch
+  the board's front edge (``support_front_edge``, 1 mm below the surface), so an object overhanging the edge rests
+  on it as on a real shelf's edge.
 - Speed (the station's real-time factor, benchmarks/bench_station.py) is roughly proportional to the number of
   resting contacts: 6 rim spheres instead of 8 ran 1.2x faster with 10 objects (4 would give 1.4x). The price:
   a cylinder tips over a hexagon, whose narrowest half-width is cos(30 deg) = 0.87 of its radius (0.92 with 8).
@@ -47,6 +49,15 @@ SHELF_PANEL_NAMES = ("support", "left_wall", "right_wall", "top", "back")
 # meets the board's bottom face nearer than its top and is pushed out below it: in the Drake trial 8:5 of the Table II
 # protocol a carried box pressed 1.2 cm into the board fell through it and hung beneath the bay (docs/research/physics.md)
 SUPPORT_COLLISION_DEPTH = 0.10
+# The support board's front edge as a second collision box that the objects' own shapes touch (the board itself carries
+# them by their corner spheres only, ``support_by_corner_spheres_only``): FRONT_EDGE_LENGTH (m) of the board behind its
+# front face, from FRONT_EDGE_DROP (m) below the support surface down to SUPPORT_COLLISION_DEPTH. An object resting on
+# the board does not touch it (its shape's bottom is on the surface); one whose front hangs over the edge rests on it and
+# tips only when its centre of mass is past the edge. Without it an object overhanging the edge by 1 cm, its centre of
+# mass 3 cm behind it, pivoted about its back corner spheres with the edge cutting through its shape, and fell
+# (tests/station/test_station.py).
+FRONT_EDGE_LENGTH = 0.02
+FRONT_EDGE_DROP = 0.001
 SHELF_COLOR = (0.76, 0.60, 0.42, 1.0)
 FLOOR_SIZE = 20.0  # m, the floor's width and length about the robot (add_floor)
 
@@ -82,38 +93,42 @@ def add_floor(plant) -> None:
                                     Box(FLOOR_SIZE, FLOOR_SIZE, 1.0), "floor", props)
 
 
-def shelf_urdf(shelf: Shelf) -> str:
-    """URDF text of the shelf bay: one body ``shelf_body`` at the shelf frame S with five box panels, each a
-    collision box with Drake's point-contact properties and a visual box (the support's collision box reaches
-    ``SUPPORT_COLLISION_DEPTH`` below the support surface, so that nothing pressed into the board passes through it). URDF rather than SDFormat: Drake parses an
-    SDFormat file in about 65 ms whatever its content (a URDF this size in under 1 ms), and the planner builds a
-    planning world, the shelf included, for every object state it plans in."""
-    links = []
-    for name, (lo, hi) in zip(SHELF_PANEL_NAMES, shelf_boxes(shelf)):
-        c, s = (lo + hi) / 2.0, hi - lo
-        origin = f'<origin xyz="{c[0]:.6f} {c[1]:.6f} {c[2]:.6f}" rpy="0 0 0"/>'
-        box = f'<geometry><box size="{s[0]:.6f} {s[1]:.6f} {s[2]:.6f}"/></geometry>'
-        if name == "support":  # the collision box reaches SUPPORT_COLLISION_DEPTH below the support surface
-            lo_c = np.array([lo[0], lo[1], hi[2] - SUPPORT_COLLISION_DEPTH])
-            c_c, s_c = (lo_c + hi) / 2.0, hi - lo_c
-            collision_origin = f'<origin xyz="{c_c[0]:.6f} {c_c[1]:.6f} {c_c[2]:.6f}" rpy="0 0 0"/>'
-            collision_box = f'<geometry><box size="{s_c[0]:.6f} {s_c[1]:.6f} {s_c[2]:.6f}"/></geometry>'
-        else:
-            collision_origin, collision_box = origin, box
-        links.append(
-            f"""    <collision name="{name}">
-      {collision_origin}
-      {collision_box}
+def _collision_box_xml(name: str, lo: np.ndarray, hi: np.ndarray) -> str:
+    """A URDF collision element: the box from corner ``lo`` to ``hi`` (shelf frame S, m), shelf contact properties."""
+    c, s = (lo + hi) / 2.0, hi - lo
+    return f"""    <collision name="{name}">
+      <origin xyz="{c[0]:.6f} {c[1]:.6f} {c[2]:.6f}" rpy="0 0 0"/>
+      <geometry><box size="{s[0]:.6f} {s[1]:.6f} {s[2]:.6f}"/></geometry>
       <drake:proximity_properties>
         <drake:mu_dynamic value="{SHELF_FRICTION}"/>
         <drake:mu_static value="{SHELF_FRICTION}"/>
         <drake:point_contact_stiffness value="{POINT_STIFFNESS:g}"/>
         <drake:hunt_crossley_dissipation value="{HUNT_CROSSLEY_DISSIPATION:g}"/>
       </drake:proximity_properties>
-    </collision>
-    <visual name="{name}_visual">
-      {origin}
-      {box}
+    </collision>"""
+
+
+def shelf_urdf(shelf: Shelf) -> str:
+    """URDF text of the shelf bay: one body ``shelf_body`` at the shelf frame S with five box panels, each a
+    collision box with Drake's point-contact properties and a visual box (the support's collision box reaches
+    ``SUPPORT_COLLISION_DEPTH`` below the support surface, so that nothing pressed into the board passes through it),
+    and the support board's front edge (``support_front_edge``, collision only). URDF rather than SDFormat: Drake parses an
+    SDFormat file in about 65 ms whatever its content (a URDF this size in under 1 ms), and the planner builds a
+    planning world, the shelf included, for every object state it plans in."""
+    links = []
+    for name, (lo, hi) in zip(SHELF_PANEL_NAMES, shelf_boxes(shelf)):
+        c, s = (lo + hi) / 2.0, hi - lo
+        if name == "support":  # the collision box reaches SUPPORT_COLLISION_DEPTH below the support surface
+            links.append(_collision_box_xml(name, np.array([lo[0], lo[1], hi[2] - SUPPORT_COLLISION_DEPTH]), hi))
+            links.append(_collision_box_xml(
+                "support_front_edge", np.array([lo[0], lo[1], hi[2] - SUPPORT_COLLISION_DEPTH]),
+                np.array([hi[0], lo[1] + FRONT_EDGE_LENGTH, hi[2] - FRONT_EDGE_DROP])))
+        else:
+            links.append(_collision_box_xml(name, lo, hi))
+        links.append(
+            f"""    <visual name="{name}_visual">
+      <origin xyz="{c[0]:.6f} {c[1]:.6f} {c[2]:.6f}" rpy="0 0 0"/>
+      <geometry><box size="{s[0]:.6f} {s[1]:.6f} {s[2]:.6f}"/></geometry>
       <material name="shelf_board"><color rgba="{" ".join(f"{v:g}" for v in SHELF_COLOR)}"/></material>
     </visual>"""
         )

@@ -1,6 +1,8 @@
 """The full station: point contact, the scene's objects at rest where the JSON puts them, the tool camera equal
 to the scene camera, the exported ports, and bad station files."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -261,3 +263,36 @@ def test_an_object_pressed_deep_into_the_support_board_comes_back_up(station_fil
     X_SO = shelf_pose(scenario, scene.camera).inverse() @ plant.EvalBodyPoseInWorld(
         plant_context, plant.GetBodyByName("object_0"))
     assert X_SO.translation()[2] == pytest.approx(0.06, abs=3e-3)  # resting on the board, not beneath it
+
+
+@pytest.mark.parametrize("station_file, scenario_file", [("sim_configs/station_sim_shelf.yaml", "sim_configs/sim_shelf.yaml"),
+                                                          ("sim_configs/station_table2.yaml", "sim_configs/table2.yaml")])
+def test_an_object_over_the_front_edge_rests_on_it_until_its_centre_of_mass_is_past_it(station_file, scenario_file):
+    """An 8 cm deep box whose front overhangs the support board's front edge by 1 cm (its centre of mass 3 cm behind
+    the edge) rests on the edge and stays upright on the board; one whose centre of mass is 1 cm past the edge tips
+    off and falls to the room's floor, not into the board. Before ``support_front_edge`` the first one pivoted about
+    its back corner spheres, the edge cutting through its shape, and fell."""
+    from slax_drake.config import load_scenario
+    from slax_drake.scene.model import Scene, SceneObject, planar_pose
+    from slax_drake.station.plant import shelf_pose
+
+    scenario = load_station_scenario(station_file)
+    shelf = sample_scene(load_scenario(scenario_file), 1, seed=0)
+    front = -shelf.shelf.depth / 2
+
+    def rest(centre_behind_edge):
+        box = SceneObject("object_0", "box", (0.08, 0.08, 0.12), planar_pose(0.0, front + centre_behind_edge, 0.06, 0.0),
+                          mass=0.3)
+        diagram = MakeStation(scenario, Scene(shelf.shelf, shelf.camera, (box,), None, 0), camera=False)
+        simulator = _simulator(diagram, 1.5)
+        plant = diagram.GetSubsystemByName("plant")
+        plant_context = plant.GetMyContextFromRoot(simulator.get_context())
+        return shelf_pose(scenario, shelf.camera).inverse() @ plant.EvalBodyPoseInWorld(
+            plant_context, plant.GetBodyByName("object_0"))
+
+    X_SO = rest(0.03)
+    assert X_SO.translation()[2] == pytest.approx(0.06, abs=3e-3)
+    assert X_SO.translation()[1] == pytest.approx(front + 0.03, abs=0.01)
+    assert X_SO.rotation().matrix()[2, 2] > math.cos(math.radians(3.0))  # upright
+    X_SO = rest(-0.01)
+    assert X_SO.translation()[2] < -0.3 and X_SO.translation()[1] < front  # on the floor in front of the shelf
