@@ -31,6 +31,7 @@ of a deep contact).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 
 import numpy as np
@@ -182,8 +183,9 @@ def map_grid(shelf, step: float = STEP) -> tuple[np.ndarray, np.ndarray]:
 
 def compute_reach_map(station_path: str, step: float = STEP, progress: bool = True, layers=LAYERS,
                       base: ReachMap | None = None) -> ReachMap:
-    """The reach map of ``layers`` on the station's empty shelf; with ``base``, its grid and layers are kept and
-    ``layers`` computed on that grid and added (e.g. the turned-cup layers)."""
+    """The reach map of ``layers`` on the station's empty shelf; with ``base``, its grid and layers (its hold and
+    pre-approach layers included) are kept and ``layers`` computed on that grid and added (e.g. the turned-cup
+    layers)."""
     from slax_drake.config import load_scenario
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.shelf.tool import tool_config
@@ -221,7 +223,10 @@ def compute_reach_map(station_path: str, step: float = STEP, progress: bool = Tr
         if progress:
             print(f"{layer}: {int(ok.sum())} of {ok.size} nodes reached ({time.perf_counter() - t0:.0f} s)", flush=True)
     heights = {layer: layer_heights(tool)[layer] for layer in reach}
-    return ReachMap(str(station_path) if base is None else base.station, xs, ys, reach, heights)
+    if base is None:
+        return ReachMap(str(station_path), xs, ys, reach, heights)
+    # the base's own-grid layers (hold, pre-approach) stay as they were
+    return dataclasses.replace(base, reach=reach, heights=heights, _tables={})
 
 
 def layer_heights(tool) -> dict:
