@@ -12,6 +12,12 @@ from slax_drake.scene.model import SceneObject, planar_pose
 from slax_drake.scene.sampling import shelf_of
 
 SIM_MAP = "models/reach/station_sim_shelf.json"
+PHYSICAL_MAP = "models/reach/station_physical_shelf.json"
+SHIPPED_MAPS = pytest.mark.parametrize("map_path", [SIM_MAP, PHYSICAL_MAP])
+# the shipped stations with their scenarios' fixtures, for the agreement tests with the planner
+SHIPPED_STATIONS = pytest.mark.parametrize("station_file, scenario_fixture", [
+    ("sim_configs/station_sim_shelf.yaml", "sim_scenario"),
+    ("sim_configs/station_physical_shelf.yaml", "physical_scenario")])
 
 
 def _toy_map():
@@ -139,17 +145,19 @@ def test_a_turned_suction_is_refused_only_where_every_layer_around_refuses():
     assert again.refuses_cup(0.1, 0.05, 0.045, rad(-25.0)) and not again.refuses_cup(0.1, 0.05, 0.045, rad(-15.0))
 
 
-def test_the_sim_map_holds_the_turned_cup_layers():
+@SHIPPED_MAPS
+def test_the_shipped_maps_hold_the_turned_cup_layers(map_path):
     from slax_drake.shelf.reach import turned_cup_layers
 
-    rmap = load_reach_map(SIM_MAP)
+    rmap = load_reach_map(map_path)
     for name in turned_cup_layers():
         layer = rmap.reach[name]
         assert layer.shape == rmap.reach["cup"].shape and layer[0].any() and not layer.all()
 
 
 @pytest.mark.slow
-def test_the_turned_cup_layers_agree_with_the_planner_on_a_sample_of_poses(sim_scenario):
+@SHIPPED_STATIONS
+def test_the_turned_cup_layers_agree_with_the_planner_on_a_sample_of_poses(request, station_file, scenario_fixture):
     """Seeded random contacts, heights and yaws (within the tool's 30 deg): each one the turned layers refuse has
     no collision-free IK solution of the cup at the seal from the observation pose; each one whose four grid
     nodes are reached in every layer around it has one."""
@@ -160,11 +168,12 @@ def test_the_turned_cup_layers_agree_with_the_planner_on_a_sample_of_poses(sim_s
     from slax_drake.scene.model import Scene
     from slax_drake.station.scenario import load_station_scenario
 
-    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    scenario = request.getfixturevalue(scenario_fixture)
+    station = load_station_scenario(station_file)
     rmap = load_reach_map(station.reach_map)
-    tool = tool_config(sim_scenario, "station")
+    tool = tool_config(scenario, "station")
     planner = MotionPlanner(station, tool)
-    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
     yaws, heights = TURNED_CUP_YAWS_DEG, TURNED_CUP_HEIGHTS
     rng = np.random.default_rng(23)
     refused, accepted = [], []
@@ -216,10 +225,11 @@ def test_a_release_is_refused_where_the_back_off_or_the_retract_layer_refuses():
     assert with_retract.refuses_release(0.25, 0.05) and not with_retract.refuses_release(0.15, 0.05)
 
 
-def test_the_sim_map_holds_the_release_layers():
+@SHIPPED_MAPS
+def test_the_shipped_maps_hold_the_release_layers(map_path):
     from slax_drake.shelf.reach import RELEASE_LAYERS
 
-    rmap = load_reach_map(SIM_MAP)
+    rmap = load_reach_map(map_path)
     for name in RELEASE_LAYERS:
         layer = rmap.reach[name]
         assert layer.shape == rmap.reach["cup"].shape and layer.any()
@@ -248,7 +258,8 @@ def test_the_action_model_keeps_no_placement_the_release_layers_refuse(sim_scena
 
 
 @pytest.mark.slow
-def test_the_release_layers_agree_with_the_planner_on_a_sample_of_poses(sim_scenario):
+@SHIPPED_STATIONS
+def test_the_release_layers_agree_with_the_planner_on_a_sample_of_poses(request, station_file, scenario_fixture):
     """Seeded random release contacts: each one the back-off (or retract) layer refuses has no collision-free IK
     solution of that waypoint from the observation pose (the retract at neither approach margin); each one in a
     cell whose four nodes were reached has one."""
@@ -259,11 +270,12 @@ def test_the_release_layers_agree_with_the_planner_on_a_sample_of_poses(sim_scen
     from slax_drake.scene.model import Scene
     from slax_drake.station.scenario import load_station_scenario
 
-    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    scenario = request.getfixturevalue(scenario_fixture)
+    station = load_station_scenario(station_file)
     rmap = load_reach_map(station.reach_map)
-    tool = tool_config(sim_scenario, "station")
+    tool = tool_config(scenario, "station")
     planner = MotionPlanner(station, tool)
-    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
     rng = np.random.default_rng(29)
     for layer in ("back off", "retract"):
         refused, accepted = [], []
@@ -358,14 +370,27 @@ def test_a_map_whose_hold_layer_has_the_wrong_shape_is_one_config_error(tmp_path
         load_reach_map(str(path))
 
 
-def test_the_sim_map_holds_the_hold_layers():
+@SHIPPED_MAPS
+def test_the_shipped_maps_hold_the_hold_layers(map_path):
     from slax_drake.shelf.reach import hold_layers
 
-    rmap = load_reach_map(SIM_MAP)
+    rmap = load_reach_map(map_path)
     assert rmap.hold_ys[0] < -0.5 and rmap.hold_ys[-1] == rmap.ys[-1]  # from well in front of the opening to the back
     for name in hold_layers():
         layer = rmap.hold[name]
         assert layer.shape == (len(rmap.hold_ys), len(rmap.xs)) and layer.any() and not layer.all(), name
+
+
+@SHIPPED_MAPS
+def test_the_shipped_maps_hold_the_pre_approach_layers(map_path):
+    from slax_drake.shelf.reach import hold_layers
+
+    rmap = load_reach_map(map_path)
+    assert max(rmap.approach_ys) < rmap.ys[0]  # in front of the bay's first row of nodes
+    layers = [rmap.approach[name] for name in hold_layers("approach")]
+    for name, layer in zip(hold_layers("approach"), layers):
+        assert layer.shape == (len(rmap.approach_ys), len(rmap.approach_xs)) and layer.any(), name
+    assert not all(layer.all() for layer in layers)  # far to the side the arm does not reach
 
 
 def _hold_tool(sim_scenario, tmp_path, rmap):
@@ -419,7 +444,8 @@ def test_the_action_model_refuses_the_carries_the_hold_layers_refuse(sim_scenari
 
 
 @pytest.mark.slow
-def test_a_carry_pose_the_hold_layers_refuse_has_no_ik_solution(sim_scenario):
+@SHIPPED_STATIONS
+def test_a_carry_pose_the_hold_layers_refuse_has_no_ik_solution(request, station_file, scenario_fixture):
     """Seeded random cup poses of a carry (x across the bay, y from in front of the opening to its back, height
     3-36 cm, tool yaw within +-30 deg): each one the hold layers refuse has no collision-free IK solution from the
     observation pose; each one whose grid cells are reached in every layer around it has one."""
@@ -430,10 +456,11 @@ def test_a_carry_pose_the_hold_layers_refuse_has_no_ik_solution(sim_scenario):
     from slax_drake.scene.model import Scene
     from slax_drake.station.scenario import load_station_scenario
 
-    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    scenario = request.getfixturevalue(scenario_fixture)
+    station = load_station_scenario(station_file)
     rmap = load_reach_map(station.reach_map)
-    planner = MotionPlanner(station, tool_config(sim_scenario, "station"))
-    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    planner = MotionPlanner(station, tool_config(scenario, "station"))
+    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
     yaws, heights, xs, ys = HOLD_YAWS_DEG, HOLD_HEIGHTS, rmap.xs, rmap.hold_ys
     rng = np.random.default_rng(31)
     refused, accepted = [], []
@@ -526,7 +553,8 @@ def test_the_action_model_refuses_a_suction_whose_pre_approach_the_map_refuses(s
 
 
 @pytest.mark.slow
-def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(sim_scenario):
+@SHIPPED_STATIONS
+def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(request, station_file, scenario_fixture):
     """Seeded random pre-approach poses (x across the layers' width, at either approach margin, 3-20 cm high, the
     tool turned within +-30 deg): each one the pre-approach layers refuse has no collision-free IK solution from
     the observation pose."""
@@ -537,10 +565,11 @@ def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(sim_scenario):
     from slax_drake.scene.model import Scene
     from slax_drake.station.scenario import load_station_scenario
 
-    station = load_station_scenario("sim_configs/station_sim_shelf.yaml")
+    scenario = request.getfixturevalue(scenario_fixture)
+    station = load_station_scenario(station_file)
     rmap = load_reach_map(station.reach_map)
-    planner = MotionPlanner(station, tool_config(sim_scenario, "station"))
-    scene = Scene(shelf_of(sim_scenario), Camera.from_config(sim_scenario.camera), (), None, 0)
+    planner = MotionPlanner(station, tool_config(scenario, "station"))
+    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
     rng = np.random.default_rng(37)
     refused = []
     for _ in range(20000):
@@ -553,3 +582,20 @@ def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(sim_scenario):
     assert len(refused) == 8
     for x, y, z, deg in refused:
         assert not planner.reaches(scene, hold_waypoint(x, y, z, np.radians(deg), suction=False)), (x, y, z, deg)
+
+
+def test_adding_floor_layers_to_a_map_keeps_its_hold_and_pre_approach_layers(tmp_path):
+    """``python -m slax_drake.planning.reach --add-release`` (or ``--add-turned-cup``) on a map that already holds the
+    hold and pre-approach layers writes them back unchanged (they were dropped, and an hour of layers with them)."""
+    import json
+    import shutil
+
+    from slax_drake.config import REPO_ROOT
+    from slax_drake.planning.reach import main
+
+    path = tmp_path / "map.json"
+    shutil.copy(REPO_ROOT / SIM_MAP, path)
+    before = json.loads(path.read_text())
+    assert before["hold"] and before["approach"]
+    assert main(["--station", "sim_configs/station_sim_shelf.yaml", "--out", str(path), "--add-release"]) == 0
+    assert json.loads(path.read_text()) == before  # every release layer was there: nothing to add, nothing lost
