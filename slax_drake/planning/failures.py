@@ -43,9 +43,8 @@ class FailureKind(enum.Enum):
     SEGMENT_COLLIDES = "segment collides"  # a checked joint segment collides
     CARRIED_COLLIDES = "carried object collides"  # the carried object collides on a joint segment
     JOINT_LIMIT = "joint limit"  # the timed trajectory comes within the IK limit margin of a joint's limit
-    GUARDED_LIFTED = "guarded push-in lifted"  # a guarded placement's push-in is carried higher than the plain way in
-    # (LIFT + CARRY_SAG): it would pass over what it cannot see and lower the object onto it, where the guard (which
-    # senses the push) is blind
+    GUARDED_LIFTED = "guarded push-in lifted"  # a guarded placement's push-in is carried higher than LIFT: it
+    # would pass over what it cannot see and lower the object onto it, where the guard (which senses the push) is blind
 
 
 STRAIGHT_SEGMENT_KINDS = frozenset({FailureKind.LEAVES_STRAIGHT_SEGMENT, FailureKind.STRAIGHT_SEGMENT_OUT_OF_REACH})

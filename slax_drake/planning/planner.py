@@ -28,8 +28,7 @@
 5. Ruckig times the chain rest to rest (:mod:`slax_drake.planning.timing`), with dwells at rest where the
    waypoints ask for them; the suction command is on during the segments that carry the object.
 
-A guarded lift (``Suction.guarded``) whose push-in would carry the object higher than the plain way in (``LIFT`` +
-``CARRY_SAG``) is rejected
+A guarded lift (``Suction.guarded``) whose push-in would carry the object higher than ``LIFT`` is rejected
 (:attr:`~slax_drake.planning.failures.FailureKind.GUARDED_LIFTED`; a shallower carry may avoid it): it would pass
 over a lower object hidden in its way and lower onto it, where the guard, which senses the push, is blind.
 
@@ -60,7 +59,7 @@ from slax_drake.planning.free_path import free_path
 from slax_drake.planning.ik import CONTINUOUS_JOINTS, LIMIT_MARGIN, solve_tool_pose
 from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
-from slax_drake.planning.waypoints import CARRY_SAG, DWELL, LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
+from slax_drake.planning.waypoints import DWELL, LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
 from slax_drake.planning.world import TOOL_RIGID_BODIES, PlanningWorld, pairs_text
 from slax_drake.shelf.actions import ActionModel, Push, Suction
 from slax_drake.shelf.rules import ToolConfig
@@ -763,16 +762,15 @@ def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) 
 
 def _reject_a_lifted_guarded_push_in(action, waypoints) -> None:
     """Raises _Reject (:attr:`FailureKind.GUARDED_LIFTED`) when ``action`` is a guarded lift whose push-in carries the
-    object higher than the plain way in, ``LIFT`` + ``CARRY_SAG`` (over a known object on the way across or in):
-    pushed in at that height it would pass over a lower object hidden in its way and be lowered onto it; the guard
-    senses the push, not the lowering."""
+    object higher than ``LIFT`` (over a known object on the way across or in): pushed in at that height it would pass
+    over a lower object hidden in its way and be lowered onto it; the guard senses the push, not the lowering."""
     if not isinstance(action, Suction) or not action.guarded or action.drag:
         return
     by = {w.label: w for w in waypoints}
     if "push in" not in by or "lower" not in by:
         return
     height = float(by["push in"].position[2] - by["lower"].position[2])
-    if height > LIFT + CARRY_SAG + 1e-6:
+    if height > LIFT + 1e-6:
         raise _Reject(PlanningFailure(FailureKind.GUARDED_LIFTED, "push in", deviation=height))
 
 

@@ -25,8 +25,7 @@ toward the camera (by default until its back is out of the shelf; the planner ma
 came). The lift is ``LIFT`` unless the carried object's way
 (its footprint swept in 5 mm steps) crosses another object: then it is lifted ``LIFT_CLEARANCE`` above the
 tallest one crossed (the action model's "over-lower" rule lets objects pass over lower ones); the lift on the
-way out clears the ways out and across, the height at which it is pushed in the ways across and in, ``CARRY_SAG``
-higher (a held object hangs lower than planned, and on the way in the board's front edge stands in its way), and the
+way out clears the ways out and across, the height at which it is pushed in the ways across and in, and the
 translation rises or falls between the two (the arm reaches a low pull-out near the robot more easily). The segments
 arriving at "pull out", "translate" and "push in" carry the object clear of the support (``carried``): the
 planner checks the object with the tool there ("clear"); on the lift and the lowering ("resting") it checks the
@@ -46,7 +45,7 @@ import dataclasses
 
 import numpy as np
 
-from slax_drake.shelf.actions import (APPROACH_MARGINS, BLADE_LIFT, CARRY_SAG, CARRY_YAWS_DEG, DRAG_FRONT_MARGIN, GRAVITY, LIFT,
+from slax_drake.shelf.actions import (APPROACH_MARGINS, BLADE_LIFT, CARRY_YAWS_DEG, DRAG_FRONT_MARGIN, GRAVITY, LIFT,
                                       LIFT_CLEARANCE, OUT_MARGIN, PULL_STEP, SEAL_PRESS, TUBE_STANDOFF, Push, Suction)
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.footprint import TOUCH_ALLOWANCE, Footprint, touch_overlap
@@ -224,7 +223,7 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         # needs: the translation between them rises or falls, above what it crosses at both ends.
         way = carry_offsets(action, y_far, y_place, carry_yaw)
         lift_out = carry_lift(obj, objects, way[:3], pivot=action.q[:2])
-        lift_in = carry_lift(obj, objects, way[1:], pivot=action.q[:2]) + CARRY_SAG  # over the board's front edge
+        lift_in = carry_lift(obj, objects, way[1:], pivot=action.q[:2])
         # The tube comes in along its axis a (turned by the action's yaw toward the face's normal): the
         # pre-approach is on that axis in front of the opening, the cup meets the face along it and presses in;
         # once sealed the tool keeps its yaw and carries the object along S y and x; it backs off along -a.

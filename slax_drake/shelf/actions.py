@@ -89,12 +89,6 @@ SEAL_PRESS = 0.001  # m
 APPROACH_MARGINS = (0.05, 0.01)  # m
 LIFT = 0.01  # m
 LIFT_CLEARANCE = 0.01  # m
-# m: how much higher than its way out the carried object comes back in (translated and pushed in). A held object
-# hangs below the pose the planner gives it: the cup's compliance and the arm's droop under the load lowered a 0.58 kg
-# cylinder 9 mm below its planned 1 cm lift at 0.35 m to the side (Drake, Table II 8:2), and on the way in the board's
-# front edge stands in its way: it met the edge, and a guarded push-in stopped there and released it in front of the
-# board (docs/research/table-ii.md). The way out needs no more: the board falls away under it.
-CARRY_SAG = 0.01
 OUT_MARGIN = 0.01  # m
 PULL_STEP = 0.04  # m
 CARRY_YAWS_DEG = (30.0,)  # deg
@@ -690,8 +684,7 @@ class ActionModel:
         """(A, B) bool: placements of object i's suction whose motion the reach map's hold layers refuse: the cup
         lowered at the placement, or (a lifted carry) pushed in there, or every way across of
         :meth:`carry_cup_ys` refused at its pull-out or its translation. A lifted carry's cup is anywhere from
-        ``LIFT`` above the seal to ``CARRY_SAG`` more than ``LIFT_CLEARANCE`` above the tallest other object near
-        its way (the way in is carried ``CARRY_SAG`` higher than the way out; any object counts whose
+        ``LIFT`` above the seal to ``LIFT_CLEARANCE`` above the tallest other object near its way (any whose
         bounding box meets the box around every footprint the carried object may sweep); a drag's stays at the
         seal's height. What depends on the object alone is kept with its lattice."""
         pre = lat._hold.get("pre")
@@ -715,7 +708,7 @@ class ActionModel:
             near_x = (x_lo <= other.x + ejx) & (other.x - ejx <= x_hi)
             near_y = (y_lo <= other.y + ejy) & (other.y - ejy <= y_hi)
             tallest = np.maximum(tallest, float(ctx.all_heights[j]) * (near_x[:, None] & near_y[None, :]))
-        z_top = cz + np.maximum(LIFT, np.where(tallest > 0.0, tallest + LIFT_CLEARANCE, 0.0)) + CARRY_SAG
+        z_top = cz + np.maximum(LIFT, np.where(tallest > 0.0, tallest + LIFT_CLEARANCE, 0.0))
         for zt in np.unique(np.round(z_top, 6)):
             span = hold_height_span(cz + LIFT, float(zt))
             if span is None:

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from slax_drake.planning.planner import MotionPlanner
-from slax_drake.planning.waypoints import CARRY_SAG, LIFT, LIFT_CLEARANCE, action_waypoints, carry_lift, pull_out_options
+from slax_drake.planning.waypoints import LIFT, LIFT_CLEARANCE, action_waypoints, carry_lift, pull_out_options
 from slax_drake.planning.world import PlanningWorld, rest_gap
 from slax_drake.shelf.actions import ActionModel, Suction
 from slax_drake.shelf.tool import tool_config
@@ -94,20 +94,7 @@ def test_lift_clears_the_lower_objects_crossed(two_boxes):
     assert carry_lift(a, scene.objects, [(0.0, 0.0), (0.2, 0.0)]) == pytest.approx(b.size[2] + LIFT_CLEARANCE)
     waypoints = action_waypoints(Suction(a.name, (-0.2, -0.19, 0.1), 0.2, -0.15), scene.objects, scene.shelf)
     lifted = {w.label: w.position[2] for w in waypoints}
-    # pushed in over B, CARRY_SAG higher than the way out (the held object hangs below its planned pose)
-    assert lifted["push in"] - lifted["seal"] == pytest.approx(b.size[2] + LIFT_CLEARANCE + CARRY_SAG)
-
-
-def test_the_way_in_is_carried_higher_than_the_way_out_over_the_front_edge(two_boxes):
-    """A carry out of the shelf and straight back in at another x: lifted LIFT on the way out, translated and pushed
-    in CARRY_SAG higher, so that the object, hanging lower than planned, clears the board's front edge (in Drake a
-    0.58 kg cylinder carried LIFT up hung 9 mm lower, met the edge and a guarded push-in stopped there)."""
-    scene, _, a, _ = two_boxes
-    waypoints = action_waypoints(Suction(a.name, (-0.2, -0.19, 0.1), -0.05, -0.15), scene.objects, scene.shelf)
-    z = {w.label: w.position[2] - 0.1 for w in waypoints}
-    assert z["lift"] == pytest.approx(LIFT) and z["pull out"] == pytest.approx(LIFT)
-    assert z["translate"] == pytest.approx(LIFT + CARRY_SAG) and z["push in"] == pytest.approx(LIFT + CARRY_SAG)
-    assert z["lower"] == pytest.approx(0.0)
+    assert lifted["push in"] - lifted["seal"] == pytest.approx(b.size[2] + LIFT_CLEARANCE)
 
 
 def test_shallower_carry_depths_avoid_the_target(two_boxes):
@@ -161,14 +148,13 @@ def test_a_neighbour_whose_estimate_overlaps_is_not_lifted_over_on_a_way_away_fr
 
 def test_the_way_out_is_lifted_only_as_high_as_it_needs(two_boxes):
     """A is carried out (nothing in its way), across in front of the shelf and pushed in over B's spot: it leaves
-    at the plain lift, and the translation rises to B's height plus the clearance (and the way in's CARRY_SAG)
-    before it is pushed in."""
+    at the plain lift, and the translation rises to B's height plus the clearance before it is pushed in."""
     scene, _, a, b = two_boxes
     waypoints = action_waypoints(Suction(a.name, (-0.2, -0.19, 0.1), 0.2, -0.15), scene.objects, scene.shelf)
     z = {w.label: w.position[2] for w in waypoints}
     assert z["lift"] - z["seal"] == pytest.approx(LIFT)
     assert z["pull out"] - z["seal"] == pytest.approx(LIFT)
-    assert z["translate"] - z["seal"] == pytest.approx(b.size[2] + LIFT_CLEARANCE + CARRY_SAG)
+    assert z["translate"] - z["seal"] == pytest.approx(b.size[2] + LIFT_CLEARANCE)
     assert z["push in"] == pytest.approx(z["translate"])
     # C behind B, pulled out over B and pushed in at the free lane between A and B: high out, low in
     c = _box("object_2", 0.0, 0.05, (0.08, 0.08, 0.12))
@@ -176,7 +162,7 @@ def test_the_way_out_is_lifted_only_as_high_as_it_needs(two_boxes):
     z = {w.label: w.position[2] for w in action_waypoints(Suction(c.name, (0.0, 0.01, 0.1), -0.1, 0.05),
                                                              behind.objects, behind.shelf)}
     assert z["pull out"] - z["seal"] == pytest.approx(b.size[2] + LIFT_CLEARANCE)
-    assert z["push in"] - z["seal"] == pytest.approx(LIFT + CARRY_SAG)
+    assert z["push in"] - z["seal"] == pytest.approx(LIFT)
 
 
 def test_a_lift_over_a_tall_object_rests_one_lift_up_to_be_weighed_before_it_rises(sim_scenario):

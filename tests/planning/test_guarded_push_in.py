@@ -25,7 +25,7 @@ def test_a_guarded_push_in_carried_over_a_known_object_is_rejected(sim_scenario)
     straight = Suction("carried", q, 0.0, 0.15, guarded=True)  # its way in crosses nothing
     over = Suction("carried", q, -0.15, 0.15, guarded=True)  # pushed in over the low box
     wps = action_waypoints(straight, (carried, low), shelf)
-    _reject_a_lifted_guarded_push_in(straight, wps)  # pushed in at the plain way in, LIFT + CARRY_SAG: accepted
+    _reject_a_lifted_guarded_push_in(straight, wps)  # pushed in at LIFT: accepted
     wps = action_waypoints(over, (carried, low), shelf)
     with pytest.raises(_Reject) as e:
         _reject_a_lifted_guarded_push_in(over, wps)
