@@ -97,6 +97,7 @@ class CollisionWorld:
         from slax_drake.station import robot as robot_model
         from slax_drake.station.plant import PlantPurpose, make_station_plant
         from slax_drake.station.scenario import observation_positions
+        from slax_drake.station.scene_world import SUPPORT_GEOMETRY_NAMES
 
         self.tolerance = tolerance
         station_plant = make_station_plant(station, scene, PlantPurpose.CHECKING)
@@ -127,9 +128,8 @@ class CollisionWorld:
         self.cup_geometries = {g for g, n in local.items() if n.startswith("cup")}
         self.object_of_geometry = {g: name for name, (_, b) in self.objects.items() for g in plant.GetCollisionGeometriesForBody(b)}
         self.shelf_geometries = set(geometries([plant.get_body(b) for b in plant.GetBodyIndices(shelf)]))
-        # the support board and its front edge (support, support_front_edge) carry objects; the rest of the shelf obstructs
         self.shelf_obstacles = {g for g in self.shelf_geometries
-                                if not inspector.GetName(g).split("::")[-1].startswith("support")}
+                                if inspector.GetName(g).split("::")[-1] not in SUPPORT_GEOMETRY_NAMES}
         self.body_name = {g: plant.GetBodyFromFrameId(inspector.GetFrameId(g)).name() for g in self.object_of_geometry}
         self.body_name.update({g: plant.GetBodyFromFrameId(inspector.GetFrameId(g)).name() for g in self.robot_geometries})
         self.body_name.update({g: "shelf" for g in self.shelf_geometries})

@@ -58,6 +58,9 @@ SUPPORT_COLLISION_DEPTH = 0.10
 # (tests/station/test_station.py).
 FRONT_EDGE_LENGTH = 0.02
 FRONT_EDGE_DROP = 0.001
+FRONT_EDGE_NAME = "support_front_edge"
+# the shelf's collision geometries that carry objects (the board and its front edge); the rest of the shelf obstructs
+SUPPORT_GEOMETRY_NAMES = ("support", FRONT_EDGE_NAME)
 SHELF_COLOR = (0.76, 0.60, 0.42, 1.0)
 FLOOR_SIZE = 20.0  # m, the floor's width and length about the robot (add_floor)
 
@@ -112,17 +115,17 @@ def shelf_urdf(shelf: Shelf) -> str:
     """URDF text of the shelf bay: one body ``shelf_body`` at the shelf frame S with five box panels, each a
     collision box with Drake's point-contact properties and a visual box (the support's collision box reaches
     ``SUPPORT_COLLISION_DEPTH`` below the support surface, so that nothing pressed into the board passes through it),
-    and the support board's front edge (``support_front_edge``, collision only). URDF rather than SDFormat: Drake parses an
+    and the support board's front edge (``FRONT_EDGE_NAME``, collision only). URDF rather than SDFormat: Drake parses an
     SDFormat file in about 65 ms whatever its content (a URDF this size in under 1 ms), and the planner builds a
     planning world, the shelf included, for every object state it plans in."""
     links = []
     for name, (lo, hi) in zip(SHELF_PANEL_NAMES, shelf_boxes(shelf)):
         c, s = (lo + hi) / 2.0, hi - lo
         if name == "support":  # the collision box reaches SUPPORT_COLLISION_DEPTH below the support surface
-            links.append(_collision_box_xml(name, np.array([lo[0], lo[1], hi[2] - SUPPORT_COLLISION_DEPTH]), hi))
-            links.append(_collision_box_xml(
-                "support_front_edge", np.array([lo[0], lo[1], hi[2] - SUPPORT_COLLISION_DEPTH]),
-                np.array([hi[0], lo[1] + FRONT_EDGE_LENGTH, hi[2] - FRONT_EDGE_DROP])))
+            bottom = np.array([lo[0], lo[1], hi[2] - SUPPORT_COLLISION_DEPTH])
+            links.append(_collision_box_xml(name, bottom, hi))
+            links.append(_collision_box_xml(FRONT_EDGE_NAME, bottom,
+                                            np.array([hi[0], lo[1] + FRONT_EDGE_LENGTH, hi[2] - FRONT_EDGE_DROP])))
         else:
             links.append(_collision_box_xml(name, lo, hi))
         links.append(

@@ -20,6 +20,21 @@ SHIPPED_STATIONS = pytest.mark.parametrize("station_file, scenario_fixture", [
     ("sim_configs/station_physical_shelf.yaml", "physical_scenario")])
 
 
+def _station_planner(request, station_file: str, scenario_fixture: str):
+    """(station, its reach map, tool, motion planner, empty-shelf scene) of a shipped station, for the agreement
+    tests with the planner."""
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.scene.camera import Camera
+    from slax_drake.scene.model import Scene
+    from slax_drake.station.scenario import load_station_scenario
+
+    scenario = request.getfixturevalue(scenario_fixture)
+    station = load_station_scenario(station_file)
+    tool = tool_config(scenario, "station")
+    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
+    return station, load_reach_map(station.reach_map), tool, MotionPlanner(station, tool), scene
+
+
 def _toy_map():
     xs, ys = np.array([0.0, 0.1, 0.2, 0.3]), np.array([0.0, 0.1, 0.2])
     ok = np.array([[True, True, False, False]] * 3)  # reached left of x = 0.1, not from x = 0.2
@@ -161,19 +176,10 @@ def test_the_turned_cup_layers_agree_with_the_planner_on_a_sample_of_poses(reque
     """Seeded random contacts, heights and yaws (within the tool's 30 deg): each one the turned layers refuse has
     no collision-free IK solution of the cup at the seal from the observation pose; each one whose four grid
     nodes are reached in every layer around it has one."""
-    from slax_drake.planning.planner import MotionPlanner
     from slax_drake.planning.reach import cup_waypoint
     from slax_drake.shelf.reach import TURNED_CUP_HEIGHTS, TURNED_CUP_YAWS_DEG, turned_cup_layer
-    from slax_drake.scene.camera import Camera
-    from slax_drake.scene.model import Scene
-    from slax_drake.station.scenario import load_station_scenario
 
-    scenario = request.getfixturevalue(scenario_fixture)
-    station = load_station_scenario(station_file)
-    rmap = load_reach_map(station.reach_map)
-    tool = tool_config(scenario, "station")
-    planner = MotionPlanner(station, tool)
-    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
+    _, rmap, tool, planner, scene = _station_planner(request, station_file, scenario_fixture)
     yaws, heights = TURNED_CUP_YAWS_DEG, TURNED_CUP_HEIGHTS
     rng = np.random.default_rng(23)
     refused, accepted = [], []
@@ -263,19 +269,10 @@ def test_the_release_layers_agree_with_the_planner_on_a_sample_of_poses(request,
     """Seeded random release contacts: each one the back-off (or retract) layer refuses has no collision-free IK
     solution of that waypoint from the observation pose (the retract at neither approach margin); each one in a
     cell whose four nodes were reached has one."""
-    from slax_drake.planning.planner import MotionPlanner
     from slax_drake.planning.reach import release_waypoint
     from slax_drake.planning.waypoints import APPROACH_MARGINS
-    from slax_drake.scene.camera import Camera
-    from slax_drake.scene.model import Scene
-    from slax_drake.station.scenario import load_station_scenario
 
-    scenario = request.getfixturevalue(scenario_fixture)
-    station = load_station_scenario(station_file)
-    rmap = load_reach_map(station.reach_map)
-    tool = tool_config(scenario, "station")
-    planner = MotionPlanner(station, tool)
-    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
+    _, rmap, tool, planner, scene = _station_planner(request, station_file, scenario_fixture)
     rng = np.random.default_rng(29)
     for layer in ("back off", "retract"):
         refused, accepted = [], []
@@ -449,18 +446,10 @@ def test_a_carry_pose_the_hold_layers_refuse_has_no_ik_solution(request, station
     """Seeded random cup poses of a carry (x across the bay, y from in front of the opening to its back, height
     3-36 cm, tool yaw within +-30 deg): each one the hold layers refuse has no collision-free IK solution from the
     observation pose; each one whose grid cells are reached in every layer around it has one."""
-    from slax_drake.planning.planner import MotionPlanner
     from slax_drake.planning.reach import hold_waypoint
     from slax_drake.shelf.reach import HOLD_HEIGHTS, HOLD_YAWS_DEG, hold_layer
-    from slax_drake.scene.camera import Camera
-    from slax_drake.scene.model import Scene
-    from slax_drake.station.scenario import load_station_scenario
 
-    scenario = request.getfixturevalue(scenario_fixture)
-    station = load_station_scenario(station_file)
-    rmap = load_reach_map(station.reach_map)
-    planner = MotionPlanner(station, tool_config(scenario, "station"))
-    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
+    _, rmap, _, planner, scene = _station_planner(request, station_file, scenario_fixture)
     yaws, heights, xs, ys = HOLD_YAWS_DEG, HOLD_HEIGHTS, rmap.xs, rmap.hold_ys
     rng = np.random.default_rng(31)
     refused, accepted = [], []
@@ -558,18 +547,10 @@ def test_a_pre_approach_the_layers_refuse_has_no_ik_solution(request, station_fi
     """Seeded random pre-approach poses (x across the layers' width, at either approach margin, 3-20 cm high, the
     tool turned within +-30 deg): each one the pre-approach layers refuse has no collision-free IK solution from
     the observation pose."""
-    from slax_drake.planning.planner import MotionPlanner
     from slax_drake.planning.reach import hold_waypoint
     from slax_drake.shelf.reach import APPROACH_HEIGHTS as HEIGHTS, HOLD_YAWS_DEG
-    from slax_drake.scene.camera import Camera
-    from slax_drake.scene.model import Scene
-    from slax_drake.station.scenario import load_station_scenario
 
-    scenario = request.getfixturevalue(scenario_fixture)
-    station = load_station_scenario(station_file)
-    rmap = load_reach_map(station.reach_map)
-    planner = MotionPlanner(station, tool_config(scenario, "station"))
-    scene = Scene(shelf_of(scenario), Camera.from_config(scenario.camera), (), None, 0)
+    _, rmap, _, planner, scene = _station_planner(request, station_file, scenario_fixture)
     rng = np.random.default_rng(37)
     refused = []
     for _ in range(20000):
@@ -599,3 +580,4 @@ def test_adding_floor_layers_to_a_map_keeps_its_hold_and_pre_approach_layers(tmp
     assert before["hold"] and before["approach"]
     assert main(["--station", "sim_configs/station_sim_shelf.yaml", "--out", str(path), "--add-release"]) == 0
     assert json.loads(path.read_text()) == before  # every release layer was there: nothing to add, nothing lost
+
