@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import sys
 import time
 
 import numpy as np
@@ -270,12 +271,7 @@ def reach_png(rmap: ReachMap, shelf) -> bytes:
 
 
 def main(argv=None) -> int:
-    from slax_drake.config import load_scenario
-    from slax_drake.io import write_bytes_atomic, write_text_atomic
-    from slax_drake.scene.sampling import shelf_of
-    from slax_drake.station.scenario import load_station_scenario
-    import json
-    from pathlib import Path
+    from slax_drake.errors import UserError
 
     parser = argparse.ArgumentParser(description="compute a station's reach map")
     parser.add_argument("--station", required=True)
@@ -293,21 +289,32 @@ def main(argv=None) -> int:
                         help="read the map at --out and add the pre-approach layers (a turned suction's first "
                              "waypoint) it lacks, writing it after each layer")
     args = parser.parse_args(argv)
-    if args.add_hold or args.add_approach:
-        from slax_drake.shelf.reach import load_reach_map
+    try:
+        return _run(args)
+    except UserError as e:  # a malformed or missing map or station file: one line, exit 2
+        print(f"error: {e}", file=sys.stderr)
+        return 2
 
+
+def _run(args) -> int:
+    """Computes the map (or its missing layers) that ``args`` asks for and writes it, and its picture."""
+    from slax_drake.config import load_scenario
+    from slax_drake.io import write_bytes_atomic, write_text_atomic
+    from slax_drake.scene.sampling import shelf_of
+    from slax_drake.shelf.reach import load_reach_map
+    from slax_drake.station.scenario import load_station_scenario
+    import json
+    from pathlib import Path
+
+    if args.add_hold or args.add_approach:
         rmap = load_reach_map(args.out)
         for family in ("hold",) * args.add_hold + ("approach",) * args.add_approach:
             rmap = add_hold_layers(args.station, rmap, args.out, family=family)
     elif args.add_release:
-        from slax_drake.shelf.reach import load_reach_map
-
         base = load_reach_map(args.out)
         layers = tuple(layer for layer in RELEASE_LAYERS if layer not in base.reach)
         rmap = compute_reach_map(args.station, layers=layers, base=base)
     elif args.add_turned_cup:
-        from slax_drake.shelf.reach import load_reach_map
-
         base = load_reach_map(args.out)
         layers = tuple(layer for layer in turned_cup_layers() if layer not in base.reach)
         rmap = compute_reach_map(args.station, layers=layers, base=base)

@@ -581,3 +581,14 @@ def test_adding_floor_layers_to_a_map_keeps_its_hold_and_pre_approach_layers(tmp
     assert main(["--station", "sim_configs/station_sim_shelf.yaml", "--out", str(path), "--add-release"]) == 0
     assert json.loads(path.read_text()) == before  # every release layer was there: nothing to add, nothing lost
 
+
+def test_adding_layers_to_a_malformed_map_is_one_error_line_and_exit_2(tmp_path, capsys):
+    """``--add-*`` on a file that is not a reach map: one line naming it, exit code 2, the file left as it was."""
+    from slax_drake.planning.reach import main
+
+    path = tmp_path / "map.json"
+    path.write_text('{"bad": 1}\n')
+    assert main(["--station", "sim_configs/station_sim_shelf.yaml", "--out", str(path), "--add-release"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and "not a reach map" in err and "\n" not in err
+    assert path.read_text() == '{"bad": 1}\n'
