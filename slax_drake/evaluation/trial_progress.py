@@ -132,8 +132,11 @@ class DecisionPrinter:
             self._write(", dragged instead, ")
         guard = entry.get("guarded")
         if guard:
-            self._write("guarded, " + (f"stopped on contact after {guard.get('pushed_in_m', 0.0):.3f} m, "
-                                       if guard["stopped"] else "completed, "))
+            edge = guard.get("edge_stop")
+            self._write("guarded, " + (f"stopped at the board's front edge after {edge.get('pushed_in_m', 0.0):.3f} m "
+                                       "and pushed in again higher, " if edge else "")
+                        + (f"stopped on contact after {guard.get('pushed_in_m', 0.0):.3f} m, "
+                           if guard["stopped"] else "completed, "))
         segment = entry.get("segment_of", {}).get(entry["action"]["object"], entry["action"]["object"])
         true_object = snap.segments.get(segment) if snap is not None else None
         if true_object is None or poses is None or true_object not in poses or true_object not in snap.poses:

@@ -46,7 +46,9 @@ The object an action may touch (``touched`` below) rests on geometry:
   touching, which the cup's seal presses against each other again when the same object is taken next); the
   objects it met are reported (``guarded_met``). A
   plan-step file's guarded push-in has no stop: its first contact is where the guard stops it
-  (:func:`slax_drake.hardware.check._guarded_stop`);
+  (:func:`slax_drake.hardware.check._guarded_stop`). A trial's push-in stopped at the board's front edge is followed
+  by the push-in again higher (``action.edge_retry_motion``): that motion goes on holding the object where the one
+  before stopped (no release between them);
 - the seal's press: the carry starts ``CUP_REACH`` before the cup meets the object, and the cup then presses on to
   seal. An object the carried one stands within ``CUP_PRESS`` of when the cup takes it (a neighbour a guarded
   placement left it touching, or one a moment's press reaches) may be pressed by it, by at most ``CUP_PRESS``, until
@@ -280,6 +282,7 @@ class CollisionWorld:
         self.place_objects(None)
         count = 0
         motions = []
+        held = None  # the grip (X_TO) a motion hands on to the next, which goes on holding its object
         for m_index, m in enumerate(traj.motions):
             offset, worst = self._offset(m.objects_before)
             if m_index > 0 and offset is not None:
@@ -300,7 +303,8 @@ class CollisionWorld:
             qs, _, _ = quintic_hermite(m.times, m.q, m.v, m.a, times)
             kind = (m.action or {}).get("type")
             model = _Push(self, name, m.action, m_index, violation, out) if kind == "push" and name else \
-                _Suction(self, name, m, m_index, violation, out) if kind == "suction" and name else None
+                _Suction(self, name, m, m_index, violation, out, held) if kind == "suction" and name else None
+            following = traj.motions[m_index + 1].action or {} if m_index + 1 < len(traj.motions) else {}
             for t, q in zip(times, qs):
                 count += 1
                 self.set_robot(q)
@@ -310,8 +314,9 @@ class CollisionWorld:
                     out.append(violation("collision", m_index, float(t), what, depth, self.tolerance,
                                          f"{self.body_name[a]} penetrates {self.body_name.get(b, '?')} by "
                                          f"{depth * 1000:.1f} mm at t = {t:.4f} s"))
-            if model is not None:
-                model.finish(entry)
+            held = None
+            if model is not None:  # the push-in again higher at the board's edge goes on holding the object
+                held = model.finish(entry, keep=bool(following.get("edge_retry_motion")))
         self.report = {"motions": motions}
         return count
 
@@ -394,14 +399,15 @@ class _Push:
                 self.shift = cleared
         return w._penetrations()
 
-    def finish(self, entry):
+    def finish(self, entry, keep: bool = False):
         entry["pushed_m"] = round(self.shift, 5)
+        return None  # a push hands no grip on
 
 
 class _Suction:
     """The cup sucking the touched object and carrying it while the suction is on (module docstring)."""
 
-    def __init__(self, world: CollisionWorld, name: str, motion, m_index: int, violation, out):
+    def __init__(self, world: CollisionWorld, name: str, motion, m_index: int, violation, out, held=None):
         self.w, self.name = world, name
         self.intervals = []
         on = None
@@ -413,7 +419,7 @@ class _Suction:
                 on = None
         if on is not None:
             self.intervals.append((on, motion.duration))
-        self.X_TO = None
+        self.X_TO = held  # the grip the motion before handed on (it goes on holding the object), or None
         self.carried = False
         guarded = (motion.action or {}).get("guarded_push_in") or {}
         # a trial's stopped guarded push-in: the window in which the carried object pushes what it meets
@@ -531,8 +537,11 @@ class _Suction:
         self.X_TO = None
         self._filter(carried=False)
 
-    def finish(self, entry):
-        if self.X_TO is not None:
+    def finish(self, entry, keep: bool = False):
+        """Records the motion's report in ``entry``; releases the object, or with ``keep`` (the next motion goes on
+        holding it) returns the grip (X_TO, None when nothing is held)."""
+        held = self.X_TO if keep else None
+        if self.X_TO is not None and not keep:
             self._release()
         entry["carried"] = self.carried
         if self.met:
@@ -540,3 +549,4 @@ class _Suction:
                                     for name, (t, shift) in self.met.items()}
         if self.pressed:
             entry["seal_pressed"] = {name: round(depth, 5) for name, depth in self.pressed.items()}
+        return held

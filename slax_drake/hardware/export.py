@@ -12,7 +12,10 @@ A guarded suction's motion carries ``guarded_push_in`` in its action (its push-i
 and the stop force); when the trial's guard stopped it on contact, the action is exported as two motions: the
 motion up to the stop (``guarded_push_in.stopped_at_s``; it ends moving, where the controller's guard stops it) and
 the stop motion the planner made from the measured pose (``guard_stop_motion``: hold, lower, release, back off, the
-way back), which starts at rest. A lift the trial weighed and put back (too heavy, not hanging free, or nothing
+way back), which starts at rest. A lifted object's push-in that the guard stopped at the support board's front edge
+(``guard.edge_stop``) was pushed in again higher by the motion the planner made from there (``edge_retry_motion``;
+it starts at rest and carries its own ``guarded_push_in``), followed, when the guard stopped that too, by its stop
+motion: three motions. A lift the trial weighed and put back (too heavy, not hanging free, or nothing
 held) is exported likewise: the motion up to the weighing (``put_back_at_s``; at rest at the lift) and the put-back
 motion (``put_back_motion``: its own motion played backward, lowered, released where it was sealed, the way back).
 
@@ -174,10 +177,12 @@ def guarded_window(action: dict) -> tuple[float, float] | None:
 
 def _segments(entry: dict, action: dict, act: dict, source):
     """[(start s on the trial clock, duration s, suction intervals from the start, the motion's action, whether it
-    is the stop motion after a guard stop)] of one action: its motion; for a guarded suction whose push-in the guard
-    stopped (``action["guard"]["stopped"]``), its motion up to the stop (ending where the guard stopped it, not at
-    rest; the action's ``guarded_push_in`` says so) and the stop motion planned from there (hold, lower, release,
-    back off, the way back; ``guard.stop_motion``). A guarded suction's action carries ``guarded_push_in``: its
+    starts where a guard stopped the motion before)] of one action: its motion; for a guarded suction whose push-in
+    the guard stopped (``action["guard"]["stopped"]``), its motion up to the stop (ending where the guard stopped it,
+    not at rest; the action's ``guarded_push_in`` says so) and the stop motion planned from there (hold, lower,
+    release, back off, the way back; ``guard.stop_motion``); one stopped at the board's front edge
+    (``guard.edge_stop``): its motion up to that stop, then the push-in again higher (``edge_stop.stop_motion``, its
+    own ``guarded_push_in``), cut likewise when the guard stopped that. A guarded suction's action carries ``guarded_push_in``: its
     push-in window, the stop force and, when stopped, ``stopped_at_s``. A lift weighed and put back
     (``action["weighed"]["put_back"]``): its motion up to the weighing (at rest at the lift; its action carries
     ``put_back_at_s``) and the put-back motion (its own motion played backward: lowered, released, the way back;
@@ -208,17 +213,35 @@ def _segments(entry: dict, action: dict, act: dict, source):
             segments.append((t_drag, drag_duration, drag_intervals,
                              {**act, **drag_act, "grip": "drag", "dragged_after_weighing": True}, False))
         return segments
+    from slax_drake.systems.guard import push_in_of
+
     guard = action.get("guard") if isinstance(action.get("guard"), dict) else None
     window = guarded_window(action)
     if window is None:
         return [(t0, duration, intervals, act, False)]
     record = {"t_start_s": window[0], "t_end_s": window[1], "stop_force_n": (guard or {}).get("threshold_n")}
+    edge = guard.get("edge_stop") if guard else None
+    if isinstance(edge, dict):  # stopped at the board's front edge, then pushed in again higher
+        t_edge, retry_duration, retry_intervals, before = _replaced(
+            edge, "stop_time", "stop_motion", t0, duration, intervals, "a stop at the board's edge", source)
+        retry_window = push_in_of(edge["stop_motion"].get("waypoint_times") or [])
+        if retry_window is None:
+            raise TrialFileError(f"{source or 'trial'}: a push-in retried at the board's edge has no 'push in'")
+        first = (t0, t_edge, before, {**act, "guarded_push_in": {**record, "stopped_at_s": t_edge}}, False)
+        t0, duration, intervals = t0 + t_edge, retry_duration, retry_intervals
+        act = {**act, "edge_retry_motion": True}
+        record = {"t_start_s": retry_window[0], "t_end_s": retry_window[1], "stop_force_n": record["stop_force_n"]}
+    else:
+        first = None
+    segments = [] if first is None else [first]
     if not (guard and guard.get("stopped")):
-        return [(t0, duration, intervals, {**act, "guarded_push_in": record}, False)]
+        return segments + [(t0, duration, intervals, {**act, "guarded_push_in": record}, first is not None)]
     t_stop, stop_duration, stop_intervals, before = _replaced(
         guard, "stop_time", "stop_motion", t0, duration, intervals, "a guard stop", source)
-    return [(t0, t_stop, before, {**act, "guarded_push_in": {**record, "stopped_at_s": t_stop}}, False),
-            (t0 + t_stop, stop_duration, stop_intervals, {**act, "guard_stop_motion": True}, True)]
+    return segments + [(t0, t_stop, before, {**act, "guarded_push_in": {**record, "stopped_at_s": t_stop}},
+                        first is not None),
+                       (t0 + t_stop, stop_duration, stop_intervals,
+                        {k: v for k, v in act.items() if k != "edge_retry_motion"} | {"guard_stop_motion": True}, True)]
 
 
 def _replaced(record: dict, time_key: str, motion_key: str, t0: float, duration: float, intervals, what: str,

@@ -100,6 +100,10 @@ KINEMATIC_IK_CACHE_SIZE = 50_000  # kinematic IK solutions kept across planning 
 HOLD_POSITION_TOLERANCE = 1e-4  # m
 HOLD_ANGLE_TOLERANCE = 1e-3  # rad
 GUARD_HOLD = 0.2  # s, a guarded push-in stopped on contact holds the pose reached this long before it lowers
+# m: a lifted object whose guarded push-in stopped at the board's front edge is raised this much and pushed in again
+# (edge_retry). In the Drake trials a 0.58 kg cylinder carried 1 cm up hung 0.6-1.0 mm above the board's level
+# (the cup's give and the arm's droop) and met the edge (docs/research/table-ii.md).
+EDGE_RETRY_RISE = 0.01
 # Indices in PLANNED_JOINTS of the continuous joints (upperarm, forearm and wrist roll): a whole turn of one leaves the
 # arm's pose unchanged, and IK may return any of those equivalent values
 _TURNING = np.array([robot_model.PLANNED_JOINTS.index(n) for n in CONTINUOUS_JOINTS])
@@ -392,6 +396,73 @@ class MotionPlanner:
         timings["total_s"] = time.perf_counter() - t_all
         return PlannedMotion(motion.action, out, [(0.0, round(float(suction_off), 6))], waypoint_times, float(max_dev),
                              _rounded(timings), [], list(motion.waypoints))
+
+    def edge_retry(self, motion: PlannedMotion, q_stop, scene: Scene, rise: float = EDGE_RETRY_RISE,
+                   hold: float = GUARD_HOLD) -> PlannedMotion | None:
+        """The rest of a lifted suction whose guarded push-in stopped at the support board's front edge (the carried
+        object hangs lower than planned: the cup's give and the arm's droop under its weight) at the measured joint
+        positions ``q_stop`` (9,), as a new motion from there (t = 0): hold still ``hold`` s with the cup on, raise
+        the object ``rise`` (m), push it in as planned but ``rise`` higher (a "push in" of its own, which the guard
+        watches as it watched the first), lower it to the plan's "lower" pose and go on with the plan from there
+        (release, back off, retract, the way back). Its waypoints are the plan's with the push-in raised, so that
+        :meth:`guarded_stop` applies to it. None for a motion without a lowering (a drag) or when IK finds no pose
+        for the raise or the raised push-in (the caller stops as at any contact). ``scene``: the believed scene the
+        motion was planned in. Not collision-checked: the object passes where it was carried, ``rise`` higher."""
+        timings = {"world_s": 0.0, "ik_s": 0.0, "check_s": 0.0, "timing_s": 0.0, "ik_solves": 0}
+        t_all = time.perf_counter()
+        wps = {w.label: w for w in motion.waypoints}
+        at = dict(motion.waypoint_times)
+        if "lower" not in wps or "lower" not in at or "push in" not in wps:
+            return None
+        world = self.world(scene)
+        q_stop = np.asarray(q_stop, float)
+        push, lower = wps["push in"], wps["lower"]
+        X_stop = world.tool_pose_S(q_stop, push.frame).GetAsMatrix4()
+        up, push_up = X_stop.copy(), push.X_SF.copy()
+        up[2, 3] += rise
+        push_up[2, 3] += rise
+        raised = dataclasses.replace(push, X_SF=push_up)
+        traj = motion.trajectory
+        t_lower = float(at["lower"])
+        k_lower = int(np.argmin(np.abs(traj.times - t_lower)))
+        chain = [(q_stop, None)]  # (q, waypoint label)
+        max_dev = 0.0
+        prev_q, prev_X = q_stop, X_stop
+        for wp, label in ((dataclasses.replace(push, label="raise", X_SF=up), "raise"), (raised, "push in"),
+                          (lower, "lower")):
+            q = traj.q[k_lower] if label == "lower" else self._ik(world, wp, prev_q, timings)
+            if q is None:
+                return None
+            inner, dev = self._refine_or_straight(world, prev_q, prev_X, q, wp.X_SF, wp, timings)
+            max_dev = max(max_dev, dev)
+            chain.extend((p, None) for p in inner)
+            chain.append((q, label))
+            prev_q, prev_X = q, wp.X_SF
+        t0 = time.perf_counter()
+        lim = self.limits
+        out = JointTrajectory.hold(lim.names, q_stop, hold)
+        waypoint_times = [("stop", 0.0), ("hold", round(float(out.times[-1]), 6))]
+        for (qa, _), (qb, label) in zip(chain[:-1], chain[1:]):
+            t, q, v, a = time_segment(qa, qb, lim.velocity, lim.acceleration, lim.jerk, SAMPLE_PERIOD)
+            if len(t) > 1:
+                out = out.then(JointTrajectory(lim.names, t, q, v, a))
+            if label is not None:
+                waypoint_times.append((label, round(float(out.times[-1]), 6)))
+        t_join = float(out.times[-1])
+        tail = JointTrajectory(lim.names, traj.times[k_lower:] - traj.times[k_lower], traj.q[k_lower:],
+                               traj.v[k_lower:], traj.a[k_lower:])
+        if len(tail.times) > 1:
+            out = out.then(tail)
+        k_label = [label for label, _ in motion.waypoint_times].index("lower")
+        waypoint_times += [(label, round(t - t_lower + t_join, 6)) for label, t in motion.waypoint_times[k_label + 1:]]
+        # the cup holds on from the stop to the plan's own release, shifted as the tail is
+        off = next((t1 for t0_, t1 in motion.suction_intervals if t0_ <= t_lower <= t1 + 1e-9), None)
+        suction = [(0.0, round(float(off - t_lower + t_join), 6))] if off is not None else []
+        timings["timing_s"] += time.perf_counter() - t0
+        timings["total_s"] = time.perf_counter() - t_all
+        waypoints = [raised if w.label == "push in" else w for w in motion.waypoints]
+        return PlannedMotion(motion.action, out, suction, waypoint_times, float(max_dev), _rounded(timings), [],
+                             waypoints)
 
     def _refine_or_straight(self, world, qa, Xa, qb, Xb, wp, timings):
         """:meth:`_refine`'s inserted configurations, or none (the joint-space line) when it cannot keep the tool

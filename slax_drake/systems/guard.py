@@ -262,6 +262,8 @@ class GuardRun:
     rebase_at: float = 0.0  # m of cup travel along the push before the baseline is taken again (a drag); 0: none
     p_start: tuple | None = None  # the cup's position (world, m) at the first sample, while a rebase is due
     friction: float = 0.0  # N, a drag's friction bound, the stop's margin until the rebase
+    edge_cup_y: float | None = None  # S y (m) of the cup up to which a stop is the board's front edge (edge_stop_cup_y)
+    edge_stop: dict | None = None  # the record of the stop at the board's edge this run retries (None: the first)
 
     @property
     def direction(self) -> float:
@@ -361,6 +363,25 @@ class Guard:
                         float(cup_y_S(q0)), float(cup_y_S(q1)), rebase_at=DRAG_REBASE_TRAVEL if drag else 0.0,
                         friction=float(expected))
 
+    def stopped(self, run: GuardRun, motion, q, planner, believed, cup_y_S, now: float):
+        """(the motion to play from ``now`` (s, simulated), the GuardRun watching it or None, the record) once
+        ``run`` stopped ``motion`` with the arm at the measured joint positions ``q``: at the board's front edge
+        (:func:`at_board_edge`) the push-in again higher (``planner.edge_retry``), watched with the same forces;
+        otherwise, or when that has no IK solution, ``planner.guarded_stop`` (hold, lower, release, back off, the
+        way back). ``believed``: the Scene the motion was planned in; ``cup_y_S(q)``: the cup's y (S, m)."""
+        y = cup_y_S(q)
+        record = guard_record(run, stopped=True, cup_y=y)
+        retry = planner.edge_retry(motion, q, believed) if at_board_edge(run, y) else None
+        after = retry if retry is not None else planner.guarded_stop(motion, q, believed)
+        record["stop_time"] = round(now, 4)
+        record["stop_motion"] = {"duration_s": round(after.trajectory.duration, 3),
+                                 "waypoint_times": after.waypoint_times, "suction_intervals": after.suction_intervals}
+        if retry is None:
+            return after, None, record
+        record["edge"] = True
+        again = self.start(retry, cup_y_S, run.friction, run.monitor.threshold)
+        return after, (None if again is None else dataclasses.replace(again, edge_stop=record)), record
+
     def observe(self, run: GuardRun, motion, t: float, q, v, efforts) -> GuardRun:
         """``run`` after one joint-state sample at ``t`` (s from the motion's start) inside its window; a drag's
         baseline is fitted again once the cup has pushed in ``run.rebase_at`` (module docstring)."""
@@ -379,11 +400,44 @@ class Guard:
         return dataclasses.replace(run, monitor=run.monitor.update(residual, push, weight, payload))
 
 
+# m: a lifted object's guarded push-in that stops before the object's leading face (as believed) is this far past the
+# opening met the support board's front edge, not an object: the camera sees the board's front strip, and the carry
+# was checked against what it sees there (slax_drake.scene_world's FRONT_EDGE_LENGTH is as deep)
+EDGE_BAND = 0.02
+
+
+def edge_stop_cup_y(action, obj, shelf, y_start: float) -> float | None:
+    """The cup's y (S, m) up to which a contact on the guarded push-in of the lifted suction ``action`` of ``obj``
+    (the believed object) is the support board's front edge: until the object's leading face (its side along S +y,
+    as believed) is ``EDGE_BAND`` past the opening (y = -depth / 2 of ``shelf``). None for a drag (it slides on the
+    board), an unknown object, or a push-in that starts (the cup at ``y_start``) with that face inside the opening (a
+    carry across inside the shelf)."""
+    from slax_drake.scene.footprint import Footprint
+    from slax_drake.shelf.actions import SEAL_PRESS
+
+    if obj is None or getattr(action, "drag", True):
+        return None
+    _, ey = Footprint.of(obj).extents()
+    lead = float(obj.center[1]) + ey - (float(action.q[1]) + SEAL_PRESS * float(action.axis[1]))
+    y_open = -shelf.depth / 2.0
+    if y_start + lead >= y_open:
+        return None
+    return y_open + EDGE_BAND - lead
+
+
+def at_board_edge(run: GuardRun, cup_y: float) -> bool:
+    """Whether ``run``, stopped with the cup at ``cup_y`` (S, m), stopped at the board's front edge, to be retried
+    higher (:meth:`slax_drake.planning.planner.MotionPlanner.edge_retry`): once, on a push-in into the shelf."""
+    return (run.edge_stop is None and run.edge_cup_y is not None and run.direction > 0
+            and cup_y <= run.edge_cup_y)
+
+
 def guard_record(run: GuardRun, stopped: bool, cup_y: float | None = None) -> dict:
     """The trial record of a guarded push-in: whether it stopped on contact, how far the cup had pushed in then
     and how far short of the planned placement (m, along the push-in), the largest resisting force seen and the
     threshold (N; a drag's: ``friction_n``, its friction bound, and ``rebased``, whether the baseline was taken again
-    once it slid, after which the peak counts)."""
+    once it slid, after which the peak counts); for the push-in retried higher after a stop at the board's front
+    edge, ``edge_stop``: that stop's record (with its ``stop_time`` and the retry's ``stop_motion``)."""
     out = {"guarded": True, "stopped": bool(stopped), "threshold_n": round(run.monitor.threshold + run.monitor.expected, 3),
            "peak_force_n": round(run.monitor.peak, 3)}
     if run.friction > 0.0:
@@ -392,4 +446,6 @@ def guard_record(run: GuardRun, stopped: bool, cup_y: float | None = None) -> di
     if stopped and cup_y is not None:
         out["pushed_in_m"] = round(abs(cup_y - run.y_start), 4)
         out["short_m"] = round(run.direction * (run.y_end - cup_y), 4)
+    if run.edge_stop is not None:
+        out["edge_stop"] = run.edge_stop
     return out

@@ -8,6 +8,7 @@ end plus ``settle`` seconds).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -71,7 +72,8 @@ def run_motion(station_scenario, scene, motion, name: str, times=(), settle: flo
 class GuardedMotionSource(LeafSystem):
     """As :class:`MotionSource`, with the guarded push-in of the PlannerSystem (:mod:`slax_drake.systems.guard`):
     reads ``measured_state`` and ``measured_efforts`` every ``guard.period`` s while the push-in plays and, on
-    contact, plays ``planner.guarded_stop`` from the measured positions instead. ``believed``: the Scene the motion
+    contact, plays what :meth:`~slax_drake.systems.guard.Guard.stopped` makes from the measured positions instead
+    (the planner's stop motion, or at the board's front edge its push-in again higher). ``believed``: the Scene the motion
     was planned in. :meth:`record` is the guard's record (:func:`slax_drake.systems.guard.guard_record`)."""
 
     def __init__(self, motion, planner, believed, guard, expected: float = 0.0, threshold: float | None = None):
@@ -86,7 +88,13 @@ class GuardedMotionSource(LeafSystem):
         self._n = n
         self._measured = self.DeclareVectorInputPort("measured_state", 2 * n)
         self._efforts = self.DeclareVectorInputPort("measured_efforts", n)
-        start = (motion, 0.0, guard.start(motion, self._cup_y, expected, threshold), None)
+        from slax_drake.systems.guard import edge_stop_cup_y
+
+        run = guard.start(motion, self._cup_y, expected, threshold)
+        if run is not None:
+            obj = next((o for o in believed.objects if o.name == motion.action.name), None)
+            run = dataclasses.replace(run, edge_cup_y=edge_stop_cup_y(motion.action, obj, believed.shelf, run.y_start))
+        start = (motion, 0.0, run, None)
         self._state = self.DeclareAbstractState(AbstractValue.Make(start))
         self.DeclarePeriodicUnrestrictedUpdateEvent(guard.period, 0.0, self._watch)
         ticket = {self.abstract_state_ticket(self._state)} | {self.time_ticket()}
@@ -125,11 +133,10 @@ class GuardedMotionSource(LeafSystem):
         if not run.monitor.stopped:
             state.get_mutable_abstract_state(0).set_value((motion, t0, run, None))
             return
-        q = np.asarray(x[:self._n], float)
-        record = guard_record(run, stopped=True, cup_y=self._cup_y(q))
-        stop = self.planner.guarded_stop(motion, q, self.believed)
-        record["stop_time"] = round(context.get_time(), 4)
-        state.get_mutable_abstract_state(0).set_value((stop, context.get_time(), None, record))
+        now = context.get_time()
+        after, again, record = self.guard.stopped(run, motion, np.asarray(x[:self._n], float), self.planner,
+                                                  self.believed, self._cup_y, now)
+        state.get_mutable_abstract_state(0).set_value((after, now, again, None if again is not None else record))
 
 
 def run_guarded_motion(station_scenario, scene, believed, motion, planner, names, expected: float = 0.0,

@@ -64,7 +64,8 @@ from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
 from slax_drake.systems.drag_weigh import believed_pull, observe_pull, pull_record, start_pull
-from slax_drake.systems.guard import PutBack, guard_record, least_lever, push_in_forces, weigh_time, weigh_verdict
+from slax_drake.systems.guard import (PutBack, edge_stop_cup_y, guard_record, least_lever, push_in_forces, weigh_time,
+                                     weigh_verdict)
 
 MAX_PLAN_ATTEMPTS = 25
 
@@ -212,7 +213,10 @@ class PlannerSystem(LeafSystem):
             return None
         stop, expected = push_in_forces(action, obj, self.policy.action_model, self.guard.threshold,
                                         self.guard.lip_moment) if isinstance(action, Suction) else (None, 0.0)
-        return self.guard.start(motion, self._cup_y(believed, motion), expected, stop)
+        run = self.guard.start(motion, self._cup_y(believed, motion), expected, stop)
+        if run is None:
+            return None
+        return dataclasses.replace(run, edge_cup_y=edge_stop_cup_y(action, obj, self.template.shelf, run.y_start))
 
     def _start_pull(self, motion):
         """The weighing of ``motion``'s pull when it is a sideways drag and the ``weigh_drag_pull`` rule is on (the
@@ -418,15 +422,11 @@ class PlannerSystem(LeafSystem):
         if not run.monitor.stopped:
             state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, guard=run))
             return
-        q = np.asarray(x[:n], float)
-        record = guard_record(run, stopped=True, cup_y=self._cup_y(s.believed, s.motion)(q))
-        stop = self.planner.guarded_stop(s.motion, q, s.believed)
         now = context.get_time()
-        record["stop_time"] = round(now, 4)
-        record["stop_motion"] = {"duration_s": round(stop.trajectory.duration, 3), "waypoint_times": stop.waypoint_times,
-                                 "suction_intervals": stop.suction_intervals}
+        after, again, record = self.guard.stopped(run, s.motion, np.asarray(x[:n], float), self.planner, s.believed,
+                                                  self._cup_y(s.believed, s.motion), now)
         state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
-            s, motion=stop, t_start=now, guard=None, motions=s.motions + ((now, stop),),
+            s, motion=after, t_start=now, guard=again, motions=s.motions + ((now, after),),
             log=s.log[:-1] + ({**s.log[-1], "guarded": record},)))
 
     # weighing a drag along its pull ----------------------------------------------------------------------

@@ -163,3 +163,18 @@ def test_a_belief_policys_line_says_what_its_plan_reveals_or_that_it_found_none(
     plain = io.StringIO()  # a policy without a decision log (Bluction-DAR): nothing added
     DecisionPrinter(8, plain).update((_decision(0, 0.5),), (_snap(0.5, 0.05),))
     assert plain.getvalue() == "step 1/8: push segment_2 -0.100 m, planned in 0.4 s, "
+
+
+def test_a_guarded_placement_retried_at_the_boards_edge_says_so():
+    """A push-in stopped at the board's front edge and pushed in again higher: the line names both."""
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    entry = {**_decision(0, 0.5), "action": {"type": "suction", "object": "segment_2", "dx": -0.5, "dz": -0.08,
+                                             "grip": "lift", "guarded": True}}
+    printer.update((entry,), (_snap(0.5, 0.05),))
+    edge = {"guarded": True, "stopped": True, "pushed_in_m": 0.0186, "short_m": 0.21, "edge": True}
+    done = {**entry, "guarded": {"guarded": True, "stopped": False, "edge_stop": edge}}
+    printer.update((done, {"step": 1, "time": 20.0, "final": True, "result": "horizon"}),
+                   (_snap(0.5, 0.05), _snap(20.0, -0.05)))
+    assert ("planned in 0.4 s, guarded, stopped at the board's front edge after 0.019 m and pushed in again higher, "
+            "completed, executed") in out.getvalue()

@@ -197,6 +197,43 @@ def test_a_guard_stopped_suction_exports_as_its_motion_up_to_the_stop_and_the_st
         _segments({"time": 10.0}, {**action, "guard": {**action["guard"], "stop_time": 30.0}}, {}, "t.json")
 
 
+def test_a_push_in_retried_at_the_boards_edge_exports_as_its_motion_up_to_the_edge_and_the_retry():
+    """A lift's push-in stopped at the board's front edge and pushed in again higher (guard.edge_stop): its motion
+    up to that stop, then the retry (it starts where the arm stopped, with its own guarded push-in window, from its
+    waypoint times); when the guard stopped the retry too, the retry is cut there and its stop motion follows."""
+    import pytest
+
+    from slax_drake.errors import TrialFileError
+    from slax_drake.hardware.export import _segments
+
+    motion = {"duration_s": 12.0, "suction_intervals": [[3.0, 9.0]],
+              "waypoint_times": [["seal", 3.0], ["lift", 4.0], ["translate", 6.0], ["push in", 8.0],
+                                 ["lower", 9.0], ["release", 9.0], ["retract", 12.0]]}
+    retry = {"duration_s": 8.0, "suction_intervals": [[0.0, 4.0]],
+             "waypoint_times": [["stop", 0.0], ["hold", 0.2], ["raise", 0.5], ["push in", 3.5], ["lower", 4.0],
+                                ["release", 4.0], ["retract", 6.0]]}
+    edge = {"guarded": True, "stopped": True, "edge": True, "threshold_n": 4.4, "stop_time": 16.2,
+            "stop_motion": retry}
+    action = {"type": "suction", "object": "track_3", "guarded": True, "motion": motion,
+              "guard": {"guarded": True, "stopped": False, "threshold_n": 4.4, "edge_stop": edge}}
+    (t0, d0, on0, act0, after0), (t1, d1, on1, act1, after1) = _segments({"time": 10.0}, action, {"type": "suction"},
+                                                                         None)
+    assert (t0, d0, on0, after0) == (10.0, pytest.approx(6.2), [(3.0, pytest.approx(6.2))], False)
+    assert act0["guarded_push_in"]["stopped_at_s"] == pytest.approx(6.2) and "edge_retry_motion" not in act0
+    assert (t1, d1, on1, after1) == (16.2, 8.0, [(0.0, 4.0)], True) and act1["edge_retry_motion"]
+    assert act1["guarded_push_in"] == {"t_start_s": 0.5, "t_end_s": 3.5, "stop_force_n": 4.4}
+    stopped = {**action, "guard": {**action["guard"], "stopped": True, "stop_time": 18.2,
+                                   "stop_motion": {"duration_s": 3.0, "suction_intervals": [[0.0, 0.5]]}}}
+    first, cut, stop = _segments({"time": 10.0}, stopped, {"type": "suction"}, None)
+    assert cut[:2] == (16.2, pytest.approx(2.0)) and cut[3]["guarded_push_in"]["stopped_at_s"] == pytest.approx(2.0)
+    assert cut[4] and cut[3]["edge_retry_motion"]
+    assert stop[:3] == (pytest.approx(18.2), 3.0, [(0.0, 0.5)]) and stop[3]["guard_stop_motion"]
+    assert "edge_retry_motion" not in stop[3]
+    no_push_in = {**edge, "stop_motion": {**retry, "waypoint_times": [["stop", 0.0], ["lower", 4.0]]}}
+    with pytest.raises(TrialFileError, match="retried at the board's edge has no 'push in'"):
+        _segments({"time": 10.0}, {**action, "guard": {**action["guard"], "edge_stop": no_push_in}}, {}, "t.json")
+
+
 def test_a_lift_put_back_exports_as_its_motion_up_to_the_weighing_and_the_put_back():
     from slax_drake.errors import TrialFileError
     from slax_drake.hardware.export import _segments

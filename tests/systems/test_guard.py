@@ -171,3 +171,32 @@ def test_a_drag_s_push_in_bears_its_friction_turning_over_and_stops_on_contact_o
     assert not run.monitor.stopped
     run = sample(run, 0.0, 26.0)
     assert run.monitor.stopped and not guard_record(run, stopped=True)["rebased"]
+
+
+def test_a_stop_before_the_objects_leading_face_is_past_the_boards_edge_is_the_edge(sim_scenario):
+    """A lifted object carried out of the shelf and pushed back in: a contact while its believed leading face (its
+    back, along S +y) is within EDGE_BAND of the opening is the board's front edge, retried once; deeper, on a drag,
+    on a carry across inside the shelf, or once retried, it is a contact like any other."""
+    import dataclasses
+
+    from slax_drake.scene.model import SceneObject, planar_pose
+    from slax_drake.scene.sampling import shelf_of
+    from slax_drake.shelf.actions import SEAL_PRESS, Suction
+    from slax_drake.systems.guard import EDGE_BAND, GuardRun, at_board_edge, edge_stop_cup_y
+
+    shelf = shelf_of(sim_scenario)
+    y_open = -shelf.depth / 2.0
+    obj = SceneObject("object_1", "box", (0.08, 0.10, 0.12), planar_pose(0.1, y_open + 0.10, 0.06, 0.0))
+    lift = Suction("object_1", (0.1, y_open + 0.05, 0.06), -0.2, y_open + 0.12, guarded=True)
+    cup_at_seal = y_open + 0.05 + SEAL_PRESS  # the leading face is 0.10 m ahead of the cup (centre 0.05 + 0.05)
+    y_start = y_open - 0.12  # the push-in starts with the object out of the shelf, its back 2 cm outside
+    edge = edge_stop_cup_y(lift, obj, shelf, y_start)
+    assert edge == pytest.approx(y_open + EDGE_BAND - (y_open + 0.15 - cup_at_seal))
+    run = GuardRun(ContactMonitor(threshold=5.0), 0.0, 1.0, y_start, y_start + 0.2, edge_cup_y=edge)
+    assert at_board_edge(run, y_start + 0.02)  # 2 cm in: the back has just reached the opening
+    assert at_board_edge(run, edge) and not at_board_edge(run, edge + 0.001)
+    assert not at_board_edge(dataclasses.replace(run, edge_stop={"stopped": True}), y_start + 0.02)  # retried once
+    assert not at_board_edge(dataclasses.replace(run, y_end=y_start - 0.1), y_start - 0.05)  # a push-in out
+    assert edge_stop_cup_y(dataclasses.replace(lift, drag=True), obj, shelf, y_start) is None
+    assert edge_stop_cup_y(lift, None, shelf, y_start) is None
+    assert edge_stop_cup_y(lift, obj, shelf, y_open - 0.05) is None  # its back inside the opening already

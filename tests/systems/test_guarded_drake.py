@@ -65,3 +65,51 @@ def test_a_guarded_placement_with_nothing_in_the_way_completes(planned):
     end = poses["object_1"]
     assert abs(end["y"] - motion.action.dz) < 0.01 and abs(end["x"] - 0.20) < 0.01
     assert end["tilt_deg"] < 20.0
+
+
+# The believed objects of the physical shelf's Table II scene 8:2 at its first decision (the camera's hypotheses, S,
+# m): its first action carries track_3 (object_3, a 0.58 kg cylinder) 0.5 m left in front of the shelf and pushes it
+# back in, guarded. The cup's give and the arm's droop let it hang low enough that its back met the board's front
+# edge 1.85 cm into the push-in; stopped there and released, it fell in front of the shelf (docs/research/table-ii.md).
+SCENE_8_2_BELIEVED = {
+    "track_1": ("cylinder", (0.1213, 0.1213, 0.1686), 0.13139, -0.01234, 0.0),
+    "track_2": ("box", (0.0749, 0.09, 0.1147), -0.34732, 0.03249, 0.0),
+    "track_3": ("cylinder", (0.0853, 0.0853, 0.12), 0.1478, -0.12639, 0.0),
+    "track_4": ("box", (0.102, 0.0725, 0.0817), -0.02751, 0.10856, 1.29503),
+    "track_5": ("box", (0.1984, 0.1013, 0.0678), -0.03664, -0.09934, 0.50964),
+    "track_6": ("box", (0.1833, 0.0674, 0.1249), -0.24604, -0.07056, 1.39452),
+    "track_7": ("box", (0.1421, 0.0921, 0.1759), 0.27375, -0.03124, 0.86045),
+}
+
+
+def test_a_push_in_stopped_at_the_boards_front_edge_is_pushed_in_again_higher_and_places_its_object():
+    from slax_drake.config import load_scenario
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.shelf.actions import Suction
+    from slax_drake.shelf.tool import tool_config
+    from slax_drake.station.scenario import load_station_scenario, station_for
+    from slax_drake.systems.motion_run import run_guarded_motion
+    from slax_drake.systems.trial import station_tool_rules
+
+    scenario = load_scenario("sim_configs/table2.yaml")
+    scene = protocol_scene(scenario, 8, scene_seed(0, 8, 2))
+    station = load_station_scenario(station_for("sim_configs/table2.yaml"))
+    planner = MotionPlanner(station, tool_config(scenario, "station", **station_tool_rules(station)))
+    believed = Scene(scene.shelf, scene.camera, tuple(
+        SceneObject(name, shape, size, planar_pose(x, y, size[2] / 2, yaw))
+        for name, (shape, size, x, y, yaw) in SCENE_8_2_BELIEVED.items()), None, 0)
+    action = Suction("track_3", (0.14780, -0.16903, 0.10001), -0.5, -0.076387, guarded=True)
+    motion = planner.plan(action, believed)
+    assert motion.feasible, motion.reason
+    poses, record = run_guarded_motion(station, scene, believed, motion, planner, ["object_3"])
+    edge = record["edge_stop"]
+    assert edge["edge"] and edge["stopped"] and edge["pushed_in_m"] < 0.03
+    times = dict(edge["stop_motion"]["waypoint_times"])
+    assert [label for label, _ in edge["stop_motion"]["waypoint_times"]][:6] == [
+        "stop", "hold", "raise", "push in", "lower", "release"]
+    assert [tuple(i) for i in edge["stop_motion"]["suction_intervals"]] == [(0.0, times["release"])]  # held to there
+    assert not record["stopped"]  # the push-in again, EDGE_RETRY_RISE higher, met nothing
+    end = poses["object_3"]
+    assert abs(end["x"] - (0.1478 - 0.5)) < 0.01 and abs(end["y"] - action.dz) < 0.01  # placed as predicted
+    assert end["tilt_deg"] < 5.0 and abs(end["z"] - 0.1192 / 2) < 0.005  # upright on the board
