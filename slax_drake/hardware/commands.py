@@ -385,9 +385,12 @@ def run_plan_step(args: argparse.Namespace) -> int:
         drag = (f" (a drag: over twice its {guarded['expected_resistance_n']:.1f} N of floor friction until the cup "
                 f"has pushed in {guarded['rebase_after_m'] * 100:.0f} cm, then over a new baseline)"
                 if guarded["expected_resistance_n"] > 0 else "")
+        edge = (f"; a stop within its first {guarded['edge_retry_within_m'] * 100:.1f} cm is the board's front edge: "
+                f"rise {guarded['edge_retry_rise_m'] * 100:.0f} cm and push in again, once"
+                if guarded.get("edge_retry_within_m") else "")
         print(f"GUARDED: the push-in from {guarded['t_start_s']:.2f} to {guarded['t_end_s']:.2f} s places into space "
               f"the camera cannot see: run it as a guarded move that stops when the push meets more than "
-              f"{guarded['stop_force_n']:.1f} N{drag}, then releases and backs out "
+              f"{guarded['stop_force_n']:.1f} N{drag}, then releases and backs out{edge} "
               "(metadata.plan_step.guarded_push_in)")
     from slax_drake.systems.drag_weigh import is_pull_record
 

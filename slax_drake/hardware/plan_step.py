@@ -419,7 +419,7 @@ class StepPlanner:
             motion = self.motion_planner.plan(action, believed, q_start=q)
             if motion.feasible:
                 traj = self._export(action, motion, belief, q, source)
-                guarded = self._guarded_push_in(action, motion, belief.known)
+                guarded = self._guarded_push_in(action, motion, belief.known, believed.shelf)
                 if guarded is not None:  # the checker reads it from the motion (hardware.check)
                     traj.motions[0].action["guarded_push_in"] = dict(guarded)
                 weigh = self._weigh_at_lift(action, motion, belief) or self._weigh_along_pull(action, motion, belief)
@@ -487,15 +487,19 @@ class StepPlanner:
         exported.metadata["initial_positions"] = list(map(float, q))
         return exported
 
-    def _guarded_push_in(self, action, motion, known) -> dict | None:
+    def _guarded_push_in(self, action, motion, known, shelf) -> dict | None:
         """What the arm's controller must do for a guarded suction (None for any other action): the push-in
         (``t_start_s`` to ``t_end_s``, s from the trajectory's start) runs as a guarded move that stops when the
         force resisting the push, estimated from the joint efforts, exceeds ``stop_force_n``; for a drag, first
         over twice ``expected_resistance_n`` (its floor friction turning over) and, once the cup has pushed in
         ``rebase_after_m``, over a baseline taken again there; then it holds, releases and backs out the way it
-        came (:mod:`slax_drake.systems.guard`, ``MotionPlanner.guarded_stop``). The trajectory after the push-in
-        is what follows when nothing stops it."""
-        from slax_drake.systems.guard import DRAG_REBASE_TRAVEL, push_in_forces, push_in_window
+        came (:mod:`slax_drake.systems.guard`, ``MotionPlanner.guarded_stop``). A lift stopped before the cup has
+        pushed in ``edge_retry_within_m`` (0: never) met the board's front edge (the object hangs lower than
+        planned): it holds, rises ``edge_retry_rise_m``, pushes in again that much higher, as guarded, lowers to the
+        plan's lowering and goes on with the plan, once (``MotionPlanner.edge_retry``). The trajectory after the
+        push-in is what follows when nothing stops it."""
+        from slax_drake.planning.planner import EDGE_RETRY_RISE
+        from slax_drake.systems.guard import DRAG_REBASE_TRAVEL, edge_stop_cup_y, push_in_forces, push_in_window
 
         window = push_in_window(motion)
         if window is None:
@@ -503,9 +507,14 @@ class StepPlanner:
         obj = next((o for o in known if o.name == action.name), None)
         stop, expected = push_in_forces(action, obj, self.policy.action_model, self.station.guarded_stop_force,
                                         self.station.suction.lip_moment)
+        labels = [w.label for w in motion.waypoints]
+        y_start = float(motion.waypoints[labels.index("push in") - 1].position[1])  # the cup where the push-in starts
+        edge = edge_stop_cup_y(action, obj, shelf, y_start)
+        within = 0.0 if edge is None else max(0.0, edge - y_start)
         return {"t_start_s": round(window[0], 4), "t_end_s": round(window[1], 4), "stop_force_n": round(stop, 3),
                 "expected_resistance_n": round(expected, 3),
-                "rebase_after_m": DRAG_REBASE_TRAVEL if expected > 0.0 else 0.0}
+                "rebase_after_m": DRAG_REBASE_TRAVEL if expected > 0.0 else 0.0,
+                "edge_retry_within_m": round(within, 4), "edge_retry_rise_m": EDGE_RETRY_RISE if within > 0 else 0.0}
 
     def _weigh_at_lift(self, action, motion, belief) -> dict | None:
         """What the arm's controller must do at a lifted suction's lift (None for any other action): at ``t_s`` (s
