@@ -19,7 +19,9 @@
 4. the free segments from the start to the first waypoint and from the last one back to the observation pose
    are straight when that is collision-free; the way back then tries the way it came (last waypoint, first
    waypoint, the way from the start reversed); else :func:`slax_drake.planning.free_path.free_path`
-   (RRT-Connect around the robot itself); every joint segment is checked
+   (RRT-Connect around the robot itself); the way back is searched and checked with the moved object where the
+   action leaves it (:func:`placed_pose`, :meth:`~slax_drake.planning.world.PlanningWorld.place`); every joint
+   segment is checked
    densely with SceneGraphCollisionChecker against the world as it stands and against the robot itself
    (:mod:`slax_drake.planning.world`: padding 2 mm to the environment, 3 mm between non-adjacent links; the
    tool may touch the manipulated object only on the action's contact segments; a suctioned object is
@@ -499,7 +501,7 @@ class MotionPlanner:
 
     def _free_path(self, world, qa, qb):
         """:func:`free_path` (no tool contact), memoised in the current world."""
-        key = ("free", np.asarray(qa, float).tobytes(), np.asarray(qb, float).tobytes())
+        key = ("free", np.asarray(qa, float).tobytes(), np.asarray(qb, float).tobytes(), world.placed_key)
         if key not in self._memo:
             self._memo[key] = free_path(world, qa, qb, self.limits, LIMIT_MARGIN, seed=FREE_PATH_SEED)
         path = self._memo[key]
@@ -696,15 +698,22 @@ class MotionPlanner:
         t0 = time.perf_counter()
         world.allow_tool_contact(name, False)
         to_first = self._free_path(world, q_start, qs[0])
+        # the way back clears the moved object where the action leaves it, not where it stood
+        placed = placed_pose(action, world.scene)
         back = None
-        if to_first is not None and not world.edge_free(qs[-1], self.q_observation):
-            # back the way it came: to the first waypoint's configuration, then the way from the start reversed
-            via = [qs[-1], qs[0]] + to_first[::-1][1:] + [self.q_observation]
-            via = [q for i, q in enumerate(via) if i == 0 or not np.array_equal(q, via[i - 1])]
-            if all(world.edge_free(a, b) for a, b in zip(via[:-1], via[1:])):
-                back = via
-        if back is None:
-            back = self._free_path(world, qs[-1], self.q_observation)
+        try:
+            if placed is not None:
+                world.place(*placed)
+            if to_first is not None and not world.edge_free(qs[-1], self.q_observation):
+                # back the way it came: to the first waypoint's configuration, then the way from the start reversed
+                via = [qs[-1], qs[0]] + to_first[::-1][1:] + [self.q_observation]
+                via = [q for i, q in enumerate(via) if i == 0 or not np.array_equal(q, via[i - 1])]
+                if all(world.edge_free(a, b) for a, b in zip(via[:-1], via[1:])):
+                    back = via
+            if back is None:
+                back = self._free_path(world, qs[-1], self.q_observation)
+        finally:
+            world.unplace()
         timings["check_s"] += time.perf_counter() - t0
         if to_first is None:
             raise _Reject(PlanningFailure(FailureKind.NO_WAY_FROM_START, waypoints[0].label))
@@ -715,6 +724,7 @@ class MotionPlanner:
         carried[1:1] = [""] * len(to_first[1:-1])
         carried.extend("" for _ in back[1:])
         chain.extend((q, False, False, None) for q in back[1:])
+        i_back = len(chain) - len(back)  # the segments from here on are the way back
         obj = next((o for o in world.scene.objects if o.name == name), None)
         i_seal = next((i for i, wp in enumerate(waypoints) if wp.suction), None)
         # 4. Dense collision checks of every joint segment.
@@ -723,6 +733,8 @@ class MotionPlanner:
         t0 = time.perf_counter()
         try:
             for i, ((qa, _, _, wa), (qb, contact, _, wb), carry) in enumerate(zip(chain[:-1], chain[1:], carried[1:])):
+                if i == i_back and placed is not None:
+                    world.place(*placed)
                 world.allow_tool_contact(name, contact)
                 if carry != attached:
                     world.drop()
@@ -744,6 +756,7 @@ class MotionPlanner:
                 segments.append((np.asarray(qa).copy(), np.asarray(qb).copy(), contact, carry))
         finally:
             world.drop()
+            world.unplace()
             world.allow_tool_contact(name, False)
         timings["check_s"] += time.perf_counter() - t0
         # 5. Ruckig timing, segment by segment, with dwells and the suction schedule.
@@ -829,6 +842,22 @@ def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) 
     is a straight-segment failure."""
     return (failures[0].names_any(dependent) or failures[0].kind in kinds
             or any(f.straight_segment for f in failures))
+
+
+def placed_pose(action, scene: Scene):
+    """(the object ``action`` moves, its pose X_SO (4x4, shelf frame) where the action leaves it as the action model
+    predicts the translation: a suction's placement at x + d_x, y = d_z; a push's x + d, its turn left out), or None
+    when ``scene`` does not hold the object."""
+    obj = next((o for o in scene.objects if o.name == action.name), None)
+    if obj is None:
+        return None
+    X = np.array(obj.X_SO, float)
+    if isinstance(action, Suction):
+        X[0, 3] += action.dx
+        X[1, 3] = action.dz
+    else:
+        X[0, 3] += action.d
+    return obj, X
 
 
 def _reject_a_lifted_guarded_push_in(action, waypoints) -> None:

@@ -46,6 +46,7 @@ NESTED_PAIRS = (("torso_fixed_link", "torso_lift_link"),)
 TOOL_RIGID_BODIES = ("wrist_roll_link", "bluction_mount_link", "camera_link", "tool_shaft_link")
 EDGE_STEP = 0.005  # rad (weighted joint distance) between checked configurations along a segment
 CARRIED_GROUP = "carried_object"
+PLACED_GROUP = "placed_object"  # the moved object where the action leaves it (PlanningWorld.place)
 # An object resting closer than CARRIED_MARGIN to a wall or neighbour may press this far into it while it slides
 # out along it (m; the carry's lift reckons touching neighbours with the same allowance).
 REST_CONTACT_ALLOWANCE = TOUCH_ALLOWANCE
@@ -103,6 +104,9 @@ class PlanningWorld:
         # is carried and how): a motion re-checks its free-space moves, which the free-path search has checked.
         self._allowed: set[str] = set()
         self._carried_key = None
+        self.placed = None  # the object place() moved, or None
+        self._placed_key = None
+        self._robot_bodies = [self.plant.get_body(b) for b in self.plant.GetBodyIndices(robot)]
         self._edge_memo: dict = {}
         self._tool_rigid_index = {n: int(self.plant.GetBodyByName(n, robot).index()) for n in TOOL_RIGID_BODIES
                                   if self.plant.HasBodyNamed(n, robot)}
@@ -127,11 +131,49 @@ class PlanningWorld:
 
     # checks -----------------------------------------------------------------------------------------------
     def allow_tool_contact(self, name: str | None, allowed: bool) -> None:
-        """Lets the tool link touch object ``name`` (or stops letting it)."""
+        """Lets the tool link touch object ``name`` (or stops letting it; an object :meth:`place` moved stays
+        ignored where it stood)."""
         if name is None or name not in self.object_bodies:
             return
-        self.checker.SetCollisionFilteredBetween(self.tool_body, self.object_bodies[name], allowed)
+        self.checker.SetCollisionFilteredBetween(self.tool_body, self.object_bodies[name],
+                                                 allowed or name == self.placed)
         (self._allowed.add if allowed else self._allowed.discard)(name)
+
+    def place(self, obj, X_SO) -> None:
+        """Moves ``obj`` (a SceneObject of the scene) to X_SO (4x4, shelf frame) for the checks that follow, until
+        :meth:`unplace`: the robot ignores its welded copy where it stood and meets its box or cylinder at X_SO
+        (an added shape on the world body, group ``PLACED_GROUP``). Where an action leaves the object it moved:
+        the way back to the observation pose must clear it there."""
+        from pydrake.geometry import Box, Cylinder
+        from pydrake.math import RigidTransform
+
+        self.unplace()
+        body = self.object_bodies[obj.name]
+        for b in self._robot_bodies:
+            self.checker.SetCollisionFilteredBetween(b, body, True)
+        sx, sy, sz = (float(v) for v in obj.size)
+        shape = Box(sx, sy, sz) if obj.shape == "box" else Cylinder(sx / 2.0, sz)
+        if not self.checker.AddCollisionShapeToBody(PLACED_GROUP, self.plant.world_body(), shape,
+                                                    self.X_WS @ RigidTransform(np.asarray(X_SO, float))):
+            raise RuntimeError("the collision checker refused the placed object's shape")
+        self.placed = obj.name
+        self._placed_key = (obj.name, np.asarray(X_SO, float).tobytes())
+
+    def unplace(self) -> None:
+        """Puts back the object :meth:`place` moved (no-op when none)."""
+        if self.placed is None:
+            return
+        body = self.object_bodies[self.placed]
+        self.checker.RemoveAllAddedCollisionShapes(PLACED_GROUP)
+        for b in self._robot_bodies:
+            self.checker.SetCollisionFilteredBetween(b, body, b is self.tool_body and self.placed in self._allowed)
+        self.placed = None
+        self._placed_key = None
+
+    @property
+    def placed_key(self):
+        """What :meth:`place` moved and where (None: nothing), for memos of checks."""
+        return self._placed_key
 
     def ik_tool_contact(self, name: str | None, allowed: bool) -> None:
         """The same as :meth:`allow_tool_contact` for IK's distance constraint (a transient collision filter in
@@ -209,7 +251,7 @@ class PlanningWorld:
         """The dense check of the joint-space segment q0 -> q1 (``edge_step`` apart) in the checker's present
         state; a segment already checked in the same state is answered from memory."""
         key = (np.asarray(q0, float).tobytes(), np.asarray(q1, float).tobytes(), frozenset(self._allowed),
-               self._carried_key)
+               self._carried_key, self._placed_key)
         free = self._edge_memo.get(key)
         if free is None:
             free = bool(self.checker.CheckEdgeCollisionFree(self.full_q(q0), self.full_q(q1)))
