@@ -205,6 +205,9 @@ def _run_scene(job) -> dict:
         if isinstance(a.get("guard"), dict):  # a guarded placement: whether it stopped on contact, where
             record["guard"] = {k: a["guard"][k] for k in ("stopped", "pushed_in_m", "short_m", "peak_force_n",
                                                           "threshold_n", "rebased") if k in a["guard"]}
+            edge = a["guard"].get("edge_stop")
+            if isinstance(edge, dict):  # stopped at the board's front edge first, then pushed in again higher
+                record["guard"]["edge_stop"] = {k: edge[k] for k in ("pushed_in_m", "peak_force_n") if k in edge}
         record["mismatch"] = mismatch_kind(record, scenario.shelf.width, scenario.shelf.depth)
         actions.append(record)
     final = d["final_objects"]
@@ -433,7 +436,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             # (None: the trial ended otherwise, or its record predates end_rejected)
             "end_refused": len(d["end_rejected"]) if "end_rejected" in d else None,
             "guarded": [sum(1 for a in d["actions"] if "guard" in a),
-                        sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped"))],
+                        sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped")),
+                        sum(1 for a in d["actions"] if "edge_stop" in (a.get("guard") or {}))],
         })
         if "target_moved_m" in d:  # None: the simulation diverged (no final pose); absent: a record from before
             summary["trials"][-1]["target_moved_m"] = d["target_moved_m"]
@@ -469,9 +473,11 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 # "no feasible motion" endings where the planner refused one candidate: the only one the action model
                 # and the policy's corrections had left (None where the records do not say)
                 "no_motion_one_left": None if None in no_motion_refused else no_motion_refused.count(1),
-                # guarded placements executed, and how many of them the guard stopped on contact
+                # guarded placements executed, how many of them the guard stopped on contact, and how many it
+                # stopped at the board's front edge first and pushed in again higher (records before that: 0)
                 "guarded_placements": [sum(t.get("guarded", [0, 0])[0] for t in sel),
-                                       sum(t.get("guarded", [0, 0])[1] for t in sel)],
+                                       sum(t.get("guarded", [0, 0])[1] for t in sel),
+                                       sum((t.get("guarded", [0, 0]) + [0])[2] for t in sel)],
                 # trials whose moves pushed the target TARGET_MOVED or farther, and of them revealed (None where the
                 # records do not say)
                 "target_moved": None if any("target_moved_m" not in t for t in sel) else [
@@ -723,8 +729,10 @@ def markdown_table(summary: dict) -> str:
                               f"had the action model refused it too).")
         guarded = per.get("all", {}).get("guarded_placements")
         if guarded and guarded[0]:
+            edge = (f", stopped at the board's front edge and pushed in again higher {guarded[2]}"
+                    if len(guarded) > 2 and guarded[2] else "")
             lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "
-                          f"stopped on contact {guarded[1]}.")
+                          f"stopped on contact {guarded[1]}{edge}.")
         moved = per.get("all", {}).get("target_moved")
         if moved is not None and endings:
             lines[-1] += (f" The target pushed {100 * TARGET_MOVED:.0f} cm or more by a move that brushed it: "

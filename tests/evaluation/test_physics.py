@@ -515,3 +515,25 @@ def test_the_summary_counts_the_trials_whose_moves_pushed_the_target():
     old = summarise([unrecorded], ["p"], [4])
     assert old["policies"]["p"]["all"]["target_moved"] is None
     assert "The target pushed" not in markdown_table(old)
+
+
+def test_the_report_counts_the_guarded_push_ins_retried_at_the_boards_edge():
+    from slax_drake.evaluation.physics import markdown_table, summarise
+
+    def trial(i, guards):
+        actions = [{"type": "suction", "matched": True, "mismatch": None, "guard": g} for g in guards]
+        drake = {"success": False, "result": "horizon", "steps": len(actions), "toppled": [], "dropped": [],
+                 "real_time_factor": 1.0, "wall_s": 1.0, "actions": actions}
+        return {"policy": "p", "density": 4, "index": i, "seed": i, "shelf": {"success": False, "steps": 1},
+                "drake": drake}
+
+    edge = {"stopped": False, "edge_stop": {"pushed_in_m": 0.018, "peak_force_n": 5.3}}
+    results = [trial(0, [edge, {"stopped": True}]), trial(1, [{"stopped": False}])]
+    summary = summarise(results, ["p"], [4])
+    assert [t["guarded"] for t in summary["trials"]] == [[2, 1, 1], [1, 0, 0]]
+    assert summary["policies"]["p"]["all"]["guarded_placements"] == [3, 1, 1]
+    assert ("Guarded placements (a push-in into hidden space that stops on contact): 3, stopped on contact 1, "
+            "stopped at the board's front edge and pushed in again higher 1.") in markdown_table(summary)
+    # a summary from before the retry holds two counts: no third clause
+    summary["policies"]["p"]["all"]["guarded_placements"] = [3, 1]
+    assert "pushed in again higher" not in markdown_table(summary)
