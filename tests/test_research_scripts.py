@@ -461,3 +461,38 @@ def test_object_motion_refuses_a_folder_without_poses(tmp_path, capsys):
     assert script("object_motion").main([str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"error: {tmp_path}")
+
+
+def test_replay_action_refuses_an_unreadable_folder_and_an_action_the_trial_does_not_hold(tmp_path, capsys):
+    import numpy as np
+
+    replay = script("replay_action")
+    assert replay.main([str(tmp_path / "none"), "--action", "0"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: ") and "not a readable trial folder" in err[0]
+    (tmp_path / "trial.json").write_text(json.dumps({"actions": [{"type": "push"}], "steps_log": [
+        {"action": {"type": "push"}, "time": 0.5}]}))
+    np.savez(tmp_path / "object_poses.npz", times=np.zeros(1), poses=np.zeros((1, 1, 7)), names=np.array(["object_0"]))
+    assert replay.main([str(tmp_path), "--action", "3"]) == 2
+    assert "--action 3: the trial has 1 actions" in capsys.readouterr().err
+    assert replay.main([str(tmp_path), "--action", "0", "--object", "object_7"]) == 2
+    assert "--object 'object_7': not an object of the trial" in capsys.readouterr().err
+
+
+def test_replay_action_puts_each_object_where_the_recorded_poses_hold_it_at_the_decision():
+    import numpy as np
+
+    from slax_drake.scene.model import Scene, SceneObject, planar_pose
+
+    replay = script("replay_action")
+    half = math.radians(30.0) / 2.0
+    poses = np.zeros((2, 1, 7))
+    poses[0, 0] = (0.1, 0.0, 0.05, 1.0, 0.0, 0.0, 0.0)
+    poses[1, 0] = (0.2, -0.1, 0.05, math.cos(half), 0.0, 0.0, math.sin(half))  # turned 30 deg about z
+    arrays = {"times": np.array([0.0, 10.0]), "poses": poses, "names": np.array(["object_0"])}
+    scene = Scene(None, None, (SceneObject("object_0", "box", (0.1, 0.1, 0.1), planar_pose(0.1, 0.0, 0.05, 0.0)),),
+                  None, 0)
+    early, late = replay.true_scene_at(scene, arrays, 9.9), replay.true_scene_at(scene, arrays, 12.0)
+    assert early.objects[0].center[:2].tolist() == [0.1, 0.0]
+    assert late.objects[0].center[:2].tolist() == pytest.approx([0.2, -0.1])
+    assert late.objects[0].yaw == pytest.approx(math.radians(30.0))
