@@ -7,9 +7,9 @@ TRIAL_FOLDER is a ``slax-drake trial --out`` folder (trial.json, scene.json and 
 (0-based, as the trial's actions) is rebuilt from its record (type, object, contact, parameters, grip, guarded) and
 planned with the trial's station, profile and tool rules in the believed scene of its decision (the recorded
 hypotheses as boxes and cylinders standing on the board). The true scene is the trial's initial scene with every
-object where ``object_poses.npz`` holds it at the decision's time. The motion then runs in the station: a guarded
-suction with its guard (the stop and the retry at the board's edge), anything else open loop (no weighing, no
-put-back). The moved object's true pose (S; m, rad, deg from upright) is printed every ``--every`` simulated seconds
+object where ``object_poses.npz`` holds it at the decision's time. The motion then runs in the station: a suction
+with the trial's guard (a guarded push-in's stop and retry at the board's edge; an unguarded lift's watch at the
+edge), a push open loop (no weighing, no put-back). The moved object's true pose (S; m, rad, deg from upright) is printed every ``--every`` simulated seconds
 and at the end, beside the trial's own outcome of that action, so that a change of the planner can be tried on the
 very action that went wrong (``docs/research/physics.md``: the way back that knocked a placed box off the shelf).
 
@@ -146,10 +146,10 @@ def main(argv=None) -> int:
     print(f"Motion {motion.trajectory.duration:.1f} s (the trial's: {was} s); waypoints: "
           + ", ".join(f"{label} {t:.1f}" for label, t in motion.waypoint_times) + ".\n")
     times = tuple(np.arange(args.every, motion.trajectory.duration, args.every))
-    if action.kind == "suction" and action.guarded:
+    if action.kind == "suction":  # with the trial's guard: a guarded push-in, or an unguarded lift's edge watch
         end, guard = run_guarded_motion(station, true, believed, motion, planner, [name])
         poses = {"end": end[name]}
-        print(f"Guard: {json.dumps({k: v for k, v in guard.items() if k != 'stop_motion'}, default=str)}\n")
+        print(f"Guard: {json.dumps(guard, default=str) if guard else 'none'}\n")
     else:
         poses = run_motion(station, true, motion, name, times)
     print(f"| t (s) | {name} x | y | z | yaw | tilt (deg) |")

@@ -204,7 +204,7 @@ def _run_scene(job) -> dict:
                                  if k in a["weighed"]}
         if isinstance(a.get("guard"), dict):  # a guarded placement: whether it stopped on contact, where
             record["guard"] = {k: a["guard"][k] for k in ("stopped", "pushed_in_m", "short_m", "peak_force_n",
-                                                          "threshold_n", "rebased") if k in a["guard"]}
+                                                          "threshold_n", "rebased", "edge_only") if k in a["guard"]}
             edge = a["guard"].get("edge_stop")
             if isinstance(edge, dict):  # stopped at the board's front edge first, then pushed in again higher
                 record["guard"]["edge_stop"] = {k: edge[k] for k in ("pushed_in_m", "peak_force_n") if k in edge}
@@ -435,7 +435,7 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
             # an ending with no action executed: how many candidates the motion planner refused at that decision
             # (None: the trial ended otherwise, or its record predates end_rejected)
             "end_refused": len(d["end_rejected"]) if "end_rejected" in d else None,
-            "guarded": [sum(1 for a in d["actions"] if "guard" in a),
+            "guarded": [sum(1 for a in d["actions"] if "guard" in a and not a["guard"].get("edge_only")),
                         sum(1 for a in d["actions"] if (a.get("guard") or {}).get("stopped")),
                         sum(1 for a in d["actions"] if "edge_stop" in (a.get("guard") or {}))],
         })
@@ -473,8 +473,8 @@ def summarise(results: list[dict], policies, densities, shelf=(math.inf, math.in
                 # "no feasible motion" endings where the planner refused one candidate: the only one the action model
                 # and the policy's corrections had left (None where the records do not say)
                 "no_motion_one_left": None if None in no_motion_refused else no_motion_refused.count(1),
-                # guarded placements executed, how many of them the guard stopped on contact, and how many it
-                # stopped at the board's front edge first and pushed in again higher (records before that: 0)
+                # guarded placements executed, how many of them the guard stopped on contact, and how many lifted
+                # push-ins (guarded or not) stopped at the board's front edge and went in again higher (before: 0)
                 "guarded_placements": [sum(t.get("guarded", [0, 0])[0] for t in sel),
                                        sum(t.get("guarded", [0, 0])[1] for t in sel),
                                        sum((t.get("guarded", [0, 0]) + [0])[2] for t in sel)],
@@ -729,10 +729,11 @@ def markdown_table(summary: dict) -> str:
                               f"had the action model refused it too).")
         guarded = per.get("all", {}).get("guarded_placements")
         if guarded and guarded[0]:
-            edge = (f", stopped at the board's front edge and pushed in again higher {guarded[2]}"
-                    if len(guarded) > 2 and guarded[2] else "")
             lines[-1] += (f" Guarded placements (a push-in into hidden space that stops on contact): {guarded[0]}, "
-                          f"stopped on contact {guarded[1]}{edge}.")
+                          f"stopped on contact {guarded[1]}.")
+        if guarded and len(guarded) > 2 and guarded[2]:
+            lines[-1] += (f" Lifted push-ins stopped at the board's front edge and pushed in again higher: "
+                          f"{guarded[2]}.")
         moved = per.get("all", {}).get("target_moved")
         if moved is not None and endings:
             lines[-1] += (f" The target pushed {100 * TARGET_MOVED:.0f} cm or more by a move that brushed it: "

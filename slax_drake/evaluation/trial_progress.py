@@ -133,10 +133,13 @@ class DecisionPrinter:
         guard = entry.get("guarded")
         if guard:
             edge = guard.get("edge_stop")
-            self._write("guarded, " + (f"stopped at the board's front edge after {edge.get('pushed_in_m', 0.0):.3f} m "
-                                       "and pushed in again higher, " if edge else "")
-                        + (f"stopped on contact after {guard.get('pushed_in_m', 0.0):.3f} m, "
-                           if guard["stopped"] else "completed, "))
+            retried = (f"stopped at the board's front edge after {edge.get('pushed_in_m', 0.0):.3f} m and pushed in "
+                       "again higher, " if edge else "")
+            if guard.get("edge_only"):  # an unguarded lift's push-in, watched at the edge only
+                self._write(retried)
+            else:
+                self._write("guarded, " + retried + (f"stopped on contact after {guard.get('pushed_in_m', 0.0):.3f} m, "
+                                                     if guard["stopped"] else "completed, "))
         segment = entry.get("segment_of", {}).get(entry["action"]["object"], entry["action"]["object"])
         true_object = snap.segments.get(segment) if snap is not None else None
         if true_object is None or poses is None or true_object not in poses or true_object not in snap.poses:

@@ -232,9 +232,11 @@ def check_trajectory(traj: ExportedTrajectory, world=None, limits: FetchLimits |
 
 
 def _stopped_by_guard(motion) -> bool:
-    """Whether ``motion`` ends where a guard stopped its push-in: its action's ``guarded_push_in`` says it stopped
-    at the motion's end (``stopped_at_s``), inside its push-in window."""
-    g = (motion.action or {}).get("guarded_push_in") or {}
+    """Whether ``motion`` ends where a guard stopped its push-in: its action's ``guarded_push_in`` (or, an unguarded
+    lift's watch at the board's edge, ``edge_watch``) says it stopped at the motion's end (``stopped_at_s``), inside
+    its push-in window."""
+    action = motion.action or {}
+    g = action.get("guarded_push_in") or action.get("edge_watch") or {}
     stop = g.get("stopped_at_s")
     return stop is not None and abs(float(stop) - motion.duration) <= 1e-6 and \
         float(g["t_start_s"]) <= float(stop) <= float(g["t_end_s"]) + 1e-6

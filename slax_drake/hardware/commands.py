@@ -392,6 +392,11 @@ def run_plan_step(args: argparse.Namespace) -> int:
               f"the camera cannot see: run it as a guarded move that stops when the push meets more than "
               f"{guarded['stop_force_n']:.1f} N{drag}, then releases and backs out{edge} "
               "(metadata.plan_step.guarded_push_in)")
+    watch = result.trajectory.metadata["plan_step"].get("edge_watch")
+    if watch:
+        print(f"EDGE: watch the push-in from {watch['t_start_s']:.2f} s (stop force {watch['stop_force_n']:.1f} N): a "
+              f"stop within its first {watch['within_m'] * 100:.1f} cm is the board's front edge: rise "
+              f"{watch['rise_m'] * 100:.0f} cm and push in again, once (metadata.plan_step.edge_watch)")
     from slax_drake.systems.drag_weigh import is_pull_record
 
     weigh = result.trajectory.metadata["plan_step"].get("weigh")

@@ -15,7 +15,9 @@ the stop motion the planner made from the measured pose (``guard_stop_motion``: 
 way back), which starts at rest. A lifted object's push-in that the guard stopped at the support board's front edge
 (``guard.edge_stop``) was pushed in again higher by the motion the planner made from there (``edge_retry_motion``;
 it starts at rest and carries its own ``guarded_push_in``), followed, when the guard stopped that too, by its stop
-motion: three motions. A lift the trial weighed and put back (too heavy, not hanging free, or nothing
+motion: three motions. An unguarded lift's push-in is watched likewise while a stop would be the board's edge
+(``guard.edge_only``): when it stopped there, its motion up to the stop (``edge_watch.stopped_at_s``, ending moving)
+and the push-in again higher (``edge_retry_motion``, not watched). A lift the trial weighed and put back (too heavy, not hanging free, or nothing
 held) is exported likewise: the motion up to the weighing (``put_back_at_s``; at rest at the lift) and the put-back
 motion (``put_back_motion``: its own motion played backward, lowered, released where it was sealed, the way back).
 
@@ -216,6 +218,16 @@ def _segments(entry: dict, action: dict, act: dict, source):
     from slax_drake.systems.guard import push_in_of
 
     guard = action.get("guard") if isinstance(action.get("guard"), dict) else None
+    if guard and guard.get("edge_only") and isinstance(guard.get("edge_stop"), dict):  # an unguarded lift's retry
+        edge = guard["edge_stop"]
+        t_edge, retry_duration, retry_intervals, before = _replaced(
+            edge, "stop_time", "stop_motion", t0, duration, intervals, "a stop at the board's edge", source)
+        window = push_in_of(motion.get("waypoint_times") or [])
+        if window is None:
+            raise TrialFileError(f"{source or 'trial'}: a push-in stopped at the board's edge has no 'push in'")
+        watch = {"t_start_s": window[0], "t_end_s": window[1], "stopped_at_s": t_edge}
+        return [(t0, t_edge, before, {**act, "edge_watch": watch}, False),
+                (t0 + t_edge, retry_duration, retry_intervals, {**act, "edge_retry_motion": True}, True)]
     window = guarded_window(action)
     if window is None:
         return [(t0, duration, intervals, act, False)]

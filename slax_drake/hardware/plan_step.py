@@ -31,7 +31,9 @@ scene is embedded for its collision check), with ``metadata.plan_step``: the cho
 hypotheses, the check report, timings and the updated history, and ``guarded_push_in``: for a guarded suction (a
 placement reaching into space the camera cannot see, on a station with ``guarded_placement``) the push-in's time
 window and stop force (also in the motion's ``action``, where the checker reads it), which the arm's controller
-must run as a guarded move; None for any other action; and ``weigh``: what the controller weighs and when it undoes
+must run as a guarded move; None for any other action; ``edge_watch``: for an unguarded lift whose object comes
+into the bay from outside, the first part of its push-in the controller watches for the board's front edge
+(a stop there: rise and push in again); and ``weigh``: what the controller weighs and when it undoes
 the action, for a lift at its lift (the load the cup holds) and, under the ``weigh_drag_pull`` rule, for a sideways
 drag along its pull (the floor's friction, against the most the cup's twist limit allows); None for any other
 action. When no action is left it still writes the file, with no motion and the reason.
@@ -420,6 +422,7 @@ class StepPlanner:
             if motion.feasible:
                 traj = self._export(action, motion, belief, q, source)
                 guarded = self._guarded_push_in(action, motion, belief.known, believed.shelf)
+                edge_watch = self._edge_watch(action, motion, belief.known, believed.shelf)
                 if guarded is not None:  # the checker reads it from the motion (hardware.check)
                     traj.motions[0].action["guarded_push_in"] = dict(guarded)
                 weigh = self._weigh_at_lift(action, motion, belief) or self._weigh_along_pull(action, motion, belief)
@@ -430,6 +433,7 @@ class StepPlanner:
                     traj.metadata["plan_step"] = self._record(action, belief, observation, rejected, report,
                                                               history, timings, visibility=visibility, frame=frame)
                     traj.metadata["plan_step"]["guarded_push_in"] = guarded
+                    traj.metadata["plan_step"]["edge_watch"] = edge_watch
                     traj.metadata["plan_step"]["weigh"] = weigh
                     return StepResult(traj, traj.metadata["plan_step"]["action"], None, timings, visibility)
                 why, early, kind, waypoint = "check: " + report.summary().splitlines()[-1], False, "check", None
@@ -499,7 +503,7 @@ class StepPlanner:
         plan's lowering and goes on with the plan, once (``MotionPlanner.edge_retry``). The trajectory after the
         push-in is what follows when nothing stops it."""
         from slax_drake.planning.planner import EDGE_RETRY_RISE
-        from slax_drake.systems.guard import DRAG_REBASE_TRAVEL, edge_stop_cup_y, push_in_forces, push_in_window
+        from slax_drake.systems.guard import DRAG_REBASE_TRAVEL, push_in_forces, push_in_window
 
         window = push_in_window(motion)
         if window is None:
@@ -507,14 +511,34 @@ class StepPlanner:
         obj = next((o for o in known if o.name == action.name), None)
         stop, expected = push_in_forces(action, obj, self.policy.action_model, self.station.guarded_stop_force,
                                         self.station.suction.lip_moment)
-        labels = [w.label for w in motion.waypoints]
-        y_start = float(motion.waypoints[labels.index("push in") - 1].position[1])  # the cup where the push-in starts
-        edge = edge_stop_cup_y(action, obj, shelf, y_start)
-        within = 0.0 if edge is None else max(0.0, edge - y_start)
+        within = _edge_within(action, motion, obj, shelf)
         return {"t_start_s": round(window[0], 4), "t_end_s": round(window[1], 4), "stop_force_n": round(stop, 3),
                 "expected_resistance_n": round(expected, 3),
                 "rebase_after_m": DRAG_REBASE_TRAVEL if expected > 0.0 else 0.0,
                 "edge_retry_within_m": round(within, 4), "edge_retry_rise_m": EDGE_RETRY_RISE if within > 0 else 0.0}
+
+    def _edge_watch(self, action, motion, known, shelf) -> dict | None:
+        """What the arm's controller must watch on an unguarded lift's push-in that comes into the bay from outside
+        (None for any other action, or one whose object starts inside): the push-in (``t_start_s`` to
+        ``t_end_s``) runs as planned, but a force resisting it over ``stop_force_n`` (from the joint efforts, as a
+        guarded push-in's) before the cup has pushed in ``within_m`` is the board's front edge: hold, rise
+        ``rise_m``, push in again that much higher (not watched), lower to the plan's lowering and go on
+        (``MotionPlanner.edge_retry``); a stop past ``within_m`` is not watched for."""
+        from slax_drake.planning.planner import EDGE_RETRY_RISE
+        from slax_drake.shelf.actions import Suction
+        from slax_drake.systems.guard import push_in_forces, push_in_of
+
+        if not isinstance(action, Suction) or action.guarded or action.drag:
+            return None
+        window = push_in_of(motion.waypoint_times)
+        obj = next((o for o in known if o.name == action.name), None)
+        within = 0.0 if window is None else _edge_within(action, motion, obj, shelf)
+        if within <= 0.0:
+            return None
+        stop, _ = push_in_forces(action, obj, self.policy.action_model, self.station.guarded_stop_force,
+                                 self.station.suction.lip_moment)
+        return {"t_start_s": round(window[0], 4), "t_end_s": round(window[1], 4), "stop_force_n": round(stop, 3),
+                "within_m": round(within, 4), "rise_m": EDGE_RETRY_RISE}
 
     def _weigh_at_lift(self, action, motion, belief) -> dict | None:
         """What the arm's controller must do at a lifted suction's lift (None for any other action): at ``t_s`` (s
@@ -790,3 +814,15 @@ def recorded_rules(recorded, station_path: str) -> dict | None:
     defaults = ToolConfig.build("station")
     station = station_tool_rules(load_station_scenario(station_path))
     return {**{k: defaults.value(k) for k in station if k not in recorded}, **recorded}
+
+
+def _edge_within(action, motion, obj, shelf) -> float:
+    """m: how far the cup of a lifted suction's ``motion`` pushes in before its object's back (as ``obj`` is
+    believed) is :data:`~slax_drake.systems.guard.EDGE_BAND` past the opening: a stop before that is the board's
+    front edge (:func:`~slax_drake.systems.guard.edge_stop_cup_y`); 0 for a drag or a push-in that starts inside."""
+    from slax_drake.systems.guard import edge_stop_cup_y
+
+    labels = [w.label for w in motion.waypoints]
+    y_start = float(motion.waypoints[labels.index("push in") - 1].position[1])  # the cup where the push-in starts
+    edge = edge_stop_cup_y(action, obj, shelf, y_start)
+    return 0.0 if edge is None else max(0.0, edge - y_start)

@@ -397,15 +397,17 @@ def _check_action(action, what) -> None:
         raise _Bad(f"{what} is a push without its distance d")
     if "scene_object" in action and not isinstance(action["scene_object"], str):
         raise _Bad(f"{what}.scene_object must be a name")
-    guarded = action.get("guarded_push_in")
-    if guarded is not None:
+    for field in ("guarded_push_in", "edge_watch"):  # a guarded push-in; an unguarded lift's watch at the edge
+        guarded = action.get(field)
+        if guarded is None:
+            continue
         if not isinstance(guarded, dict):
-            raise _Bad(f"{what}.guarded_push_in must be a mapping")
+            raise _Bad(f"{what}.{field} must be a mapping")
         for key in ("t_start_s", "t_end_s"):
-            _number(_get(guarded, key, f"{what}.guarded_push_in"), f"{what}.guarded_push_in.{key}")
+            _number(_get(guarded, key, f"{what}.{field}"), f"{what}.{field}.{key}")
         for key in ("stop_force_n", "stopped_at_s"):
             if guarded.get(key) is not None:
-                _number(guarded[key], f"{what}.guarded_push_in.{key}")
+                _number(guarded[key], f"{what}.{field}.{key}")
     est = action.get("estimate")
     if est is not None:
         if not isinstance(est, dict) or est.get("shape") not in ("box", "cylinder"):

@@ -28,6 +28,13 @@ against twice the friction bound until the cup has pushed in ``DRAG_REBASE_TRAVE
 sliding, the baseline is fitted again and the stop force alone counts from then on (the friction is in the
 baseline).
 
+At the board's front edge: a lifted object carried out of the bay hangs lower than planned, and its back can meet
+the support board's front edge as it comes back in. A stop before the object's believed back is ``EDGE_BAND`` past
+the opening is the edge, not an object (:func:`edge_stop_cup_y`, :func:`at_board_edge`): the push-in is made again
+higher (``MotionPlanner.edge_retry``), once. An unguarded lift (its placement in space the camera sees) is watched
+only there (``GuardRun.edge_only``, :func:`past_edge_band`): a stop in that band retries it, and past it the push-in
+runs unwatched, as planned.
+
 Units: efforts in N (the torso) and N m (the rest), forces in N, positions m / rad, times s.
 """
 
@@ -264,6 +271,7 @@ class GuardRun:
     friction: float = 0.0  # N, a drag's friction bound, the stop's margin until the rebase
     edge_cup_y: float | None = None  # S y (m) of the cup up to which a stop is the board's front edge (edge_stop_cup_y)
     edge_stop: dict | None = None  # the record of the stop at the board's edge this run retries (None: the first)
+    edge_only: bool = False  # an unguarded lift's push-in, watched only while a stop would be the board's edge
 
     @property
     def direction(self) -> float:
@@ -347,11 +355,19 @@ class Guard:
         a = planned_acceleration(motion.trajectory, t)
         return self.model.payload(q, np.asarray(efforts, float) - self.model.effort(q, v, a))
 
-    def start(self, motion, cup_y_S, expected: float = 0.0, threshold: float | None = None) -> GuardRun | None:
-        """A GuardRun for ``motion`` when it is a guarded suction, else None. ``cup_y_S(q)``: the cup's y (S, m) at
-        planned joint positions q; ``expected``: N of resistance the free push-in meets (a drag's friction);
-        ``threshold``: the stop force (N; default the station's)."""
-        window = push_in_window(motion)
+    def start(self, motion, cup_y_S, expected: float = 0.0, threshold: float | None = None,
+              edge_only: bool = False) -> GuardRun | None:
+        """A GuardRun for ``motion`` when it is a guarded suction, else None; with ``edge_only``, for an unguarded
+        lifted suction's push-in instead (watched only while a stop would be the board's edge: :func:`past_edge_band`;
+        the caller sets its ``edge_cup_y``). ``cup_y_S(q)``: the cup's y (S, m) at planned joint positions q;
+        ``expected``: N of resistance the free push-in meets (a drag's friction); ``threshold``: the stop force (N;
+        default the station's)."""
+        action = motion.action
+        if edge_only:
+            lifted = not getattr(action, "drag", True) and not getattr(action, "guarded", True)
+            window = push_in_of(motion.waypoint_times) if lifted else None
+        else:
+            window = push_in_window(motion)
         if window is None:
             return None
         traj = motion.trajectory
@@ -361,17 +377,21 @@ class Guard:
         drag = expected > 0.0  # the friction turns over at the start: twice the bound until the rebase
         return GuardRun(ContactMonitor(stop, 2.0 * expected if drag else expected), window[0], window[1],
                         float(cup_y_S(q0)), float(cup_y_S(q1)), rebase_at=DRAG_REBASE_TRAVEL if drag else 0.0,
-                        friction=float(expected))
+                        friction=float(expected), edge_only=edge_only)
 
     def stopped(self, run: GuardRun, motion, q, planner, believed, cup_y_S, now: float):
         """(the motion to play from ``now`` (s, simulated), the GuardRun watching it or None, the record) once
         ``run`` stopped ``motion`` with the arm at the measured joint positions ``q``: at the board's front edge
         (:func:`at_board_edge`) the push-in again higher (``planner.edge_retry``), watched with the same forces;
         otherwise, or when that has no IK solution, ``planner.guarded_stop`` (hold, lower, release, back off, the
-        way back). ``believed``: the Scene the motion was planned in; ``cup_y_S(q)``: the cup's y (S, m)."""
+        way back). An edge-only watch (``run.edge_only``) retries unwatched, and without a retry gives (None, None,
+        None): the motion goes on as planned. ``believed``: the Scene the motion was planned in; ``cup_y_S(q)``: the
+        cup's y (S, m)."""
         y = cup_y_S(q)
         record = guard_record(run, stopped=True, cup_y=y)
         retry = planner.edge_retry(motion, q, believed) if at_board_edge(run, y) else None
+        if run.edge_only and retry is None:  # an unguarded lift goes on as planned, unwatched
+            return None, None, None
         after = retry if retry is not None else planner.guarded_stop(motion, q, believed)
         record["stop_time"] = round(now, 4)
         record["stop_motion"] = {"duration_s": round(after.trajectory.duration, 3),
@@ -379,6 +399,8 @@ class Guard:
         if retry is None:
             return after, None, record
         record["edge"] = True
+        if run.edge_only:  # the push-in again is not watched, as the first was not past the edge band
+            return after, None, {"guarded": False, "edge_only": True, "stopped": False, "edge_stop": record}
         again = self.start(retry, cup_y_S, run.friction, run.monitor.threshold)
         return after, (None if again is None else dataclasses.replace(again, edge_stop=record)), record
 
@@ -430,6 +452,13 @@ def at_board_edge(run: GuardRun, cup_y: float) -> bool:
     higher (:meth:`slax_drake.planning.planner.MotionPlanner.edge_retry`): once, on a push-in into the shelf."""
     return (run.edge_stop is None and run.edge_cup_y is not None and run.direction > 0
             and cup_y <= run.edge_cup_y)
+
+
+def past_edge_band(run: GuardRun, cup_y: float) -> bool:
+    """Whether an edge-only watch (``run.edge_only``: an unguarded lift's push-in) is over, the cup at ``cup_y`` (S,
+    m) past the cup y up to which a stop would be the board's front edge: from there the push-in runs unwatched, as
+    a placement the camera sees."""
+    return run.edge_only and (run.edge_cup_y is None or cup_y > run.edge_cup_y)
 
 
 def guard_record(run: GuardRun, stopped: bool, cup_y: float | None = None) -> dict:

@@ -73,7 +73,8 @@ class GuardedMotionSource(LeafSystem):
     """As :class:`MotionSource`, with the guarded push-in of the PlannerSystem (:mod:`slax_drake.systems.guard`):
     reads ``measured_state`` and ``measured_efforts`` every ``guard.period`` s while the push-in plays and, on
     contact, plays what :meth:`~slax_drake.systems.guard.Guard.stopped` makes from the measured positions instead
-    (the planner's stop motion, or at the board's front edge its push-in again higher). ``believed``: the Scene the motion
+    (the planner's stop motion, or at the board's front edge its push-in again higher); an unguarded lift's push-in
+    from outside the bay is watched only while a stop would be the board's edge. ``believed``: the Scene the motion
     was planned in. :meth:`record` is the guard's record (:func:`slax_drake.systems.guard.guard_record`)."""
 
     def __init__(self, motion, planner, believed, guard, expected: float = 0.0, threshold: float | None = None):
@@ -90,10 +91,13 @@ class GuardedMotionSource(LeafSystem):
         self._efforts = self.DeclareVectorInputPort("measured_efforts", n)
         from slax_drake.systems.guard import edge_stop_cup_y
 
-        run = guard.start(motion, self._cup_y, expected, threshold)
+        action = motion.action
+        edge_only = action.kind == "suction" and not action.guarded and not action.drag  # watched at the edge only
+        run = guard.start(motion, self._cup_y, expected, threshold, edge_only=edge_only)
         if run is not None:
-            obj = next((o for o in believed.objects if o.name == motion.action.name), None)
-            run = dataclasses.replace(run, edge_cup_y=edge_stop_cup_y(motion.action, obj, believed.shelf, run.y_start))
+            obj = next((o for o in believed.objects if o.name == action.name), None)
+            edge = edge_stop_cup_y(action, obj, believed.shelf, run.y_start)
+            run = None if edge_only and edge is None else dataclasses.replace(run, edge_cup_y=edge)
         start = (motion, 0.0, run, None)
         self._state = self.DeclareAbstractState(AbstractValue.Make(start))
         self.DeclarePeriodicUnrestrictedUpdateEvent(guard.period, 0.0, self._watch)
@@ -117,7 +121,7 @@ class GuardedMotionSource(LeafSystem):
         out.SetAtIndex(0, 1.0 if motion.suction_at(context.get_time() - t0) else 0.0)
 
     def _watch(self, context, state):
-        from slax_drake.systems.guard import guard_record
+        from slax_drake.systems.guard import guard_record, past_edge_band
 
         motion, t0, run, record = self.state(context)
         if run is None:
@@ -125,10 +129,11 @@ class GuardedMotionSource(LeafSystem):
         t = context.get_time() - t0
         if t < run.t0:
             return
-        if t > run.t1:
-            state.get_mutable_abstract_state(0).set_value((motion, t0, None, guard_record(run, stopped=False)))
-            return
         x = self._measured.Eval(context)
+        if t > run.t1 or (run.edge_only and past_edge_band(run, self._cup_y(x[:self._n]))):
+            done = record if run.edge_only else guard_record(run, stopped=False)
+            state.get_mutable_abstract_state(0).set_value((motion, t0, None, done))
+            return
         run = self.guard.observe(run, motion, t, x[:self._n], x[self._n:], self._efforts.Eval(context))
         if not run.monitor.stopped:
             state.get_mutable_abstract_state(0).set_value((motion, t0, run, None))
@@ -136,14 +141,18 @@ class GuardedMotionSource(LeafSystem):
         now = context.get_time()
         after, again, record = self.guard.stopped(run, motion, np.asarray(x[:self._n], float), self.planner,
                                                   self.believed, self._cup_y, now)
+        if after is None:  # an unguarded lift goes on as planned
+            state.get_mutable_abstract_state(0).set_value((motion, t0, None, None))
+            return
         state.get_mutable_abstract_state(0).set_value((after, now, again, None if again is not None else record))
 
 
 def run_guarded_motion(station_scenario, scene, believed, motion, planner, names, expected: float = 0.0,
                        settle: float = 1.0) -> tuple[dict, dict]:
-    """Runs a guarded suction's ``motion`` (planned by ``planner`` in ``believed``) in the station on the true
-    ``scene`` with the guarded push-in; returns ({name: {"x", "y", "z", "yaw", "tilt_deg"}} of the objects
-    ``names`` at the end, in S; the guard's record)."""
+    """Runs a suction's ``motion`` (planned by ``planner`` in ``believed``) in the station on the true ``scene`` with
+    the guard the PlannerSystem gives it (a guarded push-in; an unguarded lift's watch at the board's edge); returns
+    ({name: {"x", "y", "z", "yaw", "tilt_deg"}} of the objects ``names`` at the end, in S; the guard's record, None
+    when nothing was recorded)."""
     from pydrake.systems.analysis import Simulator
     from pydrake.systems.framework import DiagramBuilder
 

@@ -64,8 +64,8 @@ from slax_drake.shelf.simulator import PolicyObservation
 from slax_drake.scene.model import Scene
 from slax_drake.station import robot as robot_model
 from slax_drake.systems.drag_weigh import believed_pull, observe_pull, pull_record, start_pull
-from slax_drake.systems.guard import (PutBack, edge_stop_cup_y, guard_record, least_lever, push_in_forces, weigh_time,
-                                     weigh_verdict)
+from slax_drake.systems.guard import (PutBack, edge_stop_cup_y, guard_record, least_lever, past_edge_band,
+                                     push_in_forces, weigh_time, weigh_verdict)
 
 MAX_PLAN_ATTEMPTS = 25
 
@@ -208,15 +208,20 @@ class PlannerSystem(LeafSystem):
 
     def _start_guard(self, action, obj, believed, motion):
         """The guard's run over ``motion`` (None without a guard): a suction's push-in forces from ``obj``, the
-        believed object it moves."""
+        believed object it moves; an unguarded lift's push-in from outside the bay is watched while a stop would be
+        the board's front edge (``edge_only``), and not at all when it starts inside."""
         if self.guard is None:
             return None
         stop, expected = push_in_forces(action, obj, self.policy.action_model, self.guard.threshold,
                                         self.guard.lip_moment) if isinstance(action, Suction) else (None, 0.0)
-        run = self.guard.start(motion, self._cup_y(believed, motion), expected, stop)
+        edge_only = isinstance(action, Suction) and not action.guarded and not action.drag
+        run = self.guard.start(motion, self._cup_y(believed, motion), expected, stop, edge_only=edge_only)
         if run is None:
             return None
-        return dataclasses.replace(run, edge_cup_y=edge_stop_cup_y(action, obj, self.template.shelf, run.y_start))
+        edge = edge_stop_cup_y(action, obj, self.template.shelf, run.y_start)
+        if edge_only and edge is None:
+            return None
+        return dataclasses.replace(run, edge_cup_y=edge)
 
     def _start_pull(self, motion):
         """The weighing of ``motion``'s pull when it is a sideways drag and the ``weigh_drag_pull`` rule is on (the
@@ -412,19 +417,22 @@ class PlannerSystem(LeafSystem):
         if t < run.t0:
             return
         n = len(self._q_obs)
-        if t > run.t1:  # completed: no contact all the way in
-            record = guard_record(run, stopped=False)
-            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
-                s, guard=None, log=s.log[:-1] + ({**s.log[-1], "guarded": record},)))
-            return
         x = self._measured.Eval(context)
+        cup_y = self._cup_y(s.believed, s.motion)
+        if t > run.t1 or (run.edge_only and past_edge_band(run, cup_y(x[:n]))):  # completed (or past the edge band)
+            log = s.log if run.edge_only else s.log[:-1] + ({**s.log[-1], "guarded": guard_record(run, False)},)
+            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, guard=None, log=log))
+            return
         run = self.guard.observe(run, s.motion, t, x[:n], x[n:], self._efforts.Eval(context))
         if not run.monitor.stopped:
             state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, guard=run))
             return
         now = context.get_time()
         after, again, record = self.guard.stopped(run, s.motion, np.asarray(x[:n], float), self.planner, s.believed,
-                                                  self._cup_y(s.believed, s.motion), now)
+                                                  cup_y, now)
+        if after is None:  # an unguarded lift's stop that is not the edge, or no retry: it goes on as planned
+            state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, guard=None))
+            return
         state.get_mutable_abstract_state(0).set_value(dataclasses.replace(
             s, motion=after, t_start=now, guard=again, motions=s.motions + ((now, after),),
             log=s.log[:-1] + ({**s.log[-1], "guarded": record},)))

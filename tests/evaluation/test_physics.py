@@ -528,12 +528,15 @@ def test_the_report_counts_the_guarded_push_ins_retried_at_the_boards_edge():
                 "drake": drake}
 
     edge = {"stopped": False, "edge_stop": {"pushed_in_m": 0.018, "peak_force_n": 5.3}}
-    results = [trial(0, [edge, {"stopped": True}]), trial(1, [{"stopped": False}])]
+    unguarded = {"guarded": False, "edge_only": True, "stopped": False, "edge_stop": {"pushed_in_m": 0.015}}
+    results = [trial(0, [edge, {"stopped": True}, unguarded]), trial(1, [{"stopped": False}])]
     summary = summarise(results, ["p"], [4])
-    assert [t["guarded"] for t in summary["trials"]] == [[2, 1, 1], [1, 0, 0]]
-    assert summary["policies"]["p"]["all"]["guarded_placements"] == [3, 1, 1]
-    assert ("Guarded placements (a push-in into hidden space that stops on contact): 3, stopped on contact 1, "
-            "stopped at the board's front edge and pushed in again higher 1.") in markdown_table(summary)
-    # a summary from before the retry holds two counts: no third clause
+    # an unguarded lift's retry at the edge is no guarded placement, but a push-in retried
+    assert [t["guarded"] for t in summary["trials"]] == [[2, 1, 2], [1, 0, 0]]
+    assert summary["policies"]["p"]["all"]["guarded_placements"] == [3, 1, 2]
+    text = markdown_table(summary)
+    assert "Guarded placements (a push-in into hidden space that stops on contact): 3, stopped on contact 1." in text
+    assert "Lifted push-ins stopped at the board's front edge and pushed in again higher: 2." in text
+    # a summary from before the retry holds two counts: no such sentence
     summary["policies"]["p"]["all"]["guarded_placements"] = [3, 1]
     assert "pushed in again higher" not in markdown_table(summary)

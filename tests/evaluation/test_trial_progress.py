@@ -178,3 +178,13 @@ def test_a_guarded_placement_retried_at_the_boards_edge_says_so():
                    (_snap(0.5, 0.05), _snap(20.0, -0.05)))
     assert ("planned in 0.4 s, guarded, stopped at the board's front edge after 0.019 m and pushed in again higher, "
             "completed, executed") in out.getvalue()
+    # an unguarded lift's push-in, watched at the edge only: no "guarded"
+    out = io.StringIO()
+    printer = DecisionPrinter(6, out)
+    plain = {**entry, "action": {**entry["action"], "guarded": False}}
+    printer.update((plain,), (_snap(0.5, 0.05),))
+    done = {**plain, "guarded": {"guarded": False, "edge_only": True, "stopped": False, "edge_stop": edge}}
+    printer.update((done, {"step": 1, "time": 20.0, "final": True, "result": "horizon"}),
+                   (_snap(0.5, 0.05), _snap(20.0, -0.05)))
+    assert ("planned in 0.4 s, stopped at the board's front edge after 0.019 m and pushed in again higher, "
+            "executed") in out.getvalue()

@@ -234,6 +234,40 @@ def test_a_push_in_retried_at_the_boards_edge_exports_as_its_motion_up_to_the_ed
         _segments({"time": 10.0}, {**action, "guard": {**action["guard"], "edge_stop": no_push_in}}, {}, "t.json")
 
 
+def test_an_unguarded_lift_retried_at_the_boards_edge_exports_as_its_motion_up_to_the_edge_and_the_retry():
+    """An unguarded lift's push-in, watched only at the board's edge (guard.edge_only), stopped there: its motion up
+    to the stop carries edge_watch (not guarded_push_in: the checker must not excuse a collision in that window as a
+    guard's stop), the push-in again after it; the checker reads the stop from edge_watch."""
+    from types import SimpleNamespace
+
+    import pytest
+
+    from slax_drake.hardware.check import _stopped_by_guard
+    from slax_drake.hardware.export import _segments
+
+    motion = {"duration_s": 12.0, "suction_intervals": [[3.0, 9.0]],
+              "waypoint_times": [["seal", 3.0], ["lift", 4.0], ["translate", 6.0], ["push in", 8.0],
+                                 ["lower", 9.0], ["release", 9.0], ["retract", 12.0]]}
+    retry = {"duration_s": 8.0, "suction_intervals": [[0.0, 4.0]],
+             "waypoint_times": [["stop", 0.0], ["hold", 0.2], ["raise", 0.5], ["push in", 3.5], ["lower", 4.0]]}
+    edge = {"guarded": True, "stopped": True, "edge": True, "threshold_n": 2.4, "stop_time": 16.2,
+            "stop_motion": retry}
+    action = {"type": "suction", "object": "track_1", "guarded": False, "motion": motion,
+              "guard": {"guarded": False, "edge_only": True, "stopped": False, "edge_stop": edge}}
+    (t0, d0, on0, act0, after0), (t1, d1, on1, act1, after1) = _segments({"time": 10.0}, action, {"type": "suction"},
+                                                                         None)
+    assert (t0, d0, after0) == (10.0, pytest.approx(6.2), False) and "guarded_push_in" not in act0
+    assert act0["edge_watch"] == {"t_start_s": 6.0, "t_end_s": 8.0, "stopped_at_s": pytest.approx(6.2)}
+    assert (t1, d1, on1, after1) == (16.2, 8.0, [(0.0, 4.0)], True) and act1["edge_retry_motion"]
+    assert "guarded_push_in" not in act1 and "edge_watch" not in act1
+    assert _stopped_by_guard(SimpleNamespace(action=act0, duration=d0))
+    assert not _stopped_by_guard(SimpleNamespace(action={"type": "suction"}, duration=d0))
+    # an unguarded lift that was not stopped exports as one motion, with nothing to watch
+    plain = {**action, "guard": {"guarded": False, "edge_only": True, "stopped": False}}
+    ((_, d, _, act, _),) = _segments({"time": 10.0}, plain, {"type": "suction"}, None)
+    assert d == 12.0 and act == {"type": "suction"}
+
+
 def test_a_lift_put_back_exports_as_its_motion_up_to_the_weighing_and_the_put_back():
     from slax_drake.errors import TrialFileError
     from slax_drake.hardware.export import _segments

@@ -113,3 +113,62 @@ def test_a_push_in_stopped_at_the_boards_front_edge_is_pushed_in_again_higher_an
     end = poses["object_3"]
     assert abs(end["x"] - (0.1478 - 0.5)) < 0.01 and abs(end["y"] - action.dz) < 0.01  # placed as predicted
     assert end["tilt_deg"] < 5.0 and abs(end["z"] - 0.1192 / 2) < 0.005  # upright on the board
+
+
+# Table I household scene 10:4 at its tenth decision (replayed at 189f5c7): the camera's hypotheses and the true
+# objects' poses (S; x, y, yaw). slax-belief lifts track_1 (object_0, a box whose 0.39 N m hangs near the cup's
+# 0.4 N m) out of the bay and places it 5 cm right, in space the camera sees: an unguarded push-in. Its back met the
+# board's front edge on the way in, tilted 14 deg on the cup and fell off the shelf.
+SCENE_10_4_BELIEVED = {
+    "track_1": ("box", (0.1234, 0.1097, 0.1918), -0.20629, -0.14933, 0.5236),
+    "track_2": ("box", (0.1566, 0.1666, 0.1279), 0.16055, 0.01568, 0.92852),
+    "track_3": ("box", (0.0827, 0.165, 0.1571), 0.02969, -0.09212, 0.15359),
+    "track_8": ("box", (0.06, 0.1787, 0.065), -0.0333, 0.12374, 0.3543),
+    "track_4": ("cylinder", (0.1698, 0.1698, 0.0927), 0.17516, -0.19865, 0.0),
+    "track_5": ("box", (0.0815, 0.1187, 0.1258), -0.12872, 0.0041, 0.25482),
+    "track_6": ("cylinder", (0.0689, 0.0689, 0.1694), 0.08186, 0.24266, 0.0),
+    "track_7": ("cylinder", (0.0702, 0.0702, 0.1742), 0.25134, 0.09406, 0.0),
+}
+SCENE_10_4_TRUE = {
+    "object_0": (-0.20591, -0.14891, 0.52273), "object_1": (0.14745, 0.02676, 2.49871),
+    "object_2": (-0.22095, 0.17159, 0.0), "object_3": (0.03016, -0.09061, 1.72410),
+    "object_4": (-0.02210, 0.13629, 1.92411), "object_5": (0.17573, -0.19875, -0.00565),
+    "object_6": (-0.16714, -0.00193, 0.25421), "object_7": (0.07655, 0.16413, 0.0),
+    "object_8": (0.08291, 0.24247, 0.0), "object_9": (0.25224, 0.09389, 0.0),
+}
+
+
+def test_an_unguarded_lift_whose_push_in_meets_the_boards_edge_is_pushed_in_again_higher():
+    import dataclasses
+
+    from slax_drake.config import load_scenario
+    from slax_drake.evaluation.table1 import protocol_scene, scene_seed
+    from slax_drake.planning.planner import MotionPlanner
+    from slax_drake.shelf.actions import Suction
+    from slax_drake.shelf.tool import tool_config
+    from slax_drake.station.scenario import load_station_scenario, station_for
+    from slax_drake.systems.motion_run import run_guarded_motion
+    from slax_drake.systems.trial import station_tool_rules
+
+    config = "sim_configs/table1_household.yaml"
+    scenario = load_scenario(config)
+    initial = protocol_scene(scenario, 10, scene_seed(0, 10, 4))
+    scene = dataclasses.replace(initial, objects=tuple(
+        dataclasses.replace(o, X_SO=planar_pose(x, y, o.size[2] / 2, yaw))
+        for o in initial.objects for x, y, yaw in [SCENE_10_4_TRUE[o.name]]))
+    station = load_station_scenario(station_for(config))
+    planner = MotionPlanner(station, tool_config(scenario, "station", **station_tool_rules(station)))
+    believed = Scene(scene.shelf, scene.camera, tuple(
+        SceneObject(name, shape, size, planar_pose(x, y, size[2] / 2, yaw))
+        for name, (shape, size, x, y, yaw) in SCENE_10_4_BELIEVED.items()), None, 0)
+    action = Suction("track_1", (-0.17887, -0.19682, 0.17183), 0.05, -0.199325, 0.523599)
+    assert not action.guarded and not action.drag
+    motion = planner.plan(action, believed)
+    assert motion.feasible, motion.reason
+    poses, record = run_guarded_motion(station, scene, believed, motion, planner, ["object_0"])
+    assert record["edge_only"] and not record["guarded"]
+    edge = record["edge_stop"]
+    assert edge["edge"] and edge["stopped"] and edge["pushed_in_m"] < 0.03
+    end = poses["object_0"]
+    assert abs(end["x"] - (-0.20629 + 0.05)) < 0.01 and abs(end["y"] - action.dz) < 0.01  # placed as predicted
+    assert end["tilt_deg"] < 5.0
