@@ -27,8 +27,11 @@ monitor compares the efforts with what the free arm and its carried weight need;
 exceeds the stop force (the station's ``guarded_stop_force``; for a lift at most what the cup's seal holds over the
 lever, :meth:`~slax_drake.systems.guard.Guard.stop_force`; for a drag plus its floor friction), the motion is replaced, from that instant, by the planner's stop
 motion from the measured joint positions (:meth:`slax_drake.planning.planner.MotionPlanner.guarded_stop`: hold,
-lower, release, back off, the planned way back). The record (stopped or completed, how far it pushed in, the
-peak force) is added to the action's log entry as ``guarded``. A lifted object is weighed at its lift
+lower, release, back off, the planned way back); a stop at the support board's front edge (the carried object
+hangs lower than planned) is made again higher instead (``MotionPlanner.edge_retry``), and an unguarded lift's
+push-in from outside the bay is watched for that edge alone (:mod:`slax_drake.systems.guard`). The record (stopped
+or completed, how far it pushed in, the peak force, an ``edge_stop``) is added to the action's log entry as
+``guarded``. A lifted object is weighed at its lift
 (:meth:`PlannerSystem._weigh`) and, under the ``weigh_drag_pull`` rule, a sideways drag along its pull
 (:mod:`slax_drake.systems.drag_weigh`); each may be undone from there (``weighed``). It reads joint states and
 efforts only.
