@@ -26,6 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
+from slax_drake.config import load_scenario
+from slax_drake.errors import UserError
+from slax_drake.scene.io import load_scene
+from slax_drake.station.scenario import load_station_scenario
+
 
 class ReplayError(Exception):
     """The folder or the request cannot be replayed (a user's error: one line, exit code 2)."""
@@ -111,21 +116,14 @@ def main(argv=None) -> int:
         name = args.object or act.get("true_object")
         if name not in [str(n) for n in arrays["names"]]:
             raise ReplayError(f"--object {name!r}: not an object of the trial")
-        from slax_drake.config import load_scenario
-        from slax_drake.scene.io import load_scene
-        from slax_drake.station.scenario import load_station_scenario
-
+        if not (isinstance(record.get("config"), str) and isinstance(record.get("station"), str)):
+            raise ReplayError(f"{args.trial}: trial.json names no scenario config or station file")
         scenario = load_scenario(record["config"])
         station = load_station_scenario(record["station"])
         scene = load_scene(args.trial / "scene.json")
-    except ReplayError as e:
+    except (ReplayError, UserError) as e:  # a config, station or scene file the trial names that cannot be read
         print(f"error: {e}", file=sys.stderr)
         return 2
-    except Exception as e:  # a config, station or scene file the trial names that cannot be read
-        if type(e).__module__.startswith("slax_drake"):
-            print(f"error: {e}", file=sys.stderr)
-            return 2
-        raise
     from slax_drake.planning.planner import MotionPlanner
     from slax_drake.shelf.tool import tool_config
     from slax_drake.systems.motion_run import run_guarded_motion, run_motion

@@ -63,7 +63,7 @@ from slax_drake.planning.timing import SAMPLE_PERIOD, time_segment
 from slax_drake.planning.trajectory import JointTrajectory
 from slax_drake.planning.waypoints import DWELL, LIFT, APPROACH_MARGINS, ToolWaypoint, action_waypoints, carry_options
 from slax_drake.planning.world import TOOL_RIGID_BODIES, PlanningWorld, pairs_text
-from slax_drake.shelf.actions import ActionModel, Push, Suction
+from slax_drake.shelf.actions import ActionModel, Push, Suction, apply_action
 from slax_drake.shelf.rules import ToolConfig
 from slax_drake.scene.model import Scene, state_key
 from slax_drake.station import robot as robot_model
@@ -373,25 +373,7 @@ class MotionPlanner:
         chain.extend((p, False, None) for p in inner)
         chain.append((q_retract, False, "retract"))
         t0 = time.perf_counter()
-        lim = self.limits
-        out = JointTrajectory.hold(lim.names, q_stop, hold)
-        waypoint_times = [("stop", 0.0), ("hold", round(float(out.times[-1]), 6))]
-        suction_off = None
-        for (qa, _, _), (qb, on, label) in zip(chain[:-1], chain[1:]):
-            if not on and suction_off is None:
-                suction_off = float(out.times[-1])
-                out = out.then(JointTrajectory.hold(lim.names, qa, DWELL))  # released, at rest
-                waypoint_times.append(("release", round(suction_off, 6)))
-            t, q, v, a = time_segment(qa, qb, lim.velocity, lim.acceleration, lim.jerk, SAMPLE_PERIOD)
-            if len(t) > 1:
-                out = out.then(JointTrajectory(lim.names, t, q, v, a))
-            if label is not None:
-                waypoint_times.append((label, round(float(out.times[-1]), 6)))
-        t_join = float(out.times[-1])
-        tail = JointTrajectory(lim.names, traj.times[k_retract:] - traj.times[k_retract], traj.q[k_retract:],
-                               traj.v[k_retract:], traj.a[k_retract:])
-        if len(tail.times) > 1:
-            out = out.then(tail)
+        out, waypoint_times, suction_off, t_join = self._timed_after_stop(q_stop, hold, chain, traj, k_retract)
         waypoint_times += [(label, round(t - t_retract + t_join, 6)) for label, t in motion.waypoint_times
                            if t > t_retract]
         timings["timing_s"] += time.perf_counter() - t0
@@ -427,7 +409,7 @@ class MotionPlanner:
         traj = motion.trajectory
         t_lower = float(at["lower"])
         k_lower = int(np.argmin(np.abs(traj.times - t_lower)))
-        chain = [(q_stop, None)]  # (q, waypoint label)
+        chain = [(q_stop, True, None)]  # (q, suction on while arriving, waypoint label)
         max_dev = 0.0
         prev_q, prev_X = q_stop, X_stop
         for wp, label in ((dataclasses.replace(push, label="raise", X_SF=up), "raise"), (raised, "push in"),
@@ -437,24 +419,11 @@ class MotionPlanner:
                 return None
             inner, dev = self._refine_or_straight(world, prev_q, prev_X, q, wp.X_SF, wp, timings)
             max_dev = max(max_dev, dev)
-            chain.extend((p, None) for p in inner)
-            chain.append((q, label))
+            chain.extend((p, True, None) for p in inner)
+            chain.append((q, True, label))
             prev_q, prev_X = q, wp.X_SF
         t0 = time.perf_counter()
-        lim = self.limits
-        out = JointTrajectory.hold(lim.names, q_stop, hold)
-        waypoint_times = [("stop", 0.0), ("hold", round(float(out.times[-1]), 6))]
-        for (qa, _), (qb, label) in zip(chain[:-1], chain[1:]):
-            t, q, v, a = time_segment(qa, qb, lim.velocity, lim.acceleration, lim.jerk, SAMPLE_PERIOD)
-            if len(t) > 1:
-                out = out.then(JointTrajectory(lim.names, t, q, v, a))
-            if label is not None:
-                waypoint_times.append((label, round(float(out.times[-1]), 6)))
-        t_join = float(out.times[-1])
-        tail = JointTrajectory(lim.names, traj.times[k_lower:] - traj.times[k_lower], traj.q[k_lower:],
-                               traj.v[k_lower:], traj.a[k_lower:])
-        if len(tail.times) > 1:
-            out = out.then(tail)
+        out, waypoint_times, _, t_join = self._timed_after_stop(q_stop, hold, chain, traj, k_lower)
         k_label = [label for label, _ in motion.waypoint_times].index("lower")
         waypoint_times += [(label, round(t - t_lower + t_join, 6)) for label, t in motion.waypoint_times[k_label + 1:]]
         # the cup holds on from the stop to the plan's own release, shifted as the tail is
@@ -465,6 +434,33 @@ class MotionPlanner:
         waypoints = [raised if w.label == "push in" else w for w in motion.waypoints]
         return PlannedMotion(motion.action, out, suction, waypoint_times, float(max_dev), _rounded(timings), [],
                              waypoints)
+
+    def _timed_after_stop(self, q_stop, hold: float, chain, traj, k_tail):
+        """The motion from a stop at ``q_stop``: held still ``hold`` s, then ``chain`` [(q, suction on while arriving,
+        waypoint label or None)], which starts at ``q_stop``, timed segment by segment rest to rest with Ruckig (where
+        the suction first goes off the arm dwells ``DWELL`` at rest, released, "release"), then the planned
+        trajectory ``traj`` from its sample ``k_tail`` on. Returns (the trajectory, its waypoint times up to the tail,
+        the time the suction went off (s; None: it stays on), the time the tail starts (s))."""
+        lim = self.limits
+        out = JointTrajectory.hold(lim.names, q_stop, hold)
+        waypoint_times = [("stop", 0.0), ("hold", round(float(out.times[-1]), 6))]
+        suction_off = None
+        for (qa, _, _), (qb, on, label) in zip(chain[:-1], chain[1:]):
+            if not on and suction_off is None:
+                suction_off = float(out.times[-1])
+                out = out.then(JointTrajectory.hold(lim.names, qa, DWELL))  # released, at rest
+                waypoint_times.append(("release", round(suction_off, 6)))
+            t, q, v, a = time_segment(qa, qb, lim.velocity, lim.acceleration, lim.jerk, SAMPLE_PERIOD)
+            if len(t) > 1:
+                out = out.then(JointTrajectory(lim.names, t, q, v, a))
+            if label is not None:
+                waypoint_times.append((label, round(float(out.times[-1]), 6)))
+        t_join = float(out.times[-1])
+        tail = JointTrajectory(lim.names, traj.times[k_tail:] - traj.times[k_tail], traj.q[k_tail:], traj.v[k_tail:],
+                               traj.a[k_tail:])
+        if len(tail.times) > 1:
+            out = out.then(tail)
+        return out, waypoint_times, suction_off, t_join
 
     def _refine_or_straight(self, world, qa, Xa, qb, Xb, wp, timings):
         """:meth:`_refine`'s inserted configurations, or none (the joint-space line) when it cannot keep the tool
@@ -846,18 +842,14 @@ def _may_differ(failures, dependent: frozenset, kinds: frozenset = frozenset()) 
 
 def placed_pose(action, scene: Scene):
     """(the object ``action`` moves, its pose X_SO (4x4, shelf frame) where the action leaves it as the action model
-    predicts the translation: a suction's placement at x + d_x, y = d_z; a push's x + d, its turn left out), or None
-    when ``scene`` does not hold the object."""
+    predicts the translation (:func:`~slax_drake.shelf.actions.apply_action`: a suction's placement at x + d_x,
+    y = d_z; a push's x + d, its turn left out), or None when ``scene`` does not hold the object."""
     obj = next((o for o in scene.objects if o.name == action.name), None)
     if obj is None:
         return None
-    X = np.array(obj.X_SO, float)
-    if isinstance(action, Suction):
-        X[0, 3] += action.dx
-        X[1, 3] = action.dz
-    else:
-        X[0, 3] += action.d
-    return obj, X
+    translated = dataclasses.replace(action, turns=False) if isinstance(action, Push) else action
+    (moved,) = apply_action((obj,), translated)
+    return obj, np.array(moved.X_SO, float)
 
 
 def _reject_a_lifted_guarded_push_in(action, waypoints) -> None:

@@ -421,8 +421,8 @@ class PlannerSystem(LeafSystem):
             return
         n = len(self._q_obs)
         x = self._measured.Eval(context)
-        cup_y = self._cup_y(s.believed, s.motion)
-        if t > run.t1 or (run.edge_only and past_edge_band(run, cup_y(x[:n]))):  # completed (or past the edge band)
+        if t > run.t1 or (run.edge_only and past_edge_band(run, self._cup_y(s.believed, s.motion)(x[:n]))):
+            # completed: no contact all the way in, or an unguarded lift past the band where a stop is the edge
             log = s.log if run.edge_only else s.log[:-1] + ({**s.log[-1], "guarded": guard_record(run, False)},)
             state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, guard=None, log=log))
             return
@@ -432,7 +432,7 @@ class PlannerSystem(LeafSystem):
             return
         now = context.get_time()
         after, again, record = self.guard.stopped(run, s.motion, np.asarray(x[:n], float), self.planner, s.believed,
-                                                  cup_y, now)
+                                                  self._cup_y(s.believed, s.motion), now)
         if after is None:  # an unguarded lift's stop that is not the edge, or no retry: it goes on as planned
             state.get_mutable_abstract_state(0).set_value(dataclasses.replace(s, guard=None))
             return
