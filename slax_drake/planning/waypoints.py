@@ -81,6 +81,7 @@ TARGET_CLEARANCE = 0.005  # m, an object carried across inside the shelf keeps t
 SWEEP_STEP = 0.005  # m between footprints of the carried object's sweep when looking for objects it crosses
 # OUT_MARGIN (the action model's): the carried object's back this far in front of the opening (m)
 RELEASE_BACKOFF = 0.02  # m
+PUSH_BACK_SLACK = 0.02  # m: at most this much farther than its gap and give a push backs off (push_back_slack)
 DWELL = 0.3  # s at rest after sealing and after releasing
 PULL_DWELL = 0.1  # s at rest at the end of a sideways drag's pull when it is weighed there (the weigh_drag_pull rule:
 # slax_drake.systems.drag_weigh): the arm decides there whether to slide the object across or push it back
@@ -137,6 +138,17 @@ def push_give(obj: SceneObject, compliance: float, tool: ToolConfig = ToolConfig
         return 0.0
     mass = object_mass(obj, tool.physics.object_density, tool.physics, tool.rules.mass_quantile)
     return compliance * tool.rules.drag_friction * mass * GRAVITY
+
+
+def push_back_slack(d: float) -> float:
+    """How much farther (m) than the push's gap and give the tool backs off before it retracts along S -y: the
+    push's length, up to ``PUSH_BACK_SLACK``. An object that moved less than d (the arm's give, a light tall object
+    that leans on the tool as it is pushed at its foot) still touches the tool where a back-off of the gap alone ends,
+    and the retract drags it toward the opening (Table I household 8:8 and 10:13 at ba55d14: thin cylinders 16-18
+    cm tall pushed 2 and 2.5 cm moved 1.1 cm, leaned 5 deg onto the tube, were dragged 3 cm to the board's front
+    edge by the retract and fell off at the next push). Backing off by d more returns the tool to the lane it came
+    in by, which was free."""
+    return min(abs(float(d)), PUSH_BACK_SLACK)
 
 
 def push_rotation() -> np.ndarray:
@@ -204,13 +216,14 @@ def action_waypoints(action, objects: tuple[SceneObject, ...], shelf: Shelf, too
         gap = BLADE_HALF_THICKNESS + PUSH_STANDOFF - shift - push_lead(float(obj.center[2]) + obj.size[2] / 2.0, tool)
         give = push_give(obj, push_compliance, tool)
         x_end = x + action.d + sign * (gap + give)
+        x_back = x_end - sign * (gap + give + push_back_slack(action.d))
         R, f, s = push_rotation(), robot_model.BLADE_FACE_FRAME, robot_model.SHAFT_BLADE_DOWN
         return [
             ToolWaypoint("pre-approach", f, _pose(R, (x, y_pre, z)), s),
             ToolWaypoint("insert", f, _pose(R, (x, y, z)), s),
             ToolWaypoint("push", f, _pose(R, (x_end, y, z)), s, contact=True),
-            ToolWaypoint("back off", f, _pose(R, (x_end - sign * (gap + give), y, z)), s, contact=True),
-            ToolWaypoint("retract", f, _pose(R, (x_end - sign * (gap + give), y_pre, z)), s, contact=True),
+            ToolWaypoint("back off", f, _pose(R, (x_back, y, z)), s, contact=True),
+            ToolWaypoint("retract", f, _pose(R, (x_back, y_pre, z)), s, contact=True),
         ]
     if isinstance(action, Suction):
         cx, cy, cz = action.q

@@ -3,11 +3,13 @@ that meets it first, the blade's face for an object lower than the tube, the tub
 (measured in Drake: a push planned for the blade moved boxes taller than the tube 8.5-11.9 mm too far,
 research/push_contact.py --heights)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from slax_drake.planning.waypoints import (BLADE_HALF_THICKNESS, TUBE_PUSH_ANGLE, TUBE_RADIUS, action_waypoints,
-                                           push_lead)
+from slax_drake.planning.waypoints import (BLADE_HALF_THICKNESS, PUSH_BACK_SLACK, TUBE_PUSH_ANGLE, TUBE_RADIUS,
+                                           action_waypoints, push_back_slack, push_lead)
 from slax_drake.shelf.actions import TUBE_STANDOFF
 from slax_drake.shelf.actions import BLADE_LIFT, ActionModel, Push, ToolConfig
 from slax_drake.scene.model import SceneObject, Shelf, planar_pose
@@ -43,12 +45,28 @@ def leading_surface_travel(height: float, sign: int, d: float, others=()) -> tup
 def test_the_surface_that_meets_the_object_ends_d_past_the_objects_extreme(sign, height):
     """The leading surface starts clear of the object and ends exactly d past the object's extreme on its side,
     so the object moves by d, whether the blade (a 5 cm box) or the tube (12 and 25 cm) pushes it; backing off,
-    it leaves the object as far behind as it stood before the push."""
+    it leaves the object ``PUSH_BACK_SLACK`` farther behind than it stood before the push (a 0.10 m push)."""
     extreme = sign * (0.0 - sign * 0.04)  # the box's extreme x on the blade's side, along the push
     start, end, back = leading_surface_travel(height, sign, 0.10)
     assert start < extreme - 1e-3
     assert end == pytest.approx(extreme + 0.10, abs=1e-9)
-    assert end - back == pytest.approx(extreme - start, abs=1e-9)
+    assert end - back == pytest.approx(extreme - start + PUSH_BACK_SLACK, abs=1e-9)
+
+
+@pytest.mark.parametrize("sign", [+1, -1])
+def test_a_short_push_backs_off_to_the_lane_it_came_in_by(sign):
+    """A push no longer than ``PUSH_BACK_SLACK`` backs off and retracts along the lane of its insert (an object that
+    moved less than d, or leaned onto the tool, is left clear); a longer one backs off that much farther than its
+    gap."""
+    a = box(0.12)
+    model = ActionModel(SHELF, EYE, TOOL)
+    push = next(p for p in model.enumerate((a,), suctions=False).feasible if isinstance(p, Push) and p.d * sign > 0)
+    short = dataclasses.replace(push, d=sign * 0.015)  # as a neighbour would stop it
+    wps = {w.label: w for w in action_waypoints(short, (a,), SHELF, TOOL)}
+    assert wps["back off"].position[0] == pytest.approx(wps["insert"].position[0], abs=1e-9)
+    assert wps["retract"].position[0] == pytest.approx(wps["pre-approach"].position[0], abs=1e-9)
+    assert push_back_slack(short.d) == pytest.approx(abs(short.d))
+    assert push_back_slack(sign * 0.30) == PUSH_BACK_SLACK
 
 
 def test_which_surface_leads():
@@ -92,7 +110,7 @@ def test_the_tube_stands_midway_in_a_narrow_gap(sign):
     assert own_now == pytest.approx(far_now, abs=1e-9)
     start, end, back = leading_surface_travel(0.12, sign, 0.10, (wall,))
     assert end == pytest.approx(-0.04 + 0.10, abs=1e-9)  # the extreme along the push is -0.04 either way
-    assert end - back == pytest.approx(-0.04 - start, abs=1e-9)
+    assert end - back == pytest.approx(-0.04 - start + PUSH_BACK_SLACK, abs=1e-9)
 
 
 @pytest.mark.parametrize("sign", [+1, -1])
