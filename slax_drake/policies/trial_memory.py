@@ -20,8 +20,8 @@ redoes it, until the horizon. :class:`TrialMemory` holds the two facts the corre
 - the last proposed action, the objects it was chosen on and the pose the action model predicts for its object.
   :meth:`outcome` compares that prediction with the next observation: "moved nothing" (the object stands where
   it stood), "moved less than predicted" (it moved, but stands more than ``position_tolerance`` short of or away
-  from the predicted pose; for a move predicted no longer than the tolerance, such as a 1 cm push: it moved less
-  than ``SMALL_MOVE_SHARE`` of it along its direction), or None (as predicted, or the object is no longer seen and
+  from the predicted pose; or, for a move predicted shorter than twice the tolerance, such as a 1 cm push, it moved
+  less than ``SMALL_MOVE_SHARE`` of it along its direction), or None (as predicted, or the object is no longer seen and
   nothing can be said);
 - per object, the planar displacement (m) of the last executed action on it (as observed; as commanded when the
   object is hidden after it), so that :meth:`undoes` can tell a candidate that moves the object back (a shuttle).
@@ -47,8 +47,8 @@ from slax_drake.scene.model import box_yaw_difference
 from slax_drake.shelf.actions import apply_action
 
 
-# A move predicted within the position tolerance failed when the object moved less than this share of it along the
-# predicted direction (TrialMemory._small_move_outcome)
+# A move predicted shorter than twice the position tolerance failed when the object moved less than this share of
+# it along the predicted direction (TrialMemory._small_move_outcome)
 SMALL_MOVE_SHARE = 0.5
 
 
@@ -340,8 +340,8 @@ class TrialMemory:
         if now is None:
             return None
         xy = (float(now.center[0]), float(now.center[1]))
-        if math.dist(xy, p.predicted_xy) <= tol:
-            return None
+        if math.dist(xy, p.predicted_xy) <= tol:  # as predicted, unless a move under twice the tolerance fell short
+            return self._small_move_outcome(p, now, predicted)
         if math.dist(xy, p.before_xy) <= tol:
             return p, Failed(Miss.UNCHANGED)
         moved, off = math.dist(xy, p.before_xy), math.dist(xy, p.predicted_xy)
@@ -350,11 +350,13 @@ class TrialMemory:
 
     @staticmethod
     def _small_move_outcome(p: Proposal, now, predicted: float) -> tuple[Proposal, Failed] | None:
-        """The outcome of a proposal predicted to move its object no farther than ``position_tolerance`` (a push
-        of 1 cm): failed ("moved less than predicted") when the object, seen now, moved less than
-        ``SMALL_MOVE_SHARE`` of the predicted distance along the predicted direction. Within the tolerance
-        these pushes could never be told to have failed, and a push blocked by a wall or a neighbour was repeated:
-        a Drake trial (Table II 12:1) pushed one box 1 cm 13 times, 0.6 mm each time. An object seen in both
+        """The outcome of a proposal whose object stands within ``position_tolerance`` of where it stood or of
+        where it was predicted: failed ("moved less than predicted") when the object, seen now, moved less than
+        ``SMALL_MOVE_SHARE`` of the predicted distance along the predicted direction. That can happen only to a
+        move predicted shorter than twice the tolerance (a push of 1 cm, which an object that did not move at all
+        stands within the tolerance of); judged by the tolerance alone such pushes could never fail, and a push
+        blocked by a wall or a neighbour was repeated: a Drake trial (Table II 12:1) pushed one box 1 cm 13 times,
+        0.6 mm each time. An object seen in both
         frames and moved by the robot has an estimate steady to a millimetre or so (untouched objects between
         decisions of Drake trials: median 0, 90th percentile 0.6 mm), so half of a 1 cm move is told apart."""
         if now is None or now.remembered or predicted <= 0.0:

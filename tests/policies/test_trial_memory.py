@@ -68,8 +68,8 @@ def test_a_push_that_moved_less_than_predicted_is_excluded():
     assert memory.outcome((box("a", 0.10, 0.0), b)) is None  # as predicted
 
 
-def test_a_push_within_the_tolerance_that_moved_less_than_half_of_it_failed():
-    """A 1 cm push (no longer than the 1 cm position tolerance) is judged along its direction: 0.6 mm moved is a
+def test_a_short_push_that_moved_less_than_half_of_it_failed():
+    """A 1 cm push (no longer than twice the 1 cm position tolerance) is judged along its direction: 0.6 mm moved is a
     failure (Table II 12:1 in Drake pushed one box 1 cm 13 times, 0.6 mm each), 6 mm is as predicted, and so is a
     push whose object is hidden now (nothing can be said)."""
     import dataclasses
@@ -92,6 +92,14 @@ def test_a_push_within_the_tolerance_that_moved_less_than_half_of_it_failed():
     assert memory.outcome((hidden, b)) is None
     memory.propose(dataclasses.replace(push, d=-0.01), (a, b))
     assert memory.outcome((box("a", 0.0006, 0.0), b)) is not None  # moved the other way
+    # in Drake the 1 cm push's predicted displacement read a hair over the tolerance (0.010000000000000009 m): an
+    # object that did not move stands within the tolerance of that prediction too
+    memory.propose(dataclasses.replace(push, d=0.0100001), (a, b))
+    assert memory.outcome((box("a", 0.0006, 0.0), b))[1].miss is Miss.SHORT
+    memory.propose(dataclasses.replace(push, d=0.015), (a, b))
+    assert memory.outcome((box("a", 0.006, 0.0), b))[1].miss is Miss.SHORT  # 6 mm of 15, within 1 cm of both
+    memory.propose(dataclasses.replace(push, d=0.015), (a, b))
+    assert memory.outcome((box("a", 0.009, 0.0), b)) is None
 
 
 @pytest.mark.parametrize("name", ["dar", "bluction-dar"])
