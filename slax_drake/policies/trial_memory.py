@@ -347,7 +347,6 @@ class TrialMemory:
         moved, off = math.dist(xy, p.before_xy), math.dist(xy, p.predicted_xy)
         return p, Failed(Miss.SHORT if moved < predicted else Miss.ELSEWHERE, moved, predicted, off)
 
-
     @staticmethod
     def _small_move_outcome(p: Proposal, now, predicted: float) -> tuple[Proposal, Failed] | None:
         """The outcome of a proposal whose object stands within ``position_tolerance`` of where it stood or of
@@ -356,20 +355,16 @@ class TrialMemory:
         move predicted shorter than twice the tolerance (a push of 1 cm, which an object that did not move at all
         stands within the tolerance of); judged by the tolerance alone such pushes could never fail, and a push
         blocked by a wall or a neighbour was repeated: a Drake trial (Table II 12:1) pushed one box 1 cm 13 times,
-        0.6 mm each time. An object seen in both
-        frames and moved by the robot has an estimate steady to a millimetre or so (untouched objects between
-        decisions of Drake trials: median 0, 90th percentile 0.6 mm), so half of a 1 cm move is told apart."""
+        0.6 mm each time. An object seen in both frames and moved by the robot has an estimate steady to a
+        millimetre or so (untouched objects between decisions of Drake trials: median 0, 90th percentile 0.6 mm),
+        so half of a 1 cm move is told apart."""
         if now is None or now.remembered or predicted <= 0.0:
             return None
-        ux = (p.predicted_xy[0] - p.before_xy[0]) / predicted
-        uy = (p.predicted_xy[1] - p.before_xy[1]) / predicted
-        dx, dy = float(now.center[0]) - p.before_xy[0], float(now.center[1]) - p.before_xy[1]
-        along = dx * ux + dy * uy
-        if along >= SMALL_MOVE_SHARE * predicted:
+        px, py = p.predicted_xy[0] - p.before_xy[0], p.predicted_xy[1] - p.before_xy[1]  # the predicted move
+        dx, dy = float(now.center[0]) - p.before_xy[0], float(now.center[1]) - p.before_xy[1]  # the observed one
+        if dx * px + dy * py >= SMALL_MOVE_SHARE * predicted * predicted:  # along the predicted direction, x predicted
             return None
-        moved = math.hypot(dx, dy)
-        off = math.dist((float(now.center[0]), float(now.center[1])), p.predicted_xy)
-        return p, Failed(Miss.SHORT, moved, predicted, off)
+        return p, Failed(Miss.SHORT, math.hypot(dx, dy), predicted, math.hypot(px - dx, py - dy))
 
 
 def same_box_turn(a, b, tolerance: float) -> bool:
